@@ -1,0 +1,516 @@
+//! The render-ready scene model. Everything here is plain data: the loader fills it, the renderer
+//! reads it, and tests may build it by hand.
+
+use glam::{Affine3A, Vec2, Vec3, Vec4};
+
+/// A scene ready to render: unique meshes, the instances that draw them, and what shades them.
+#[derive(Debug, Clone, Default)]
+pub struct Scene {
+    /// Unique geometry, each in its own object space. A glTF mesh used by many nodes is stored once.
+    pub meshes: Vec<Mesh>,
+    /// Placements of meshes in the world (one per drawing node, or per `EXT_mesh_gpu_instancing` instance).
+    pub instances: Vec<Instance>,
+    /// Materials; `Mesh::material_ids` index into this list.
+    pub materials: Vec<Material>,
+    /// Decoded textures; `TextureRef::texture` indexes into this list.
+    pub textures: Vec<Texture>,
+    /// Punctual lights in world space.
+    pub lights: Vec<Light>,
+    /// Cameras with resolved depth of field. Never empty after loading: a scene without a camera
+    /// gets an automatic one that frames its bounds.
+    pub cameras: Vec<Camera>,
+    /// What the loader saw, skipped and warned about (for `aperture info`).
+    pub stats: SceneStats,
+}
+
+/// Triangle geometry in object space: all primitives of one glTF mesh, merged.
+///
+/// Attribute vectors are either empty (absent in every primitive) or as long as `positions`.
+#[derive(Debug, Clone, Default)]
+pub struct Mesh {
+    /// The glTF mesh name, if any.
+    pub name: Option<String>,
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Unit shading normals. Always present: primitives without `NORMAL` get flat normals.
+    pub normals: Vec<Vec3>,
+    /// Tangents (xyz) with handedness sign (w), from `TANGENT`; empty when no primitive has them.
+    pub tangents: Vec<Vec4>,
+    /// `TEXCOORD_0`; empty when no primitive has it (zeros fill primitives that lack it).
+    pub uv0: Vec<Vec2>,
+    /// `TEXCOORD_1`; empty when no primitive has it.
+    pub uv1: Vec<Vec2>,
+    /// `COLOR_0` as linear RGBA; empty when no primitive has it (white fills the rest).
+    pub colors: Vec<Vec4>,
+    /// Triangles as vertex indices, counter-clockwise when seen from the front.
+    pub indices: Vec<[u32; 3]>,
+    /// Material of each triangle (index into `Scene::materials`), as long as `indices`.
+    pub material_ids: Vec<u32>,
+}
+
+/// One placement of a mesh in the world.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Instance {
+    /// Index into `Scene::meshes`.
+    pub mesh: u32,
+    /// Object-to-world transform (may contain scale, shear and reflection).
+    pub world_from_object: Affine3A,
+    /// Index of the glTF node that draws this instance.
+    pub node: u32,
+}
+
+impl Instance {
+    /// True when the transform mirrors space, which reverses the triangles' winding.
+    pub fn is_mirrored(&self) -> bool {
+        self.world_from_object.matrix3.determinant() < 0.0
+    }
+}
+
+/// How a material treats alpha.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum AlphaMode {
+    /// Alpha is ignored.
+    #[default]
+    Opaque,
+    /// Alpha below the cutoff is fully transparent, otherwise fully opaque.
+    Mask {
+        /// The `alphaCutoff` (glTF default 0.5).
+        cutoff: f32,
+    },
+    /// Alpha is coverage (rendered stochastically).
+    Blend,
+}
+
+/// `KHR_texture_transform` of one texture reference: `uv' = offset + rotate(rotation) * (scale * uv)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TextureTransform {
+    /// UV offset.
+    pub offset: Vec2,
+    /// Rotation in radians (counter-clockwise in UV space, as the extension defines).
+    pub rotation: f32,
+    /// UV scale.
+    pub scale: Vec2,
+}
+
+impl Default for TextureTransform {
+    fn default() -> Self {
+        Self {
+            offset: Vec2::ZERO,
+            rotation: 0.0,
+            scale: Vec2::ONE,
+        }
+    }
+}
+
+/// A material's reference to a texture.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TextureRef {
+    /// Index into `Scene::textures`.
+    pub texture: u32,
+    /// Which UV set (0 or 1), after `KHR_texture_transform`'s own `texCoord` override.
+    pub tex_coord: u32,
+    /// `KHR_texture_transform`, if present.
+    pub transform: Option<TextureTransform>,
+}
+
+/// glTF metallic-roughness material (SPEC §5) with the extensions we read.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    /// The glTF material name, if any.
+    pub name: Option<String>,
+    /// Linear RGBA base colour factor.
+    pub base_color_factor: Vec4,
+    /// Base colour texture (sRGB-encoded).
+    pub base_color_texture: Option<TextureRef>,
+    /// Metallic factor.
+    pub metallic_factor: f32,
+    /// Roughness factor (perceptual roughness; alpha = roughness²).
+    pub roughness_factor: f32,
+    /// Metallic (B) and roughness (G) texture, linear.
+    pub metallic_roughness_texture: Option<TextureRef>,
+    /// Tangent-space normal map, linear.
+    pub normal_texture: Option<TextureRef>,
+    /// Normal map scale.
+    pub normal_scale: f32,
+    /// Occlusion texture (R), linear. Read but not used by a path tracer.
+    pub occlusion_texture: Option<TextureRef>,
+    /// Occlusion strength.
+    pub occlusion_strength: f32,
+    /// Linear emissive factor.
+    pub emissive_factor: Vec3,
+    /// Emissive texture (sRGB-encoded).
+    pub emissive_texture: Option<TextureRef>,
+    /// `KHR_materials_emissive_strength` (1 when absent).
+    pub emissive_strength: f32,
+    /// Alpha mode and cutoff.
+    pub alpha_mode: AlphaMode,
+    /// glTF `doubleSided` (we shade both sides regardless; kept for `info` and culling choices).
+    pub double_sided: bool,
+    /// `KHR_materials_unlit`.
+    pub unlit: bool,
+    /// `KHR_materials_ior` (1.5 when absent).
+    pub ior: f32,
+    /// `KHR_materials_specular` factor (1 when absent).
+    pub specular_factor: f32,
+    /// `KHR_materials_specular` colour factor (1 when absent).
+    pub specular_color_factor: Vec3,
+}
+
+impl Default for Material {
+    /// The glTF default material.
+    fn default() -> Self {
+        Self {
+            name: None,
+            base_color_factor: Vec4::ONE,
+            base_color_texture: None,
+            metallic_factor: 1.0,
+            roughness_factor: 1.0,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+            occlusion_texture: None,
+            occlusion_strength: 1.0,
+            emissive_factor: Vec3::ZERO,
+            emissive_texture: None,
+            emissive_strength: 1.0,
+            alpha_mode: AlphaMode::Opaque,
+            double_sided: false,
+            unlit: false,
+            ior: 1.5,
+            specular_factor: 1.0,
+            specular_color_factor: Vec3::ONE,
+        }
+    }
+}
+
+impl Material {
+    /// True when the material can emit light (a non-zero emissive factor and strength).
+    pub fn is_emissive(&self) -> bool {
+        self.emissive_strength > 0.0 && self.emissive_factor.max_element() > 0.0
+    }
+}
+
+/// Texture coordinate wrapping.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Wrap {
+    /// Repeat (glTF default).
+    #[default]
+    Repeat,
+    /// Mirrored repeat.
+    MirroredRepeat,
+    /// Clamp to edge.
+    ClampToEdge,
+}
+
+/// Texture filtering for magnification.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Filter {
+    /// Bilinear (the default when the sampler says nothing).
+    #[default]
+    Linear,
+    /// Nearest texel.
+    Nearest,
+}
+
+/// How a texture is sampled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Sampler {
+    /// Wrapping along U.
+    pub wrap_u: Wrap,
+    /// Wrapping along V.
+    pub wrap_v: Wrap,
+    /// Magnification filter.
+    pub mag_filter: Filter,
+}
+
+/// How a texture's stored values map to linear values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ColorSpace {
+    /// sRGB-encoded colour (base colour, emissive): RGB decoded to linear on lookup, alpha linear.
+    Srgb,
+    /// Linear data (normals, metallic-roughness, occlusion).
+    Linear,
+}
+
+/// Texel storage.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Texels {
+    /// 8 bits per channel, RGBA, rows top to bottom.
+    Rgba8(Vec<[u8; 4]>),
+    /// 32-bit float RGBA (16-bit and float sources), rows top to bottom, already linear-valued
+    /// storage of the encoded values (the colour space still applies).
+    Rgba32F(Vec<[f32; 4]>),
+}
+
+/// A decoded texture: one glTF image with the sampler and colour space of its use.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Texture {
+    /// glTF image name or URI, for messages.
+    pub name: Option<String>,
+    /// Width in texels (≥ 1).
+    pub width: u32,
+    /// Height in texels (≥ 1).
+    pub height: u32,
+    /// Texel data, `width * height` long.
+    pub texels: Texels,
+    /// Encoding of the stored values.
+    pub color_space: ColorSpace,
+    /// Wrap and filter modes.
+    pub sampler: Sampler,
+}
+
+/// What kind of punctual light, with its kind-specific parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LightKind {
+    /// Point light at `Light::position`.
+    Point,
+    /// Spot light at `Light::position` along `Light::direction`, with the glTF smooth falloff.
+    Spot {
+        /// `innerConeAngle` in radians.
+        inner_cone: f32,
+        /// `outerConeAngle` in radians.
+        outer_cone: f32,
+    },
+    /// Directional light travelling along `Light::direction`.
+    Directional,
+}
+
+/// A `KHR_lights_punctual` light placed in the world, in SPEC §4 units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Light {
+    /// The light's name, if any.
+    pub name: Option<String>,
+    /// Kind and cone.
+    pub kind: LightKind,
+    /// World position (unused for directional lights).
+    pub position: Vec3,
+    /// Unit world direction the light travels (the node's −Z); unused for point lights.
+    pub direction: Vec3,
+    /// Radiant intensity in W/sr (point, spot: cd / 683 × colour) or irradiance in W/m²
+    /// (directional: lux / 683 × colour).
+    pub intensity: Vec3,
+}
+
+/// Camera projection.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Projection {
+    /// Perspective projection.
+    Perspective {
+        /// Vertical field of view in radians.
+        yfov: f32,
+        /// Width / height, if the file gives it.
+        aspect_ratio: Option<f32>,
+    },
+    /// Orthographic projection.
+    Orthographic {
+        /// Half-width of the view volume.
+        xmag: f32,
+        /// Half-height of the view volume.
+        ymag: f32,
+    },
+}
+
+/// Blender's `sensor_fit`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SensorFit {
+    /// Fit the sensor width to the larger image side.
+    #[default]
+    Auto,
+    /// Sensor width spans the image width.
+    Horizontal,
+    /// Sensor height spans the image height.
+    Vertical,
+}
+
+/// Depth of field, resolved from every source of SPEC §3.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dof {
+    /// Depth of field on. When false the camera is a pinhole whatever `aperture_radius` says.
+    pub enabled: bool,
+    /// Lens radius `R` in scene units.
+    pub aperture_radius: f32,
+    /// Distance of the focal plane along the view axis, scene units.
+    pub focus_distance: f32,
+    /// Focal length in mm (given, or derived from `yfov` and the sensor).
+    pub lens_mm: f32,
+    /// Sensor width, mm.
+    pub sensor_width: f32,
+    /// Sensor height, mm.
+    pub sensor_height: f32,
+    /// Sensor fit.
+    pub sensor_fit: SensorFit,
+    /// Blade count: 0 = round, otherwise ≥ 3.
+    pub blades: u32,
+    /// Blade rotation, radians.
+    pub rotation: f32,
+    /// Anamorphic ratio (lens x is divided by it).
+    pub ratio: f32,
+    /// Name of the node focused on, when `focus_object` decided the focus distance.
+    pub focus_object: Option<String>,
+}
+
+impl Dof {
+    /// The lens radius the camera should use: 0 when depth of field is off.
+    pub fn effective_radius(&self) -> f32 {
+        if self.enabled {
+            self.aperture_radius
+        } else {
+            0.0
+        }
+    }
+}
+
+impl Default for Dof {
+    /// Blender's defaults, depth of field off.
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            aperture_radius: 0.0,
+            focus_distance: 10.0,
+            lens_mm: 50.0,
+            sensor_width: 36.0,
+            sensor_height: 24.0,
+            sensor_fit: SensorFit::Auto,
+            blades: 0,
+            rotation: 0.0,
+            ratio: 1.0,
+            focus_object: None,
+        }
+    }
+}
+
+/// A camera placed in the world.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Camera {
+    /// Camera name (the glTF camera's, else its node's, else `camera N`).
+    pub name: String,
+    /// Index of the node carrying the camera; `None` for the automatic camera.
+    pub node: Option<u32>,
+    /// Camera-to-world transform, rotation and translation only (scale removed, SPEC §1).
+    /// The camera looks down its local −Z with +Y up.
+    pub world_from_camera: Affine3A,
+    /// Projection.
+    pub projection: Projection,
+    /// Resolved depth of field.
+    pub dof: Dof,
+}
+
+/// Depth-of-field values from the command line: the highest-precedence source of SPEC §3.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct DofOverrides {
+    /// Force depth of field on or off (`--no-dof` gives `Some(false)`).
+    pub use_dof: Option<bool>,
+    /// `--aperture-radius`.
+    pub aperture_radius: Option<f32>,
+    /// `--fstop`.
+    pub aperture_fstop: Option<f32>,
+    /// `--focus-distance`.
+    pub focus_distance: Option<f32>,
+    /// `--focus-object` (a node name, or a node index written as digits).
+    pub focus_object: Option<String>,
+}
+
+/// What to load and how.
+#[derive(Debug, Clone, Default)]
+pub struct LoadOptions {
+    /// Which glTF scene (`--scene N`); default the file's `scene`, else the first.
+    pub scene: Option<usize>,
+    /// Command-line depth-of-field overrides, applied to every camera.
+    pub dof_overrides: DofOverrides,
+    /// Skip decoding textures (for `info` and geometry-only uses).
+    pub skip_textures: bool,
+}
+
+/// An axis-aligned box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bounds {
+    /// Minimum corner.
+    pub min: Vec3,
+    /// Maximum corner.
+    pub max: Vec3,
+}
+
+impl Bounds {
+    /// The empty box (min = +∞, max = −∞), the identity of [`Bounds::union`].
+    pub const EMPTY: Self = Self {
+        min: Vec3::INFINITY,
+        max: Vec3::NEG_INFINITY,
+    };
+
+    /// True when the box contains no point.
+    pub fn is_empty(&self) -> bool {
+        self.min.cmpgt(self.max).any()
+    }
+
+    /// Grows the box to contain `p`.
+    pub fn include(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// The smallest box containing both.
+    pub fn union(self, other: Self) -> Self {
+        Self {
+            min: self.min.min(other.min),
+            max: self.max.max(other.max),
+        }
+    }
+
+    /// Centre of the box.
+    pub fn center(&self) -> Vec3 {
+        0.5 * (self.min + self.max)
+    }
+
+    /// Length of the diagonal.
+    pub fn diagonal(&self) -> f32 {
+        (self.max - self.min).length()
+    }
+}
+
+/// Counts and diagnostics gathered while loading.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SceneStats {
+    /// Nodes in the selected scene's hierarchy.
+    pub nodes: usize,
+    /// glTF primitives that were turned into triangles.
+    pub primitives: usize,
+    /// Primitives skipped (points, lines).
+    pub skipped_primitives: usize,
+    /// Animations, skins and morph targets present in the file but not evaluated (rest pose).
+    pub skipped_features: Vec<String>,
+    /// Warnings for the user (one line each).
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// Triangles stored (each unique mesh counted once).
+    pub fn unique_triangle_count(&self) -> usize {
+        self.meshes.iter().map(|m| m.indices.len()).sum()
+    }
+
+    /// Triangles drawn (each mesh counted once per instance).
+    pub fn drawn_triangle_count(&self) -> usize {
+        self.instances
+            .iter()
+            .map(|i| {
+                self.meshes
+                    .get(i.mesh as usize)
+                    .map_or(0, |m| m.indices.len())
+            })
+            .sum()
+    }
+
+    /// World-space bounds of every drawn triangle vertex (exact: each instance's transformed
+    /// vertices, not transformed boxes).
+    pub fn bounds(&self) -> Bounds {
+        let mut b = Bounds::EMPTY;
+        for inst in &self.instances {
+            if let Some(mesh) = self.meshes.get(inst.mesh as usize) {
+                for p in &mesh.positions {
+                    b.include(inst.world_from_object.transform_point3(*p));
+                }
+            }
+        }
+        b
+    }
+}
