@@ -1,5 +1,8 @@
 //! `aperture`: render glTF scenes with physically based depth of field.
 
+mod info;
+mod render_cmd;
+
 use clap::{Parser, Subcommand};
 
 /// Physically based depth-of-field renderer for glTF 2.0 scenes.
@@ -13,19 +16,22 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Print what a scene contains and how its cameras resolve.
-    Info {
-        /// The .gltf or .glb file.
-        scene: std::path::PathBuf,
-    },
+    Info(info::InfoArgs),
+    /// Render a scene to EXR or PNG.
+    Render(render_cmd::RenderArgs),
 }
 
-fn main() -> anyhow::Result<()> {
+fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
-    match cli.command {
-        Command::Info { scene } => {
-            let s = aperture_scene::load(&scene, &Default::default())?;
-            println!("{} triangles drawn", s.drawn_triangle_count());
+    let result = match cli.command {
+        Command::Info(args) => info::run(args),
+        Command::Render(args) => render_cmd::run(args),
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
         }
     }
-    Ok(())
 }
