@@ -5,7 +5,7 @@
 //! use aperture_imageio::{Image, write_image, PngOptions};
 //! let mut image = Image::new(2, 2);
 //! image.rgba[0] = [1.0, 0.5, 0.25, 1.0];
-//! write_image("out.exr".as_ref(), &image, &PngOptions::default())?;
+//! write_image("out.png".as_ref(), &image, &PngOptions::default())?;
 //! # Ok::<(), aperture_imageio::Error>(())
 //! ```
 //!
@@ -13,8 +13,12 @@
 
 use std::path::{Path, PathBuf};
 
+mod atomic;
 pub mod metrics;
+mod png;
 pub mod view;
+
+pub use crate::png::{encode_png, write_png};
 
 /// A plain float image: beauty RGBA plus optional named passes and header metadata.
 /// Rows run top to bottom.
@@ -386,12 +390,13 @@ impl Format {
 ///
 /// `png` is used only for PNG; EXR stores scene-referred values unchanged.
 pub fn write_image(path: &Path, image: &Image, png: &PngOptions) -> Result<(), Error> {
-    Format::from_path(path)?;
-    let _ = (image, png);
-    // The writers land in the next commit.
-    Err(Error::UnknownFormat {
-        path: path.to_path_buf(),
-    })
+    match Format::from_path(path)? {
+        // The EXR writer lands in the next commit.
+        Format::Exr => Err(Error::UnknownFormat {
+            path: path.to_path_buf(),
+        }),
+        Format::Png => write_png(path, image, png),
+    }
 }
 
 #[cfg(test)]
@@ -411,6 +416,15 @@ mod tests {
                 "{bad}"
             );
         }
+    }
+
+    #[test]
+    fn write_image_refuses_unknown_extension_and_writes_nothing() {
+        let dir = atomic::tests::scratch_dir("unknown-ext");
+        let path = dir.join("out.jpg");
+        let err = write_image(&path, &Image::new(1, 1), &PngOptions::default()).unwrap_err();
+        assert!(matches!(err, Error::UnknownFormat { .. }));
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
     }
 
     #[test]
