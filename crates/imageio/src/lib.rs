@@ -2,10 +2,18 @@
 //! (display-referred, after exposure and a view transform), plus image-error metrics.
 //!
 //! ```no_run
-//! use aperture_imageio::{Image, write_image, PngOptions};
+//! use aperture_imageio::{read_exr, write_image, Image, Layer, MetaValue, PngOptions};
 //! let mut image = Image::new(2, 2);
 //! image.rgba[0] = [1.0, 0.5, 0.25, 1.0];
-//! write_image("out.png".as_ref(), &image, &PngOptions::default())?;
+//! image.layers.push(Layer {
+//!     name: "depth".into(),
+//!     channels: vec!["Z".into()],
+//!     data: vec![1.5; 4],
+//! });
+//! image.metadata.push(("aperture:radius".into(), MetaValue::Float(0.05)));
+//! write_image("out.exr".as_ref(), &image, &PngOptions::default())?;
+//! write_image("out.png".as_ref(), &image, &PngOptions { exposure: 1.0, ..Default::default() })?;
+//! assert_eq!(read_exr("out.exr".as_ref())?.rgba, image.rgba);
 //! # Ok::<(), aperture_imageio::Error>(())
 //! ```
 //!
@@ -14,10 +22,12 @@
 use std::path::{Path, PathBuf};
 
 mod atomic;
+mod exr;
 pub mod metrics;
 mod png;
 pub mod view;
 
+pub use crate::exr::{encode_exr, read_exr, write_exr};
 pub use crate::png::{encode_png, write_png};
 
 /// A plain float image: beauty RGBA plus optional named passes and header metadata.
@@ -391,10 +401,7 @@ impl Format {
 /// `png` is used only for PNG; EXR stores scene-referred values unchanged.
 pub fn write_image(path: &Path, image: &Image, png: &PngOptions) -> Result<(), Error> {
     match Format::from_path(path)? {
-        // The EXR writer lands in the next commit.
-        Format::Exr => Err(Error::UnknownFormat {
-            path: path.to_path_buf(),
-        }),
+        Format::Exr => write_exr(path, image),
         Format::Png => write_png(path, image, png),
     }
 }
