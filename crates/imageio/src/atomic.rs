@@ -92,15 +92,30 @@ fn write_and_sync(mut file: File, bytes: &[u8]) -> io::Result<()> {
 pub(crate) mod tests {
     use super::*;
 
-    /// A fresh, empty folder for one test.
-    pub(crate) fn scratch_dir(name: &str) -> PathBuf {
+    /// A fresh, empty folder for one test, removed again when dropped.
+    pub(crate) struct Scratch(PathBuf);
+
+    impl std::ops::Deref for Scratch {
+        type Target = Path;
+        fn deref(&self) -> &Path {
+            &self.0
+        }
+    }
+
+    impl Drop for Scratch {
+        fn drop(&mut self) {
+            let _ = fs::remove_dir_all(&self.0);
+        }
+    }
+
+    pub(crate) fn scratch_dir(name: &str) -> Scratch {
         let dir = std::env::temp_dir().join(format!(
             "aperture-imageio-test-{}-{name}",
             std::process::id()
         ));
         let _ = fs::remove_dir_all(&dir);
         fs::create_dir_all(&dir).unwrap();
-        dir
+        Scratch(dir)
     }
 
     pub(crate) fn entries(dir: &Path) -> Vec<String> {

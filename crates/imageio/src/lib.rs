@@ -1,7 +1,7 @@
 //! Writing and reading images: EXR (scene-referred float, with passes and metadata) and PNG
 //! (display-referred, after exposure and a view transform), plus image-error metrics.
 //!
-//! ```no_run
+//! ```
 //! use aperture_imageio::{read_exr, write_image, Image, Layer, MetaValue, PngOptions};
 //! let mut image = Image::new(2, 2);
 //! image.rgba[0] = [1.0, 0.5, 0.25, 1.0];
@@ -11,9 +11,16 @@
 //!     data: vec![1.5; 4],
 //! });
 //! image.metadata.push(("aperture:radius".into(), MetaValue::Float(0.05)));
-//! write_image("out.exr".as_ref(), &image, &PngOptions::default())?;
-//! write_image("out.png".as_ref(), &image, &PngOptions { exposure: 1.0, ..Default::default() })?;
-//! assert_eq!(read_exr("out.exr".as_ref())?.rgba, image.rgba);
+//!
+//! let dir = std::env::temp_dir();
+//! let exr = dir.join(format!("aperture-doc-{}.exr", std::process::id()));
+//! write_image(&exr, &image, &PngOptions::default())?;
+//! assert_eq!(read_exr(&exr)?, image);
+//!
+//! let png = exr.with_extension("png");
+//! write_image(&png, &image, &PngOptions { exposure: 1.0, ..Default::default() })?;
+//! # std::fs::remove_file(exr).unwrap();
+//! # std::fs::remove_file(png).unwrap();
 //! # Ok::<(), aperture_imageio::Error>(())
 //! ```
 //!
@@ -431,7 +438,7 @@ mod tests {
         let path = dir.join("out.jpg");
         let err = write_image(&path, &Image::new(1, 1), &PngOptions::default()).unwrap_err();
         assert!(matches!(err, Error::UnknownFormat { .. }));
-        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+        assert!(atomic::tests::entries(&dir).is_empty());
     }
 
     #[test]

@@ -61,16 +61,17 @@ fn mul(m: &Mat3, v: [f64; 3]) -> [f64; 3] {
     m.map(|row| row[0] * v[0] + row[1] * v[1] + row[2] * v[2])
 }
 
-// Rows. Rec.709 and Rec.2020 primaries, both D65.
+// Rows. Rec.709 and Rec.2020 primaries, both D65 (ITU-R BT.2087-0; Filament and three.js
+// round these to four decimals, which tints grey slightly).
 const REC709_TO_REC2020: Mat3 = [
-    [0.6274, 0.3293, 0.0433],
-    [0.0691, 0.9195, 0.0113],
-    [0.0164, 0.0880, 0.8956],
+    [0.627_403_896, 0.329_283_039, 0.043_313_065],
+    [0.069_097_289, 0.919_540_395, 0.011_362_316],
+    [0.016_391_439, 0.088_013_308, 0.895_595_253],
 ];
 const REC2020_TO_REC709: Mat3 = [
-    [1.6605, -0.5876, -0.0728],
-    [-0.1246, 1.1329, -0.0083],
-    [-0.0182, -0.1006, 1.1187],
+    [1.660_491, -0.587_641_1, -0.072_849_9],
+    [-0.124_550_5, 1.132_899_9, -0.008_349_4],
+    [-0.018_150_8, -0.100_578_9, 1.118_729_7],
 ];
 // Blender's AgX inset (config.ocio, "AgX Log"), in Rec.2020: pulls colours towards the
 // achromatic axis so highlights desaturate to white instead of skewing in hue.
@@ -185,6 +186,17 @@ mod tests {
             standard([f32::INFINITY, f32::NEG_INFINITY, 0.0]),
             [1.0, 0.0, 0.0]
         );
+    }
+
+    #[test]
+    fn rec2020_matrices_are_inverse() {
+        for i in 0..3 {
+            let e = [0, 1, 2].map(|j| f64::from(u8::from(i == j)));
+            let back = mul(&REC2020_TO_REC709, mul(&REC709_TO_REC2020, e));
+            for j in 0..3 {
+                assert!((back[j] - e[j]).abs() < 1e-6, "{i} {j}: {back:?}");
+            }
+        }
     }
 
     #[test]
