@@ -22,6 +22,8 @@ use ::exr::prelude::traits::{ReadChannels, ReadLayers, WritableImage};
 use ::exr::prelude::{Compression, LineOrder, SmallVec};
 
 use crate::atomic::write_atomically;
+
+mod guard;
 use crate::{Error, Image, Layer, MetaValue, NameKind};
 
 /// Encodes `image` as EXR into memory. `path` only names the file in errors.
@@ -94,9 +96,13 @@ pub fn write_exr(path: &Path, image: &Image) -> Result<(), Error> {
 ///   multi-part file only the part holding the beauty gives metadata.
 /// - The image is the data window; all parts must share it.
 ///
+/// All codecs of exr 1.74 are read; for DWAA/DWAB only scan-line parts (tiled or deep DWA
+/// is refused, as its blocks are not checked; see below).
+///
 /// A damaged or hostile file gives an error, never a panic. As a guard against files that
 /// claim a huge image in a few bytes, the decoded samples may take at most 1 GiB or 4096
-/// times the file size, whichever is larger.
+/// times the file size, whichever is larger; the size counters of DWA blocks are checked
+/// before decoding, as the decoder trusts them for allocations.
 pub fn read_exr(path: &Path) -> Result<Image, Error> {
     let bytes = std::fs::read(path).map_err(|e| Error::Io {
         path: path.to_path_buf(),
@@ -137,19 +143,15 @@ fn decode_exr_inner(bytes: &[u8], path: &Path) -> Result<Image, Error> {
     };
 
     let meta = MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(exr_error)?;
-    if let Some(header) = meta
-        .headers
-        .iter()
-        .find(|h| matches!(h.compression, Compression::DWAA(_) | Compression::DWAB(_)))
-    {
-        // exr 1.74 sizes buffers from counters inside each DWA block before checking them,
-        // so one damaged block can abort the process on a failed allocation, which no
-        // `catch_unwind` stops. Refusing the (lossy, rarely used for renders) codec is the
-        // safe choice until the decoder checks its counters.
-        return Err(unsupported(format!(
-            "{:?} compression (not read: its decoder can abort on damaged data)",
-            header.compression
-        )));
+    match guard::check_dwa_blocks(bytes, &meta) {
+        Ok(()) => {}
+        Err(guard::DwaProblem::Unsupported(what)) => return Err(unsupported(what)),
+        Err(guard::DwaProblem::Damaged(message)) => {
+            return Err(Error::Exr {
+                path: path.to_path_buf(),
+                message,
+            })
+        }
     }
     let limit = (1u64 << 30).max(4096 * bytes.len() as u64);
     let mut decoded = 0u64;
@@ -439,43 +441,13 @@ fn sort_header_attributes(bytes: &mut [u8]) -> bool {
     if flags & MULTIPART != 0 {
         return false;
     }
-    // Each attribute: name NUL, type NUL, i32 size, value; a lone NUL ends the header.
-    let mut records: Vec<(usize, usize, usize)> = Vec::new(); // (start, name end, end)
-    let mut at = 8;
-    loop {
-        let Some(&first) = bytes.get(at) else {
-            return false;
-        };
-        if first == 0 {
-            break;
-        }
-        let Some(name_len) = bytes[at..].iter().position(|&b| b == 0) else {
-            return false;
-        };
-        let type_start = at + name_len + 1;
-        let Some(type_len) = bytes
-            .get(type_start..)
-            .and_then(|t| t.iter().position(|&b| b == 0))
-        else {
-            return false;
-        };
-        let size_at = type_start + type_len + 1;
-        let Some(size) = bytes.get(size_at..size_at + 4) else {
-            return false;
-        };
-        let Ok(size) = usize::try_from(i32::from_le_bytes([size[0], size[1], size[2], size[3]]))
-        else {
-            return false;
-        };
-        let end = size_at + 4 + size;
-        if end > bytes.len() {
-            return false;
-        }
-        records.push((at, at + name_len, end));
-        at = end;
-    }
+    let Some((records, after)) = guard::walk_header(bytes, 8) else {
+        return false;
+    };
+    // The header's closing NUL stays where it is.
+    let at = after - 1;
     let (start, end) = (8, at);
-    let mut sorted_records = records.clone();
+    let mut sorted_records = records;
     sorted_records.sort_by(|a, b| bytes[a.0..a.1].cmp(&bytes[b.0..b.1]));
     let mut header = Vec::with_capacity(end - start);
     for &(s, _, e) in &sorted_records {
@@ -868,6 +840,8 @@ mod tests {
             Compression::PIZ,
             Compression::PXR24,
             Compression::B44,
+            Compression::DWAA(None),
+            Compression::DWAB(None),
         ];
         let mut x = 99u64;
         let mut next = move || {
@@ -903,8 +877,52 @@ mod tests {
     }
 
     #[test]
-    fn dwa_files_are_refused() {
-        let err = decode_exr(&foreign_file(Compression::DWAA(None)), "t".as_ref()).unwrap_err();
+    fn dwa_files_are_read_and_damaged_ones_refused() {
+        for codec in [Compression::DWAA(None), Compression::DWAB(None)] {
+            let good = foreign_file(codec);
+            let image = decode_exr(&good, "t".as_ref()).unwrap();
+            // DWA is lossy (about 0.02 worst here, on values up to 2).
+            let wave = |p: usize| (p as f32 * 0.1).sin();
+            for (p, px) in image.rgba.iter().enumerate() {
+                let expected = [wave(p), 2.0 * wave(p), -wave(p), 1.0];
+                for c in 0..4 {
+                    assert!((px[c] - expected[c]).abs() < 0.05, "{codec:?} {p} {c}");
+                }
+            }
+            // A block whose counter claims exabytes (this aborted the process before the
+            // check): find the first block through the offset table, bump its counter 1.
+            let meta = MetaData::read_from_buffered(Cursor::new(&good), false).unwrap();
+            let tables = guard::walk_header(&good, 8).unwrap().1;
+            assert!(meta.headers[0].chunk_count >= 1);
+            let first = u64::from_le_bytes(good[tables..tables + 8].try_into().unwrap());
+            let counter = first as usize + 8 + 8;
+            let mut bad = good.clone();
+            bad[counter..counter + 8].copy_from_slice(&(1u64 << 56).to_le_bytes());
+            let err = decode_exr(&bad, "t".as_ref()).unwrap_err();
+            assert!(matches!(err, Error::Exr { .. }), "{codec:?}: {err}");
+        }
+    }
+
+    #[test]
+    fn tiled_dwa_is_refused() {
+        use ::exr::prelude::Vec2;
+        let channels = AnyChannels::sort(SmallVec::from_vec(vec![
+            AnyChannel::new("R", FlatSamples::F32(vec![0.5; 64])),
+            AnyChannel::new("G", FlatSamples::F32(vec![0.5; 64])),
+            AnyChannel::new("B", FlatSamples::F32(vec![0.5; 64])),
+        ]));
+        let encoding = Encoding {
+            compression: Compression::DWAA(None),
+            blocks: Blocks::Tiles(Vec2(4, 4)),
+            line_order: LineOrder::Increasing,
+        };
+        let layer = ExrLayer::new((8, 8), LayerAttributes::default(), encoding, channels);
+        let mut bytes = Vec::new();
+        ExrImage::from_layer(layer)
+            .write()
+            .to_buffered(Cursor::new(&mut bytes))
+            .unwrap();
+        let err = decode_exr(&bytes, "t".as_ref()).unwrap_err();
         assert!(matches!(err, Error::UnsupportedExr { .. }), "{err}");
     }
 }
