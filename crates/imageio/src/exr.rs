@@ -26,7 +26,8 @@ use crate::atomic::write_atomically;
 mod guard;
 use crate::{Error, Image, Layer, MetaValue, NameKind};
 
-/// Encodes `image` as EXR into memory. `path` only names the file in errors.
+/// Encodes `image` as EXR into memory, laid out as [`write_exr`] describes. `path` only names
+/// the file in errors.
 pub fn encode_exr(image: &Image, path: &Path) -> Result<Vec<u8>, Error> {
     image.validate()?;
     let exr_error = |e: ::exr::error::Error| Error::Exr {
@@ -76,7 +77,12 @@ pub fn encode_exr(image: &Image, path: &Path) -> Result<Vec<u8>, Error> {
     Ok(bytes)
 }
 
-/// Writes `image` to `path` as EXR (see the module docs for the layout), atomically.
+/// Writes `image` to `path` as EXR, atomically.
+///
+/// The file is one scan-line part, float32, ZIP-compressed (lossless, 16 rows a block), rows
+/// top to bottom: the beauty in the unnamed layer's `R`,`G`,`B`,`A` (premultiplied, as EXR
+/// expects), so every viewer shows it; each [`Layer`] as `name.channel` channels beside it;
+/// [`Image::metadata`] as header attributes. The bytes depend only on `image`.
 pub fn write_exr(path: &Path, image: &Image) -> Result<(), Error> {
     let bytes = encode_exr(image, path)?;
     write_atomically(path, &bytes)
@@ -924,5 +930,80 @@ mod tests {
             .unwrap();
         let err = decode_exr(&bytes, "t".as_ref()).unwrap_err();
         assert!(matches!(err, Error::UnsupportedExr { .. }), "{err}");
+    }
+
+    /// Bit patterns, so NaN payloads, infinities and -0.0 count.
+    type Bits = (Vec<u32>, Vec<(String, Vec<String>, Vec<u32>)>, Vec<String>);
+
+    fn bits(image: &Image) -> Bits {
+        let rgba = image.rgba.iter().flatten().map(|v| v.to_bits()).collect();
+        let layers = image
+            .layers
+            .iter()
+            .map(|l| {
+                let data = l.data.iter().map(|v| v.to_bits()).collect();
+                (l.name.clone(), l.channels.clone(), data)
+            })
+            .collect();
+        let meta = image
+            .metadata
+            .iter()
+            .map(|(k, v)| match v {
+                MetaValue::Float(f) => format!("{k}=f{:08x}", f.to_bits()),
+                other => format!("{k}={other:?}"),
+            })
+            .collect();
+        (rgba, layers, meta)
+    }
+
+    #[test]
+    fn random_images_round_trip_bit_exactly() {
+        let mut x = 2024u64;
+        let mut next = move || {
+            x = x
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (x >> 32) as u32
+        };
+        for case in 0..40 {
+            let (w, h) = (1 + next() % 40, 1 + next() % 40);
+            let n = (w * h) as usize;
+            let mut image = Image::new(w, h);
+            for px in &mut image.rgba {
+                *px = [0; 4].map(|_| f32::from_bits(next()));
+            }
+            // Layers sorted by name, channels in the reader's canonical order.
+            let sets: [&[&str]; 4] = [&["Z"], &["X", "Y", "Z"], &["R", "G", "B", "A"], &["id"]];
+            for name in ["albedo", "depth", "normal"] {
+                if next() % 2 == 0 {
+                    let channels = sets[next() as usize % sets.len()];
+                    image.layers.push(Layer {
+                        name: name.into(),
+                        channels: channels.iter().map(|c| c.to_string()).collect(),
+                        data: (0..n * channels.len())
+                            .map(|_| f32::from_bits(next()))
+                            .collect(),
+                    });
+                }
+            }
+            for i in 0..next() % 6 {
+                let value = match next() % 3 {
+                    0 => MetaValue::Int(next() as i32),
+                    1 => MetaValue::Float(f32::from_bits(next())),
+                    _ => MetaValue::Text(
+                        (0..next() % 20)
+                            .filter_map(|_| char::from_u32(next() % 0x3000))
+                            .collect(),
+                    ),
+                };
+                image
+                    .metadata
+                    .push((format!("m{i}:{}", next() % 100), value));
+            }
+            let bytes = encode_exr(&image, "t".as_ref()).unwrap();
+            let back = decode_exr(&bytes, "t".as_ref()).unwrap();
+            assert_eq!((back.width, back.height), (w, h), "case {case}");
+            assert_eq!(bits(&back), bits(&image), "case {case}");
+        }
     }
 }

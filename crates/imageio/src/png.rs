@@ -38,7 +38,8 @@ fn quantise(v: f64, max: f64) -> f64 {
     (v * max + 0.5).floor().clamp(0.0, max)
 }
 
-/// Encodes `image` as PNG into memory. `path` only names the file in errors.
+/// Encodes `image` as PNG into memory, as [`write_png`] describes. `path` only names the file
+/// in errors.
 pub fn encode_png(image: &Image, options: &PngOptions, path: &Path) -> Result<Vec<u8>, Error> {
     image.validate_beauty()?;
     if !options.exposure.is_finite() {
@@ -79,8 +80,13 @@ pub fn encode_png(image: &Image, options: &PngOptions, path: &Path) -> Result<Ve
     Ok(bytes)
 }
 
-/// Writes `image` to `path` as PNG (see the module docs), atomically. Layers and metadata are
-/// not written.
+/// Writes `image` to `path` as PNG, atomically: RGBA, 8 bits (16 with
+/// [`PngOptions::sixteen_bit`]), sRGB-encoded. Layers and metadata are not written.
+///
+/// Per pixel: NaN becomes 0 and infinities are clipped; RGB is multiplied by `2^exposure`;
+/// PNG stores straight alpha while [`Image`] RGB is premultiplied, so RGB is divided by A
+/// where A > 0; then the view transform; then rounding to nearest. A is written as coverage,
+/// clipped to [0, 1] and quantised linearly. The bytes depend only on the image and options.
 pub fn write_png(path: &Path, image: &Image, options: &PngOptions) -> Result<(), Error> {
     let bytes = encode_png(image, options, path)?;
     write_atomically(path, &bytes)
