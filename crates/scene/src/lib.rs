@@ -10,18 +10,19 @@
 //! ```
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
+mod accessor;
+mod dof;
 mod error;
+mod glb;
+mod load;
+mod material;
+mod mesh;
+mod prepass;
 mod types;
+mod uri;
 
+pub use dof::{lens_from_yfov, DEFAULT_ASPECT};
 pub use error::Error;
+pub use load::{load, load_bytes};
+pub use prepass::SUPPORTED_EXTENSIONS;
 pub use types::*;
-
-use std::path::Path;
-
-/// Loads a `.gltf` or `.glb` file into a render-ready [`Scene`].
-pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, Error> {
-    let _ = (path, options);
-    Err(Error::Unsupported {
-        what: "the loader is not written yet".into(),
-    })
-}
