@@ -143,6 +143,8 @@ fn cases() -> Vec<Case> {
     wrong_chunk[16..20].copy_from_slice(&0x004E_4942u32.to_le_bytes());
     let mut long_chunk = good_glb.clone();
     long_chunk[12..16].copy_from_slice(&100_000u32.to_le_bytes());
+    let mut bad_magic = good_glb.clone();
+    bad_magic[..4].copy_from_slice(b"gLTF");
     let mut long_header = good_glb.clone();
     long_header[8..12].copy_from_slice(&100_000u32.to_le_bytes());
 
@@ -152,6 +154,12 @@ fn cases() -> Vec<Case> {
             good_glb[..good_glb.len() / 2].to_vec(),
             |e| matches!(e, Error::Glb { .. }),
             "truncated",
+        ),
+        glb_case(
+            "GLB bad magic",
+            bad_magic,
+            |e| matches!(e, Error::Glb { .. }),
+            "bad magic",
         ),
         glb_case(
             "GLB header length past the end",

@@ -300,3 +300,143 @@ pub(crate) fn read_vec<const N: usize>(
         })
         .collect())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use base64::Engine;
+    use serde_json::json;
+
+    /// A document with one buffer holding `bytes` (one view over all of it, with `stride`) and
+    /// the given accessors.
+    fn doc(
+        bytes: &[u8],
+        stride: Option<u64>,
+        accessors: serde_json::Value,
+    ) -> (gltf::Document, Buffers) {
+        let mut view = json!({"buffer": 0, "byteLength": bytes.len()});
+        if let Some(s) = stride {
+            view["byteStride"] = json!(s);
+        }
+        let j = json!({
+            "asset": {"version": "2.0"},
+            "buffers": [{"byteLength": bytes.len(), "uri": format!("data:application/octet-stream;base64,{}",
+                base64::engine::general_purpose::STANDARD.encode(bytes))}],
+            "bufferViews": [view],
+            "accessors": accessors,
+        });
+        let p = crate::prepass::prepare(&serde_json::to_vec(&j).unwrap()).unwrap();
+        let data = vec![bytes.to_vec()];
+        (
+            p.document,
+            Buffers {
+                total: bytes.len() as u64,
+                data,
+            },
+        )
+    }
+
+    #[test]
+    fn normalized_and_quantized_integers() {
+        let bytes: Vec<u8> = [127i8, -128, 0, 64].iter().map(|&b| b as u8).collect();
+        let (d, b) = doc(
+            &bytes,
+            None,
+            json!([
+                {"bufferView": 0, "componentType": 5120, "normalized": true, "count": 1, "type": "VEC4"},
+                {"bufferView": 0, "componentType": 5120, "count": 1, "type": "VEC4"},
+                {"bufferView": 0, "componentType": 5121, "normalized": true, "count": 1, "type": "VEC4"},
+            ]),
+        );
+        let acc: Vec<_> = d.accessors().collect();
+        let (n, dims) = read_f32(&acc[0], &b, "a").unwrap();
+        assert_eq!(dims, 4);
+        assert_eq!(n, [1.0, -1.0, 0.0, 64.0 / 127.0]);
+        // KHR_mesh_quantization: non-normalized integers keep their value.
+        assert_eq!(
+            read_f32(&acc[1], &b, "a").unwrap().0,
+            [127.0, -128.0, 0.0, 64.0]
+        );
+        assert_eq!(
+            read_f32(&acc[2], &b, "a").unwrap().0,
+            [127.0 / 255.0, 128.0 / 255.0, 0.0, 64.0 / 255.0]
+        );
+    }
+
+    #[test]
+    fn strided_u16_and_bounds() {
+        // Two u16 elements with a 4-byte stride: 1, (pad), 2, (pad).
+        let bytes = [1u8, 0, 9, 9, 2, 0, 9, 9];
+        let (d, b) = doc(
+            &bytes,
+            Some(4),
+            json!([
+                {"bufferView": 0, "componentType": 5123, "count": 2, "type": "SCALAR"},
+                {"bufferView": 0, "componentType": 5123, "count": 3, "type": "SCALAR"},
+                {"bufferView": 0, "byteOffset": 2, "componentType": 5123, "count": 2, "type": "SCALAR"},
+            ]),
+        );
+        let acc: Vec<_> = d.accessors().collect();
+        assert_eq!(read_indices(&acc[0], &b, "i").unwrap(), [1, 2]);
+        assert!(matches!(
+            read_indices(&acc[1], &b, "i"),
+            Err(Error::OutOfBounds {
+                needed: 10,
+                available: 8,
+                ..
+            })
+        ));
+        assert_eq!(read_indices(&acc[2], &b, "i").unwrap(), [0x0909, 0x0909]);
+    }
+
+    #[test]
+    fn sparse_values_replace_the_base() {
+        // Base: 4 floats 0..4; sparse: indices [3, 1] (u8) and values [30, 10].
+        let mut bytes = Vec::new();
+        for x in [0.0f32, 1.0, 2.0, 3.0, 30.0, 10.0] {
+            bytes.extend(x.to_le_bytes());
+        }
+        bytes.extend([3u8, 1, 0, 0]);
+        let (d, b) = doc(
+            &bytes,
+            None,
+            json!([
+                {"bufferView": 0, "componentType": 5126, "count": 4, "type": "SCALAR",
+                 "sparse": {"count": 2, "indices": {"bufferView": 0, "byteOffset": 24, "componentType": 5121},
+                            "values": {"bufferView": 0, "byteOffset": 16}}},
+                {"componentType": 5126, "count": 4, "type": "SCALAR",
+                 "sparse": {"count": 2, "indices": {"bufferView": 0, "byteOffset": 24, "componentType": 5121},
+                            "values": {"bufferView": 0, "byteOffset": 16}}},
+            ]),
+        );
+        let acc: Vec<_> = d.accessors().collect();
+        assert_eq!(
+            read_f32(&acc[0], &b, "s").unwrap().0,
+            [0.0, 10.0, 2.0, 30.0]
+        );
+        assert_eq!(
+            read_f32(&acc[1], &b, "s").unwrap().0,
+            [0.0, 10.0, 0.0, 30.0]
+        );
+    }
+
+    #[test]
+    fn wrong_component_count_and_index_type_are_errors() {
+        let (d, b) = doc(
+            &[0; 12],
+            None,
+            json!([
+                {"bufferView": 0, "componentType": 5126, "count": 1, "type": "VEC3"},
+            ]),
+        );
+        let acc = d.accessors().next().unwrap();
+        assert!(matches!(
+            read_vec::<2>(&acc, &b, "uv"),
+            Err(Error::BadAccessor { .. })
+        ));
+        assert!(matches!(
+            read_indices(&acc, &b, "i"),
+            Err(Error::BadAccessor { .. })
+        ));
+    }
+}

@@ -30,6 +30,13 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, Error> {
     } else {
         base_dir
     };
+    let named_glb = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    if named_glb && !glb::is_glb(&bytes) {
+        // A .glb without the magic is a damaged container, not JSON: say so.
+        glb::parse(&bytes)?;
+    }
     load_bytes(&bytes, base_dir, options)
 }
 
@@ -516,4 +523,191 @@ fn automatic_camera(
         projection,
         dof,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use base64::Engine;
+    use serde_json::json;
+
+    /// One triangle (no normals) plus, from byte 44, instancing translations for 3 instances.
+    fn bin() -> Vec<u8> {
+        let mut b = Vec::new();
+        let floats = [
+            0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, // positions
+        ];
+        for x in floats {
+            b.extend(x.to_le_bytes());
+        }
+        for i in [0u16, 1, 2, 0] {
+            b.extend(i.to_le_bytes());
+        }
+        for x in [0.0f32, 0.0, 0.0, 5.0, 0.0, 0.0, 0.0, 5.0, 0.0] {
+            b.extend(x.to_le_bytes());
+        }
+        b
+    }
+
+    fn gltf(nodes: Value, scene_nodes: Value, extra: Value) -> Vec<u8> {
+        let b = bin();
+        let mut j = json!({
+            "asset": {"version": "2.0"},
+            "scenes": [{"nodes": scene_nodes}],
+            "nodes": nodes,
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+            "accessors": [
+                {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 0]},
+                {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"},
+                {"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC3"}
+            ],
+            "bufferViews": [
+                {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                {"buffer": 0, "byteOffset": 36, "byteLength": 6},
+                {"buffer": 0, "byteOffset": 44, "byteLength": 36}
+            ],
+            "buffers": [{"byteLength": b.len(), "uri": format!("data:application/octet-stream;base64,{}",
+                base64::engine::general_purpose::STANDARD.encode(&b))}]
+        });
+        if let (Some(o), Some(e)) = (j.as_object_mut(), extra.as_object()) {
+            o.extend(e.clone());
+        }
+        serde_json::to_vec(&j).unwrap()
+    }
+
+    fn load_json(bytes: &[u8]) -> Result<Scene, Error> {
+        load_bytes(bytes, Path::new("."), &LoadOptions::default())
+    }
+
+    #[test]
+    fn shared_mesh_is_stored_once_with_hierarchy_transforms() {
+        let s = load_json(&gltf(
+            json!([
+                {"translation": [1, 0, 0], "children": [1, 2]},
+                {"mesh": 0, "scale": [2, 2, 2]},
+                {"mesh": 0, "matrix": [-1,0,0,0, 0,1,0,0, 0,0,1,0, 0,3,0,1]}
+            ]),
+            json!([0]),
+            json!({}),
+        ))
+        .unwrap();
+        assert_eq!(s.meshes.len(), 1);
+        assert_eq!(s.instances.len(), 2);
+        assert_eq!(s.drawn_triangle_count(), 2);
+        assert_eq!(s.stats.nodes, 3);
+        let a = s.instances[0].world_from_object;
+        assert_eq!(a.transform_point3(Vec3::X), Vec3::new(3.0, 0.0, 0.0));
+        let b = s.instances[1];
+        assert_eq!(
+            b.world_from_object.transform_point3(Vec3::X),
+            Vec3::new(0.0, 3.0, 0.0)
+        );
+        assert!(b.is_mirrored() && !s.instances[0].is_mirrored());
+        // No NORMAL: flat normals, one vertex per corner, facing +Z for this CCW triangle.
+        assert_eq!(s.meshes[0].positions.len(), 3);
+        assert!(s.meshes[0].normals.iter().all(|n| *n == Vec3::Z));
+        // No material: the glTF default one.
+        assert_eq!(s.materials, vec![crate::Material::default()]);
+    }
+
+    #[test]
+    fn gpu_instancing_multiplies_instances_not_geometry() {
+        let s = load_json(&gltf(
+            json!([{"mesh": 0, "translation": [0, 0, 1],
+                "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 2}}}}]),
+            json!([0]),
+            json!({"extensionsUsed": ["EXT_mesh_gpu_instancing"], "extensionsRequired": ["EXT_mesh_gpu_instancing"]}),
+        ))
+        .unwrap();
+        assert_eq!(s.meshes.len(), 1);
+        assert_eq!(s.unique_triangle_count(), 1);
+        assert_eq!(s.drawn_triangle_count(), 3);
+        let origins: Vec<Vec3> = s
+            .instances
+            .iter()
+            .map(|i| i.world_from_object.transform_point3(Vec3::ZERO))
+            .collect();
+        assert_eq!(
+            origins,
+            [
+                Vec3::new(0.0, 0.0, 1.0),
+                Vec3::new(5.0, 0.0, 1.0),
+                Vec3::new(0.0, 5.0, 1.0)
+            ]
+        );
+    }
+
+    #[test]
+    fn lights_in_blender_units_placed_by_nodes() {
+        let s = load_json(&gltf(
+            json!([
+                {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0, 2, 0],
+                 "rotation": [-0.7071068, 0, 0, 0.7071068]},
+                {"extensions": {"KHR_lights_punctual": {"light": 1}}}
+            ]),
+            json!([0, 1]),
+            json!({"extensionsUsed": ["KHR_lights_punctual"], "extensions": {"KHR_lights_punctual": {"lights": [
+                {"type": "spot", "intensity": 683, "color": [1, 0.5, 0], "spot": {"innerConeAngle": 0.1, "outerConeAngle": 0.5}},
+                {"type": "directional", "intensity": 1366}
+            ]}}}),
+        ))
+        .unwrap();
+        assert_eq!(s.lights.len(), 2);
+        let spot = &s.lights[0];
+        assert!(
+            (spot.intensity - Vec3::new(1.0, 0.5, 0.0))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        assert!(
+            (spot.direction - Vec3::NEG_Y).length() < 1e-5,
+            "{}",
+            spot.direction
+        );
+        assert_eq!(spot.position, Vec3::new(0.0, 2.0, 0.0));
+        assert_eq!(
+            spot.kind,
+            LightKind::Spot {
+                inner_cone: 0.1,
+                outer_cone: 0.5
+            }
+        );
+        assert!(
+            (s.lights[1].intensity - Vec3::splat(2.0))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+    }
+
+    #[test]
+    fn camera_scale_is_removed_and_automatic_camera_frames_bounds() {
+        let cam = json!({"cameras": [{"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1}}]});
+        let s = load_json(&gltf(
+            json!([{"mesh": 0}, {"camera": 0, "scale": [3, 3, 3], "translation": [0, 0, 4]}]),
+            json!([0, 1]),
+            cam,
+        ))
+        .unwrap();
+        let c = &s.cameras[0];
+        assert_eq!(c.node, Some(1));
+        assert!((c.world_from_camera.matrix3.determinant() - 1.0).abs() < 1e-5);
+        assert_eq!(
+            Vec3::from(c.world_from_camera.translation),
+            Vec3::new(0.0, 0.0, 4.0)
+        );
+
+        let s = load_json(&gltf(json!([{"mesh": 0}]), json!([0]), json!({}))).unwrap();
+        assert_eq!(s.cameras.len(), 1);
+        let c = &s.cameras[0];
+        assert_eq!(c.node, None);
+        let eye = Vec3::from(c.world_from_camera.translation);
+        let forward = Vec3::from(-c.world_from_camera.matrix3.z_axis);
+        let to_center = (s.bounds().center() - eye).normalize();
+        assert!(forward.dot(to_center) > 0.9999);
+        assert!(eye.z > s.bounds().max.z && eye.y > s.bounds().center().y);
+        assert!(!c.dof.enabled);
+    }
 }

@@ -35,6 +35,7 @@ pub struct Mesh {
     /// Unit shading normals. Always present: primitives without `NORMAL` get flat normals.
     pub normals: Vec<Vec3>,
     /// Tangents (xyz) with handedness sign (w), from `TANGENT`; empty when no primitive has them.
+    /// Vertices of primitives without `TANGENT` hold `Vec4::ZERO` (derive a tangent there).
     pub tangents: Vec<Vec4>,
     /// `TEXCOORD_0`; empty when no primitive has it (zeros fill primitives that lack it).
     pub uv0: Vec<Vec2>,
@@ -53,7 +54,10 @@ pub struct Mesh {
 pub struct Instance {
     /// Index into `Scene::meshes`.
     pub mesh: u32,
-    /// Object-to-world transform (may contain scale, shear and reflection).
+    /// Object-to-world transform (may contain scale, shear and reflection). A mesh is shared by
+    /// mirrored and unmirrored instances, so its winding is not flipped: when
+    /// [`Instance::is_mirrored`], the world-space front side of a triangle is the opposite of
+    /// `cross(b - a, c - a)` of its transformed corners.
     pub world_from_object: Affine3A,
     /// Index of the glTF node that draws this instance.
     pub node: u32,
@@ -417,7 +421,8 @@ pub struct LoadOptions {
     pub scene: Option<usize>,
     /// Command-line depth-of-field overrides, applied to every camera.
     pub dof_overrides: DofOverrides,
-    /// Skip decoding textures (for `info` and geometry-only uses).
+    /// Skip decoding textures (for `info` and geometry-only uses). Textures are still listed
+    /// (with their sampler and colour space), each as a 1×1 white placeholder.
     pub skip_textures: bool,
 }
 
