@@ -643,7 +643,7 @@ mod tests {
         let s = load_json(&gltf(
             json!([
                 {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0, 2, 0],
-                 "rotation": [-0.7071068, 0, 0, 0.7071068]},
+                 "rotation": [-std::f32::consts::FRAC_1_SQRT_2, 0, 0, std::f32::consts::FRAC_1_SQRT_2]},
                 {"extensions": {"KHR_lights_punctual": {"light": 1}}}
             ]),
             json!([0, 1]),
