@@ -710,4 +710,42 @@ mod tests {
         assert!(eye.z > s.bounds().max.z && eye.y > s.bounds().center().y);
         assert!(!c.dof.enabled);
     }
+
+    #[test]
+    fn dof_sources_reach_the_camera() {
+        let extra = json!({"cameras": [{"name": "Lens", "type": "perspective",
+            "perspective": {"yfov": 0.5, "aspectRatio": 1.5, "znear": 0.1},
+            "extensions": {"EXT_camera_physical": {"focalLength": 0.05, "fStop": 4.0, "focusDistance": 2.0}},
+            "extras": {"aperture_blades": 6}}]});
+        let nodes = json!([
+            {"mesh": 0, "name": "Target", "translation": [0, 0, -3]},
+            {"camera": 0, "translation": [0, 0, 4], "extras": {"focus_object": {"name": "Target", "type": "Object"}}}
+        ]);
+        let s = load_json(&gltf(nodes.clone(), json!([0, 1]), extra.clone())).unwrap();
+        let d = &s.cameras[0].dof;
+        assert!(d.enabled);
+        assert_eq!(d.lens_mm, 50.0);
+        assert!((d.aperture_radius - 0.05 / 8.0).abs() < 1e-7);
+        assert!((d.focus_distance - 7.0).abs() < 1e-5);
+        assert_eq!(d.focus_object.as_deref(), Some("Target"));
+        assert_eq!(d.blades, 6);
+        // The command line wins over every file source.
+        let opts = LoadOptions {
+            dof_overrides: crate::DofOverrides {
+                aperture_radius: Some(0.5),
+                focus_distance: Some(1.5),
+                ..Default::default()
+            },
+            ..LoadOptions::default()
+        };
+        let s = load_bytes(&gltf(nodes, json!([0, 1]), extra), Path::new("."), &opts).unwrap();
+        assert_eq!(
+            (
+                s.cameras[0].dof.aperture_radius,
+                s.cameras[0].dof.focus_distance
+            ),
+            (0.5, 1.5)
+        );
+        assert_eq!(s.cameras[0].dof.focus_object, None);
+    }
 }
