@@ -387,6 +387,29 @@ fn cases() -> Vec<Case> {
             "scene",
         ),
         gltf_case(
+            "camera type without its projection",
+            |j| {
+                j["cameras"] = json!([{"type": "perspective", "orthographic":
+                    {"xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 10}}]);
+                j["nodes"] = json!([{"mesh": 0}, {"camera": 0}]);
+                j["scenes"] = json!([{"nodes": [0, 1]}]);
+            },
+            |e| matches!(e, Error::Invalid { .. }),
+            "cameras[0].perspective",
+        ),
+        gltf_case(
+            "image with no source",
+            |j| {
+                j["images"] = json!([{"name": "nothing"}]);
+                j["textures"] = json!([{"source": 0}]);
+                j["materials"] =
+                    json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+                j["meshes"][0]["primitives"][0]["material"] = json!(0);
+            },
+            |e| matches!(e, Error::Invalid { .. }),
+            "images[0]",
+        ),
+        gltf_case(
             "missing image file",
             |j| {
                 j["images"] = json!([{"uri": "gone.png"}]);

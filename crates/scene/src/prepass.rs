@@ -83,6 +83,42 @@ fn check_position_indices(root: &Value) -> Result<(), Error> {
     Ok(())
 }
 
+/// Shapes the `gltf` crate's typed accessors unwrap without its validation checking them.
+/// - A camera's `type` names the projection object it reads.
+/// - An image has a `uri` or a `bufferView`; with a `bufferView` it must have a `mimeType`, which
+///   some exporters omit: we sniff the format from the bytes anyway, so a neutral one is supplied.
+fn check_shapes_the_typed_api_assumes(root: &mut Value) -> Result<(), Error> {
+    let cameras = root.get("cameras").and_then(Value::as_array);
+    for (i, cam) in cameras.into_iter().flatten().enumerate() {
+        if let Some(kind @ ("perspective" | "orthographic")) =
+            cam.get("type").and_then(Value::as_str)
+        {
+            if cam.get(kind).is_none() {
+                return Err(Error::Invalid {
+                    at: format!("cameras[{i}].{kind}"),
+                    reason: format!("missing, but the camera's type is {kind}"),
+                });
+            }
+        }
+    }
+    let images = root.get_mut("images").and_then(Value::as_array_mut);
+    for (i, image) in images.into_iter().flatten().enumerate() {
+        let Some(obj) = image.as_object_mut() else {
+            continue;
+        };
+        if obj.contains_key("bufferView") {
+            obj.entry("mimeType")
+                .or_insert_with(|| Value::from("application/octet-stream"));
+        } else if !obj.contains_key("uri") {
+            return Err(Error::Invalid {
+                at: format!("images[{i}]"),
+                reason: "neither uri nor bufferView".into(),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Parses, checks and cleans the JSON, then hands it to the `gltf` crate for validation.
 pub(crate) fn prepare(json: &[u8]) -> Result<Prepared, Error> {
     let mut root: Value = serde_json::from_slice(json).map_err(|source| Error::Json { source })?;
@@ -135,6 +171,7 @@ pub(crate) fn prepare(json: &[u8]) -> Result<Prepared, Error> {
     }
 
     check_position_indices(&root)?;
+    check_shapes_the_typed_api_assumes(&mut root)?;
     let json_root: gltf::json::Root =
         serde_json::from_value(root).map_err(|source| Error::Json { source })?;
     let document = gltf::Document::from_json(json_root).map_err(|e| match e {
