@@ -93,7 +93,7 @@ fn check_shapes_the_typed_api_assumes(root: &mut Value) -> Result<(), Error> {
         if let Some(kind @ ("perspective" | "orthographic")) =
             cam.get("type").and_then(Value::as_str)
         {
-            if cam.get(kind).is_none() {
+            if cam.get(kind).is_none_or(Value::is_null) {
                 return Err(Error::Invalid {
                     at: format!("cameras[{i}].{kind}"),
                     reason: format!("missing, but the camera's type is {kind}"),
@@ -106,10 +106,14 @@ fn check_shapes_the_typed_api_assumes(root: &mut Value) -> Result<(), Error> {
         let Some(obj) = image.as_object_mut() else {
             continue;
         };
-        if obj.contains_key("bufferView") {
-            obj.entry("mimeType")
-                .or_insert_with(|| Value::from("application/octet-stream"));
-        } else if !obj.contains_key("uri") {
+        // serde reads an explicit null as absent.
+        let given =
+            |o: &serde_json::Map<String, Value>, k: &str| o.get(k).is_some_and(|v| !v.is_null());
+        if given(obj, "bufferView") {
+            if !given(obj, "mimeType") {
+                obj.insert("mimeType".into(), Value::from("application/octet-stream"));
+            }
+        } else if !given(obj, "uri") {
             return Err(Error::Invalid {
                 at: format!("images[{i}]"),
                 reason: "neither uri nor bufferView".into(),
