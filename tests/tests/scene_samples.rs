@@ -165,6 +165,39 @@ fn textures_of_a_textured_file_are_decoded() {
 }
 
 #[test]
+fn texture_colour_spaces_follow_their_use() {
+    let Some(dir) = aperture_tests::samples_dir() else {
+        return;
+    };
+    // FlightHelmet: 15 images, each used as base colour (sRGB), normal or
+    // occlusion-roughness-metal (linear).
+    let s = load(
+        &dir.join("benchmark/FlightHelmet/FlightHelmet.gltf"),
+        &geometry_only(),
+    )
+    .unwrap();
+    assert_eq!(s.textures.len(), 15);
+    let mut srgb: Vec<u32> = s
+        .materials
+        .iter()
+        .flat_map(|m| [m.base_color_texture, m.emissive_texture])
+        .flatten()
+        .map(|t| t.texture)
+        .collect();
+    srgb.sort_unstable();
+    srgb.dedup();
+    assert_eq!(srgb.len(), 5);
+    for (i, t) in s.textures.iter().enumerate() {
+        let want = if srgb.contains(&(i as u32)) {
+            aperture_scene::ColorSpace::Srgb
+        } else {
+            aperture_scene::ColorSpace::Linear
+        };
+        assert_eq!(t.color_space, want, "texture {i} {:?}", t.name);
+    }
+}
+
+#[test]
 fn lights_and_cameras_are_placed_by_their_nodes() {
     let Some(dir) = aperture_tests::samples_dir() else {
         return;

@@ -748,4 +748,25 @@ mod tests {
         );
         assert_eq!(s.cameras[0].dof.focus_object, None);
     }
+
+    #[test]
+    fn only_images_of_drawn_materials_are_decoded() {
+        // Material 1 is used by no primitive; its image file does not exist.
+        let extra = json!({
+            "images": [{"uri": "does-not-exist.png"}],
+            "textures": [{"source": 0}],
+            "materials": [{"name": "used"}, {"name": "unused", "emissiveTexture": {"index": 0}}]
+        });
+        let mut bytes: Value =
+            serde_json::from_slice(&gltf(json!([{"mesh": 0}]), json!([0]), extra)).unwrap();
+        bytes["meshes"][0]["primitives"][0]["material"] = json!(0);
+        let s = load_json(&serde_json::to_vec(&bytes).unwrap()).unwrap();
+        assert_eq!(s.materials.len(), 1);
+        assert_eq!(s.materials[0].name.as_deref(), Some("used"));
+        assert!(s.textures.is_empty());
+        // Used, the same file is an error that names the image.
+        bytes["meshes"][0]["primitives"][0]["material"] = json!(1);
+        let e = load_json(&serde_json::to_vec(&bytes).unwrap()).unwrap_err();
+        assert!(e.to_string().contains("images[0].uri"), "{e}");
+    }
 }
