@@ -165,6 +165,43 @@ fn textures_of_a_textured_file_are_decoded() {
 }
 
 #[test]
+fn mirrored_instances_keep_triangles_facing_their_normals() {
+    let Some(dir) = aperture_tests::samples_dir() else {
+        return;
+    };
+    let s = load(
+        &dir.join("correctness/NegativeScaleTest/NegativeScaleTest.glb"),
+        &geometry_only(),
+    )
+    .unwrap();
+    assert!(s.instances.iter().any(|i| i.is_mirrored()));
+    assert!(s.instances.iter().any(|i| !i.is_mirrored()));
+    for (k, inst) in s.instances.iter().enumerate() {
+        let mesh = &s.meshes[inst.mesh as usize];
+        let (mut agree, mut total) = (0, 0);
+        for (t, tri) in mesh.indices.iter().enumerate() {
+            let Some(g) = inst.world_geometric_normal(mesh, t) else {
+                continue;
+            };
+            let shading: glam::Vec3 = tri
+                .iter()
+                .filter_map(|&v| inst.world_normal(mesh.normals[v as usize]))
+                .sum();
+            total += 1;
+            if g.dot(shading) > 0.0 {
+                agree += 1;
+            }
+        }
+        // Authored normals follow the winding; a few smoothed edges may disagree.
+        assert!(
+            agree * 100 >= total * 95,
+            "instance {k} (mirrored: {}): {agree}/{total} triangles agree",
+            inst.is_mirrored()
+        );
+    }
+}
+
+#[test]
 fn texture_colour_spaces_follow_their_use() {
     let Some(dir) = aperture_tests::samples_dir() else {
         return;

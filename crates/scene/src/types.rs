@@ -68,6 +68,33 @@ impl Instance {
     pub fn is_mirrored(&self) -> bool {
         self.world_from_object.matrix3.determinant() < 0.0
     }
+
+    /// A world-space unit normal from an object-space one (inverse transpose of the linear part).
+    /// `None` when the transform is singular or the normal is zero.
+    pub fn world_normal(&self, object_normal: Vec3) -> Option<Vec3> {
+        let m = self.world_from_object.matrix3;
+        if m.determinant() == 0.0 {
+            return None;
+        }
+        (m.inverse().transpose() * glam::Vec3A::from(object_normal))
+            .try_normalize()
+            .map(Vec3::from)
+    }
+
+    /// The world-space unit normal of the front of triangle `triangle` of `mesh` (the side its
+    /// counter-clockwise winding faces in object space), flipped for mirroring transforms so it
+    /// stays on the same side of the surface as the transformed shading normals.
+    /// `None` for a degenerate triangle or an index outside the mesh.
+    pub fn world_geometric_normal(&self, mesh: &Mesh, triangle: usize) -> Option<Vec3> {
+        let [a, b, c] = mesh.indices.get(triangle)?.map(|i| {
+            mesh.positions
+                .get(i as usize)
+                .map(|p| self.world_from_object.transform_point3(*p))
+        });
+        let (a, b, c) = (a?, b?, c?);
+        let n = (b - a).cross(c - a).try_normalize()?;
+        Some(if self.is_mirrored() { -n } else { n })
+    }
 }
 
 /// How a material treats alpha.
