@@ -8,6 +8,18 @@
 //! println!("{} triangles drawn", scene.drawn_triangle_count());
 //! # Ok::<(), aperture_scene::Error>(())
 //! ```
+//!
+//! What the loader guarantees:
+//! - `extensionsRequired` is checked before any buffer is read ([`SUPPORTED_EXTENSIONS`]); an
+//!   extension that is only used is ignored (and reported in [`SceneStats::warnings`]).
+//! - Animations, skins and morph targets are not evaluated: the rest pose is drawn.
+//! - Only the selected scene's meshes are loaded, each once, with one [`Instance`] per drawing node
+//!   or `EXT_mesh_gpu_instancing` instance; only images used by drawn materials are decoded, in
+//!   parallel.
+//! - Bad input is an [`Error`] saying where, never a panic; every count is checked against the
+//!   bytes that back it before anything is allocated.
+//! - External URIs resolve only inside the scene file's folder: no `..`, absolute paths or
+//!   `http:`.
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 mod accessor;

@@ -53,10 +53,15 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
     let doc = prepared.document;
     let mut stats = SceneStats {
         skipped_features: prepared.skipped,
+        warnings: prepared
+            .ignored_extensions
+            .iter()
+            .map(|e| format!("extension {e} is used but not implemented: ignored"))
+            .collect(),
         ..SceneStats::default()
     };
     let buffers = load_buffers(&doc, bin, base_dir)?;
-    let nodes = world_transforms(&doc)?;
+    let world_from_node = world_transforms(&doc)?;
 
     // The scene to draw.
     let scene = match options.scene {
@@ -69,7 +74,7 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
     let mut order = Vec::new();
     match &scene {
         Some(s) => {
-            let mut seen = vec![false; nodes.len()];
+            let mut seen = vec![false; world_from_node.len()];
             let mut stack: Vec<usize> = s.nodes().map(|n| n.index()).collect();
             stack.reverse();
             while let Some(i) = stack.pop() {
@@ -96,7 +101,7 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
     let all_nodes: Vec<gltf::Node<'_>> = doc.nodes().collect();
     for &ni in &order {
         let node = &all_nodes[ni];
-        let world = nodes[ni];
+        let world = world_from_node[ni];
         if let Some(m) = node.mesh() {
             let mesh_index = match mesh_of.get(&m.index()) {
                 Some(&i) => i,
@@ -164,7 +169,10 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
         .iter()
         .map(|n| n.name().map(str::to_owned))
         .collect();
-    let origins: Vec<Vec3> = nodes.iter().map(|m| Vec3::from(m.translation)).collect();
+    let origins: Vec<Vec3> = world_from_node
+        .iter()
+        .map(|m| Vec3::from(m.translation))
+        .collect();
     let info = NodeInfo {
         names: &names,
         origins: &origins,
@@ -173,7 +181,7 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
         let node = &all_nodes[ni];
         if let Some(cam) = node.camera() {
             out.cameras
-                .push(camera(&cam, node, nodes[ni], &info, options)?);
+                .push(camera(&cam, node, world_from_node[ni], &info, options)?);
         }
     }
 

@@ -27,6 +27,8 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
 pub(crate) struct Prepared {
     pub document: gltf::Document,
     pub skipped: Vec<String>,
+    /// Extensions the file uses that we ignore (allowed: they are not required).
+    pub ignored_extensions: Vec<String>,
 }
 
 /// Refuses required extensions we do not implement. Runs on the raw JSON, before anything else.
@@ -134,6 +136,15 @@ pub(crate) fn prepare(json: &[u8]) -> Result<Prepared, Error> {
     }
     check_required(&root)?;
 
+    let ignored_extensions = root
+        .get("extensionsUsed")
+        .and_then(Value::as_array)
+        .into_iter()
+        .flatten()
+        .filter_map(Value::as_str)
+        .filter(|e| !SUPPORTED_EXTENSIONS.contains(e))
+        .map(str::to_owned)
+        .collect();
     let mut skipped = Vec::new();
     let animations = len_of(&root, "animations");
     let skins = len_of(&root, "skins");
@@ -198,7 +209,11 @@ pub(crate) fn prepare(json: &[u8]) -> Result<Prepared, Error> {
             reason: other.to_string(),
         },
     })?;
-    Ok(Prepared { document, skipped })
+    Ok(Prepared {
+        document,
+        skipped,
+        ignored_extensions,
+    })
 }
 
 #[cfg(test)]
@@ -216,8 +231,9 @@ mod tests {
 
     #[test]
     fn used_only_extensions_are_ignored_and_required_supported_ones_pass() {
-        let p = prepare(br#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_draco_mesh_compression","EXT_mesh_gpu_instancing"],"extensionsRequired":["EXT_mesh_gpu_instancing","KHR_mesh_quantization"]}"#);
-        assert!(p.is_ok());
+        let p = prepare(br#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_draco_mesh_compression","EXT_mesh_gpu_instancing"],"extensionsRequired":["EXT_mesh_gpu_instancing","KHR_mesh_quantization"]}"#)
+            .unwrap();
+        assert_eq!(p.ignored_extensions, ["KHR_draco_mesh_compression"]);
     }
 
     #[test]
