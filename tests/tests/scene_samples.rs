@@ -272,3 +272,68 @@ fn lights_and_cameras_are_placed_by_their_nodes() {
     assert_eq!(s.cameras.len(), 1);
     assert_eq!(s.cameras[0].node, None);
 }
+
+/// Every leaf of a JSON value (and every object/array), as key/index paths.
+fn json_paths(v: &Value, path: &mut Vec<Value>, out: &mut Vec<Vec<Value>>) {
+    match v {
+        Value::Object(m) => m.iter().for_each(|(k, c)| {
+            path.push(Value::from(k.as_str()));
+            json_paths(c, path, out);
+            path.pop();
+        }),
+        Value::Array(a) => a.iter().enumerate().for_each(|(i, c)| {
+            path.push(Value::from(i));
+            json_paths(c, path, out);
+            path.pop();
+        }),
+        _ => {}
+    }
+    out.push(path.clone());
+}
+
+#[test]
+fn replacing_any_json_value_of_real_samples_never_panics() {
+    let Some(dir) = aperture_tests::samples_dir() else {
+        return;
+    };
+    let replacements = [
+        Value::Null,
+        serde_json::json!(-1),
+        serde_json::json!(0),
+        serde_json::json!(3),
+        serde_json::json!(1e39),
+        serde_json::json!("x"),
+    ];
+    let mut panics = Vec::new();
+    for file in [
+        "correctness/SimpleSkin/SimpleSkin.gltf",
+        "correctness/SimpleSparseAccessor/SimpleSparseAccessor.gltf",
+        "correctness/MeshPrimitiveModes/MeshPrimitiveModes.gltf",
+        "correctness/TextureTransformTest/TextureTransformTest.gltf",
+        "correctness/Cameras/Cameras.gltf",
+    ] {
+        let path = dir.join(file);
+        let base_dir = path.parent().unwrap().to_path_buf();
+        let json: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+        let mut paths = Vec::new();
+        json_paths(&json, &mut Vec::new(), &mut paths);
+        for p in &paths {
+            for r in &replacements {
+                let mut m = json.clone();
+                let slot = p.iter().fold(&mut m, |v, k| match k {
+                    Value::String(s) => &mut v[s.as_str()],
+                    _ => &mut v[k.as_u64().unwrap() as usize],
+                });
+                *slot = r.clone();
+                let bytes = serde_json::to_vec(&m).unwrap();
+                let result = std::panic::catch_unwind(|| {
+                    let _ = aperture_scene::load_bytes(&bytes, &base_dir, &geometry_only());
+                });
+                if result.is_err() {
+                    panics.push(format!("{file}: {p:?} = {r}"));
+                }
+            }
+        }
+    }
+    assert!(panics.is_empty(), "{}", panics.join("\n"));
+}
