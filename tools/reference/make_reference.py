@@ -1,0 +1,525 @@
+#!/usr/bin/env python3
+"""Reference scenes for aperture, rendered independently by Mitsuba 3.
+
+Each scene is defined once, below, as plain data (boxes, quads, one light, a camera).
+From that one definition the script writes
+
+* ``assets/reference/<name>.gltf`` -- the scene for aperture (one embedded ``data:`` buffer),
+* ``assets/reference/<name>.exr``  -- Mitsuba 3's render of the same scene (RGB float32),
+* ``assets/reference/manifest.json`` -- what the Rust test needs to render the same image.
+
+Mitsuba side: ``scalar_rgb`` variant, ``path`` integrator with ``max_depth = max_bounces + 2``
+(Mitsuba counts path segments: 1 = emitters seen directly, 2 = direct light; aperture counts
+bounces as Cycles does: 0 = direct light), ``hide_emitters`` false, ``independent`` sampler,
+``hdrfilm`` with a 1-pixel ``box`` filter, ``thinlens`` (or ``perspective``) sensor with
+``fov_axis`` 'y'. All surfaces are two-sided Lambertian (``twosided`` + ``diffuse``), which is
+what aperture's ``--override-material diffuse`` renders.
+
+The reference is rendered as two independent halves (seeds 0 and 1, ``spp/2`` each); their
+average is written, and ``rmse(half0, half1) / 2`` -- the noise RMSE of that average -- is
+recorded in the manifest as ``reference_noise_rmse`` so the test can account for it.
+
+Usage: ``python make_reference.py [--spp N] [--only NAME ...] [--gltf-only]`` (see README.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import base64
+import json
+import math
+import os
+import struct
+import sys
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.normpath(os.path.join(HERE, "..", ".."))
+OUT = os.path.join(REPO, "assets", "reference")
+
+# aperture's candela per W/sr (SPEC section 4: Blender's importer converts cd / 683).
+LUMENS_PER_WATT = 683.0
+
+WIDTH, HEIGHT = 160, 120
+MAX_BOUNCES = 3
+DEFAULT_SPP = 8192
+# Seeds of the two Mitsuba halves whose average is the reference.
+REFERENCE_SEEDS = [0, 1]
+
+# --------------------------------------------------------------------------------------------
+# Small linear algebra (row-major 4x4 lists; glTF wants column-major, converted on output).
+
+
+def mat_mul(a, b):
+    return [[sum(a[i][k] * b[k][j] for k in range(4)) for j in range(4)] for i in range(4)]
+
+
+def translate(x, y, z):
+    return [[1, 0, 0, x], [0, 1, 0, y], [0, 0, 1, z], [0, 0, 0, 1]]
+
+
+def scale(x, y, z):
+    return [[x, 0, 0, 0], [0, y, 0, 0], [0, 0, z, 0], [0, 0, 0, 1]]
+
+
+def rot_x(deg):
+    c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
+    return [[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1]]
+
+
+def rot_y(deg):
+    c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
+    return [[c, 0, s, 0], [0, 1, 0, 0], [-s, 0, c, 0], [0, 0, 0, 1]]
+
+
+def trs(t=(0, 0, 0), ry=0.0, rx=0.0, s=(1, 1, 1)):
+    """translate * rot_y * rot_x * scale."""
+    return mat_mul(mat_mul(mat_mul(translate(*t), rot_y(ry)), rot_x(rx)), scale(*s))
+
+
+def normalize(v):
+    n = math.sqrt(sum(c * c for c in v))
+    return [c / n for c in v]
+
+
+def cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def gltf_camera_matrix(eye, target, up):
+    """Camera-to-world of a glTF camera (looks down local -Z, +X right, +Y up)."""
+    fwd = normalize([t - e for t, e in zip(target, eye)])
+    right = normalize(cross(fwd, up))
+    cup = cross(right, fwd)
+    back = [-c for c in fwd]
+    return [
+        [right[0], cup[0], back[0], eye[0]],
+        [right[1], cup[1], back[1], eye[1]],
+        [right[2], cup[2], back[2], eye[2]],
+        [0, 0, 0, 1],
+    ]
+
+
+def column_major(m):
+    return [float(m[r][c]) for c in range(4) for r in range(4)]
+
+
+# --------------------------------------------------------------------------------------------
+# The two primitive shapes, exactly as Mitsuba's built-in `rectangle` and `cube` define them:
+# the rectangle is [-1,1]^2 in z = 0 facing +Z, the cube is [-1,1]^3 with outward faces.
+
+QUAD_POS = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
+QUAD_NRM = [(0, 0, 1)] * 4
+QUAD_IDX = [0, 1, 2, 0, 2, 3]
+
+
+def cube_mesh():
+    pos, nrm, idx = [], [], []
+    for axis in range(3):
+        for sign in (-1, 1):
+            n = [0, 0, 0]
+            n[axis] = sign
+            # Two tangent axes, ordered so (u x v) = n (counter-clockwise seen from outside).
+            u_ax, v_ax = (axis + 1) % 3, (axis + 2) % 3
+            base = len(pos)
+            for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+                p = [0, 0, 0]
+                p[axis] = sign
+                p[u_ax] = su * sign
+                p[v_ax] = sv
+                pos.append(tuple(p))
+                nrm.append(tuple(n))
+            idx += [base, base + 1, base + 2, base, base + 2, base + 3]
+    return pos, nrm, idx
+
+
+CUBE_POS, CUBE_NRM, CUBE_IDX = cube_mesh()
+
+
+def check_winding(pos, idx, nrm):
+    for t in range(0, len(idx), 3):
+        a, b, c = (pos[i] for i in idx[t : t + 3])
+        n = cross([b[k] - a[k] for k in range(3)], [c[k] - a[k] for k in range(3)])
+        assert sum(n[k] * nrm[idx[t]][k] for k in range(3)) > 0, "winding disagrees with normal"
+
+
+check_winding(QUAD_POS, QUAD_IDX, QUAD_NRM)
+check_winding(CUBE_POS, CUBE_IDX, CUBE_NRM)
+
+# --------------------------------------------------------------------------------------------
+# The scenes.
+
+EYE = (0.6, 1.6, 6.5)
+TARGET = (0.0, 0.6, 0.0)
+UP = (0.0, 1.0, 0.0)
+YFOV_DEG = 40.0
+FOCUS = math.dist(EYE, TARGET)  # distance to the target, a plane through the green box
+APERTURE_RADIUS = 0.15
+ENV = (0.6, 0.7, 0.9)
+
+
+def base_objects():
+    """Ground, and boxes at several depths; deliberately asymmetric (red near left, blue far
+    right, a leaning tall box on the right) so a mirrored image cannot pass."""
+    return [
+        # name, shape, world matrix, diffuse albedo
+        ("ground", "quad", trs(rx=-90, s=(10, 10, 1)), (0.7, 0.7, 0.7)),
+        ("red_near", "cube", trs((-1.4, 0.4, 2.6), ry=25, s=(0.4, 0.4, 0.4)), (0.8, 0.15, 0.1)),
+        ("green_mid", "cube", trs((0.0, 0.6, 0.0), ry=-15, s=(0.6, 0.6, 0.6)), (0.15, 0.7, 0.2)),
+        ("blue_far", "cube", trs((2.2, 0.9, -4.5), ry=40, s=(0.9, 0.9, 0.9)), (0.1, 0.25, 0.8)),
+        ("white_tall", "cube", trs((1.6, 1.2, 1.2), ry=10, rx=8, s=(0.25, 1.2, 0.25)), (0.8, 0.8, 0.75)),
+        ("yellow_back_left", "cube", trs((-3.0, 0.5, -2.5), ry=-30, s=(0.5, 0.5, 1.0)), (0.8, 0.7, 0.1)),
+    ]
+
+
+def scene_defs():
+    point = {"kind": "point", "position": (2.5, 4.0, 3.0), "intensity": (30.0, 27.0, 24.0)}
+    area = {
+        "kind": "area",
+        # Faces down (-Y): the quad's +Z normal rotated by +90 deg about X.
+        "matrix": trs((-0.5, 3.6, 1.0), rx=90, s=(0.8, 0.8, 1)),
+        "radiance": (12.0, 11.0, 9.5),
+    }
+    dof = {"aperture_radius": APERTURE_RADIUS, "focus_distance": FOCUS}
+    return {
+        "dof_point": {"light": point, "dof": dof, "env": None},
+        "pinhole_point": {"light": point, "dof": None, "env": None},
+        "dof_area": {"light": area, "dof": dof, "env": None},
+        "dof_env": {"light": None, "dof": dof, "env": ENV},
+    }
+
+
+# --------------------------------------------------------------------------------------------
+# glTF writer.
+
+
+def pack_f32(vals):
+    return struct.pack("<%df" % len(vals), *vals)
+
+
+def pack_u16(vals):
+    return struct.pack("<%dH" % len(vals), *vals)
+
+
+def write_gltf(name, sdef, path):
+    buf = bytearray()
+    views, accessors = [], []
+
+    def add(data, target, comp, count, typ, minmax=None):
+        while len(buf) % 4:
+            buf.append(0)
+        views.append({"buffer": 0, "byteOffset": len(buf), "byteLength": len(data), "target": target})
+        buf.extend(data)
+        acc = {"bufferView": len(views) - 1, "componentType": comp, "count": count, "type": typ}
+        if minmax:
+            acc["min"], acc["max"] = minmax
+        accessors.append(acc)
+        return len(accessors) - 1
+
+    def add_shape(pos, nrm, idx):
+        flat_p = [c for p in pos for c in p]
+        mins = [min(p[k] for p in pos) for k in range(3)]
+        maxs = [max(p[k] for p in pos) for k in range(3)]
+        p = add(pack_f32(flat_p), 34962, 5126, len(pos), "VEC3", (mins, maxs))
+        n = add(pack_f32([c for v in nrm for c in v]), 34962, 5126, len(nrm), "VEC3")
+        i = add(pack_u16(idx), 34963, 5123, len(idx), "SCALAR")
+        return {"POSITION": p, "NORMAL": n}, i
+
+    shapes = {"quad": add_shape(QUAD_POS, QUAD_NRM, QUAD_IDX), "cube": add_shape(CUBE_POS, CUBE_NRM, CUBE_IDX)}
+
+    materials, meshes, nodes = [], [], []
+
+    def add_object(oname, shape, matrix, material):
+        materials.append(material)
+        attrs, ind = shapes[shape]
+        meshes.append({"name": oname, "primitives": [{"attributes": attrs, "indices": ind, "material": len(materials) - 1}]})
+        nodes.append({"name": oname, "mesh": len(meshes) - 1, "matrix": column_major(matrix)})
+
+    def diffuse(oname, rgb):
+        # metallicFactor 0 and KHR_materials_specular factor 0: Lambertian even without
+        # --override-material diffuse.
+        return {
+            "name": oname,
+            "pbrMetallicRoughness": {"baseColorFactor": [*rgb, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0},
+            "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}},
+        }
+
+    for oname, shape, matrix, albedo in base_objects():
+        add_object(oname, shape, matrix, diffuse(oname, albedo))
+
+    ext_used = ["KHR_materials_specular"]
+    extensions = {}
+    light = sdef["light"]
+    if light and light["kind"] == "area":
+        rad = light["radiance"]
+        strength = max(rad)
+        mat = {
+            "name": "area_light",
+            "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0.0, "roughnessFactor": 1.0},
+            "emissiveFactor": [c / strength for c in rad],
+            "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": strength}},
+        }
+        add_object("area_light", "quad", light["matrix"], mat)
+        ext_used.append("KHR_materials_emissive_strength")
+    elif light and light["kind"] == "point":
+        inten = light["intensity"]
+        peak = max(inten)
+        extensions["KHR_lights_punctual"] = {
+            "lights": [{
+                "name": "point",
+                "type": "point",
+                "color": [c / peak for c in inten],
+                # candela = 683 x W/sr (SPEC section 4).
+                "intensity": peak * LUMENS_PER_WATT,
+            }]
+        }
+        nodes.append({
+            "name": "point_light",
+            "translation": list(light["position"]),
+            "extensions": {"KHR_lights_punctual": {"light": 0}},
+        })
+        ext_used.append("KHR_lights_punctual")
+
+    cam = {
+        "name": "camera",
+        "type": "perspective",
+        "perspective": {"yfov": math.radians(YFOV_DEG), "aspectRatio": WIDTH / HEIGHT, "znear": 0.01},
+    }
+    if sdef["dof"]:
+        cam["extras"] = dict(sdef["dof"])
+    nodes.append({"name": "camera", "camera": 0, "matrix": column_major(gltf_camera_matrix(EYE, TARGET, UP))})
+
+    doc = {
+        "asset": {"version": "2.0", "generator": "aperture tools/reference/make_reference.py"},
+        "extensionsUsed": ext_used,
+        "scene": 0,
+        "scenes": [{"name": name, "nodes": list(range(len(nodes)))}],
+        "nodes": nodes,
+        "meshes": meshes,
+        "materials": materials,
+        "cameras": [cam],
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{
+            "byteLength": len(buf),
+            "uri": "data:application/octet-stream;base64," + base64.b64encode(bytes(buf)).decode(),
+        }],
+    }
+    if extensions:
+        doc["extensions"] = extensions
+    with open(path, "w") as f:
+        json.dump(doc, f, indent=1)
+        f.write("\n")
+
+
+# --------------------------------------------------------------------------------------------
+# Mitsuba scene and render.
+
+
+def mitsuba_scene(mi, sdef, spp, seed):
+    T = mi.ScalarTransform4f
+
+    def twosided(rgb):
+        return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(rgb)}}}
+
+    # Mitsuba's camera frame looks down +Z with +X left; look_at with the same eye, target
+    # and up as the glTF camera therefore gives the same (unmirrored) image.
+    sensor = {
+        "type": "thinlens" if sdef["dof"] else "perspective",
+        "fov": YFOV_DEG,
+        "fov_axis": "y",
+        "to_world": T().look_at(origin=list(EYE), target=list(TARGET), up=list(UP)),
+        "near_clip": 0.01,
+        "sampler": {"type": "independent", "sample_count": spp, "seed": seed},
+        "film": {
+            "type": "hdrfilm",
+            "width": WIDTH,
+            "height": HEIGHT,
+            "pixel_format": "rgb",
+            "component_format": "float32",
+            "rfilter": {"type": "box"},
+        },
+    }
+    if sdef["dof"]:
+        sensor["aperture_radius"] = sdef["dof"]["aperture_radius"]
+        sensor["focus_distance"] = sdef["dof"]["focus_distance"]
+
+    scene = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": MAX_BOUNCES + 2, "hide_emitters": False},
+        "sensor": sensor,
+    }
+    kinds = {"quad": "rectangle", "cube": "cube"}
+    for oname, shape, matrix, albedo in base_objects():
+        scene[oname] = {"type": kinds[shape], "to_world": T(matrix), "bsdf": twosided(albedo)}
+    light = sdef["light"]
+    if light and light["kind"] == "point":
+        scene["light"] = {
+            "type": "point",
+            "position": list(light["position"]),
+            "intensity": {"type": "rgb", "value": list(light["intensity"])},
+        }
+    elif light and light["kind"] == "area":
+        # Mitsuba's area light emits on the front (+Z) side only; aperture's emissive surfaces
+        # emit on both. The quad faces down and nothing lies above it, so its back side lights
+        # nothing and the camera (below it) never sees it.
+        scene["light"] = {
+            "type": "rectangle",
+            "to_world": T(light["matrix"]),
+            "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}},
+            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": list(light["radiance"])}},
+        }
+    if sdef["env"]:
+        scene["env"] = {"type": "constant", "radiance": {"type": "rgb", "value": list(sdef["env"])}}
+    return scene
+
+
+def render_mitsuba(mi, sdef, spp, seed):
+    scene = mi.load_dict(mitsuba_scene(mi, sdef, spp, seed))
+    img = mi.render(scene, spp=spp, seed=seed)
+    return np.array(img, dtype=np.float64)[:, :, :3]
+
+
+# What aperture's test does with each scene: two renders at TEST_SPP, one per seed.
+TEST_SPP = 64
+TEST_SEEDS = [1, 2]
+
+
+# Manifest fields that only a render gives (kept by --manifest-only).
+MEASURED = ["reference_spp", "reference_noise_rmse", "reference_mean_rgb", "reference_seconds"]
+
+COMMON = {
+    "generator": "tools/reference/make_reference.py",
+    "integrator": "path",
+    "sampler": "independent",
+    "filter": "box (1 pixel)",
+}
+
+
+def cli_args(name, sdef):
+    """The `aperture` arguments that render the image the test compares (add `--seed S` and
+    `--output FILE`)."""
+    args = [
+        "render", f"assets/reference/{name}.gltf",
+        "--width", str(WIDTH), "--height", str(HEIGHT),
+        "--spp", str(TEST_SPP),
+        "--max-bounces", str(MAX_BOUNCES),
+        "--filter", "box",
+        "--override-material", "diffuse",
+    ]
+    if sdef["env"]:
+        args += ["--env", ",".join(repr(c) for c in sdef["env"])]
+    return args
+
+
+def static_entry(name, sdef):
+    """The manifest fields that follow from the scene definition alone."""
+    return {
+        "name": name,
+        "gltf": f"{name}.gltf",
+        "exr": f"{name}.exr",
+        "width": WIDTH,
+        "height": HEIGHT,
+        "max_bounces": MAX_BOUNCES,
+        "mitsuba_max_depth": MAX_BOUNCES + 2,
+        "env": list(sdef["env"]) if sdef["env"] else None,
+        "aperture_radius": sdef["dof"]["aperture_radius"] if sdef["dof"] else 0.0,
+        "focus_distance": sdef["dof"]["focus_distance"] if sdef["dof"] else None,
+        "reference_seeds": REFERENCE_SEEDS,
+        "test_spp": TEST_SPP,
+        "test_seeds": TEST_SEEDS,
+        "cli_args": cli_args(name, sdef),
+    }
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--spp", type=int, default=DEFAULT_SPP, help="reference samples per pixel (two halves)")
+    ap.add_argument("--only", nargs="*", help="scene names to (re)render; default all")
+    ap.add_argument("--gltf-only", action="store_true", help="write the glTF files and stop")
+    ap.add_argument("--manifest-only", action="store_true",
+                    help="write the glTF files and refresh the manifest's scene-definition fields, keeping the measured ones; no render")
+    ap.add_argument("--variant", default="scalar_rgb")
+    ap.add_argument("--threads", type=int, default=1, help="Mitsuba worker threads (default 1)")
+    args = ap.parse_args()
+    if args.spp < 2 or args.spp % 2:
+        sys.exit("--spp must be even (two halves)")
+
+    os.makedirs(OUT, exist_ok=True)
+    defs = scene_defs()
+    names = args.only or list(defs)
+    for name in names:
+        write_gltf(name, defs[name], os.path.join(OUT, f"{name}.gltf"))
+        print(f"wrote assets/reference/{name}.gltf")
+    if args.gltf_only:
+        return
+
+    manifest_path = os.path.join(OUT, "manifest.json")
+    manifest = {"scenes": []}
+    if os.path.exists(manifest_path):
+        with open(manifest_path) as f:
+            manifest = json.load(f)
+    entries = {e["name"]: e for e in manifest.get("scenes", [])}
+
+    if args.manifest_only:
+        for name in names:
+            old = entries.get(name, {})
+            kept = {k: old[k] for k in MEASURED if k in old}
+            entries[name] = {**static_entry(name, defs[name]), **kept}
+        manifest = {
+            **{k: v for k, v in manifest.items() if k != "scenes"},
+            **COMMON,
+            "scenes": [entries[n] for n in defs if n in entries],
+        }
+        with open(manifest_path, "w") as f:
+            json.dump(manifest, f, indent=2)
+            f.write("\n")
+        return
+
+    import drjit as dr
+    import mitsuba as mi
+
+    mi.set_variant(args.variant)
+    dr.set_thread_count(args.threads)
+
+    for name in names:
+        sdef = defs[name]
+        t0 = time.time()
+        half = args.spp // 2
+        a = render_mitsuba(mi, sdef, half, REFERENCE_SEEDS[0])
+        b = render_mitsuba(mi, sdef, half, REFERENCE_SEEDS[1])
+        secs = time.time() - t0
+        avg = 0.5 * (a + b)
+        # Noise RMSE of the average of two independent halves: rmse(a, b) = sqrt(2) sigma_half
+        # and sigma_avg = sigma_half / sqrt(2), so sigma_avg = rmse(a, b) / 2.
+        ref_noise = float(np.sqrt(np.mean((a - b) ** 2)) / 2.0)
+        # Mitsuba's EXR writer waits on its thread pool and deadlocks with one thread.
+        dr.set_thread_count(max(2, args.threads))
+        mi.Bitmap(avg.astype(np.float32), pixel_format=mi.Bitmap.PixelFormat.RGB).write(
+            os.path.join(OUT, f"{name}.exr")
+        )
+        dr.set_thread_count(args.threads)
+        entries[name] = {
+            **static_entry(name, sdef),
+            "reference_spp": args.spp,
+            "reference_noise_rmse": ref_noise,
+            "reference_mean_rgb": [float(c) for c in avg.reshape(-1, 3).mean(axis=0)],
+            "reference_seconds": round(secs, 1),
+        }
+        print(f"{name}: {args.spp} spp in {secs:.1f} s, reference noise rmse {ref_noise:.3g}, "
+              f"mean {entries[name]['reference_mean_rgb']}", flush=True)
+
+    manifest = {
+        "mitsuba": f"{mi.__version__} {args.variant}",
+        **COMMON,
+        "scenes": [entries[n] for n in defs if n in entries],
+    }
+    with open(manifest_path, "w") as f:
+        json.dump(manifest, f, indent=2)
+        f.write("\n")
+
+
+if __name__ == "__main__":
+    main()
