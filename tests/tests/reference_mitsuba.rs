@@ -15,10 +15,18 @@
 //! - `rmse(ours, ref) ≤ 1.25 · sqrt(σ_ours² + σ_ref²)`. A systematic per-pixel error δ (RMS)
 //!   adds as `sqrt(σ² + δ²)`, so this catches any bias above 0.75 σ. The 25% margin covers the
 //!   uncertainty of the noise estimate itself, which is small here: it averages 57 600 values.
+//! - The same rule on 4×4 block means (40×30 values per channel). At 64 spp the per-pixel check
+//!   alone is weak: a 10% larger aperture, a focal plane 4.5% too far or one bounce fewer raise
+//!   the per-pixel ratio rmse / expected only to 1.02–1.23, all passing. Those errors are
+//!   smooth over several pixels while noise is not, so averaging blocks cuts the noise 4× and
+//!   keeps most of the error: the block ratio becomes 1.32–2.08 in `dof_point` and `dof_area`
+//!   (`dof_env`, lit by a smooth sky, reacts less to the lens: 1.11–1.12), while the renderer
+//!   as it is stays at 0.87–1.02 (measured; docs/accuracy.md).
 //! - Each channel's image mean within 0.5% of the reference's. The image mean averages
 //!   19 200 pixels × 2·spp samples: its own noise is below 0.05% in every scene (measured), so
-//!   0.5% is a bias detector for the light units (683 cd/W, emissive strength), the environment,
-//!   the bounce count and the lens, not a noise allowance.
+//!   0.5% is a bias detector for the light units (683 cd/W, emissive strength) and the
+//!   environment, not a noise allowance. (One bounce fewer moves the means by only 0.1–0.5%
+//!   here; the block check catches it: block ratios 1.7–2.5.)
 
 // Compiled out until the renderer lands on main: this file uses the `render` branch's API
 // (`render`, `RenderOptions`, `FilterKind`, `MaterialOverride`), which main's placeholder
