@@ -234,3 +234,108 @@ fn render_tile(
     }
     (sums, dropped)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_scenes;
+    use glam::Affine3A;
+
+    /// A plane under a point light, an emissive ball, depth of field: every code path.
+    fn busy_scene() -> Scene {
+        let mut s = test_scenes::lit_plane(3.0);
+        s.cameras[0].dof.enabled = true;
+        s.cameras[0].dof.aperture_radius = 0.2;
+        s.cameras[0].dof.focus_distance = 5.0;
+        s.materials
+            .push(test_scenes::emitter(Vec3::new(4.0, 2.0, 1.0)));
+        s.meshes.push(test_scenes::icosphere(1, 1));
+        s.instances.push(aperture_scene::Instance {
+            mesh: 1,
+            world_from_object: Affine3A::from_translation(Vec3::new(1.0, 0.5, 1.0)),
+            node: 1,
+        });
+        s
+    }
+
+    fn render_in_pool(threads: usize, scene: &Scene, opts: &RenderOptions) -> Film {
+        let accel = build_accel(scene, Default::default());
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| render(scene, &accel, opts, &|_, _| {}).unwrap())
+    }
+
+    #[test]
+    fn identical_for_any_thread_count_and_run() {
+        let scene = busy_scene();
+        // Not a multiple of the tile size, so edge tiles are partial.
+        let opts = RenderOptions {
+            width: 45,
+            height: 37,
+            spp: 4,
+            ..RenderOptions::default()
+        };
+        let one = render_in_pool(1, &scene, &opts);
+        let two = render_in_pool(2, &scene, &opts);
+        let again = render_in_pool(2, &scene, &opts);
+        assert_eq!(one, two);
+        assert_eq!(two, again);
+        let px = one.to_rgba();
+        assert!(px.iter().all(|p| p.iter().all(|c| c.is_finite())));
+        assert!(px.iter().any(|p| p[0] != px[0][0]));
+        // Another seed changes the image (the comparison above is not vacuous).
+        let other = render_in_pool(2, &scene, &RenderOptions { seed: 1, ..opts });
+        assert_ne!(one, other);
+    }
+
+    #[test]
+    fn progress_reports_every_tile() {
+        let scene = busy_scene();
+        let accel = build_accel(&scene, Default::default());
+        let opts = RenderOptions {
+            width: 40,
+            height: 40,
+            spp: 1,
+            ..RenderOptions::default()
+        };
+        let calls = AtomicUsize::new(0);
+        let last = AtomicUsize::new(0);
+        render(&scene, &accel, &opts, &|done, total| {
+            calls.fetch_add(1, Ordering::Relaxed);
+            assert!(done <= total);
+            last.fetch_max(done, Ordering::Relaxed);
+            assert_eq!(total, 4);
+        })
+        .unwrap();
+        assert_eq!(calls.into_inner(), 4);
+        assert_eq!(last.into_inner(), 4);
+    }
+
+    #[test]
+    fn bad_options_are_refused() {
+        let scene = busy_scene();
+        let accel = build_accel(&scene, Default::default());
+        for opts in [
+            RenderOptions {
+                spp: 0,
+                ..RenderOptions::default()
+            },
+            RenderOptions {
+                width: 0,
+                ..RenderOptions::default()
+            },
+            RenderOptions {
+                camera: 3,
+                ..RenderOptions::default()
+            },
+            RenderOptions {
+                env: Vec3::new(-1.0, 0.0, 0.0),
+                ..RenderOptions::default()
+            },
+        ] {
+            assert!(render(&scene, &accel, &opts, &|_, _| {}).is_err());
+        }
+    }
+}
