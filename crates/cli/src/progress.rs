@@ -1,0 +1,79 @@
+//! Render progress on stderr, and the film turned into an image for `aperture_imageio`.
+
+use aperture_imageio::{Image, MetaValue};
+use aperture_render::{Film, RenderOptions};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal as _;
+
+/// A progress bar with ETA, shown only when stderr is a terminal and not `--quiet`.
+pub struct Progress {
+    bar: Option<ProgressBar>,
+}
+
+impl Progress {
+    /// A bar, or nothing when it would only clutter a log.
+    pub fn new(quiet: bool) -> Self {
+        let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
+            let bar = ProgressBar::new(0);
+            if let Ok(style) = ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} tiles, ETA {eta}",
+            ) {
+                bar.set_style(style);
+            }
+            bar
+        });
+        Self { bar }
+    }
+
+    /// `done` of `total` tiles finished (called from worker threads).
+    pub fn update(&self, done: usize, total: usize) {
+        if let Some(bar) = &self.bar {
+            bar.set_length(total as u64);
+            // Tiles finish out of order; the counter only grows.
+            if done as u64 > bar.position() {
+                bar.set_position(done as u64);
+            }
+        }
+    }
+
+    /// Removes the bar.
+    pub fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+/// The film as a plain image with the header metadata of SPEC §6.
+pub fn film_to_image(
+    film: &Film,
+    cam: &aperture_scene::Camera,
+    opts: &RenderOptions,
+    render_secs: f64,
+) -> Image {
+    let mut image = Image::new(film.width(), film.height());
+    image.rgba = film.to_rgba();
+    let dof = &cam.dof;
+    let meta = [
+        ("camera", MetaValue::Text(cam.name.clone())),
+        ("apertureRadius", MetaValue::Float(dof.effective_radius())),
+        ("focusDistance", MetaValue::Float(dof.focus_distance)),
+        ("apertureBlades", MetaValue::Int(dof.blades as i32)),
+        ("spp", MetaValue::Int(opts.spp as i32)),
+        ("seed", MetaValue::Int(opts.seed as i32)),
+        ("renderTime", MetaValue::Float(render_secs as f32)),
+        ("maxBounces", MetaValue::Int(opts.max_bounces as i32)),
+        ("sampler", MetaValue::Text(format!("{:?}", opts.sampler))),
+        ("filter", MetaValue::Text(format!("{:?}", opts.filter))),
+        (
+            "droppedSamples",
+            MetaValue::Int(film.dropped_samples().min(i32::MAX as u64) as i32),
+        ),
+        (
+            "software",
+            MetaValue::Text(format!("aperture {}", env!("CARGO_PKG_VERSION"))),
+        ),
+    ];
+    image.metadata = meta.into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+    image
+}
