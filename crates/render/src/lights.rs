@@ -192,6 +192,22 @@ mod tests {
     }
 
     #[test]
+    fn emissive_structures_exist_only_with_emitters() {
+        use crate::surface::{Geometry, MaterialOverride};
+        let plain = crate::test_scenes::lit_plane(1.0);
+        assert!(EmissiveLights::build(&Geometry::new(&plain, MaterialOverride::None)).is_none());
+        let mut lit = plain.clone();
+        lit.materials.push(crate::test_scenes::emitter(Vec3::ONE));
+        // A material that nothing uses builds nothing either.
+        assert!(EmissiveLights::build(&Geometry::new(&lit, MaterialOverride::None)).is_none());
+        lit.meshes[0].material_ids[1] = 1;
+        let em = EmissiveLights::build(&Geometry::new(&lit, MaterialOverride::None)).unwrap();
+        assert_eq!(em.triangles.len(), 1);
+        assert_eq!(em.pick_probability(0, 1), 1.0);
+        assert_eq!(em.pick_probability(0, 0), 0.0);
+    }
+
+    #[test]
     fn spot_falloff() {
         let light = Light {
             name: None,
