@@ -291,6 +291,28 @@ mod tests {
     }
 
     #[test]
+    fn non_finite_samples_are_dropped_and_counted() {
+        let mut scene = busy_scene();
+        // An emitter of infinite strength: every sample that sees it is infinite.
+        scene.materials[1].emissive_strength = f32::INFINITY;
+        let accel = build_accel(&scene, Default::default());
+        let opts = RenderOptions {
+            width: 24,
+            height: 24,
+            spp: 2,
+            ..RenderOptions::default()
+        };
+        let film = render(&scene, &accel, &opts, &|_, _| {}).unwrap();
+        assert!(film.dropped_samples() > 0);
+        assert!(film.to_rgba().iter().flatten().all(|c| c.is_finite()));
+        let sum: u64 = (0..24)
+            .flat_map(|y| (0..24).map(move |x| (x, y)))
+            .map(|(x, y)| film.pixel_sum(x, y).count as u64)
+            .sum();
+        assert_eq!(sum + film.dropped_samples(), 24 * 24 * 2);
+    }
+
+    #[test]
     fn progress_reports_every_tile() {
         let scene = busy_scene();
         let accel = build_accel(&scene, Default::default());
