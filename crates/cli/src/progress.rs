@@ -44,7 +44,8 @@ impl Progress {
     }
 }
 
-/// The film as a plain image with the header metadata of SPEC §6.
+/// The film as a plain image with the header metadata of SPEC §6, under `aperture:` keys so
+/// they cannot collide with the standard EXR attributes.
 pub fn film_to_image(
     film: &Film,
     cam: &aperture_scene::Camera,
@@ -55,22 +56,37 @@ pub fn film_to_image(
     image.rgba = film.to_rgba();
     let dof = &cam.dof;
     let meta = [
-        ("camera", MetaValue::Text(cam.name.clone())),
-        ("apertureRadius", MetaValue::Float(dof.effective_radius())),
-        ("focusDistance", MetaValue::Float(dof.focus_distance)),
-        ("apertureBlades", MetaValue::Int(dof.blades as i32)),
-        ("spp", MetaValue::Int(opts.spp as i32)),
-        ("seed", MetaValue::Int(opts.seed as i32)),
-        ("renderTime", MetaValue::Float(render_secs as f32)),
-        ("maxBounces", MetaValue::Int(opts.max_bounces as i32)),
-        ("sampler", MetaValue::Text(format!("{:?}", opts.sampler))),
-        ("filter", MetaValue::Text(format!("{:?}", opts.filter))),
+        ("aperture:camera", MetaValue::Text(cam.name.clone())),
         (
-            "droppedSamples",
+            "aperture:apertureRadius",
+            MetaValue::Float(dof.effective_radius()),
+        ),
+        (
+            "aperture:focusDistance",
+            MetaValue::Float(dof.focus_distance),
+        ),
+        ("aperture:apertureBlades", MetaValue::Int(dof.blades as i32)),
+        ("aperture:spp", MetaValue::Int(opts.spp as i32)),
+        ("aperture:seed", MetaValue::Int(opts.seed as i32)),
+        ("aperture:renderTime", MetaValue::Float(render_secs as f32)),
+        (
+            "aperture:maxBounces",
+            MetaValue::Int(opts.max_bounces as i32),
+        ),
+        (
+            "aperture:sampler",
+            MetaValue::Text(format!("{:?}", opts.sampler)),
+        ),
+        (
+            "aperture:filter",
+            MetaValue::Text(format!("{:?}", opts.filter)),
+        ),
+        (
+            "aperture:droppedSamples",
             MetaValue::Int(film.dropped_samples().min(i32::MAX as u64) as i32),
         ),
         (
-            "software",
+            "aperture:software",
             MetaValue::Text(format!("aperture {}", env!("CARGO_PKG_VERSION"))),
         ),
     ];
