@@ -93,3 +93,47 @@ pub fn film_to_image(
     image.metadata = meta.into_iter().map(|(k, v)| (k.to_string(), v)).collect();
     image
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aperture_render::{build_accel, render, test_scenes};
+
+    #[test]
+    fn exr_round_trip_keeps_pixels_and_metadata() {
+        let mut scene = test_scenes::lit_plane(4.0);
+        scene.cameras[0].dof.enabled = true;
+        scene.cameras[0].dof.aperture_radius = 0.05;
+        scene.cameras[0].dof.focus_distance = 7.5;
+        let accel = build_accel(&scene, Default::default());
+        let opts = RenderOptions {
+            width: 20,
+            height: 12,
+            spp: 2,
+            seed: 42,
+            ..RenderOptions::default()
+        };
+        let film = render(&scene, &accel, &opts, &|_, _| {}).unwrap();
+        let image = film_to_image(&film, &scene.cameras[0], &opts, 1.25);
+        let path = std::env::temp_dir().join(format!("aperture-cli-{}.exr", std::process::id()));
+        aperture_imageio::write_image(&path, &image, &Default::default()).unwrap();
+        let back = aperture_imageio::read_exr(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(back.width, 20);
+        assert_eq!(back.rgba, film.to_rgba());
+        assert!(back.rgba.iter().any(|p| p[0] > 0.0));
+        let meta = |k: &str| back.meta(k).cloned();
+        assert_eq!(
+            meta("aperture:camera"),
+            Some(MetaValue::Text("test camera".into()))
+        );
+        assert_eq!(
+            meta("aperture:apertureRadius"),
+            Some(MetaValue::Float(0.05))
+        );
+        assert_eq!(meta("aperture:focusDistance"), Some(MetaValue::Float(7.5)));
+        assert_eq!(meta("aperture:spp"), Some(MetaValue::Int(2)));
+        assert_eq!(meta("aperture:seed"), Some(MetaValue::Int(42)));
+        assert_eq!(meta("aperture:renderTime"), Some(MetaValue::Float(1.25)));
+    }
+}
