@@ -114,6 +114,9 @@ pub(crate) fn intersect(
     if det == 0.0 || det.is_nan() {
         return None;
     }
+    // pbrt-v4's x/y error terms add max|z| assuming |dir| is about 1; for unnormalised directions
+    // (any scale) they need z before it is scaled by 1/dir[kz], in the same units as x and y.
+    let max_z = az.abs().max(bz.abs()).max(cz.abs());
     let az = az * r.sz;
     let bz = bz * r.sz;
     let cz = cz * r.sz;
@@ -128,8 +131,8 @@ pub(crate) fn intersect(
     let delta_z = gamma(3) * max_zt;
     let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
     let max_yt = ay.abs().max(by.abs()).max(cy.abs());
-    let delta_x = gamma(5) * (max_xt + max_zt);
-    let delta_y = gamma(5) * (max_yt + max_zt);
+    let delta_x = gamma(5) * (max_xt + max_z);
+    let delta_y = gamma(5) * (max_yt + max_z);
     let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
     let max_e = e0.abs().max(e1.abs()).max(e2.abs());
     let delta_t =
@@ -168,6 +171,30 @@ mod tests {
             let on_tri = p[0] * (1.0 - u - v) + p[1] * u + p[2] * v;
             let on_ray = ray.origin + ray.dir * t;
             assert!((on_tri - on_ray).length() < 1e-5, "{on_tri} vs {on_ray}");
+        }
+    }
+
+    #[test]
+    fn hits_do_not_depend_on_direction_length() {
+        // Tiny and huge scenes give tiny and huge unnormalised directions (dir = target - origin).
+        for scale in [1e-6f32, 1e-4, 1.0, 1e4, 1e6] {
+            let p = [
+                Vec3::new(-1.0, -1.0, -3.0) * scale,
+                Vec3::new(2.0, -1.0, -3.5) * scale,
+                Vec3::new(0.0, 1.5, -2.5) * scale,
+            ];
+            for k in 0..3 {
+                let target = (p[0] + p[1] + p[2]) / 3.0 * 0.5 + p[k] * 0.5;
+                for len in [1e-3f32, 1.0, 1e3] {
+                    let dir = target / target.length() * scale * len;
+                    let hit = intersect_triangle(&Ray::new(Vec3::ZERO, dir), p);
+                    let t = hit.map(|h| h.0 * dir.length());
+                    assert!(
+                        t.is_some_and(|t| (t - target.length()).abs() < 1e-4 * target.length()),
+                        "scale {scale} len {len} vertex {k}: {hit:?}"
+                    );
+                }
+            }
         }
     }
 
