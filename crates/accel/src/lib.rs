@@ -225,7 +225,34 @@ pub struct Accel {
     tlas: Vec<CwBvhNode>,
     tlas_depth: usize,
     max_blas_depth: usize,
+    /// Per input instance: a bound on the magnitudes met when moving its points between object
+    /// and world space (`|T| + |M| max|p_obj|`), for [`Accel::spawn_point`].
+    instance_magnitude: Vec<f32>,
     stats: AccelStats,
+}
+
+/// A hit's position in world space with a bound on its rounding error: where secondary rays
+/// start from (see [`SpawnPoint::origin`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpawnPoint {
+    /// The hit position, `origin + t * dir` of the ray that found it.
+    pub p: Vec3,
+    /// Bound on the distance from `p` to the exact surface point (world units, any direction).
+    pub error: f32,
+}
+
+impl SpawnPoint {
+    /// The origin of a ray leaving the surface on the side `n` points to (pass the geometric
+    /// normal flipped towards the new ray's direction): `p` pushed past its error bound along `n`,
+    /// then by a few ulps with [`offset_ray_origin`].
+    ///
+    /// Why not only `offset_ray_origin`: on instanced meshes the point's error comes from the
+    /// transform's magnitudes (say a coordinate near 0 computed from terms near 1e4), which a
+    /// few ulps of the point's own coordinates do not cover.
+    pub fn origin(&self, n: Vec3) -> Vec3 {
+        let n = n.normalize_or_zero();
+        offset_ray_origin(self.p + n * (2.0 * self.error), n)
+    }
 }
 
 /// A traversal stack entry: a node group (obvhs encoding: child base index, hit mask).
@@ -617,6 +644,22 @@ impl Accel {
         let entries: Vec<Entry> = order.iter().map(|&i| entries[i as usize]).collect();
         let tlas_depth = cwbvh_depth(&tlas);
         let max_blas_depth = blases.iter().map(|b| b.depth).max().unwrap_or(0);
+        let mut instance_magnitude = vec![0.0f32; instances.len()];
+        for (id, inst, _) in &usable {
+            let mesh = &meshes[inst.mesh as usize];
+            let obj = mesh
+                .positions
+                .iter()
+                .filter(|p| p.is_finite())
+                .fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+            let m = &inst.world_from_object;
+            let rows = m.matrix3.transpose();
+            let norm = [rows.x_axis, rows.y_axis, rows.z_axis]
+                .iter()
+                .map(|r| r.abs().element_sum())
+                .fold(0.0f32, f32::max);
+            instance_magnitude[*id as usize] = m.translation.abs().max_element() + norm * obj;
+        }
 
         stats.blas_count = blases.len();
         stats.tlas_entries = entries.len();
@@ -639,7 +682,26 @@ impl Accel {
             tlas,
             tlas_depth,
             max_blas_depth,
+            instance_magnitude,
             stats,
+        }
+    }
+
+    /// The world position of `hit` (found by `ray`) with a bound on its error, for spawning
+    /// secondary rays with [`SpawnPoint::origin`].
+    pub fn spawn_point(&self, ray: &Ray, hit: &Hit) -> SpawnPoint {
+        let p = ray.origin + ray.dir * hit.t;
+        let ray_part = ray.origin.abs().max_element() + (ray.dir * hit.t).abs().max_element();
+        let transform_part = self
+            .instance_magnitude
+            .get(hit.instance as usize)
+            .copied()
+            .unwrap_or(0.0);
+        // A few roundings of each magnitude: o + t d (2), the triangle test's t (a few), and the
+        // object/world transforms of the ray and of the vertices (about 3 each).
+        SpawnPoint {
+            p,
+            error: 16.0 * f32::EPSILON * (ray_part + transform_part),
         }
     }
 
