@@ -7,25 +7,22 @@
 //! on both sides: a ray cannot slip through. Edge values of exactly zero are recomputed in `f64`,
 //! where the products of two `f32` are exact, so the sign of the edge function is never lost.
 
-use glam::Vec3;
+use glam::{Mat3A, Vec3, Vec3A};
 
 /// Per-ray values of the watertight test, computed once per ray (and per instance, for rays
 /// moved into object space).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct TriRay {
     /// Ray origin.
-    pub origin: Vec3,
-    /// Axis of the largest direction component (the sheared space's z).
-    pub kz: usize,
-    /// The two other axes, swapped when `dir[kz] < 0` to keep the winding.
-    pub kx: usize,
-    /// See `kx`.
-    pub ky: usize,
-    /// Shear constants: `-dir[kx]/dir[kz]`, `-dir[ky]/dir[kz]`, `1/dir[kz]`.
-    pub sx: f32,
-    /// See `sx`.
-    pub sy: f32,
-    /// See `sx`.
+    pub origin: Vec3A,
+    /// Rows `e_kx + sx e_kz`, `e_ky + sy e_kz`, `e_kz`: maps `v - origin` to the sheared
+    /// `(x, y)` and the unscaled `z`. `kz` is the axis of the largest direction component; `kx`,
+    /// `ky` are the others, swapped when `dir[kz] < 0` to keep the winding. Each row has at most
+    /// two non-zero entries and the others are exact zeros, so the SIMD product rounds exactly
+    /// like `v[kx] + sx * v[kz]` (one product, one sum): the same value for every triangle sharing
+    /// the vertex, which is what makes the test watertight.
+    pub shear: Mat3A,
+    /// `1 / dir[kz]`: scales z into units of `t`.
     pub sz: f32,
 }
 
@@ -52,13 +49,16 @@ impl TriRay {
             std::mem::swap(&mut kx, &mut ky);
         }
         let sz = 1.0 / d[kz];
+        let (sx, sy) = (-d[kx] * sz, -d[ky] * sz);
+        let mut rows = [[0.0f32; 3]; 3];
+        rows[0][kx] = 1.0;
+        rows[0][kz] = sx;
+        rows[1][ky] = 1.0;
+        rows[1][kz] = sy;
+        rows[2][kz] = 1.0;
         Self {
-            origin,
-            kz,
-            kx,
-            ky,
-            sx: -d[kx] * sz,
-            sy: -d[ky] * sz,
+            origin: origin.into(),
+            shear: Mat3A::from_cols_array_2d(&rows).transpose(),
             sz,
         }
     }
@@ -81,18 +81,12 @@ pub(crate) fn intersect(
     tmin: f32,
     tmax: f32,
 ) -> Option<(f32, f32, f32)> {
-    let a = (p0 - r.origin).to_array();
-    let b = (p1 - r.origin).to_array();
-    let c = (p2 - r.origin).to_array();
-    let (kx, ky, kz) = (r.kx, r.ky, r.kz);
-    // Shear in x and y (z is scaled only once a hit is likely).
-    let (az, bz, cz) = (a[kz], b[kz], c[kz]);
-    let ax = a[kx] + r.sx * az;
-    let ay = a[ky] + r.sy * az;
-    let bx = b[kx] + r.sx * bz;
-    let by = b[ky] + r.sy * bz;
-    let cx = c[kx] + r.sx * cz;
-    let cy = c[ky] + r.sy * cz;
+    let a = r.shear * (Vec3A::from(p0) - r.origin);
+    let b = r.shear * (Vec3A::from(p1) - r.origin);
+    let c = r.shear * (Vec3A::from(p2) - r.origin);
+    let (ax, ay, az) = (a.x, a.y, a.z);
+    let (bx, by, bz) = (b.x, b.y, b.z);
+    let (cx, cy, cz) = (c.x, c.y, c.z);
 
     // Edge functions; e0 is the weight of p0, e1 of p1, e2 of p2.
     let mut e0 = bx * cy - by * cx;
