@@ -195,6 +195,8 @@ struct Blas {
     tri_instance: Vec<u32>,
     depth: usize,
     bounds: Option<(Vec3, Vec3)>,
+    /// `bounds`, or a zero box for an empty tree (sizes the box test's rounding slack).
+    box_bounds: (Vec3, Vec3),
 }
 
 /// One leaf of the top-level BVH: a BVH placed in the world.
@@ -224,6 +226,8 @@ pub struct Accel {
     entries: Vec<Entry>,
     tlas: Vec<CwBvhNode>,
     tlas_depth: usize,
+    /// Bounds of all instance bounds.
+    tlas_bounds: (Vec3, Vec3),
     max_blas_depth: usize,
     /// Per input instance: a bound on the magnitudes met when moving its points between object
     /// and world space (`|T| + |M| max|p_obj|`), for [`Accel::spawn_point`].
@@ -443,12 +447,14 @@ fn build_blas(tris: Vec<(Tri, u32)>, quality: BvhQuality, keep_instance: bool) -
         Vec::new()
     };
     let depth = cwbvh_depth(&nodes);
+    let box_bounds = bounds.unwrap_or((Vec3::ZERO, Vec3::ZERO));
     Blas {
         nodes,
         tris: ordered,
         tri_instance,
         depth,
         bounds,
+        box_bounds,
     }
 }
 
@@ -642,6 +648,11 @@ impl Accel {
             (Vec::new(), (0..entries.len() as u32).collect())
         };
         let entries: Vec<Entry> = order.iter().map(|&i| entries[i as usize]).collect();
+        let tlas_bounds = bounds
+            .iter()
+            .map(|b| (Vec3::from(b.min), Vec3::from(b.max)))
+            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
+            .unwrap_or((Vec3::ZERO, Vec3::ZERO));
         let tlas_depth = cwbvh_depth(&tlas);
         let max_blas_depth = blases.iter().map(|b| b.depth).max().unwrap_or(0);
         let mut instance_magnitude = vec![0.0f32; instances.len()];
@@ -681,6 +692,7 @@ impl Accel {
             entries,
             tlas,
             tlas_depth,
+            tlas_bounds,
             max_blas_depth,
             instance_magnitude,
             stats,
@@ -764,7 +776,7 @@ impl Accel {
             0 => false,
             1 => f(&self.entries[0], tmax),
             _ => {
-                let r = BoxRay::new(ray.origin, ray.dir, ray.tmin);
+                let r = BoxRay::new(ray.origin, ray.dir, ray.tmin, self.tlas_bounds);
                 with_stack(self.tlas_depth, |stack| {
                     traverse(&self.tlas, &r, tmax, stack, |i, tmax| {
                         match self.entries.get(i as usize) {
@@ -815,7 +827,7 @@ impl Accel {
     ) -> Option<Hit> {
         let blas = self.blases.get(entry.blas as usize)?;
         let (o, d) = Self::object_ray(entry, ray);
-        let br = BoxRay::new(o, d, ray.tmin);
+        let br = BoxRay::new(o, d, ray.tmin, blas.box_bounds);
         let tr = TriRay::new(o, d);
         let mut best = None;
         traverse(&blas.nodes, &br, tmax, stack, |i, tmax| {
@@ -838,7 +850,7 @@ impl Accel {
             return false;
         };
         let (o, d) = Self::object_ray(entry, ray);
-        let br = BoxRay::new(o, d, ray.tmin);
+        let br = BoxRay::new(o, d, ray.tmin, blas.box_bounds);
         let tr = TriRay::new(o, d);
         let mut tmax = ray.tmax;
         traverse(&blas.nodes, &br, &mut tmax, stack, |i, tmax| {

@@ -9,9 +9,12 @@
 //! - the triangle test itself accepts hits up to a few ulps of `|v - o|` outside the triangle,
 //!   in any axis (the shear mixes them), so the box must accept at least as much.
 //!
-//! All of these are below `K ε M` in space, where `M` is the largest coordinate of `|p - o|` plus
-//! the node's extent, so each slab is widened by `K ε M / |d_axis|` in `t` (Ize 2013 scales `tmax`
-//! by `1 + 2γ` for the same purpose; an absolute bound also covers rays that start inside a box).
+//! All of these are below `K ε M` in space, where `M` bounds the largest coordinate of `|p - o|`
+//! plus the node's extent. `M` is taken once per ray and tree as the largest coordinate of
+//! `|corner - o|` over the tree's bounds plus three times its extent (so the slack costs nothing
+//! per node and stays tight when the scene sits far from the world origin), and each slab
+//! is widened by `K ε M / |d_axis|` in `t` (Ize 2013 scales `tmax` by `1 + 2γ` for the same
+//! purpose; an absolute bound also covers rays that start inside a box).
 
 use glam::{Vec3, Vec3A};
 use obvhs::cwbvh::node::CwBvhNode;
@@ -29,17 +32,19 @@ const INV_LIMIT: f32 = 1e20;
 pub(crate) struct BoxRay {
     pub origin: Vec3A,
     pub inv: Vec3A,
-    pub inv_abs: Vec3A,
     /// Per axis, whether the direction is negative (the far plane is the box minimum).
     pub neg: [bool; 3],
     /// obvhs' child-ordering key for this direction.
     pub oct_inv4: u32,
     pub tmin: f32,
+    /// Per-axis widening of every slab, in `t` (see the module docs).
+    pub slack: Vec3A,
 }
 
 impl BoxRay {
+    /// `bounds`: the tree's bounding box (sizes the rounding slack).
     #[inline]
-    pub fn new(origin: Vec3, dir: Vec3, tmin: f32) -> Self {
+    pub fn new(origin: Vec3, dir: Vec3, tmin: f32, (lo, hi): (Vec3, Vec3)) -> Self {
         let inv = dir.to_array().map(|d| {
             let i = 1.0 / d;
             if i.is_finite() {
@@ -55,13 +60,15 @@ impl BoxRay {
             | (if neg[1] { 0 } else { 0x0202_0202 })
             | (if neg[2] { 0 } else { 0x0101_0101 });
         let inv = Vec3A::from_array(inv);
+        let m = (lo - origin).abs().max((hi - origin).abs()).max_element()
+            + 3.0 * (hi - lo).max_element();
         Self {
             origin: origin.into(),
             inv,
-            inv_abs: inv.abs(),
             neg,
             oct_inv4,
             tmin,
+            slack: inv.abs() * (SLACK * m),
         }
     }
 }
@@ -81,14 +88,11 @@ fn frame(node: &CwBvhNode, r: &BoxRay) -> NodeFrame {
         f32::from_bits((node.e[1] as u32) << 23),
         f32::from_bits((node.e[2] as u32) << 23),
     );
-    let po = Vec3A::from(node.p) - r.origin;
-    let m = po.abs().max_element() + 256.0 * e.max_element();
-    let slack = r.inv_abs * (SLACK * m);
-    let off = po * r.inv;
+    let off = (Vec3A::from(node.p) - r.origin) * r.inv;
     NodeFrame {
         scale: e * r.inv,
-        off_lo: off - slack,
-        off_hi: off + slack,
+        off_lo: off - r.slack,
+        off_hi: off + r.slack,
     }
 }
 
@@ -302,7 +306,12 @@ mod tests {
             if i % 5 == 0 {
                 d.y = 0.0; // exercises the clamped reciprocal
             }
-            let r = BoxRay::new(o, d, if i % 3 == 0 { 5.0 } else { 0.0 });
+            let r = BoxRay::new(
+                o,
+                d,
+                if i % 3 == 0 { 5.0 } else { 0.0 },
+                (Vec3::splat(-10.0), Vec3::splat(110.0)),
+            );
             let tmax = if i % 4 == 0 { 50.0 } else { f32::INFINITY };
             for node in &bvh.nodes {
                 let a = child_hits_fast(node, &r, tmax);
@@ -328,17 +337,32 @@ mod tests {
         let root = &bvh.nodes[0];
         let all = child_hits_fast(
             root,
-            &BoxRay::new(Vec3::new(-5.0, 0.0, 0.0), Vec3::X, 0.0),
+            &BoxRay::new(
+                Vec3::new(-5.0, 0.0, 0.0),
+                Vec3::X,
+                0.0,
+                (Vec3::splat(-1.0), Vec3::splat(11.0)),
+            ),
             f32::INFINITY,
         );
         let late = child_hits_fast(
             root,
-            &BoxRay::new(Vec3::new(-5.0, 0.0, 0.0), Vec3::X, 8.0),
+            &BoxRay::new(
+                Vec3::new(-5.0, 0.0, 0.0),
+                Vec3::X,
+                8.0,
+                (Vec3::splat(-1.0), Vec3::splat(11.0)),
+            ),
             f32::INFINITY,
         );
         let early = child_hits_fast(
             root,
-            &BoxRay::new(Vec3::new(-5.0, 0.0, 0.0), Vec3::X, 0.0),
+            &BoxRay::new(
+                Vec3::new(-5.0, 0.0, 0.0),
+                Vec3::X,
+                0.0,
+                (Vec3::splat(-1.0), Vec3::splat(11.0)),
+            ),
             8.0,
         );
         assert_eq!(all.count_ones(), 2);
