@@ -360,7 +360,16 @@ fn cwbvh_depth(nodes: &[CwBvhNode]) -> usize {
 }
 
 fn build_params(quality: BvhQuality) -> BvhBuildParams {
-    // Chosen by measurement (see `benches/benches/accel.rs` and the commit messages). Spatial
+    // Chosen by measurement (BlenderIO-32bitIndices, Embree's 1 M thin-lens rays, one thread,
+    // interleaved runs on the shared 2-core machine; 1 M-triangle terrain build from
+    // `benches/benches/accel.rs`):
+    //   obvhs preset      closest Mrays/s   build 130 k   build 1 M
+    //   very_fast_build   2.9 - 3.1         47 - 62 ms    0.46 s
+    //   fast_build        3.3 - 3.5         63 - 75 ms    0.53 s
+    //   medium_build      2.0 - 3.0         62 - 110 ms   0.60 s
+    //   slow_build        2.3 - 2.7         110 - 160 ms  (not benched)
+    // so the default is fast_build. More PLOC search and reinsertion bought no traversal speed on
+    // this scene; High keeps medium_build for scenes with more overlap (unmeasured). Spatial
     // pre-splits are never used: they clip triangle boxes with rounded planes, which would void
     // the conservative box test.
     let mut p = match quality {
