@@ -1,5 +1,17 @@
 //! Ray queries over triangle meshes placed by instances: closest hit and occlusion.
 //!
+//! - **Build**: obvhs (PLOC, reinsertion, conversion to its compressed 8-wide CWBVH). A mesh drawn
+//!   by several instances gets one bottom-level BVH in object space, stored once; meshes drawn
+//!   once are flattened into one world-space BVH; a top-level obvhs BVH over instance bounds
+//!   joins them. Triangles are stored in BVH order with their original index.
+//! - **Traversal** is ours (obvhs' node layout and child ordering): the box test honours
+//!   `tmin`/`tmax` and is widened by a bound on every rounding error involved, and the stack is
+//!   sized from the measured tree depth. Rays enter instances through `object_from_world`
+//!   without renormalising, so `t` is in world units everywhere.
+//! - **Triangles**: watertight test of Woop, Benthin and Wald (2013) with an `f64` fallback for
+//!   zero edge functions and pbrt-v4's bound rejecting hits not provably in front.
+//! - **Secondary rays** start from [`SpawnPoint::origin`] (or [`offset_ray_origin`]).
+//!
 //! ```
 //! use aperture_accel::{Accel, BvhQuality, InstanceInput, MeshInput, Ray};
 //! use glam::{Affine3A, Vec3};
@@ -919,6 +931,13 @@ impl Accel {
 /// cannot hit the same surface again (Wächter and Binder, Ray Tracing Gems ch. 6): the offset is
 /// a few float ulps of the point's magnitude, not a fixed epsilon. `n` need not face the ray;
 /// pass the normal flipped to the side the new ray leaves on.
+///
+/// It covers the rounding of a point computed from values of its own magnitude (barycentric
+/// interpolation of world-space vertices). Points on instanced meshes, or computed as
+/// `o + t d`, can carry more error; use [`Accel::spawn_point`] and [`SpawnPoint::origin`] there.
+/// Coordinates below 1/32 move by a fixed `n / 65536` (as in the paper), which is large
+/// compared with scenes of millimetre scale: harmless for self-intersection, but such scenes
+/// are better modelled in larger units.
 pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
     const ORIGIN: f32 = 1.0 / 32.0;
     const FLOAT_SCALE: f32 = 1.0 / 65536.0;
