@@ -9,7 +9,7 @@ use crate::bsdf::Frame;
 use crate::lights::{punctual_incident, EmissiveLights};
 use crate::sampler::SampleStream;
 use crate::surface::{Geometry, Surface};
-use aperture_accel::{offset_ray_origin, Accel, Hit, Ray};
+use aperture_accel::{offset_ray_origin, Accel, Hit, Ray, SpawnPoint};
 use glam::Vec3;
 
 /// Vertices before Russian roulette may end a path.
@@ -39,20 +39,22 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 }
 
 impl Integrator<'_> {
-    /// The closest opaque hit along `ray`, passing through alpha-cut or blended surfaces.
+    /// The closest opaque hit along `ray`, passing through alpha-cut or blended surfaces, with
+    /// the rounding-error bound of the hit point (from the ray segment that found it).
     fn trace(
         &self,
         ray: &Ray,
         stream: &SampleStream,
         vertex: u32,
         u_alpha: f32,
-    ) -> Option<(Hit, Surface)> {
+    ) -> Option<(Hit, Surface, f32)> {
         let mut r = *ray;
         for pass in 0..MAX_ALPHA_PASSES {
             let hit = self.accel.intersect(&r)?;
             let s = self.geom.surface(hit.instance, hit.triangle, hit.u, hit.v);
+            let error = self.accel.spawn_point(&r, &hit).error;
             if !self.geom.has_alpha {
-                return Some((hit, s));
+                return Some((hit, s, error));
             }
             let u = if pass == 0 {
                 u_alpha
@@ -60,11 +62,11 @@ impl Integrator<'_> {
                 stream.extra(vertex, pass)
             };
             if self.geom.is_opaque(&s, u) {
-                return Some((hit, s));
+                return Some((hit, s, error));
             }
             // Continue on the far side of the surface.
             let n = if s.ng.dot(r.dir) > 0.0 { s.ng } else { -s.ng };
-            r = Ray::new(offset_ray_origin(s.p, n), r.dir);
+            r = Ray::new(SpawnPoint { p: s.p, error }.origin(n), r.dir);
         }
         None
     }
@@ -119,7 +121,7 @@ impl Integrator<'_> {
         let mut vertex = 0u32;
         loop {
             let bs = stream.bounce(vertex);
-            let Some((hit, s)) = self.trace(&ray, stream, vertex, bs.alpha) else {
+            let Some((hit, s, error)) = self.trace(&ray, stream, vertex, bs.alpha) else {
                 // The environment is not light-sampled, so BSDF sampling finds it at weight 1.
                 l += beta * self.env;
                 break;
@@ -167,7 +169,9 @@ impl Integrator<'_> {
                 frame = Frame::from_normal(ng);
                 wo_l = frame.to_local(wo);
             }
-            let p_out = offset_ray_origin(s.p, ng);
+            // Our point is interpolated from the vertices; the accel's bound covers the rounding
+            // of instanced transforms, which a few ulps of the point alone would not.
+            let p_out = SpawnPoint { p: s.p, error }.origin(ng);
 
             for light in &self.geom.scene.lights {
                 let Some((wi, dist, e)) = punctual_incident(light, s.p) else {
