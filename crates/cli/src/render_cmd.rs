@@ -159,9 +159,12 @@ pub struct RenderArgs {
 
 /// A usage error in clap's format, exit code 2 (as clap's own parse errors).
 fn usage_error(msg: impl std::fmt::Display) -> ! {
-    crate::Cli::command()
-        .error(ErrorKind::InvalidValue, msg)
-        .exit()
+    let mut cli = crate::Cli::command();
+    let mut cmd = match cli.find_subcommand_mut("render") {
+        Some(render) => render.clone().bin_name("aperture render"),
+        None => cli,
+    };
+    cmd.error(ErrorKind::InvalidValue, msg).exit()
 }
 
 /// Runs `aperture render`.
@@ -189,8 +192,20 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         skip_textures: false,
     };
     let t_load = Instant::now();
-    let scene = aperture_scene::load(&args.scene, &load)
-        .with_context(|| format!("loading {}", args.scene.display()))?;
+    let scene = match aperture_scene::load(&args.scene, &load) {
+        Ok(s) => s,
+        // A flag's value the scene refuses (`--focus-object` naming no node, `--scene 9`) is a
+        // usage error like any other bad flag value: exit code 2.
+        Err(e @ aperture_scene::Error::InvalidDof { .. }) if matches!(&e, aperture_scene::Error::InvalidDof { key, .. } if key.starts_with("command line")) => {
+            usage_error(format!("{}: {e}", args.scene.display()))
+        }
+        Err(e @ aperture_scene::Error::NoSuchScene { .. }) => {
+            usage_error(format!("{}: {e}", args.scene.display()))
+        }
+        Err(e) => {
+            return Err(anyhow::Error::new(e).context(format!("loading {}", args.scene.display())))
+        }
+    };
     let camera_index = match &args.camera {
         None => 0,
         Some(c) => match scene.cameras.iter().position(|cam| &cam.name == c) {
