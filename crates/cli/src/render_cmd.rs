@@ -371,4 +371,52 @@ mod tests {
         assert_eq!(a.scene_index, Some(1));
         assert_eq!(a.aperture_radius, Some(0.0));
     }
+
+    /// The whole command on a real sample: EXR out, read back; `--threads 1` and `--threads 2`
+    /// give the same pixels.
+    #[test]
+    fn renders_a_sample_to_exr_identically_for_any_thread_count() {
+        let samples = std::env::var_os("APERTURE_SAMPLES")
+            .map(std::path::PathBuf::from)
+            .unwrap_or_else(|| {
+                std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                    .join("../../../shared/gltf-samples")
+            });
+        let box_glb = samples.join("correctness/BoxTextured/BoxTextured.glb");
+        if !box_glb.is_file() {
+            eprintln!("skipping: {} not found", box_glb.display());
+            return;
+        }
+        let dir = std::env::temp_dir();
+        let mut images = Vec::new();
+        for threads in ["1", "2"] {
+            let out = dir.join(format!("aperture-cli-{}-{threads}.exr", std::process::id()));
+            let mut args = parse(&[
+                "--width",
+                "24",
+                "--height",
+                "16",
+                "--spp",
+                "2",
+                "--threads",
+                threads,
+                "--env",
+                "1,1,1",
+                "--quiet",
+            ])
+            .unwrap();
+            args.scene = box_glb.clone();
+            args.output = out.clone();
+            run(args).unwrap();
+            images.push(aperture_imageio::read_exr(&out).unwrap());
+            std::fs::remove_file(&out).unwrap();
+        }
+        assert_eq!(images[0].rgba, images[1].rgba);
+        assert_eq!((images[0].width, images[0].height), (24, 16));
+        assert!(images[0].rgba.iter().any(|p| p[3] == 1.0));
+        assert_eq!(
+            images[0].meta("aperture:spp"),
+            Some(&aperture_imageio::MetaValue::Int(2))
+        );
+    }
 }
