@@ -152,6 +152,11 @@ pub struct RenderArgs {
     /// BVH build quality.
     #[arg(long, value_enum, default_value_t = BvhQualityArg::Medium)]
     pub bvh_quality: BvhQualityArg,
+    /// Keep coverage as alpha in PNG output too (as Cycles' Film > Transparent). Without it a
+    /// PNG is opaque: the environment (black by default) shows where nothing was hit, and dim
+    /// partial coverage (bokeh against the sky) stays visible. EXR always stores coverage.
+    #[arg(long)]
+    pub transparent: bool,
     /// No progress bar and no summary.
     #[arg(long, short)]
     pub quiet: bool,
@@ -284,7 +289,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     })?;
     drop(accel);
 
-    let image = crate::progress::film_to_image(&film, cam, &opts, render_secs);
+    let mut image = crate::progress::film_to_image(&film, cam, &opts, render_secs);
+    if ext.as_deref() == Some("png") && !args.transparent {
+        // RGB is already the radiance over the environment (associated alpha), so an opaque
+        // pixel is the same RGB with A = 1.
+        for p in &mut image.rgba {
+            p[3] = 1.0;
+        }
+    }
     let png = aperture_imageio::PngOptions {
         exposure: args.exposure,
         ..Default::default()
