@@ -139,6 +139,52 @@ fn six_blades_render_a_hexagon() {
     assert!(h6r > 0.05, "corners sideways: {h6r}");
 }
 
+/// Σ v r³ cos 3φ / Σ v r³ about the centroid: the sign says where a triangle's corners point.
+fn third_harmonic(film: &Film) -> f64 {
+    let (mut total, mut cx, mut cy) = (0.0, 0.0, 0.0);
+    for y in 0..film.height() {
+        for x in 0..film.width() {
+            let v = film.pixel(x, y)[0] as f64;
+            total += v;
+            cx += v * (x as f64 + 0.5);
+            cy += v * (y as f64 + 0.5);
+        }
+    }
+    let (cx, cy) = (cx / total, cy / total);
+    let (mut m3, mut h3) = (0.0, 0.0);
+    for y in 0..film.height() {
+        for x in 0..film.width() {
+            let v = film.pixel(x, y)[0] as f64;
+            let (dx, dy) = (x as f64 + 0.5 - cx, -(y as f64 + 0.5 - cy));
+            let r3 = (dx * dx + dy * dy).powf(1.5);
+            m3 += v * r3;
+            h3 += v * r3 * (3.0 * dy.atan2(dx)).cos();
+        }
+    }
+    h3 / m3
+}
+
+/// SPEC §2: behind the focal plane a bokeh shows the aperture's orientation, in front of it the
+/// shape is point-reflected. Three blades at rotation 0 have corners at 60°, 180° and 300°
+/// (cos 3φ = −1 there); reflected, at 240°, 0° and 120° (cos 3φ = +1).
+#[test]
+fn bokeh_is_point_reflected_in_front_of_the_focal_plane() {
+    let dof = Dof {
+        enabled: true,
+        aperture_radius: 0.75,
+        focus_distance: 2.0,
+        blades: 3,
+        ..Dof::default()
+    };
+    let behind = test_scenes::bokeh(0.25, 4.0, yfov(), dof.clone(), 50.0);
+    let in_front = test_scenes::bokeh(0.1, 1.5, yfov(), dof, 50.0);
+    let h_behind = third_harmonic(&render_scene(&behind, 64, SamplerKind::Sobol, 3));
+    let h_front = third_harmonic(&render_scene(&in_front, 64, SamplerKind::Sobol, 3));
+    println!("triangle bokeh: behind {h_behind:.3}, in front {h_front:.3}");
+    assert!(h_behind < -0.1, "{h_behind}");
+    assert!(h_front > 0.1, "{h_front}");
+}
+
 /// `R = 0` with depth of field "on" is the pinhole, bit for bit.
 #[test]
 fn zero_radius_is_bit_identical_to_the_pinhole() {
