@@ -37,6 +37,15 @@ pub enum OverrideArg {
     Diffuse,
 }
 
+/// `--view`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ViewArg {
+    /// Clip to [0, 1], then the sRGB transfer function.
+    Standard,
+    /// Blender's AgX base view (SPEC §6).
+    Agx,
+}
+
 /// `--bvh-quality`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum BvhQualityArg {
@@ -152,6 +161,9 @@ pub struct RenderArgs {
     /// BVH build quality.
     #[arg(long, value_enum, default_value_t = BvhQualityArg::Medium)]
     pub bvh_quality: BvhQualityArg,
+    /// View transform of PNG output.
+    #[arg(long, value_enum, default_value_t = ViewArg::Standard)]
+    pub view: ViewArg,
     /// Keep coverage as alpha in PNG output too (as Cycles' Film > Transparent). Without it a
     /// PNG is opaque: the environment (black by default) shows where nothing was hit, and dim
     /// partial coverage (bokeh against the sky) stays visible. EXR always stores coverage.
@@ -299,6 +311,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     }
     let png = aperture_imageio::PngOptions {
         exposure: args.exposure,
+        view: match args.view {
+            ViewArg::Standard => aperture_imageio::ViewTransform::Standard,
+            ViewArg::Agx => aperture_imageio::ViewTransform::AgX,
+        },
         ..Default::default()
     };
     aperture_imageio::write_image(&args.output, &image, &png)
@@ -369,6 +385,8 @@ mod tests {
             "-1.5",
             "--override-material",
             "diffuse",
+            "--view",
+            "agx",
             "--scene",
             "1",
             "--camera",
@@ -380,6 +398,7 @@ mod tests {
         assert_eq!(a.env, Some(Vec3::new(0.5, 1.0, 2.0)));
         assert_eq!(a.exposure, -1.5);
         assert_eq!(a.override_material, Some(OverrideArg::Diffuse));
+        assert_eq!(a.view, ViewArg::Agx);
         assert_eq!(a.scene_index, Some(1));
         assert_eq!(a.aperture_radius, Some(0.0));
     }
