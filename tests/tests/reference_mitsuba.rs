@@ -28,11 +28,6 @@
 //!   environment, not a noise allowance. (One bounce fewer moves the means by only 0.1–0.5%
 //!   here; the block check catches it: block ratios 1.7–2.5.)
 
-// Compiled out until the renderer lands on main: this file uses the `render` branch's API
-// (`render`, `RenderOptions`, `FilterKind`, `MaterialOverride`), which main's placeholder
-// `aperture-render` crate does not have yet. It passes against that branch (docs/accuracy.md).
-#![cfg(any())]
-
 use aperture_imageio::{metrics, read_exr, Image};
 use aperture_render::{build_accel, render, FilterKind, MaterialOverride, RenderOptions};
 use aperture_scene::LoadOptions;
