@@ -390,8 +390,8 @@ TEST_SEEDS = [1, 2]
 # Manifest fields that only a render gives (kept by --manifest-only).
 MEASURED = ["reference_spp", "reference_noise_rmse", "reference_mean_rgb", "reference_seconds"]
 
+GENERATOR = "tools/reference/make_reference.py"
 COMMON = {
-    "generator": "tools/reference/make_reference.py",
     "integrator": "path",
     "sampler": "independent",
     "filter": "box (1 pixel)",
@@ -469,7 +469,8 @@ def main():
             kept = {k: old[k] for k in MEASURED if k in old}
             entries[name] = {**static_entry(name, defs[name]), **kept}
         manifest = {
-            **{k: v for k, v in manifest.items() if k != "scenes"},
+            "generator": GENERATOR,
+            "mitsuba": manifest.get("mitsuba"),
             **COMMON,
             "scenes": [entries[n] for n in defs if n in entries],
         }
@@ -512,6 +513,7 @@ def main():
               f"mean {entries[name]['reference_mean_rgb']}", flush=True)
 
     manifest = {
+        "generator": GENERATOR,
         "mitsuba": f"{mi.__version__} {args.variant}",
         **COMMON,
         "scenes": [entries[n] for n in defs if n in entries],
