@@ -61,11 +61,11 @@ SPHERE_R = 0.03
 SPHERES = [  # name, depth along +Y, image x in [-1, 1], colour
     ("SphereNear", 0.35, 0.55, (0.8, 0.15, 0.1)),
     ("SphereMid", 0.5, 0.15, (0.75, 0.75, 0.7)),
-    ("SphereFar", 0.9, 0.6, (0.1, 0.3, 0.8)),
-    ("SphereBack", 1.3, 0.1, (0.2, 0.7, 0.2)),
+    ("SphereFar", 0.7, 0.6, (0.1, 0.3, 0.8)),
+    ("SphereBack", 0.9, 0.15, (0.2, 0.7, 0.2)),
 ]
 FOCUS = "SphereMid"
-BULB = ("Bulb", 6.0, -0.5, 0.35, 0.08, 20.0)  # name, depth, image x, image y, radius, emission
+BULB = ("Bulb", 6.0, -0.5, 0.4, 0.08, 20.0)  # name, depth, image x, image y, radius, emission
 
 RESULTS = []
 
@@ -160,10 +160,11 @@ def build_scene():
         p = at_image(nx, 0.0, depth)
         add_sphere(name, (p.x, depth, 0.0), SPHERE_R, principled(name, colour))
 
-    bpy.ops.mesh.primitive_plane_add(size=1.0, location=(0.0, 0.75, -SPHERE_R))
+    # The ground ends 1 m away: its blurred far edge stays clear of the bulb's bokeh.
+    bpy.ops.mesh.primitive_plane_add(size=1.0, location=(0.0, 0.45, -SPHERE_R))
     ground = bpy.context.active_object
     ground.name = ground.data.name = "Ground"
-    ground.scale = (1.2, 1.5, 1.0)
+    ground.scale = (1.2, 1.1, 1.0)
     ground.data.materials.append(principled("Ground", (0.5, 0.5, 0.5)))
 
     name, depth, nx, ny, radius, strength = BULB
@@ -515,7 +516,8 @@ def rmse(a, b):
 
 
 def bokeh_moments(img, centre, half):
-    """Intensity centroid, RMS radius and normalised 6-fold moment of the blob around `centre`."""
+    """Intensity centroid, RMS radius and normalised 6-fold moment of the blob within a circle of
+    radius `half` around `centre` (a circle, so the window adds no shape of its own)."""
     import numpy as np
 
     lum = img.mean(axis=2)
@@ -524,7 +526,8 @@ def bokeh_moments(img, centre, half):
     y0, y1 = max(0, int(cy - half)), min(lum.shape[0], int(cy + half) + 1)
     crop = lum[y0:y1, x0:x1]
     ys, xs = np.mgrid[y0:y1, x0:x1]
-    w = np.clip(crop, 0.0, None)
+    inside = np.hypot(xs + 0.5 - cx, ys + 0.5 - cy) <= half
+    w = np.where(inside, np.clip(crop, 0.0, None), 0.0)
     total = w.sum()
     mx, my = (w * (xs + 0.5)).sum() / total, (w * (ys + 0.5)).sum() / total
     dx, dy = xs + 0.5 - mx, ys + 0.5 - my
@@ -545,7 +548,7 @@ def ideal_hexagon_m6(rotation=0.0, n=6, res=801):
     r = np.hypot(xs, ys)
     # Distance to the polygon's edge in direction theta (circumradius 0.95).
     apothem = 0.95 * math.cos(math.pi / n)
-    rel = (theta - rotation - math.pi / n) % (2 * math.pi / n) - math.pi / n
+    rel = (theta - rotation) % (2 * math.pi / n) - math.pi / n  # 0 at the corners
     edge = apothem / np.cos(math.pi / n - np.abs(rel))
     inside = (r <= edge).astype(float)
     r6 = r ** 6
@@ -616,7 +619,7 @@ def test_render(binary, scene_path, cam):
     focus = view_depth(cam, bpy.data.objects[FOCUS])
     rad_m = LENS * 0.001 / (2.0 * FSTOP)
     coc = rad_m * abs(1.0 / focus - 1.0 / depth) * HEIGHT / ty
-    half = 0.5 * coc + radius / depth / ty * HEIGHT / 2 + 4
+    half = 0.5 * coc + radius / depth / ty * HEIGHT / 2 + 3
     mask = np.ones(A.shape[:2], bool)
     mask[max(0, int(cy - half)):int(cy + half) + 1, max(0, int(cx - half)):int(cx + half) + 1] = False
     ratio_lit = O[mask].mean() / A[mask].mean()
