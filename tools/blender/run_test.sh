@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs the Blender add-on acceptance test (tools/blender/test_export.py) with Blender as a Python
-# module: bpy 5.0.1 (or APERTURE_BPY) on Python 3.11, in a cached virtual environment that is created and filled on
-# first use. Never part of the Rust build.
+# module: bpy 5.0.1 (or APERTURE_BPY) on Python 3.11, in a cached virtual environment that is
+# created and filled on first use. Never part of the Rust build.
 #
 #   tools/blender/run_test.sh [test_export.py options, e.g. --require-all --out DIR --spp 512]
 #
