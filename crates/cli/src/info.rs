@@ -2,16 +2,355 @@
 
 use std::path::PathBuf;
 
+use aperture_accel::{Accel, BvhQuality, InstanceInput, MeshInput};
+use aperture_scene::{Camera, LightKind, LoadOptions, Projection, Scene};
+use serde_json::{json, Value};
+
 /// Arguments of `aperture info`.
 #[derive(clap::Args)]
 pub struct InfoArgs {
     /// The .gltf or .glb file.
     pub scene: PathBuf,
+    /// Which glTF scene to describe (default: the file's `scene`, else the first).
+    #[arg(long = "scene", value_name = "N")]
+    pub scene_index: Option<usize>,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Counts that are not stored on the scene directly.
+struct Counts {
+    point: usize,
+    spot: usize,
+    directional: usize,
+    emissive_drawn: usize,
+    degenerate: usize,
+}
+
+fn counts(s: &Scene) -> Counts {
+    let kind = |f: fn(&LightKind) -> bool| s.lights.iter().filter(|l| f(&l.kind)).count();
+    let emissive_per_mesh: Vec<usize> = s
+        .meshes
+        .iter()
+        .map(|m| {
+            m.material_ids
+                .iter()
+                .filter(|&&id| {
+                    s.materials
+                        .get(id as usize)
+                        .is_some_and(|m| m.is_emissive())
+                })
+                .count()
+        })
+        .collect();
+    let emissive_drawn = s
+        .instances
+        .iter()
+        .map(|i| emissive_per_mesh.get(i.mesh as usize).copied().unwrap_or(0))
+        .sum();
+    // Degenerate triangles are what the BVH builder leaves out, so ask it.
+    let meshes: Vec<MeshInput<'_>> = s
+        .meshes
+        .iter()
+        .map(|m| MeshInput {
+            positions: &m.positions,
+            indices: &m.indices,
+        })
+        .collect();
+    let instances: Vec<InstanceInput> = s
+        .instances
+        .iter()
+        .map(|i| InstanceInput {
+            mesh: i.mesh,
+            world_from_object: i.world_from_object,
+        })
+        .collect();
+    let degenerate = Accel::build(&meshes, &instances, BvhQuality::Fast)
+        .stats()
+        .degenerate_triangles;
+    Counts {
+        point: kind(|k| matches!(k, LightKind::Point)),
+        spot: kind(|k| matches!(k, LightKind::Spot { .. })),
+        directional: kind(|k| matches!(k, LightKind::Directional)),
+        emissive_drawn,
+        degenerate,
+    }
+}
+
+/// An f32 as the shortest decimal that reads back to it (0.7, not 0.699999988079071).
+fn f(x: f32) -> Value {
+    json!(x.to_string().parse::<f64>().unwrap_or(f64::from(x)))
+}
+
+fn v3(v: glam::Vec3) -> Value {
+    json!([f(v.x), f(v.y), f(v.z)])
+}
+
+fn camera_json(c: &Camera) -> Value {
+    let (projection, yfov, aspect, xmag, ymag) = match c.projection {
+        Projection::Perspective { yfov, aspect_ratio } => {
+            ("perspective", Some(yfov), aspect_ratio, None, None)
+        }
+        Projection::Orthographic { xmag, ymag } => {
+            ("orthographic", None, None, Some(xmag), Some(ymag))
+        }
+    };
+    let d = &c.dof;
+    json!({
+        "name": c.name,
+        "node": c.node,
+        "projection": projection,
+        "yfov": yfov.map(f),
+        "aspect_ratio": aspect.map(f),
+        "xmag": xmag.map(f),
+        "ymag": ymag.map(f),
+        "position": v3(c.world_from_camera.translation.into()),
+        "direction": v3((-c.world_from_camera.matrix3.z_axis).into()),
+        "dof": {
+            "enabled": d.enabled,
+            "aperture_radius": f(d.aperture_radius),
+            "focus_distance": f(d.focus_distance),
+            "lens_mm": f(d.lens_mm),
+            "sensor_width": f(d.sensor_width),
+            "sensor_height": f(d.sensor_height),
+            "sensor_fit": format!("{:?}", d.sensor_fit).to_uppercase(),
+            "blades": d.blades,
+            "rotation": f(d.rotation),
+            "ratio": f(d.ratio),
+            "focus_object": d.focus_object,
+        },
+    })
+}
+
+fn report(s: &Scene) -> Value {
+    let c = counts(s);
+    let b = s.bounds();
+    let bounds = if b.is_empty() {
+        json!({"min": null, "max": null})
+    } else {
+        json!({"min": v3(b.min), "max": v3(b.max)})
+    };
+    json!({
+        "nodes": s.stats.nodes,
+        "meshes": s.meshes.len(),
+        "instances": s.instances.len(),
+        "primitives": s.stats.primitives,
+        "triangles": {
+            "unique": s.unique_triangle_count(),
+            "drawn": s.drawn_triangle_count(),
+            "emissive_drawn": c.emissive_drawn,
+            "degenerate": c.degenerate,
+        },
+        "materials": s.materials.len(),
+        "textures": s.textures.len(),
+        "lights": {"point": c.point, "spot": c.spot, "directional": c.directional},
+        "bounds": bounds,
+        "skipped": {
+            "primitives": s.stats.skipped_primitives,
+            "features": s.stats.skipped_features,
+        },
+        "warnings": s.stats.warnings,
+        "cameras": s.cameras.iter().map(camera_json).collect::<Vec<_>>(),
+    })
+}
+
+fn print_text(path: &std::path::Path, r: &Value) {
+    let n = |v: &Value| v.as_u64().unwrap_or(0);
+    let t = &r["triangles"];
+    let l = &r["lights"];
+    println!("{}", path.display());
+    println!(
+        "  nodes {}  meshes {}  instances {}  primitives {}",
+        n(&r["nodes"]),
+        n(&r["meshes"]),
+        n(&r["instances"]),
+        n(&r["primitives"])
+    );
+    println!(
+        "  triangles: {} unique, {} drawn, {} emissive (drawn), {} degenerate",
+        n(&t["unique"]),
+        n(&t["drawn"]),
+        n(&t["emissive_drawn"]),
+        n(&t["degenerate"])
+    );
+    println!(
+        "  materials {}  textures {}  lights: {} point, {} spot, {} directional",
+        n(&r["materials"]),
+        n(&r["textures"]),
+        n(&l["point"]),
+        n(&l["spot"]),
+        n(&l["directional"])
+    );
+    println!(
+        "  bounds: min {} max {}",
+        r["bounds"]["min"], r["bounds"]["max"]
+    );
+    let skipped = &r["skipped"];
+    if n(&skipped["primitives"]) > 0 {
+        println!(
+            "  skipped: {} non-triangle primitive(s)",
+            n(&skipped["primitives"])
+        );
+    }
+    for f in skipped["features"].as_array().into_iter().flatten() {
+        println!("  skipped: {}", f.as_str().unwrap_or_default());
+    }
+    for w in r["warnings"].as_array().into_iter().flatten() {
+        println!("  warning: {}", w.as_str().unwrap_or_default());
+    }
+    let cams = r["cameras"].as_array().cloned().unwrap_or_default();
+    println!("  cameras: {}", cams.len());
+    for c in &cams {
+        let d = &c["dof"];
+        let node = match c["node"].as_u64() {
+            Some(i) => format!("node {i}"),
+            None => "automatic".into(),
+        };
+        let proj = match c["projection"].as_str() {
+            Some("perspective") => format!(
+                "perspective yfov {:.2}° aspect {}",
+                c["yfov"].as_f64().unwrap_or(0.0).to_degrees(),
+                c["aspect_ratio"]
+            ),
+            _ => format!("orthographic xmag {} ymag {}", c["xmag"], c["ymag"]),
+        };
+        println!("    {} ({node}): {proj}", c["name"]);
+        println!(
+            "      dof {}: aperture radius {} m, focus {} m{}, lens {} mm, sensor {}x{} mm {}, blades {}, rotation {}, ratio {}",
+            if d["enabled"].as_bool() == Some(true) { "on" } else { "off" },
+            d["aperture_radius"],
+            d["focus_distance"],
+            match d["focus_object"].as_str() {
+                Some(o) => format!(" (on {o:?})"),
+                None => String::new(),
+            },
+            d["lens_mm"],
+            d["sensor_width"],
+            d["sensor_height"],
+            d["sensor_fit"].as_str().unwrap_or_default(),
+            d["blades"],
+            d["rotation"],
+            d["ratio"],
+        );
+    }
 }
 
 /// Runs `aperture info`.
 pub fn run(args: InfoArgs) -> anyhow::Result<()> {
-    let s = aperture_scene::load(&args.scene, &Default::default())?;
-    println!("{} triangles drawn", s.drawn_triangle_count());
+    let options = LoadOptions {
+        scene: args.scene_index,
+        // Counts need no texels.
+        skip_textures: true,
+        ..LoadOptions::default()
+    };
+    let s = aperture_scene::load(&args.scene, &options)
+        .map_err(|e| anyhow::anyhow!(e).context(format!("loading {}", args.scene.display())))?;
+    let r = report(&s);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&r)?);
+    } else {
+        print_text(&args.scene, &r);
+    }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aperture_scene::{Dof, Instance, Light, Material, Mesh};
+    use glam::{Affine3A, Vec3};
+
+    /// Two instances of a two-triangle mesh whose second triangle is emissive.
+    fn scene() -> Scene {
+        let mesh = Mesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
+            normals: vec![Vec3::Z; 4],
+            indices: vec![[0, 1, 2], [0, 2, 3]],
+            material_ids: vec![0, 1],
+            ..Mesh::default()
+        };
+        let glow = Material {
+            emissive_factor: Vec3::ONE,
+            ..Material::default()
+        };
+        let light = |kind| Light {
+            name: None,
+            kind,
+            position: Vec3::ZERO,
+            direction: Vec3::NEG_Z,
+            intensity: Vec3::ONE,
+        };
+        Scene {
+            meshes: vec![mesh],
+            instances: vec![
+                Instance {
+                    mesh: 0,
+                    world_from_object: Affine3A::IDENTITY,
+                    node: 0,
+                },
+                Instance {
+                    mesh: 0,
+                    world_from_object: Affine3A::from_translation(Vec3::new(2.0, 0.0, 0.0)),
+                    node: 1,
+                },
+            ],
+            materials: vec![Material::default(), glow],
+            lights: vec![
+                light(LightKind::Point),
+                light(LightKind::Point),
+                light(LightKind::Directional),
+            ],
+            cameras: vec![Camera {
+                name: "Cam".into(),
+                node: Some(2),
+                world_from_camera: Affine3A::IDENTITY,
+                projection: Projection::Perspective {
+                    yfov: 0.7,
+                    aspect_ratio: Some(1.5),
+                },
+                dof: Dof {
+                    enabled: true,
+                    aperture_radius: 0.25,
+                    focus_object: Some("Target".into()),
+                    ..Dof::default()
+                },
+            }],
+            ..Scene::default()
+        }
+    }
+
+    #[test]
+    fn json_report_has_the_documented_keys_and_counts() {
+        let r = report(&scene());
+        assert_eq!(r["triangles"]["unique"], 2);
+        assert_eq!(r["triangles"]["drawn"], 4);
+        assert_eq!(r["triangles"]["emissive_drawn"], 2);
+        assert_eq!(r["lights"]["point"], 2);
+        assert_eq!(r["lights"]["spot"], 0);
+        assert_eq!(r["lights"]["directional"], 1);
+        assert_eq!(r["bounds"]["min"], json!([0.0, 0.0, 0.0]));
+        assert_eq!(r["bounds"]["max"], json!([3.0, 1.0, 1.0]));
+        let c = &r["cameras"][0];
+        assert_eq!(c["name"], "Cam");
+        assert_eq!(c["node"], 2);
+        assert_eq!(c["projection"], "perspective");
+        assert_eq!(c["yfov"], 0.7);
+        assert_eq!(c["aspect_ratio"], 1.5);
+        let d = &c["dof"];
+        assert_eq!(d["enabled"], true);
+        assert_eq!(d["aperture_radius"], 0.25);
+        assert_eq!(d["focus_distance"], 10.0);
+        assert_eq!(d["focus_object"], "Target");
+        for key in ["lens_mm", "blades", "rotation", "ratio"] {
+            assert!(d.get(key).is_some_and(|v| !v.is_null()), "{key}");
+        }
+    }
+
+    #[test]
+    fn empty_scene_has_null_bounds() {
+        let r = report(&Scene::default());
+        assert_eq!(r["bounds"]["min"], Value::Null);
+        assert_eq!(r["triangles"]["drawn"], 0);
+    }
 }

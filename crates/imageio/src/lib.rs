@@ -1,18 +1,47 @@
 //! Writing and reading images: EXR (scene-referred float, with passes and metadata) and PNG
 //! (display-referred, after exposure and a view transform), plus image-error metrics.
 //!
-//! ```no_run
-//! use aperture_imageio::{Image, write_image, PngOptions};
+//! ```
+//! use aperture_imageio::{read_exr, write_image, Image, Layer, MetaValue, PngOptions};
 //! let mut image = Image::new(2, 2);
 //! image.rgba[0] = [1.0, 0.5, 0.25, 1.0];
-//! write_image("out.exr".as_ref(), &image, &PngOptions::default())?;
+//! image.layers.push(Layer {
+//!     name: "depth".into(),
+//!     channels: vec!["Z".into()],
+//!     data: vec![1.5; 4],
+//! });
+//! image.metadata.push(("aperture:radius".into(), MetaValue::Float(0.05)));
+//!
+//! let dir = std::env::temp_dir();
+//! let exr = dir.join(format!("aperture-doc-{}.exr", std::process::id()));
+//! write_image(&exr, &image, &PngOptions::default())?;
+//! assert_eq!(read_exr(&exr)?, image);
+//!
+//! let png = exr.with_extension("png");
+//! write_image(&png, &image, &PngOptions { exposure: 1.0, ..Default::default() })?;
+//! # std::fs::remove_file(exr).unwrap();
+//! # std::fs::remove_file(png).unwrap();
 //! # Ok::<(), aperture_imageio::Error>(())
 //! ```
+//!
+//! Every writer is atomic: the file appears whole, under its final name, or not at all.
 
 use std::path::{Path, PathBuf};
 
+mod atomic;
+mod exr;
+pub mod metrics;
+mod png;
+pub mod view;
+
+pub use crate::exr::{encode_exr, read_exr, write_exr};
+pub use crate::png::{encode_png, write_png};
+
 /// A plain float image: beauty RGBA plus optional named passes and header metadata.
 /// Rows run top to bottom.
+///
+/// RGB is *associated* (premultiplied) with A, the EXR convention and what a renderer that
+/// averages radiance over samples (background contributing black) naturally produces.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Image {
     /// Width in pixels.
@@ -24,6 +53,14 @@ pub struct Image {
     /// Extra passes, written to EXR as layers (`depth.Z`, `normal.X`, ...); PNG ignores them.
     pub layers: Vec<Layer>,
     /// Header metadata (camera, aperture, focus, samples, seed, render time, ...).
+    ///
+    /// Keys are EXR attribute names: non-empty, at most 255 bytes, no NUL, each used once.
+    /// Custom names become custom attributes. The few standard OpenEXR names with a plain
+    /// text or float type (`owner`, `comments`, `capDate`, `software`, `focus` (metres),
+    /// `aperture` (f-number), `expTime`, `isoSpeed`, `near`, `far`, ...) are stored as those
+    /// standard attributes and must have that type; the structural ones (`channels`,
+    /// `dataWindow`, `name`, ...) are refused. Prefer namespaced keys such as
+    /// `aperture:radius` for renderer values whose meaning differs from the standard one.
     pub metadata: Vec<(String, MetaValue)>,
 }
 
@@ -38,9 +75,123 @@ impl Image {
             metadata: Vec::new(),
         }
     }
+
+    /// Number of pixels, `width * height`.
+    pub fn pixel_count(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+
+    /// Checks that every buffer has the size `width` and `height` promise, that the image is
+    /// not empty, and that layer, channel and metadata names can be written to an EXR file.
+    pub fn validate(&self) -> Result<(), Error> {
+        self.validate_beauty()?;
+        let pixels = self.pixel_count();
+        // Full channel names as they will appear in the file; the beauty names are taken.
+        let mut full_names: Vec<String> = ["R", "G", "B", "A"].map(String::from).to_vec();
+        for (index, layer) in self.layers.iter().enumerate() {
+            let what = || format!("layer {index} (`{}`)", layer.name);
+            if layer.name.contains('\0') {
+                return Err(invalid_name(NameKind::Layer, &layer.name, "contains NUL"));
+            }
+            if layer.channels.is_empty() {
+                return Err(invalid_name(
+                    NameKind::Layer,
+                    &layer.name,
+                    "has no channels",
+                ));
+            }
+            for channel in &layer.channels {
+                if channel.is_empty() || channel.contains('.') || channel.contains('\0') {
+                    return Err(invalid_name(
+                        NameKind::Channel,
+                        channel,
+                        "must be non-empty, without `.` or NUL",
+                    ));
+                }
+                let full = layer.full_channel_name(channel);
+                if full.len() > 255 {
+                    return Err(invalid_name(
+                        NameKind::Channel,
+                        &full,
+                        "longer than 255 bytes",
+                    ));
+                }
+                if full_names.contains(&full) {
+                    return Err(invalid_name(NameKind::Channel, &full, "appears twice"));
+                }
+                full_names.push(full);
+            }
+            let expected = pixels * layer.channels.len();
+            if layer.data.len() != expected {
+                return Err(Error::BufferSize {
+                    what: what(),
+                    expected,
+                    found: layer.data.len(),
+                });
+            }
+        }
+        let mut keys: Vec<&str> = Vec::with_capacity(self.metadata.len());
+        for (key, _) in &self.metadata {
+            if key.is_empty() || key.len() > 255 || key.contains('\0') {
+                return Err(invalid_name(
+                    NameKind::Metadata,
+                    key,
+                    "must be 1 to 255 bytes, without NUL",
+                ));
+            }
+            if keys.contains(&key.as_str()) {
+                return Err(invalid_name(NameKind::Metadata, key, "appears twice"));
+            }
+            keys.push(key);
+        }
+        Ok(())
+    }
+
+    /// The checks PNG needs: non-empty, and `rgba` of the promised size.
+    pub(crate) fn validate_beauty(&self) -> Result<(), Error> {
+        if self.width == 0 || self.height == 0 {
+            return Err(Error::EmptyImage {
+                width: self.width,
+                height: self.height,
+            });
+        }
+        let pixels = self.pixel_count();
+        if self.rgba.len() != pixels {
+            return Err(Error::BufferSize {
+                what: "rgba".into(),
+                expected: pixels,
+                found: self.rgba.len(),
+            });
+        }
+        Ok(())
+    }
+
+    /// The layer called `name`, if any.
+    pub fn layer(&self, name: &str) -> Option<&Layer> {
+        self.layers.iter().find(|layer| layer.name == name)
+    }
+
+    /// The metadata value under `key`, if any.
+    pub fn meta(&self, key: &str) -> Option<&MetaValue> {
+        self.metadata
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, value)| value)
+    }
+}
+
+fn invalid_name(kind: NameKind, name: &str, reason: &'static str) -> Error {
+    Error::InvalidName {
+        kind,
+        name: name.to_owned(),
+        reason,
+    }
 }
 
 /// A named pass with one or more channels, stored channel-interleaved per pixel.
+///
+/// In an EXR file the channel is called `name.channel` (`depth.Z`). A layer with an empty
+/// name holds channels that belong to no layer (a bare `Z` written by another tool).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Layer {
     /// Layer name (`depth`, `normal`, `samples`, ...).
@@ -49,6 +200,17 @@ pub struct Layer {
     pub channels: Vec<String>,
     /// `width * height * channels.len()` values.
     pub data: Vec<f32>,
+}
+
+impl Layer {
+    /// The channel's name in an EXR file: `layer.channel`, or `channel` for the unnamed layer.
+    pub fn full_channel_name(&self, channel: &str) -> String {
+        if self.name.is_empty() {
+            channel.to_owned()
+        } else {
+            format!("{}.{channel}", self.name)
+        }
+    }
 }
 
 /// A metadata value for the EXR header.
@@ -68,6 +230,8 @@ pub enum ViewTransform {
     /// Clip to [0, 1] and apply the sRGB transfer function.
     #[default]
     Standard,
+    /// Blender's AgX base view (no look), approximated; see [`view::agx`].
+    AgX,
 }
 
 /// How to turn scene-referred values into a PNG.
@@ -91,6 +255,28 @@ impl Default for PngOptions {
     }
 }
 
+/// What kind of name an [`Error::InvalidName`] is about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum NameKind {
+    /// A layer name.
+    Layer,
+    /// A channel name (within a layer, or the full `layer.channel`).
+    Channel,
+    /// A metadata key.
+    Metadata,
+}
+
+impl std::fmt::Display for NameKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            NameKind::Layer => "layer",
+            NameKind::Channel => "channel",
+            NameKind::Metadata => "metadata key",
+        })
+    }
+}
+
 /// Errors of image input and output.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -109,13 +295,214 @@ pub enum Error {
         /// What went wrong.
         message: String,
     },
+    /// The image has no pixels; neither EXR nor PNG can hold that.
+    #[error("empty image ({width}x{height})")]
+    EmptyImage {
+        /// Width.
+        width: u32,
+        /// Height.
+        height: u32,
+    },
+    /// A pixel buffer does not have the size `width * height` (times channels) promises.
+    #[error("{what}: {found} values, expected {expected}")]
+    BufferSize {
+        /// Which buffer (`rgba`, `layer 0 (`depth`)`).
+        what: String,
+        /// Values expected.
+        expected: usize,
+        /// Values found.
+        found: usize,
+    },
+    /// A layer, channel or metadata name cannot be written.
+    #[error("{kind} `{name}`: {reason}")]
+    InvalidName {
+        /// What the name names.
+        kind: NameKind,
+        /// The name.
+        name: String,
+        /// Why it is refused.
+        reason: &'static str,
+    },
+    /// An option is out of range.
+    #[error("option {option} = {value}: {reason}")]
+    InvalidOption {
+        /// The option (`exposure`).
+        option: &'static str,
+        /// Its value, printed.
+        value: String,
+        /// Why it is refused.
+        reason: &'static str,
+    },
+    /// The EXR file is damaged, or the EXR encoder refused the data.
+    #[error("{path}: EXR: {message}")]
+    Exr {
+        /// The file.
+        path: PathBuf,
+        /// The decoder's or encoder's message.
+        message: String,
+    },
+    /// The EXR file is valid but holds something this reader does not handle.
+    #[error("{path}: unsupported EXR: {what}")]
+    UnsupportedExr {
+        /// The file.
+        path: PathBuf,
+        /// What is not supported.
+        what: String,
+    },
+    /// The EXR file has no beauty: no `R`,`G`,`B` (nor `Y`) channels.
+    #[error("{path}: no R, G, B (or Y) channels; channels are: {channels}")]
+    NoBeauty {
+        /// The file.
+        path: PathBuf,
+        /// The channels the file has, comma-separated.
+        channels: String,
+    },
+    /// The PNG encoder failed.
+    #[error("{path}: PNG: {message}")]
+    Png {
+        /// The file.
+        path: PathBuf,
+        /// The encoder's message.
+        message: String,
+    },
+    /// Two images compared by a metric differ in size.
+    #[error("images differ in size: {left:?} vs {right:?}")]
+    SizeMismatch {
+        /// (width, height) of the first image.
+        left: (u32, u32),
+        /// (width, height) of the second image.
+        right: (u32, u32),
+    },
+}
+
+/// The formats [`write_image`] chooses between.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Format {
+    /// OpenEXR, scene-referred float.
+    Exr,
+    /// PNG, display-referred.
+    Png,
+}
+
+impl Format {
+    /// The format named by the path's extension (case-insensitive `.exr` or `.png`).
+    pub fn from_path(path: &Path) -> Result<Self, Error> {
+        let ext = path
+            .extension()
+            .and_then(|ext| ext.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("exr") => Ok(Format::Exr),
+            Some("png") => Ok(Format::Png),
+            _ => Err(Error::UnknownFormat {
+                path: path.to_path_buf(),
+            }),
+        }
+    }
 }
 
 /// Writes `image` to `path`, choosing EXR or PNG by the extension. The file is written whole or
 /// not at all (a temporary file beside it, then a rename).
+///
+/// `png` is used only for PNG; EXR stores scene-referred values unchanged.
 pub fn write_image(path: &Path, image: &Image, png: &PngOptions) -> Result<(), Error> {
-    let _ = (image, png);
-    Err(Error::UnknownFormat {
-        path: path.to_path_buf(),
-    })
+    match Format::from_path(path)? {
+        Format::Exr => write_exr(path, image),
+        Format::Png => write_png(path, image, png),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn format_by_extension_is_case_insensitive() {
+        assert_eq!(Format::from_path("a/b.EXR".as_ref()).unwrap(), Format::Exr);
+        assert_eq!(Format::from_path("b.Png".as_ref()).unwrap(), Format::Png);
+        for bad in ["b.jpg", "b", "exr", "b.exr.tmp", ".png.x"] {
+            assert!(
+                matches!(
+                    Format::from_path(bad.as_ref()),
+                    Err(Error::UnknownFormat { .. })
+                ),
+                "{bad}"
+            );
+        }
+    }
+
+    #[test]
+    fn write_image_refuses_unknown_extension_and_writes_nothing() {
+        let dir = atomic::tests::scratch_dir("unknown-ext");
+        let path = dir.join("out.jpg");
+        let err = write_image(&path, &Image::new(1, 1), &PngOptions::default()).unwrap_err();
+        assert!(matches!(err, Error::UnknownFormat { .. }));
+        assert!(atomic::tests::entries(&dir).is_empty());
+    }
+
+    #[test]
+    fn validate_catches_bad_buffers_and_names() {
+        let good = Image::new(2, 1);
+        good.validate().unwrap();
+
+        let mut short = good.clone();
+        short.rgba.pop();
+        assert!(matches!(
+            short.validate(),
+            Err(Error::BufferSize {
+                expected: 2,
+                found: 1,
+                ..
+            })
+        ));
+
+        assert!(matches!(
+            Image::new(0, 3).validate(),
+            Err(Error::EmptyImage { .. })
+        ));
+
+        let layer = |name: &str, channels: &[&str], n: usize| Layer {
+            name: name.into(),
+            channels: channels.iter().map(|c| c.to_string()).collect(),
+            data: vec![0.0; n],
+        };
+        let cases = [
+            (layer("depth", &["Z"], 3), "data size"),
+            (layer("depth", &["a.b"], 2), "dot in channel"),
+            (layer("depth", &[""], 2), "empty channel"),
+            (layer("", &["R"], 2), "clashes with beauty"),
+            (layer("n", &[], 0), "no channels"),
+        ];
+        for (bad, why) in cases {
+            let mut image = good.clone();
+            image.layers.push(bad);
+            assert!(image.validate().is_err(), "{why}");
+        }
+
+        let mut twice = good.clone();
+        twice.layers.push(layer("depth", &["Z"], 2));
+        twice.layers.push(layer("depth", &["Z"], 2));
+        assert!(matches!(
+            twice.validate(),
+            Err(Error::InvalidName {
+                kind: NameKind::Channel,
+                ..
+            })
+        ));
+
+        let mut meta = good.clone();
+        meta.metadata.push(("k".into(), MetaValue::Int(1)));
+        meta.metadata.push(("k".into(), MetaValue::Int(2)));
+        assert!(matches!(
+            meta.validate(),
+            Err(Error::InvalidName {
+                kind: NameKind::Metadata,
+                ..
+            })
+        ));
+        meta.metadata.truncate(1);
+        meta.metadata.push((String::new(), MetaValue::Int(2)));
+        assert!(meta.validate().is_err());
+    }
 }

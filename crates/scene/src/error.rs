@@ -1,6 +1,7 @@
 use std::path::PathBuf;
 
-/// Everything that can go wrong while loading a scene. Each variant says *where* in the file.
+/// Everything that can go wrong while loading a scene. Each variant says *where* in the file:
+/// `at` fields are glTF JSON paths such as `meshes[2].primitives[0].indices`.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
@@ -17,5 +18,151 @@ pub enum Error {
     Unsupported {
         /// What is not supported.
         what: String,
+    },
+    /// The file lists an extension in `extensionsRequired` that we do not implement.
+    #[error("extensionsRequired[{index}]: required extension {name} is not supported")]
+    UnsupportedExtension {
+        /// The extension's name, e.g. `KHR_draco_mesh_compression`.
+        name: String,
+        /// Its position in `extensionsRequired`.
+        index: usize,
+    },
+    /// The binary glTF container is truncated or malformed.
+    #[error("GLB container: {reason}")]
+    Glb {
+        /// What is wrong with the container.
+        reason: String,
+    },
+    /// The JSON could not be parsed, or does not have the shape of a glTF document.
+    #[error("JSON: {source}")]
+    Json {
+        /// The parser's error (with line and column).
+        source: serde_json::Error,
+    },
+    /// The glTF document breaks a rule of the specification (found by the `gltf` crate's validation).
+    #[error("{at}: {reason}")]
+    Invalid {
+        /// JSON path of the offending value.
+        at: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A URI that may not be followed (outside the scene folder, absolute, or remote).
+    #[error("{at}: URI {uri:?} refused: {reason}")]
+    ForbiddenUri {
+        /// JSON path of the URI (`buffers[0].uri`).
+        at: String,
+        /// The URI as written in the file.
+        uri: String,
+        /// Why it is refused.
+        reason: String,
+    },
+    /// A buffer or image file named by a URI could not be read.
+    #[error("{at}: cannot read {path}: {source}")]
+    MissingFile {
+        /// JSON path of the URI.
+        at: String,
+        /// The resolved file path.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// A `data:` URI that is not valid base64.
+    #[error("{at}: bad data URI: {reason}")]
+    DataUri {
+        /// JSON path of the URI.
+        at: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A buffer shorter than its `byteLength`.
+    #[error("buffers[{buffer}]: byteLength is {claimed} but only {actual} bytes are present")]
+    BufferTooShort {
+        /// Buffer index.
+        buffer: usize,
+        /// `byteLength` from the file.
+        claimed: u64,
+        /// Bytes actually available.
+        actual: u64,
+    },
+    /// An accessor (or buffer view) reaches outside the bytes that back it.
+    #[error("{at}: needs bytes up to {needed} but only {available} are available")]
+    OutOfBounds {
+        /// JSON path of the accessor or buffer view (`accessors[4]`, `accessors[4].sparse.indices`).
+        at: String,
+        /// One past the last byte the data would need.
+        needed: u64,
+        /// Bytes available.
+        available: u64,
+    },
+    /// An accessor whose type or component type cannot be used where it is used.
+    #[error("{at}: {reason}")]
+    BadAccessor {
+        /// JSON path of the use (`meshes[0].primitives[1].attributes.NORMAL`).
+        at: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A vertex index past the end of the vertex arrays.
+    #[error("{at}: index {index} out of range ({vertices} vertices)")]
+    IndexOutOfRange {
+        /// JSON path of the indices (`meshes[2].primitives[0].indices`).
+        at: String,
+        /// The offending index.
+        index: u64,
+        /// Number of vertices.
+        vertices: usize,
+    },
+    /// A TRIANGLES primitive whose index (or vertex) count is not a multiple of 3.
+    #[error("{at}: {count} indices is not a multiple of 3")]
+    IndexCount {
+        /// JSON path of the primitive.
+        at: String,
+        /// The count.
+        count: usize,
+    },
+    /// A NaN or infinite value where geometry or a transform needs a finite number.
+    #[error("{at}: non-finite value {value}")]
+    NonFinite {
+        /// JSON path (`accessors[0]` element 3, `nodes[1].matrix`).
+        at: String,
+        /// The value.
+        value: String,
+    },
+    /// A depth-of-field setting (SPEC §3) with the wrong type or out of range.
+    #[error("camera {camera:?}: {key} = {value}: {reason}")]
+    InvalidDof {
+        /// Camera name.
+        camera: String,
+        /// The key (`aperture_fstop`, `EXT_camera_physical.fStop`, `--focus-distance`).
+        key: String,
+        /// The value as written.
+        value: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A scene index that does not exist (`--scene N`).
+    #[error("scene {index} does not exist (the file has {count})")]
+    NoSuchScene {
+        /// Requested index.
+        index: usize,
+        /// Number of scenes in the file.
+        count: usize,
+    },
+    /// The node graph is not a forest (a node with two parents, or a cycle).
+    #[error("nodes[{node}]: {reason}")]
+    NodeGraph {
+        /// The node where the problem was found.
+        node: usize,
+        /// What is wrong.
+        reason: String,
+    },
+    /// An image could not be decoded.
+    #[error("images[{image}]: {source}")]
+    Image {
+        /// Image index.
+        image: usize,
+        /// The decoder's error.
+        source: image::ImageError,
     },
 }

@@ -8,20 +8,33 @@
 //! println!("{} triangles drawn", scene.drawn_triangle_count());
 //! # Ok::<(), aperture_scene::Error>(())
 //! ```
+//!
+//! What the loader guarantees:
+//! - `extensionsRequired` is checked before any buffer is read ([`SUPPORTED_EXTENSIONS`]); an
+//!   extension that is only used is ignored (and reported in [`SceneStats::warnings`]).
+//! - Animations, skins and morph targets are not evaluated: the rest pose is drawn.
+//! - Only the selected scene's meshes are loaded, each once, with one [`Instance`] per drawing node
+//!   or `EXT_mesh_gpu_instancing` instance; only images used by drawn materials are decoded, in
+//!   parallel.
+//! - Bad input is an [`Error`] saying where, never a panic; every count is checked against the
+//!   bytes that back it before anything is allocated.
+//! - External URIs resolve only inside the scene file's folder: no `..`, absolute paths or
+//!   `http:`.
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
+mod accessor;
+mod dof;
 mod error;
+mod glb;
+mod load;
+mod material;
+mod mesh;
+mod prepass;
 mod types;
+mod uri;
 
+pub use dof::{lens_from_yfov, DEFAULT_ASPECT};
 pub use error::Error;
+pub use load::{load, load_bytes};
+pub use prepass::SUPPORTED_EXTENSIONS;
 pub use types::*;
-
-use std::path::Path;
-
-/// Loads a `.gltf` or `.glb` file into a render-ready [`Scene`].
-pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, Error> {
-    let _ = (path, options);
-    Err(Error::Unsupported {
-        what: "the loader is not written yet".into(),
-    })
-}

@@ -35,6 +35,7 @@ pub struct Mesh {
     /// Unit shading normals. Always present: primitives without `NORMAL` get flat normals.
     pub normals: Vec<Vec3>,
     /// Tangents (xyz) with handedness sign (w), from `TANGENT`; empty when no primitive has them.
+    /// Vertices of primitives without `TANGENT` hold `Vec4::ZERO` (derive a tangent there).
     pub tangents: Vec<Vec4>,
     /// `TEXCOORD_0`; empty when no primitive has it (zeros fill primitives that lack it).
     pub uv0: Vec<Vec2>,
@@ -53,7 +54,10 @@ pub struct Mesh {
 pub struct Instance {
     /// Index into `Scene::meshes`.
     pub mesh: u32,
-    /// Object-to-world transform (may contain scale, shear and reflection).
+    /// Object-to-world transform (may contain scale, shear and reflection). A mesh is shared by
+    /// mirrored and unmirrored instances, so its winding is not flipped: when
+    /// [`Instance::is_mirrored`], the world-space front side of a triangle is the opposite of
+    /// `cross(b - a, c - a)` of its transformed corners.
     pub world_from_object: Affine3A,
     /// Index of the glTF node that draws this instance.
     pub node: u32,
@@ -63,6 +67,33 @@ impl Instance {
     /// True when the transform mirrors space, which reverses the triangles' winding.
     pub fn is_mirrored(&self) -> bool {
         self.world_from_object.matrix3.determinant() < 0.0
+    }
+
+    /// A world-space unit normal from an object-space one (inverse transpose of the linear part).
+    /// `None` when the transform is singular or the normal is zero.
+    pub fn world_normal(&self, object_normal: Vec3) -> Option<Vec3> {
+        let m = self.world_from_object.matrix3;
+        if m.determinant() == 0.0 {
+            return None;
+        }
+        (m.inverse().transpose() * glam::Vec3A::from(object_normal))
+            .try_normalize()
+            .map(Vec3::from)
+    }
+
+    /// The world-space unit normal of the front of triangle `triangle` of `mesh` (the side its
+    /// counter-clockwise winding faces in object space), flipped for mirroring transforms so it
+    /// stays on the same side of the surface as the transformed shading normals.
+    /// `None` for a degenerate triangle or an index outside the mesh.
+    pub fn world_geometric_normal(&self, mesh: &Mesh, triangle: usize) -> Option<Vec3> {
+        let [a, b, c] = mesh.indices.get(triangle)?.map(|i| {
+            mesh.positions
+                .get(i as usize)
+                .map(|p| self.world_from_object.transform_point3(*p))
+        });
+        let (a, b, c) = (a?, b?, c?);
+        let n = (b - a).cross(c - a).try_normalize()?;
+        Some(if self.is_mirrored() { -n } else { n })
     }
 }
 
@@ -417,7 +448,8 @@ pub struct LoadOptions {
     pub scene: Option<usize>,
     /// Command-line depth-of-field overrides, applied to every camera.
     pub dof_overrides: DofOverrides,
-    /// Skip decoding textures (for `info` and geometry-only uses).
+    /// Skip decoding textures (for `info` and geometry-only uses). Textures are still listed
+    /// (with their sampler and colour space), each as a 1×1 white placeholder.
     pub skip_textures: bool,
 }
 

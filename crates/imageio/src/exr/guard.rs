@@ -1,0 +1,177 @@
+//! Checks on untrusted EXR bytes that the `exr` decoder does not make before it allocates.
+//!
+//! A failed allocation aborts the process, which no error handling or `catch_unwind` can
+//! stop, so sizes a file claims are checked here first.
+
+use ::exr::meta::header::Header;
+use ::exr::meta::{BlockDescription, MetaData};
+use ::exr::prelude::Compression;
+
+/// One header attribute: (start, end of name, end) byte positions.
+pub(super) type Record = (usize, usize, usize);
+
+/// Walks one header's attributes from `at`: name NUL, type NUL, i32 size, value, ...; a lone
+/// NUL ends the header. Returns the records and the position after that NUL, or `None` if
+/// the bytes do not have that shape.
+pub(super) fn walk_header(bytes: &[u8], mut at: usize) -> Option<(Vec<Record>, usize)> {
+    let mut records = Vec::new();
+    loop {
+        if *bytes.get(at)? == 0 {
+            return Some((records, at + 1));
+        }
+        let name_end = at + bytes.get(at..)?.iter().position(|&b| b == 0)?;
+        let type_end = name_end + 1 + bytes.get(name_end + 1..)?.iter().position(|&b| b == 0)?;
+        let size = read_i32(bytes, type_end + 1)?;
+        let end = (type_end + 5).checked_add(usize::try_from(size).ok()?)?;
+        if end > bytes.len() {
+            return None;
+        }
+        records.push((at, name_end, end));
+        at = end;
+    }
+}
+
+fn read_i32(bytes: &[u8], at: usize) -> Option<i32> {
+    Some(i32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?))
+}
+
+fn read_u64(bytes: &[u8], at: usize) -> Option<u64> {
+    Some(u64::from_le_bytes(bytes.get(at..at + 8)?.try_into().ok()?))
+}
+
+/// Position after all headers (magic and version take 8 bytes; a multi-part file ends its
+/// header list with an extra NUL).
+fn headers_end(bytes: &[u8], multipart: bool) -> Option<usize> {
+    let mut at = 8;
+    loop {
+        at = walk_header(bytes, at)?.1;
+        if !multipart {
+            return Some(at);
+        }
+        if *bytes.get(at)? == 0 {
+            return Some(at + 1);
+        }
+    }
+}
+
+fn is_dwa(header: &Header) -> bool {
+    matches!(
+        header.compression,
+        Compression::DWAA(_) | Compression::DWAB(_)
+    )
+}
+
+/// A chunk: (part index, first row, data start, data length).
+fn parse_chunk(
+    bytes: &[u8],
+    mut at: usize,
+    meta: &MetaData,
+    multipart: bool,
+) -> Option<(usize, i32, usize, usize)> {
+    let part = if multipart {
+        at += 4;
+        usize::try_from(read_i32(bytes, at - 4)?).ok()?
+    } else {
+        0
+    };
+    let header = meta.headers.get(part)?;
+    let y = match header.blocks {
+        BlockDescription::ScanLines => {
+            at += 4;
+            read_i32(bytes, at - 4)?
+        }
+        // Tile x, y, level x, level y; the row is not needed (tiled DWA is refused).
+        BlockDescription::Tiles(_) => {
+            at += 16;
+            0
+        }
+    };
+    let len = usize::try_from(read_i32(bytes, at)?).ok()?;
+    let start = at + 4;
+    (start.checked_add(len)? <= bytes.len()).then_some((part, y, start, len))
+}
+
+/// What is wrong with the DWA blocks, if anything.
+pub(super) enum DwaProblem {
+    /// Tiled or deep DWA parts are not checked, so not read.
+    Unsupported(String),
+    /// A block's counters claim far more data than the block can hold.
+    Damaged(String),
+}
+
+/// The `exr` DWA decoder sizes buffers from eleven counters at the start of each block
+/// before checking them. Every block the decoder could visit (through the offset table, or
+/// reading sequentially when the table is damaged) is checked here: a counter may not exceed
+/// four times the block's raw size (real ones stay within about twice).
+pub(super) fn check_dwa_blocks(bytes: &[u8], meta: &MetaData) -> Result<(), DwaProblem> {
+    if !meta.headers.iter().any(is_dwa) {
+        return Ok(());
+    }
+    if let Some(h) = meta
+        .headers
+        .iter()
+        .find(|h| is_dwa(h) && (h.deep || h.blocks != BlockDescription::ScanLines))
+    {
+        return Err(DwaProblem::Unsupported(format!(
+            "tiled or deep {:?} compression",
+            h.compression
+        )));
+    }
+    let multipart = meta.requirements.has_multiple_layers;
+    // Layouts this walk cannot follow are left to the decoder, which reports them; it reads
+    // blocks only where this walk can too.
+    let Some(tables) = headers_end(bytes, multipart) else {
+        return Ok(());
+    };
+    let total: usize = meta.headers.iter().map(|h| h.chunk_count).sum();
+
+    let mut positions: Vec<usize> = (0..total)
+        .filter_map(|i| read_u64(bytes, tables + 8 * i))
+        .filter_map(|offset| usize::try_from(offset).ok())
+        .collect();
+    let mut at = tables.saturating_add(total.saturating_mul(8));
+    for _ in 0..total {
+        let Some((_, _, start, len)) = parse_chunk(bytes, at, meta, multipart) else {
+            break;
+        };
+        positions.push(at);
+        at = start + len;
+    }
+
+    for position in positions {
+        let Some((part, y, start, len)) = parse_chunk(bytes, position, meta, multipart) else {
+            continue;
+        };
+        let header = &meta.headers[part];
+        if !is_dwa(header) {
+            continue;
+        }
+        let width = header.layer_size.width();
+        let lines = header.compression.scan_lines_per_block();
+        let bytes_per_pixel = header.channels.bytes_per_pixel;
+        let row = i64::from(y) - i64::from(header.own_attributes.layer_position.y());
+        let Some(row) = usize::try_from(row)
+            .ok()
+            .filter(|&r| r < header.layer_size.height())
+        else {
+            continue; // the decoder rejects rows outside the image
+        };
+        let rows = lines.min(header.layer_size.height() - row);
+        // A block that did not compress is stored raw; an empty one is all zeros.
+        if len == 0 || len == width * rows * bytes_per_pixel {
+            continue;
+        }
+        let bound = (4 * width * lines * bytes_per_pixel + 65_536) as u64;
+        // Counters 1..=9: sizes and counts (0 is the version, 10 the AC codec).
+        for index in 1..10 {
+            if let Some(value) = read_u64(&bytes[start..start + len], 8 * index) {
+                if value > bound {
+                    return Err(DwaProblem::Damaged(format!(
+                        "DWA block at byte {position} claims {value} (at most {bound} possible)"
+                    )));
+                }
+            }
+        }
+    }
+    Ok(())
+}

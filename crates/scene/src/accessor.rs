@@ -1,0 +1,442 @@
+//! Accessor reading with strict bounds checks.
+//!
+//! Every count read from the file is checked against the bytes that back it *before* anything is
+//! allocated, so a small file that claims billions of elements is an error, not an out-of-memory.
+//! Handles strided views, sparse storage, normalized integers and `KHR_mesh_quantization`'s
+//! integer attributes.
+
+use gltf::accessor::{DataType, Dimensions};
+
+use crate::Error;
+
+/// Bytes of every buffer, each cut to its `byteLength`.
+pub(crate) struct Buffers {
+    pub data: Vec<Vec<u8>>,
+    /// Sum of all buffer lengths: the budget for accessors with no bytes behind them.
+    pub total: u64,
+}
+
+/// Accessors without a buffer view are zeros plus optional sparse values: nothing backs their
+/// count, so it is capped relative to the data the file really carries.
+const UNBACKED_FACTOR: u64 = 16;
+const UNBACKED_SLACK: u64 = 1 << 16;
+
+fn component_size(t: DataType) -> usize {
+    match t {
+        DataType::I8 | DataType::U8 => 1,
+        DataType::I16 | DataType::U16 => 2,
+        DataType::U32 | DataType::F32 => 4,
+    }
+}
+
+fn dimension_count(d: Dimensions) -> usize {
+    d.multiplicity()
+}
+
+/// The bytes of a buffer view, checked against its buffer.
+fn view_bytes<'a>(view: &gltf::buffer::View<'_>, buffers: &'a Buffers) -> Result<&'a [u8], Error> {
+    let at = format!("bufferViews[{}]", view.index());
+    let buffer = buffers
+        .data
+        .get(view.buffer().index())
+        .ok_or_else(|| Error::Invalid {
+            at: at.clone(),
+            reason: "buffer missing".into(),
+        })?;
+    let start = view.offset() as u64;
+    let end = start + view.length() as u64;
+    if end > buffer.len() as u64 {
+        return Err(Error::OutOfBounds {
+            at,
+            needed: end,
+            available: buffer.len() as u64,
+        });
+    }
+    Ok(&buffer[start as usize..end as usize])
+}
+
+fn out_of_bounds(at: &str, acc: usize, needed: u64, available: u64) -> Error {
+    Error::OutOfBounds {
+        at: format!("{at} (accessors[{acc}])"),
+        needed,
+        available,
+    }
+}
+
+/// Decodes one component to f32, normalizing integers when asked (glTF 2.0 §3.11).
+fn to_f32(t: DataType, b: &[u8], normalized: bool) -> f32 {
+    match (t, normalized) {
+        (DataType::F32, _) => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+        (DataType::I8, n) => {
+            let v = b[0] as i8 as f32;
+            if n {
+                (v / 127.0).max(-1.0)
+            } else {
+                v
+            }
+        }
+        (DataType::U8, n) => {
+            let v = b[0] as f32;
+            if n {
+                v / 255.0
+            } else {
+                v
+            }
+        }
+        (DataType::I16, n) => {
+            let v = i16::from_le_bytes([b[0], b[1]]) as f32;
+            if n {
+                (v / 32767.0).max(-1.0)
+            } else {
+                v
+            }
+        }
+        (DataType::U16, n) => {
+            let v = u16::from_le_bytes([b[0], b[1]]) as f32;
+            if n {
+                v / 65535.0
+            } else {
+                v
+            }
+        }
+        (DataType::U32, n) => {
+            let v = u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32;
+            if n {
+                v / u32::MAX as f32
+            } else {
+                v
+            }
+        }
+    }
+}
+
+fn to_u32(t: DataType, b: &[u8]) -> u32 {
+    match t {
+        DataType::U8 => b[0] as u32,
+        DataType::U16 => u16::from_le_bytes([b[0], b[1]]) as u32,
+        _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+    }
+}
+
+/// Reads every element of an accessor as `dims` components, converted with `conv`.
+fn read<T: Copy + Default>(
+    acc: &gltf::Accessor<'_>,
+    buffers: &Buffers,
+    at: &str,
+    conv: impl Fn(&[u8]) -> T,
+) -> Result<Vec<T>, Error> {
+    let ctype = acc.data_type();
+    let csize = component_size(ctype);
+    let dims = dimension_count(acc.dimensions());
+    if matches!(
+        acc.dimensions(),
+        Dimensions::Mat2 | Dimensions::Mat3 | Dimensions::Mat4
+    ) {
+        return Err(Error::BadAccessor {
+            at: at.into(),
+            reason: format!(
+                "accessors[{}]: matrix accessors are not used here",
+                acc.index()
+            ),
+        });
+    }
+    let elem = (csize * dims) as u64;
+    let count = acc.count() as u64;
+    let mut out: Vec<T> = match acc.view() {
+        Some(view) => {
+            let bytes = view_bytes(&view, buffers)?;
+            let stride = view.stride().map_or(elem, |s| s as u64);
+            if stride < elem {
+                return Err(Error::BadAccessor {
+                    at: at.into(),
+                    reason: format!(
+                        "bufferViews[{}].byteStride {stride} is smaller than the {elem}-byte element",
+                        view.index()
+                    ),
+                });
+            }
+            let offset = acc.offset() as u64;
+            let needed = if count == 0 {
+                offset
+            } else {
+                (count - 1)
+                    .checked_mul(stride)
+                    .and_then(|x| x.checked_add(offset + elem))
+                    .unwrap_or(u64::MAX)
+            };
+            if needed > bytes.len() as u64 {
+                return Err(out_of_bounds(at, acc.index(), needed, bytes.len() as u64));
+            }
+            // Safe to allocate: every element is backed by bytes we hold.
+            let (offset, stride, elem) = (offset as usize, stride as usize, elem as usize);
+            let mut out = Vec::with_capacity(count as usize * dims);
+            for i in 0..count as usize {
+                let e = &bytes[offset + i * stride..][..elem];
+                out.extend(e.chunks_exact(csize).map(&conv));
+            }
+            out
+        }
+        None => {
+            let budget = buffers.total * UNBACKED_FACTOR + UNBACKED_SLACK;
+            let size = count.saturating_mul(elem);
+            if size > budget {
+                return Err(out_of_bounds(at, acc.index(), size, budget));
+            }
+            vec![T::default(); count as usize * dims]
+        }
+    };
+    if let Some(sparse) = acc.sparse() {
+        let sat = format!("{at} (accessors[{}].sparse)", acc.index());
+        let n = sparse.count() as u64;
+        if n > count {
+            return Err(Error::BadAccessor {
+                at: sat,
+                reason: format!("{n} sparse values for {count} elements"),
+            });
+        }
+        let indices = sparse.indices();
+        let itype = match indices.index_type() {
+            gltf::accessor::sparse::IndexType::U8 => DataType::U8,
+            gltf::accessor::sparse::IndexType::U16 => DataType::U16,
+            gltf::accessor::sparse::IndexType::U32 => DataType::U32,
+        };
+        let isize = component_size(itype) as u64;
+        let ibytes = view_bytes(&indices.view(), buffers)?;
+        let ineeded = indices.offset() as u64 + n * isize;
+        if ineeded > ibytes.len() as u64 {
+            return Err(Error::OutOfBounds {
+                at: format!("{sat}.indices"),
+                needed: ineeded,
+                available: ibytes.len() as u64,
+            });
+        }
+        let values = sparse.values();
+        let vbytes = view_bytes(&values.view(), buffers)?;
+        let vneeded = values.offset() as u64 + n * elem;
+        if vneeded > vbytes.len() as u64 {
+            return Err(Error::OutOfBounds {
+                at: format!("{sat}.values"),
+                needed: vneeded,
+                available: vbytes.len() as u64,
+            });
+        }
+        let (isize, elem) = (isize as usize, elem as usize);
+        for k in 0..n as usize {
+            let target = to_u32(itype, &ibytes[indices.offset() + k * isize..][..isize]) as usize;
+            if target as u64 >= count {
+                return Err(Error::IndexOutOfRange {
+                    at: format!("{sat}.indices[{k}]"),
+                    index: target as u64,
+                    vertices: count as usize,
+                });
+            }
+            let e = &vbytes[values.offset() + k * elem..][..elem];
+            for (c, comp) in e.chunks_exact(csize).enumerate() {
+                out[target * dims + c] = conv(comp);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Reads an accessor as floats: `dims` components per element, flattened. Normalized integers
+/// map to [0, 1] or [−1, 1]; other integers (quantized data) keep their value.
+pub(crate) fn read_f32(
+    acc: &gltf::Accessor<'_>,
+    buffers: &Buffers,
+    at: &str,
+) -> Result<(Vec<f32>, usize), Error> {
+    let ctype = acc.data_type();
+    let normalized = acc.normalized();
+    let v = read(acc, buffers, at, |b| to_f32(ctype, b, normalized))?;
+    Ok((v, dimension_count(acc.dimensions())))
+}
+
+/// Reads a scalar accessor of unsigned integers (vertex indices).
+pub(crate) fn read_indices(
+    acc: &gltf::Accessor<'_>,
+    buffers: &Buffers,
+    at: &str,
+) -> Result<Vec<u32>, Error> {
+    let ctype = acc.data_type();
+    if acc.dimensions() != Dimensions::Scalar
+        || !matches!(ctype, DataType::U8 | DataType::U16 | DataType::U32)
+    {
+        return Err(Error::BadAccessor {
+            at: at.into(),
+            reason: format!(
+                "accessors[{}]: indices must be SCALAR u8/u16/u32, found {:?} {:?}",
+                acc.index(),
+                acc.dimensions(),
+                ctype
+            ),
+        });
+    }
+    read(acc, buffers, at, |b| to_u32(ctype, b))
+}
+
+/// Reads a float accessor and checks it has the expected number of components per element.
+pub(crate) fn read_vec<const N: usize>(
+    acc: &gltf::Accessor<'_>,
+    buffers: &Buffers,
+    at: &str,
+) -> Result<Vec<[f32; N]>, Error> {
+    let (flat, dims) = read_f32(acc, buffers, at)?;
+    if dims != N {
+        return Err(Error::BadAccessor {
+            at: at.into(),
+            reason: format!(
+                "accessors[{}] has {dims} components per element, {N} expected",
+                acc.index()
+            ),
+        });
+    }
+    Ok(flat
+        .chunks_exact(N)
+        .map(|c| {
+            let mut a = [0.0; N];
+            a.copy_from_slice(c);
+            a
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use base64::Engine;
+    use serde_json::json;
+
+    /// A document with one buffer holding `bytes` (one view over all of it, with `stride`) and
+    /// the given accessors.
+    fn doc(
+        bytes: &[u8],
+        stride: Option<u64>,
+        accessors: serde_json::Value,
+    ) -> (gltf::Document, Buffers) {
+        let mut view = json!({"buffer": 0, "byteLength": bytes.len()});
+        if let Some(s) = stride {
+            view["byteStride"] = json!(s);
+        }
+        let j = json!({
+            "asset": {"version": "2.0"},
+            "buffers": [{"byteLength": bytes.len(), "uri": format!("data:application/octet-stream;base64,{}",
+                base64::engine::general_purpose::STANDARD.encode(bytes))}],
+            "bufferViews": [view],
+            "accessors": accessors,
+        });
+        let p = crate::prepass::prepare(&serde_json::to_vec(&j).unwrap()).unwrap();
+        let data = vec![bytes.to_vec()];
+        (
+            p.document,
+            Buffers {
+                total: bytes.len() as u64,
+                data,
+            },
+        )
+    }
+
+    #[test]
+    fn normalized_and_quantized_integers() {
+        let bytes: Vec<u8> = [127i8, -128, 0, 64].iter().map(|&b| b as u8).collect();
+        let (d, b) = doc(
+            &bytes,
+            None,
+            json!([
+                {"bufferView": 0, "componentType": 5120, "normalized": true, "count": 1, "type": "VEC4"},
+                {"bufferView": 0, "componentType": 5120, "count": 1, "type": "VEC4"},
+                {"bufferView": 0, "componentType": 5121, "normalized": true, "count": 1, "type": "VEC4"},
+            ]),
+        );
+        let acc: Vec<_> = d.accessors().collect();
+        let (n, dims) = read_f32(&acc[0], &b, "a").unwrap();
+        assert_eq!(dims, 4);
+        assert_eq!(n, [1.0, -1.0, 0.0, 64.0 / 127.0]);
+        // KHR_mesh_quantization: non-normalized integers keep their value.
+        assert_eq!(
+            read_f32(&acc[1], &b, "a").unwrap().0,
+            [127.0, -128.0, 0.0, 64.0]
+        );
+        assert_eq!(
+            read_f32(&acc[2], &b, "a").unwrap().0,
+            [127.0 / 255.0, 128.0 / 255.0, 0.0, 64.0 / 255.0]
+        );
+    }
+
+    #[test]
+    fn strided_u16_and_bounds() {
+        // Two u16 elements with a 4-byte stride: 1, (pad), 2, (pad).
+        let bytes = [1u8, 0, 9, 9, 2, 0, 9, 9];
+        let (d, b) = doc(
+            &bytes,
+            Some(4),
+            json!([
+                {"bufferView": 0, "componentType": 5123, "count": 2, "type": "SCALAR"},
+                {"bufferView": 0, "componentType": 5123, "count": 3, "type": "SCALAR"},
+                {"bufferView": 0, "byteOffset": 2, "componentType": 5123, "count": 2, "type": "SCALAR"},
+            ]),
+        );
+        let acc: Vec<_> = d.accessors().collect();
+        assert_eq!(read_indices(&acc[0], &b, "i").unwrap(), [1, 2]);
+        assert!(matches!(
+            read_indices(&acc[1], &b, "i"),
+            Err(Error::OutOfBounds {
+                needed: 10,
+                available: 8,
+                ..
+            })
+        ));
+        assert_eq!(read_indices(&acc[2], &b, "i").unwrap(), [0x0909, 0x0909]);
+    }
+
+    #[test]
+    fn sparse_values_replace_the_base() {
+        // Base: 4 floats 0..4; sparse: indices [3, 1] (u8) and values [30, 10].
+        let mut bytes = Vec::new();
+        for x in [0.0f32, 1.0, 2.0, 3.0, 30.0, 10.0] {
+            bytes.extend(x.to_le_bytes());
+        }
+        bytes.extend([3u8, 1, 0, 0]);
+        let (d, b) = doc(
+            &bytes,
+            None,
+            json!([
+                {"bufferView": 0, "componentType": 5126, "count": 4, "type": "SCALAR",
+                 "sparse": {"count": 2, "indices": {"bufferView": 0, "byteOffset": 24, "componentType": 5121},
+                            "values": {"bufferView": 0, "byteOffset": 16}}},
+                {"componentType": 5126, "count": 4, "type": "SCALAR",
+                 "sparse": {"count": 2, "indices": {"bufferView": 0, "byteOffset": 24, "componentType": 5121},
+                            "values": {"bufferView": 0, "byteOffset": 16}}},
+            ]),
+        );
+        let acc: Vec<_> = d.accessors().collect();
+        assert_eq!(
+            read_f32(&acc[0], &b, "s").unwrap().0,
+            [0.0, 10.0, 2.0, 30.0]
+        );
+        assert_eq!(
+            read_f32(&acc[1], &b, "s").unwrap().0,
+            [0.0, 10.0, 0.0, 30.0]
+        );
+    }
+
+    #[test]
+    fn wrong_component_count_and_index_type_are_errors() {
+        let (d, b) = doc(
+            &[0; 12],
+            None,
+            json!([
+                {"bufferView": 0, "componentType": 5126, "count": 1, "type": "VEC3"},
+            ]),
+        );
+        let acc = d.accessors().next().unwrap();
+        assert!(matches!(
+            read_vec::<2>(&acc, &b, "uv"),
+            Err(Error::BadAccessor { .. })
+        ));
+        assert!(matches!(
+            read_indices(&acc, &b, "i"),
+            Err(Error::BadAccessor { .. })
+        ));
+    }
+}

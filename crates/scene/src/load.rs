@@ -1,0 +1,780 @@
+//! The loader: file → pre-pass → buffers → node hierarchy → meshes, materials, textures, lights,
+//! cameras.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::{Affine3A, Mat3, Mat4, Quat, Vec3};
+use serde_json::Value;
+
+use crate::accessor::{read_vec, Buffers};
+use crate::dof::{self, CameraInput, NodeInfo};
+use crate::material::Materials;
+use crate::{
+    glb, mesh, prepass, uri, Camera, Error, Instance, Light, LightKind, LoadOptions, Projection,
+    Scene, SceneStats,
+};
+
+/// Watts per lumen at 555 nm: Blender's importer divides candela and lux by it (SPEC §4).
+const LUMENS_PER_WATT: f32 = 683.0;
+
+/// Loads a `.gltf` or `.glb` file into a render-ready [`Scene`].
+pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, Error> {
+    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let base_dir = path.parent().unwrap_or(Path::new("."));
+    let base_dir = if base_dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        base_dir
+    };
+    let named_glb = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    if named_glb && !glb::is_glb(&bytes) {
+        // A .glb without the magic is a damaged container, not JSON: say so.
+        glb::parse(&bytes)?;
+    }
+    load_bytes(&bytes, base_dir, options)
+}
+
+/// Loads a scene from the bytes of a `.gltf` or `.glb` file; external URIs resolve inside `base_dir`.
+pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Result<Scene, Error> {
+    let glb_is = glb::is_glb(bytes);
+    let (json, bin) = if glb_is {
+        let g = glb::parse(bytes)?;
+        (g.json, g.bin)
+    } else {
+        (bytes, None)
+    };
+    let prepared = prepass::prepare(json)?;
+    let doc = prepared.document;
+    let mut stats = SceneStats {
+        skipped_features: prepared.skipped,
+        warnings: prepared
+            .ignored_extensions
+            .iter()
+            .map(|e| format!("extension {e} is used but not implemented: ignored"))
+            .collect(),
+        ..SceneStats::default()
+    };
+    let buffers = load_buffers(&doc, bin, base_dir)?;
+    let world_from_node = world_transforms(&doc)?;
+
+    // The scene to draw.
+    let scene = match options.scene {
+        Some(i) => Some(doc.scenes().nth(i).ok_or(Error::NoSuchScene {
+            index: i,
+            count: doc.scenes().len(),
+        })?),
+        None => doc.default_scene().or_else(|| doc.scenes().next()),
+    };
+    let mut order = Vec::new();
+    match &scene {
+        Some(s) => {
+            let mut seen = vec![false; world_from_node.len()];
+            let mut stack: Vec<usize> = s.nodes().map(|n| n.index()).collect();
+            stack.reverse();
+            while let Some(i) = stack.pop() {
+                if std::mem::replace(&mut seen[i], true) {
+                    continue;
+                }
+                order.push(i);
+                if let Some(n) = doc.nodes().nth(i) {
+                    let mut kids: Vec<usize> = n.children().map(|c| c.index()).collect();
+                    kids.reverse();
+                    stack.extend(kids);
+                }
+            }
+        }
+        None => stats
+            .warnings
+            .push("the file has no scene: nothing is drawn".into()),
+    }
+    stats.nodes = order.len();
+
+    let mut out = Scene::default();
+    let mut materials = Materials::default();
+    let mut mesh_of: HashMap<usize, u32> = HashMap::new();
+    let all_nodes: Vec<gltf::Node<'_>> = doc.nodes().collect();
+    for &ni in &order {
+        let node = &all_nodes[ni];
+        let world = world_from_node[ni];
+        if let Some(m) = node.mesh() {
+            let mesh_index = match mesh_of.get(&m.index()) {
+                Some(&i) => i,
+                None => {
+                    let loaded = mesh::load_mesh(&m, &buffers, &mut stats, &mut |mi| {
+                        materials.get(&doc, mi)
+                    })?;
+                    out.meshes.push(loaded);
+                    let i = (out.meshes.len() - 1) as u32;
+                    mesh_of.insert(m.index(), i);
+                    i
+                }
+            };
+            match node.extension_value("EXT_mesh_gpu_instancing") {
+                Some(ext) => {
+                    for local in gpu_instances(&doc, &buffers, ext, ni)? {
+                        out.instances.push(Instance {
+                            mesh: mesh_index,
+                            world_from_object: world * local,
+                            node: ni as u32,
+                        });
+                    }
+                }
+                None => out.instances.push(Instance {
+                    mesh: mesh_index,
+                    world_from_object: world,
+                    node: ni as u32,
+                }),
+            }
+        }
+        if let Some(light) = node.light() {
+            let color = Vec3::from(light.color());
+            let intensity = color * light.intensity() / LUMENS_PER_WATT;
+            let kind = match light.kind() {
+                gltf::khr_lights_punctual::Kind::Point => LightKind::Point,
+                gltf::khr_lights_punctual::Kind::Directional => LightKind::Directional,
+                gltf::khr_lights_punctual::Kind::Spot {
+                    inner_cone_angle,
+                    outer_cone_angle,
+                } => LightKind::Spot {
+                    inner_cone: inner_cone_angle,
+                    outer_cone: outer_cone_angle,
+                },
+            };
+            if !intensity.is_finite() {
+                return Err(Error::NonFinite {
+                    at: format!("KHR_lights_punctual.lights[{}]", light.index()),
+                    value: format!("{intensity:?}"),
+                });
+            }
+            out.lights.push(Light {
+                name: light.name().map(str::to_owned),
+                kind,
+                position: world.translation.into(),
+                direction: world
+                    .transform_vector3(Vec3::NEG_Z)
+                    .try_normalize()
+                    .unwrap_or(Vec3::NEG_Z),
+                intensity,
+            });
+        }
+    }
+
+    let names: Vec<Option<String>> = all_nodes
+        .iter()
+        .map(|n| n.name().map(str::to_owned))
+        .collect();
+    let origins: Vec<Vec3> = world_from_node
+        .iter()
+        .map(|m| Vec3::from(m.translation))
+        .collect();
+    let info = NodeInfo {
+        names: &names,
+        origins: &origins,
+    };
+    for &ni in &order {
+        let node = &all_nodes[ni];
+        if let Some(cam) = node.camera() {
+            out.cameras
+                .push(camera(&cam, node, world_from_node[ni], &info, options)?);
+        }
+    }
+
+    out.materials = std::mem::take(&mut materials.materials);
+    out.textures = materials.textures(&doc, &buffers, base_dir, options.skip_textures)?;
+    if out.cameras.is_empty() {
+        out.cameras.push(automatic_camera(&out, &info, options)?);
+    }
+    if doc.meshes().len() > 0 && out.instances.is_empty() {
+        stats
+            .warnings
+            .push("the selected scene draws no mesh".into());
+    }
+    out.stats = stats;
+    Ok(out)
+}
+
+/// Reads every buffer: the GLB BIN chunk, `data:` URIs or files beside the scene.
+fn load_buffers(
+    doc: &gltf::Document,
+    bin: Option<&[u8]>,
+    base_dir: &Path,
+) -> Result<Buffers, Error> {
+    let mut data = Vec::with_capacity(doc.buffers().len());
+    for b in doc.buffers() {
+        let at = format!("buffers[{}]", b.index());
+        let mut bytes = match b.source() {
+            gltf::buffer::Source::Bin => bin
+                .ok_or_else(|| Error::Invalid {
+                    at: at.clone(),
+                    reason: "refers to the GLB BIN chunk, which is missing".into(),
+                })?
+                .to_vec(),
+            gltf::buffer::Source::Uri(u) => uri::load(base_dir, u, &format!("{at}.uri"))?,
+        };
+        let claimed = b.length() as u64;
+        if (bytes.len() as u64) < claimed {
+            return Err(Error::BufferTooShort {
+                buffer: b.index(),
+                claimed,
+                actual: bytes.len() as u64,
+            });
+        }
+        // Padding past byteLength is not part of the buffer.
+        bytes.truncate(b.length());
+        data.push(bytes);
+    }
+    let total = data.iter().map(|d| d.len() as u64).sum();
+    Ok(Buffers { data, total })
+}
+
+fn finite(at: impl FnOnce() -> String, values: &[f32]) -> Result<(), Error> {
+    match values.iter().find(|v| !v.is_finite()) {
+        Some(v) => Err(Error::NonFinite {
+            at: at(),
+            value: v.to_string(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// A node's local transform, checked for NaN and infinity.
+fn local_transform(node: &gltf::Node<'_>) -> Result<Affine3A, Error> {
+    let i = node.index();
+    let m = match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => {
+            let m = Mat4::from_cols_array_2d(&matrix);
+            finite(|| format!("nodes[{i}].matrix"), &m.to_cols_array())?;
+            m
+        }
+        gltf::scene::Transform::Decomposed {
+            translation,
+            rotation,
+            scale,
+        } => {
+            finite(|| format!("nodes[{i}].translation"), &translation)?;
+            finite(|| format!("nodes[{i}].rotation"), &rotation)?;
+            finite(|| format!("nodes[{i}].scale"), &scale)?;
+            // Exporters write slightly denormalised quaternions; zero cannot be normalised.
+            let q = Quat::from_array(rotation);
+            let q = if q.length_squared() > 0.0 {
+                q.normalize()
+            } else {
+                return Err(Error::NonFinite {
+                    at: format!("nodes[{i}].rotation"),
+                    value: "zero quaternion".into(),
+                });
+            };
+            Mat4::from_scale_rotation_translation(scale.into(), q, translation.into())
+        }
+    };
+    Ok(Affine3A::from_mat4(m))
+}
+
+/// World transforms of all nodes (not only the drawn scene's: `focus_object` may name any node).
+fn world_transforms(doc: &gltf::Document) -> Result<Vec<Affine3A>, Error> {
+    let n = doc.nodes().len();
+    let mut parent: Vec<Option<usize>> = vec![None; n];
+    let mut local = Vec::with_capacity(n);
+    for node in doc.nodes() {
+        local.push(local_transform(&node)?);
+        for c in node.children() {
+            if c.index() == node.index() {
+                return Err(Error::NodeGraph {
+                    node: c.index(),
+                    reason: "is its own child".into(),
+                });
+            }
+            if let Some(p) = parent[c.index()].replace(node.index()) {
+                return Err(Error::NodeGraph {
+                    node: c.index(),
+                    reason: format!("has two parents (nodes {p} and {})", node.index()),
+                });
+            }
+        }
+    }
+    let mut world: Vec<Option<Affine3A>> = vec![None; n];
+    let children: Vec<Vec<usize>> = doc
+        .nodes()
+        .map(|nd| nd.children().map(|c| c.index()).collect())
+        .collect();
+    let mut stack: Vec<usize> = (0..n).filter(|&i| parent[i].is_none()).collect();
+    for &r in &stack {
+        world[r] = Some(local[r]);
+    }
+    while let Some(i) = stack.pop() {
+        let w = world[i].unwrap_or(Affine3A::IDENTITY);
+        for &c in &children[i] {
+            world[c] = Some(w * local[c]);
+            stack.push(c);
+        }
+    }
+    world
+        .into_iter()
+        .enumerate()
+        .map(|(i, w)| {
+            w.ok_or_else(|| Error::NodeGraph {
+                node: i,
+                reason: "is part of a cycle in the node hierarchy".into(),
+            })
+        })
+        .collect()
+}
+
+/// `EXT_mesh_gpu_instancing`: one local transform per instance (TRS, each optional).
+fn gpu_instances(
+    doc: &gltf::Document,
+    buffers: &Buffers,
+    ext: &Value,
+    node: usize,
+) -> Result<Vec<Affine3A>, Error> {
+    let at = format!("nodes[{node}].extensions.EXT_mesh_gpu_instancing.attributes");
+    let attrs = ext
+        .get("attributes")
+        .and_then(Value::as_object)
+        .ok_or_else(|| Error::Invalid {
+            at: at.clone(),
+            reason: "missing".into(),
+        })?;
+    let accessor = |key: &str| -> Result<Option<gltf::Accessor<'_>>, Error> {
+        let Some(v) = attrs.get(key) else {
+            return Ok(None);
+        };
+        let i = v.as_u64().ok_or_else(|| Error::Invalid {
+            at: format!("{at}.{key}"),
+            reason: format!("{v} is not an accessor index"),
+        })?;
+        doc.accessors()
+            .nth(i as usize)
+            .map(Some)
+            .ok_or_else(|| Error::Invalid {
+                at: format!("{at}.{key}"),
+                reason: format!("accessor {i} does not exist"),
+            })
+    };
+    let t = match accessor("TRANSLATION")? {
+        Some(a) => Some(read_vec::<3>(&a, buffers, &format!("{at}.TRANSLATION"))?),
+        None => None,
+    };
+    let r = match accessor("ROTATION")? {
+        Some(a) => Some(read_vec::<4>(&a, buffers, &format!("{at}.ROTATION"))?),
+        None => None,
+    };
+    let s = match accessor("SCALE")? {
+        Some(a) => Some(read_vec::<3>(&a, buffers, &format!("{at}.SCALE"))?),
+        None => None,
+    };
+    let counts: Vec<usize> = [
+        t.as_ref().map(Vec::len),
+        r.as_ref().map(Vec::len),
+        s.as_ref().map(Vec::len),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let count = counts.first().copied().unwrap_or(0);
+    if counts.iter().any(|&c| c != count) {
+        return Err(Error::Invalid {
+            at,
+            reason: format!("attribute counts differ: {counts:?}"),
+        });
+    }
+    (0..count)
+        .map(|k| {
+            let tr = t.as_ref().map_or(Vec3::ZERO, |v| Vec3::from(v[k]));
+            let q = r
+                .as_ref()
+                .map_or(Quat::IDENTITY, |v| Quat::from_array(v[k]));
+            let sc = s.as_ref().map_or(Vec3::ONE, |v| Vec3::from(v[k]));
+            let m = Affine3A::from_scale_rotation_translation(sc, q.normalize(), tr);
+            finite(|| format!("{at}[{k}]"), &Mat4::from(m).to_cols_array())?;
+            Ok(m)
+        })
+        .collect()
+}
+
+/// Rotation and translation of a world transform: scale and shear removed (SPEC §1), keeping the
+/// view axis (−Z) exact and +Y as close to the node's as possible.
+fn orthonormal(world: Affine3A) -> Option<Affine3A> {
+    let z = Vec3::from(world.matrix3.z_axis).try_normalize()?;
+    let y0 = Vec3::from(world.matrix3.y_axis);
+    let y = (y0 - z * z.dot(y0)).try_normalize()?;
+    let x = y.cross(z);
+    Some(Affine3A {
+        matrix3: Mat3::from_cols(x, y, z).into(),
+        translation: world.translation,
+    })
+}
+
+fn camera(
+    cam: &gltf::Camera<'_>,
+    node: &gltf::Node<'_>,
+    world: Affine3A,
+    info: &NodeInfo<'_>,
+    options: &LoadOptions,
+) -> Result<Camera, Error> {
+    let name = cam
+        .name()
+        .or(node.name())
+        .map(str::to_owned)
+        .unwrap_or_else(|| format!("camera {}", cam.index()));
+    let at = format!("cameras[{}]", cam.index());
+    let projection = match cam.projection() {
+        gltf::camera::Projection::Perspective(p) => {
+            let yfov = p.yfov();
+            if !(yfov.is_finite() && yfov > 0.0 && yfov < std::f32::consts::PI) {
+                return Err(Error::Invalid {
+                    at: format!("{at}.perspective.yfov"),
+                    reason: format!("{yfov} is not in (0, π)"),
+                });
+            }
+            Projection::Perspective {
+                yfov,
+                aspect_ratio: p.aspect_ratio(),
+            }
+        }
+        gltf::camera::Projection::Orthographic(o) => {
+            let (xmag, ymag) = (o.xmag(), o.ymag());
+            finite(|| format!("{at}.orthographic"), &[xmag, ymag])?;
+            Projection::Orthographic { xmag, ymag }
+        }
+    };
+    let world_from_camera = orthonormal(world).ok_or_else(|| Error::NodeGraph {
+        node: node.index(),
+        reason: "the camera's transform has no rotation (zero scale)".into(),
+    })?;
+    let raw = |e: &Option<Box<serde_json::value::RawValue>>| {
+        e.as_ref()
+            .and_then(|r| serde_json::from_str::<Value>(r.get()).ok())
+    };
+    let camera_extras = raw(cam.extras());
+    let node_extras = raw(node.extras());
+    let dof = dof::resolve(
+        &CameraInput {
+            name: &name,
+            projection,
+            world_from_camera,
+            physical: cam.extension_value("EXT_camera_physical"),
+            camera_extras: camera_extras.as_ref(),
+            node_extras: node_extras.as_ref(),
+        },
+        &options.dof_overrides,
+        info,
+    )?;
+    Ok(Camera {
+        name,
+        node: Some(node.index() as u32),
+        world_from_camera,
+        projection,
+        dof,
+    })
+}
+
+/// Vertical field of view of the automatic camera.
+const AUTO_YFOV_DEGREES: f32 = 40.0;
+
+/// A camera that frames the scene's bounding sphere from the +Z side, slightly above; pinhole
+/// unless the command line asks for depth of field.
+fn automatic_camera(
+    scene: &Scene,
+    info: &NodeInfo<'_>,
+    options: &LoadOptions,
+) -> Result<Camera, Error> {
+    let b = scene.bounds();
+    let (center, radius) = if b.is_empty() {
+        (Vec3::ZERO, 1.0)
+    } else {
+        (b.center(), (0.5 * b.diagonal()).max(1e-3))
+    };
+    let yfov = AUTO_YFOV_DEGREES.to_radians();
+    // The sphere touches the top and bottom of the frame; wider frames have room to spare.
+    let distance = radius / (0.5 * yfov).sin();
+    let back = Vec3::new(0.0, 0.3, 1.0).normalize();
+    let eye = center + back * distance;
+    // Camera +Z points back at the eye from the centre; +X right, +Y up.
+    let z = back;
+    let x = Vec3::Y.cross(z).normalize();
+    let y = z.cross(x);
+    let world_from_camera = Affine3A::from_mat3_translation(Mat3::from_cols(x, y, z), eye);
+    let projection = Projection::Perspective {
+        yfov,
+        aspect_ratio: None,
+    };
+    let name = "automatic camera".to_owned();
+    let mut dof = dof::resolve(
+        &CameraInput {
+            name: &name,
+            projection,
+            world_from_camera,
+            physical: None,
+            camera_extras: None,
+            node_extras: None,
+        },
+        &options.dof_overrides,
+        info,
+    )?;
+    if options.dof_overrides.focus_distance.is_none()
+        && options.dof_overrides.focus_object.is_none()
+    {
+        // Focus on the scene's centre rather than Blender's 10 m.
+        dof.focus_distance = distance;
+    }
+    Ok(Camera {
+        name,
+        node: None,
+        world_from_camera,
+        projection,
+        dof,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use base64::Engine;
+    use serde_json::json;
+
+    /// One triangle (no normals) plus, from byte 44, instancing translations for 3 instances.
+    fn bin() -> Vec<u8> {
+        let mut b = Vec::new();
+        let floats = [
+            0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, // positions
+        ];
+        for x in floats {
+            b.extend(x.to_le_bytes());
+        }
+        for i in [0u16, 1, 2, 0] {
+            b.extend(i.to_le_bytes());
+        }
+        for x in [0.0f32, 0.0, 0.0, 5.0, 0.0, 0.0, 0.0, 5.0, 0.0] {
+            b.extend(x.to_le_bytes());
+        }
+        b
+    }
+
+    fn gltf(nodes: Value, scene_nodes: Value, extra: Value) -> Vec<u8> {
+        let b = bin();
+        let mut j = json!({
+            "asset": {"version": "2.0"},
+            "scenes": [{"nodes": scene_nodes}],
+            "nodes": nodes,
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+            "accessors": [
+                {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 0]},
+                {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"},
+                {"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC3"}
+            ],
+            "bufferViews": [
+                {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                {"buffer": 0, "byteOffset": 36, "byteLength": 6},
+                {"buffer": 0, "byteOffset": 44, "byteLength": 36}
+            ],
+            "buffers": [{"byteLength": b.len(), "uri": format!("data:application/octet-stream;base64,{}",
+                base64::engine::general_purpose::STANDARD.encode(&b))}]
+        });
+        if let (Some(o), Some(e)) = (j.as_object_mut(), extra.as_object()) {
+            o.extend(e.clone());
+        }
+        serde_json::to_vec(&j).unwrap()
+    }
+
+    fn load_json(bytes: &[u8]) -> Result<Scene, Error> {
+        load_bytes(bytes, Path::new("."), &LoadOptions::default())
+    }
+
+    #[test]
+    fn shared_mesh_is_stored_once_with_hierarchy_transforms() {
+        let s = load_json(&gltf(
+            json!([
+                {"translation": [1, 0, 0], "children": [1, 2]},
+                {"mesh": 0, "scale": [2, 2, 2]},
+                {"mesh": 0, "matrix": [-1,0,0,0, 0,1,0,0, 0,0,1,0, 0,3,0,1]}
+            ]),
+            json!([0]),
+            json!({}),
+        ))
+        .unwrap();
+        assert_eq!(s.meshes.len(), 1);
+        assert_eq!(s.instances.len(), 2);
+        assert_eq!(s.drawn_triangle_count(), 2);
+        assert_eq!(s.stats.nodes, 3);
+        let a = s.instances[0].world_from_object;
+        assert_eq!(a.transform_point3(Vec3::X), Vec3::new(3.0, 0.0, 0.0));
+        let b = s.instances[1];
+        assert_eq!(
+            b.world_from_object.transform_point3(Vec3::X),
+            Vec3::new(0.0, 3.0, 0.0)
+        );
+        assert!(b.is_mirrored() && !s.instances[0].is_mirrored());
+        // No NORMAL: flat normals, one vertex per corner, facing +Z for this CCW triangle.
+        assert_eq!(s.meshes[0].positions.len(), 3);
+        assert!(s.meshes[0].normals.iter().all(|n| *n == Vec3::Z));
+        // No material: the glTF default one.
+        assert_eq!(s.materials, vec![crate::Material::default()]);
+    }
+
+    #[test]
+    fn gpu_instancing_multiplies_instances_not_geometry() {
+        let s = load_json(&gltf(
+            json!([{"mesh": 0, "translation": [0, 0, 1],
+                "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 2}}}}]),
+            json!([0]),
+            json!({"extensionsUsed": ["EXT_mesh_gpu_instancing"], "extensionsRequired": ["EXT_mesh_gpu_instancing"]}),
+        ))
+        .unwrap();
+        assert_eq!(s.meshes.len(), 1);
+        assert_eq!(s.unique_triangle_count(), 1);
+        assert_eq!(s.drawn_triangle_count(), 3);
+        let origins: Vec<Vec3> = s
+            .instances
+            .iter()
+            .map(|i| i.world_from_object.transform_point3(Vec3::ZERO))
+            .collect();
+        assert_eq!(
+            origins,
+            [
+                Vec3::new(0.0, 0.0, 1.0),
+                Vec3::new(5.0, 0.0, 1.0),
+                Vec3::new(0.0, 5.0, 1.0)
+            ]
+        );
+    }
+
+    #[test]
+    fn lights_in_blender_units_placed_by_nodes() {
+        let s = load_json(&gltf(
+            json!([
+                {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0, 2, 0],
+                 "rotation": [-std::f32::consts::FRAC_1_SQRT_2, 0, 0, std::f32::consts::FRAC_1_SQRT_2]},
+                {"extensions": {"KHR_lights_punctual": {"light": 1}}}
+            ]),
+            json!([0, 1]),
+            json!({"extensionsUsed": ["KHR_lights_punctual"], "extensions": {"KHR_lights_punctual": {"lights": [
+                {"type": "spot", "intensity": 683, "color": [1, 0.5, 0], "spot": {"innerConeAngle": 0.1, "outerConeAngle": 0.5}},
+                {"type": "directional", "intensity": 1366}
+            ]}}}),
+        ))
+        .unwrap();
+        assert_eq!(s.lights.len(), 2);
+        let spot = &s.lights[0];
+        assert!(
+            (spot.intensity - Vec3::new(1.0, 0.5, 0.0))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        assert!(
+            (spot.direction - Vec3::NEG_Y).length() < 1e-5,
+            "{}",
+            spot.direction
+        );
+        assert_eq!(spot.position, Vec3::new(0.0, 2.0, 0.0));
+        assert_eq!(
+            spot.kind,
+            LightKind::Spot {
+                inner_cone: 0.1,
+                outer_cone: 0.5
+            }
+        );
+        assert!(
+            (s.lights[1].intensity - Vec3::splat(2.0))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+    }
+
+    #[test]
+    fn camera_scale_is_removed_and_automatic_camera_frames_bounds() {
+        let cam = json!({"cameras": [{"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1}}]});
+        let s = load_json(&gltf(
+            json!([{"mesh": 0}, {"camera": 0, "scale": [3, 3, 3], "translation": [0, 0, 4]}]),
+            json!([0, 1]),
+            cam,
+        ))
+        .unwrap();
+        let c = &s.cameras[0];
+        assert_eq!(c.node, Some(1));
+        assert!((c.world_from_camera.matrix3.determinant() - 1.0).abs() < 1e-5);
+        assert_eq!(
+            Vec3::from(c.world_from_camera.translation),
+            Vec3::new(0.0, 0.0, 4.0)
+        );
+
+        let s = load_json(&gltf(json!([{"mesh": 0}]), json!([0]), json!({}))).unwrap();
+        assert_eq!(s.cameras.len(), 1);
+        let c = &s.cameras[0];
+        assert_eq!(c.node, None);
+        let eye = Vec3::from(c.world_from_camera.translation);
+        let forward = Vec3::from(-c.world_from_camera.matrix3.z_axis);
+        let to_center = (s.bounds().center() - eye).normalize();
+        assert!(forward.dot(to_center) > 0.9999);
+        assert!(eye.z > s.bounds().max.z && eye.y > s.bounds().center().y);
+        assert!(!c.dof.enabled);
+    }
+
+    #[test]
+    fn dof_sources_reach_the_camera() {
+        let extra = json!({"cameras": [{"name": "Lens", "type": "perspective",
+            "perspective": {"yfov": 0.5, "aspectRatio": 1.5, "znear": 0.1},
+            "extensions": {"EXT_camera_physical": {"focalLength": 0.05, "fStop": 4.0, "focusDistance": 2.0}},
+            "extras": {"aperture_blades": 6}}]});
+        let nodes = json!([
+            {"mesh": 0, "name": "Target", "translation": [0, 0, -3]},
+            {"camera": 0, "translation": [0, 0, 4], "extras": {"focus_object": {"name": "Target", "type": "Object"}}}
+        ]);
+        let s = load_json(&gltf(nodes.clone(), json!([0, 1]), extra.clone())).unwrap();
+        let d = &s.cameras[0].dof;
+        assert!(d.enabled);
+        assert_eq!(d.lens_mm, 50.0);
+        assert!((d.aperture_radius - 0.05 / 8.0).abs() < 1e-7);
+        assert!((d.focus_distance - 7.0).abs() < 1e-5);
+        assert_eq!(d.focus_object.as_deref(), Some("Target"));
+        assert_eq!(d.blades, 6);
+        // The command line wins over every file source.
+        let opts = LoadOptions {
+            dof_overrides: crate::DofOverrides {
+                aperture_radius: Some(0.5),
+                focus_distance: Some(1.5),
+                ..Default::default()
+            },
+            ..LoadOptions::default()
+        };
+        let s = load_bytes(&gltf(nodes, json!([0, 1]), extra), Path::new("."), &opts).unwrap();
+        assert_eq!(
+            (
+                s.cameras[0].dof.aperture_radius,
+                s.cameras[0].dof.focus_distance
+            ),
+            (0.5, 1.5)
+        );
+        assert_eq!(s.cameras[0].dof.focus_object, None);
+    }
+
+    #[test]
+    fn only_images_of_drawn_materials_are_decoded() {
+        // Material 1 is used by no primitive; its image file does not exist.
+        let extra = json!({
+            "images": [{"uri": "does-not-exist.png"}],
+            "textures": [{"source": 0}],
+            "materials": [{"name": "used"}, {"name": "unused", "emissiveTexture": {"index": 0}}]
+        });
+        let mut bytes: Value =
+            serde_json::from_slice(&gltf(json!([{"mesh": 0}]), json!([0]), extra)).unwrap();
+        bytes["meshes"][0]["primitives"][0]["material"] = json!(0);
+        let s = load_json(&serde_json::to_vec(&bytes).unwrap()).unwrap();
+        assert_eq!(s.materials.len(), 1);
+        assert_eq!(s.materials[0].name.as_deref(), Some("used"));
+        assert!(s.textures.is_empty());
+        // Used, the same file is an error that names the image.
+        bytes["meshes"][0]["primitives"][0]["material"] = json!(1);
+        let e = load_json(&serde_json::to_vec(&bytes).unwrap()).unwrap_err();
+        assert!(e.to_string().contains("images[0].uri"), "{e}");
+    }
+}

@@ -1,0 +1,350 @@
+//! Materials and textures. Materials are built on first use by a drawn primitive; a texture is one
+//! (image, sampler, colour space) combination, and only images such textures use are decoded, in
+//! parallel.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::{Vec2, Vec3, Vec4};
+use rayon::prelude::*;
+use serde_json::Value;
+
+use crate::accessor::Buffers;
+use crate::{
+    AlphaMode, ColorSpace, Error, Filter, Material, Sampler, Texels, Texture, TextureRef,
+    TextureTransform, Wrap,
+};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct TexKey {
+    image: usize,
+    sampler: Option<usize>,
+    srgb: bool,
+}
+
+/// Builds materials and texture references lazily, in first-use order.
+#[derive(Default)]
+pub(crate) struct Materials {
+    by_gltf: HashMap<Option<usize>, u32>,
+    pub materials: Vec<Material>,
+    keys: Vec<TexKey>,
+    by_key: HashMap<TexKey, u32>,
+}
+
+/// `KHR_texture_transform` from its JSON (normal and occlusion textures expose only JSON).
+fn transform_from_json(v: &Value) -> (TextureTransform, Option<u32>) {
+    let pair = |key: &str, default: Vec2| {
+        v.get(key)
+            .and_then(Value::as_array)
+            .filter(|a| a.len() == 2)
+            .and_then(|a| Some(Vec2::new(a[0].as_f64()? as f32, a[1].as_f64()? as f32)))
+            .unwrap_or(default)
+    };
+    (
+        TextureTransform {
+            offset: pair("offset", Vec2::ZERO),
+            rotation: v.get("rotation").and_then(Value::as_f64).unwrap_or(0.0) as f32,
+            scale: pair("scale", Vec2::ONE),
+        },
+        v.get("texCoord")
+            .and_then(Value::as_u64)
+            .and_then(|t| u32::try_from(t).ok()),
+    )
+}
+
+impl Materials {
+    fn texture(&mut self, tex: &gltf::Texture<'_>, srgb: bool) -> u32 {
+        let key = TexKey {
+            image: tex.source().index(),
+            sampler: tex.sampler().index(),
+            srgb,
+        };
+        *self.by_key.entry(key).or_insert_with(|| {
+            self.keys.push(key);
+            (self.keys.len() - 1) as u32
+        })
+    }
+
+    fn info(&mut self, info: Option<gltf::texture::Info<'_>>, srgb: bool) -> Option<TextureRef> {
+        let info = info?;
+        let mut tex_coord = info.tex_coord();
+        let transform = info.texture_transform().map(|t| {
+            if let Some(tc) = t.tex_coord() {
+                tex_coord = tc;
+            }
+            TextureTransform {
+                offset: t.offset().into(),
+                rotation: t.rotation(),
+                scale: t.scale().into(),
+            }
+        });
+        Some(TextureRef {
+            texture: self.texture(&info.texture(), srgb),
+            tex_coord,
+            transform,
+        })
+    }
+
+    fn linear(
+        &mut self,
+        tex: gltf::Texture<'_>,
+        tex_coord: u32,
+        ext: Option<&Value>,
+    ) -> TextureRef {
+        let mut tex_coord = tex_coord;
+        let transform = ext.map(|v| {
+            let (t, tc) = transform_from_json(v);
+            if let Some(tc) = tc {
+                tex_coord = tc;
+            }
+            t
+        });
+        TextureRef {
+            texture: self.texture(&tex, false),
+            tex_coord,
+            transform,
+        }
+    }
+
+    /// Our index of a glTF material (None = the glTF default material), creating it on first use.
+    pub fn get(&mut self, doc: &gltf::Document, index: Option<usize>) -> u32 {
+        if let Some(&i) = self.by_gltf.get(&index) {
+            return i;
+        }
+        let m = match index.and_then(|i| doc.materials().nth(i)) {
+            Some(m) => self.build(&m),
+            None => Material::default(),
+        };
+        self.materials.push(m);
+        let i = (self.materials.len() - 1) as u32;
+        self.by_gltf.insert(index, i);
+        i
+    }
+
+    fn build(&mut self, m: &gltf::Material<'_>) -> Material {
+        let pbr = m.pbr_metallic_roughness();
+        let base_color_texture = self.info(pbr.base_color_texture(), true);
+        let metallic_roughness_texture = self.info(pbr.metallic_roughness_texture(), false);
+        let normal = m.normal_texture();
+        let normal_scale = normal.as_ref().map_or(1.0, |n| n.scale());
+        let normal_texture = normal.map(|n| {
+            self.linear(
+                n.texture(),
+                n.tex_coord(),
+                n.extension_value("KHR_texture_transform"),
+            )
+        });
+        let occlusion = m.occlusion_texture();
+        let occlusion_strength = occlusion.as_ref().map_or(1.0, |o| o.strength());
+        let occlusion_texture = occlusion.map(|o| {
+            self.linear(
+                o.texture(),
+                o.tex_coord(),
+                o.extension_value("KHR_texture_transform"),
+            )
+        });
+        let emissive_texture = self.info(m.emissive_texture(), true);
+        let specular = m.specular();
+        Material {
+            name: m.name().map(str::to_owned),
+            base_color_factor: Vec4::from(pbr.base_color_factor()),
+            base_color_texture,
+            metallic_factor: pbr.metallic_factor(),
+            roughness_factor: pbr.roughness_factor(),
+            metallic_roughness_texture,
+            normal_texture,
+            normal_scale,
+            occlusion_texture,
+            occlusion_strength,
+            emissive_factor: Vec3::from(m.emissive_factor()),
+            emissive_texture,
+            emissive_strength: m.emissive_strength().unwrap_or(1.0),
+            alpha_mode: match m.alpha_mode() {
+                gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+                gltf::material::AlphaMode::Mask => AlphaMode::Mask {
+                    cutoff: m.alpha_cutoff().unwrap_or(0.5),
+                },
+                gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+            },
+            double_sided: m.double_sided(),
+            unlit: m.unlit(),
+            ior: m.ior().unwrap_or(1.5),
+            specular_factor: specular.as_ref().map_or(1.0, |s| s.specular_factor()),
+            specular_color_factor: specular
+                .as_ref()
+                .map_or(Vec3::ONE, |s| Vec3::from(s.specular_color_factor())),
+        }
+    }
+
+    /// Decodes the referenced images (each once, in parallel) and builds the textures.
+    /// With `skip` every texture is a 1×1 white placeholder.
+    pub fn textures(
+        &self,
+        doc: &gltf::Document,
+        buffers: &Buffers,
+        base_dir: &Path,
+        skip: bool,
+    ) -> Result<Vec<Texture>, Error> {
+        let sampler_of = |s: Option<usize>| {
+            s.and_then(|i| doc.samplers().nth(i))
+                .map_or(Sampler::default(), |s| {
+                    let wrap = |w| match w {
+                        gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+                        gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+                        gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+                    };
+                    Sampler {
+                        wrap_u: wrap(s.wrap_s()),
+                        wrap_v: wrap(s.wrap_t()),
+                        mag_filter: match s.mag_filter() {
+                            Some(gltf::texture::MagFilter::Nearest) => Filter::Nearest,
+                            _ => Filter::Linear,
+                        },
+                    }
+                })
+        };
+        let image_name = |i: usize| {
+            doc.images().nth(i).and_then(|im| {
+                im.name().map(str::to_owned).or(match im.source() {
+                    gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
+                        Some(uri.to_owned())
+                    }
+                    _ => None,
+                })
+            })
+        };
+        let color_space = |srgb| {
+            if srgb {
+                ColorSpace::Srgb
+            } else {
+                ColorSpace::Linear
+            }
+        };
+        if skip {
+            return Ok(self
+                .keys
+                .iter()
+                .map(|k| Texture {
+                    name: image_name(k.image),
+                    width: 1,
+                    height: 1,
+                    texels: Texels::Rgba8(vec![[255; 4]]),
+                    color_space: color_space(k.srgb),
+                    sampler: sampler_of(k.sampler),
+                })
+                .collect());
+        }
+        let mut images: Vec<usize> = self.keys.iter().map(|k| k.image).collect();
+        images.sort_unstable();
+        images.dedup();
+        let decoded: Vec<(u32, u32, Texels)> = images
+            .par_iter()
+            .map(|&i| decode_image(doc, buffers, base_dir, i))
+            .collect::<Result<_, _>>()?;
+        let mut slot: Vec<Option<(u32, u32, Texels)>> = decoded.into_iter().map(Some).collect();
+        let mut uses_left: Vec<usize> = images
+            .iter()
+            .map(|i| self.keys.iter().filter(|k| k.image == *i).count())
+            .collect();
+        let mut out = Vec::with_capacity(self.keys.len());
+        for k in &self.keys {
+            let Ok(s) = images.binary_search(&k.image) else {
+                continue;
+            };
+            uses_left[s] -= 1;
+            // The last use takes the texels; earlier ones (same image, other sampler or
+            // colour space) get a copy.
+            let (w, h, texels) = if uses_left[s] == 0 {
+                slot[s].take()
+            } else {
+                slot[s].clone()
+            }
+            .ok_or_else(|| Error::Invalid {
+                at: format!("images[{}]", k.image),
+                reason: "decoded image missing".into(),
+            })?;
+            out.push(Texture {
+                name: image_name(k.image),
+                width: w,
+                height: h,
+                texels,
+                color_space: color_space(k.srgb),
+                sampler: sampler_of(k.sampler),
+            });
+        }
+        Ok(out)
+    }
+}
+
+/// Reads and decodes one image to RGBA texels (8-bit stays 8-bit; 16-bit and float become f32).
+fn decode_image(
+    doc: &gltf::Document,
+    buffers: &Buffers,
+    base_dir: &Path,
+    index: usize,
+) -> Result<(u32, u32, Texels), Error> {
+    let at = format!("images[{index}]");
+    let image = doc.images().nth(index).ok_or_else(|| Error::Invalid {
+        at: at.clone(),
+        reason: "no such image".into(),
+    })?;
+    let owned;
+    let bytes: &[u8] = match image.source() {
+        gltf::image::Source::Uri { uri, .. } => {
+            owned = crate::uri::load(base_dir, uri, &format!("{at}.uri"))?;
+            &owned
+        }
+        gltf::image::Source::View { view, .. } => {
+            let buffer = buffers
+                .data
+                .get(view.buffer().index())
+                .ok_or_else(|| Error::Invalid {
+                    at: format!("bufferViews[{}]", view.index()),
+                    reason: "buffer missing".into(),
+                })?;
+            let end = view.offset() as u64 + view.length() as u64;
+            if end > buffer.len() as u64 {
+                return Err(Error::OutOfBounds {
+                    at: format!("{at}.bufferView (bufferViews[{}])", view.index()),
+                    needed: end,
+                    available: buffer.len() as u64,
+                });
+            }
+            &buffer[view.offset()..view.offset() + view.length()]
+        }
+    };
+    let img = image::load_from_memory(bytes).map_err(|source| Error::Image {
+        image: index,
+        source,
+    })?;
+    let (w, h) = (img.width(), img.height());
+    if w == 0 || h == 0 {
+        return Err(Error::Invalid {
+            at,
+            reason: "image has no texels".into(),
+        });
+    }
+    use image::DynamicImage as D;
+    let texels = match img {
+        D::ImageLuma16(_)
+        | D::ImageLumaA16(_)
+        | D::ImageRgb16(_)
+        | D::ImageRgba16(_)
+        | D::ImageRgb32F(_)
+        | D::ImageRgba32F(_) => Texels::Rgba32F(
+            img.into_rgba32f()
+                .into_raw()
+                .chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], c[3]])
+                .collect(),
+        ),
+        _ => Texels::Rgba8(
+            img.into_rgba8()
+                .into_raw()
+                .chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], c[3]])
+                .collect(),
+        ),
+    };
+    Ok((w, h, texels))
+}
