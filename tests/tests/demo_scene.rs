@@ -250,3 +250,47 @@ fn deterministic_trig_matches_std() {
         assert!((demo::atan(x) - x.atan()).abs() < 1e-15, "x = {x}");
     }
 }
+
+#[test]
+fn loader_resolves_the_camera_dof() {
+    let (json, _) = parse_glb(&demo::build_glb());
+    let scene = aperture_scene::load(&demo::asset_path(), &Default::default())
+        .expect("assets/demo.glb loads");
+    let camera = scene
+        .cameras
+        .iter()
+        .find(|c| c.name == demo::CAMERA_NAME)
+        .expect("the demo camera is loaded");
+    let dof = &camera.dof;
+    assert!(dof.enabled, "use_dof: true");
+    let radius = (demo::LENS_MM * 0.001 / (2.0 * demo::FSTOP)) as f32;
+    assert!(
+        (dof.aperture_radius - radius).abs() < 1e-6,
+        "radius {} vs lens·0.001/(2·fstop) = {radius}",
+        dof.aperture_radius
+    );
+    assert!((dof.effective_radius() - radius).abs() < 1e-6);
+    let depth = depth_from_camera(&json, node_named(&json, demo::FOCUS_OBJECT));
+    assert!(
+        (dof.focus_distance - depth).abs() < 1e-4,
+        "focus distance {} vs the depth of {} along the camera's −Z, {depth}",
+        dof.focus_distance,
+        demo::FOCUS_OBJECT
+    );
+    assert_eq!(dof.focus_object.as_deref(), Some(demo::FOCUS_OBJECT));
+    assert_eq!(dof.blades, demo::BLADES);
+    assert!((dof.lens_mm - demo::LENS_MM as f32).abs() < 1e-4);
+
+    // The loaded camera looks where the file says, and the scene is what the builder made.
+    let forward = camera.world_from_camera.transform_vector3(Vec3::NEG_Z);
+    let focus_node = vec3(&node_named(&json, demo::FOCUS_OBJECT)["translation"]);
+    let origin = Vec3::from(camera.world_from_camera.translation);
+    assert!(((focus_node - origin).dot(forward) - depth).abs() < 1e-4);
+    assert_eq!(
+        scene.drawn_triangle_count(),
+        demo::build().stats.drawn_triangles
+    );
+    assert_eq!(scene.lights.len(), 1);
+    let sun = &scene.lights[0];
+    assert!((sun.intensity.x - (demo::SUN_LUX / 683.0) as f32).abs() < 1e-3);
+}
