@@ -314,7 +314,7 @@ def test_extras_main(doc):
           f"sun exported as {lux} lux (3 W/m² × 683)")
 
 
-def test_extras_rules(cams):
+def test_extras_rules(cams, binary):
     # Export 2: every rule camera, "Custom Properties" on, the hidden focus target not selected.
     for obj in bpy.context.scene.objects:
         obj.select_set(obj.name != "NotExported")
@@ -352,6 +352,8 @@ def test_extras_rules(cams):
           f"focus_object dropped, focus_distance = {hid.get('focus_distance')} (depth {depth:.6g}), "
           f"warning: {warned[:1]}")
 
+    test_info_rules(binary, os.path.join(WORK, "rules.gltf"), cams)
+
     # Export 3: "Custom Properties" off: the hand-set values still win, the rest is native.
     doc3, _ = export(os.path.join(WORK, "rules_noextras.gltf"), use_selection=True, export_extras=False)
     cu3 = camera_extras(doc3, "CamCustom") or {}
@@ -373,39 +375,22 @@ def aperture_supports(binary, sub, flag):
     return flag in text, text
 
 
-def find_camera(node, name):
-    """The first JSON object that describes camera `name` (has that name and some DOF data)."""
-    if isinstance(node, dict):
-        if node.get("name") == name and any(k in json.dumps(node) for k in ("radius", "focus")):
-            return node
-        for v in node.values():
-            hit = find_camera(v, name)
-            if hit is not None:
-                return hit
-    elif isinstance(node, list):
-        for v in node:
-            hit = find_camera(v, name)
-            if hit is not None:
-                return hit
-    return None
+def info_json(binary, scene_path):
+    """`aperture info --json` of a file, or None (with a FAIL recorded) when it fails."""
+    out = subprocess.run([binary, "info", "--json", scene_path], capture_output=True, text=True, timeout=300)
+    if out.returncode != 0:
+        check(f"b.info-json-runs ({os.path.basename(scene_path)})", False,
+              f"exit {out.returncode} {out.stderr.strip()[:300]}")
+        return None
+    return json.loads(out.stdout)
 
 
-def find_key(node, suffixes):
-    if isinstance(node, dict):
-        for k, v in node.items():
-            if any(k == s or k.endswith(s) for s in suffixes) and isinstance(v, (int, float)) \
-                    and not isinstance(v, bool):
-                return k, v
-        for v in node.values():
-            hit = find_key(v, suffixes)
-            if hit:
-                return hit
-    elif isinstance(node, list):
-        for v in node:
-            hit = find_key(v, suffixes)
-            if hit:
-                return hit
-    return None
+def info_camera(info, name):
+    """The `dof` object of camera `name` in `aperture info --json` output ({} when absent)."""
+    for camera in info.get("cameras", []):
+        if camera.get("name") == name:
+            return camera.get("dof") or {}
+    return {}
 
 
 def test_info(binary, scene_path, cam):
@@ -414,29 +399,44 @@ def test_info(binary, scene_path, cam):
         record("b.info-json", None if not ARGS.require_all else False,
                f"`aperture info --json` not supported by {binary}")
         return
-    out = subprocess.run([binary, "info", "--json", scene_path], capture_output=True, text=True, timeout=300)
-    if not check("b.info-json-runs", out.returncode == 0, f"exit {out.returncode} {out.stderr.strip()[:300]}"):
+    info = info_json(binary, scene_path)
+    if info is None:
         return
-    info = json.loads(out.stdout)
-    camera = find_camera(info, "Camera")
-    if not check("b.info-has-camera", camera is not None, "camera 'Camera' in the JSON"):
-        print(out.stdout[:2000])
-        return
-    radius = find_key(camera, ("aperture_radius", "lens_radius", "radius"))
-    focus = find_key(camera, ("focus_distance",))
+    dof = info_camera(info, "Camera")
     want_r = LENS * 0.001 / (2.0 * FSTOP)
     want_f = view_depth(cam, bpy.data.objects[FOCUS])
-    check("b.radius", radius and close(radius[1], want_r, 1e-4),
-          f"{radius} vs lens/(2·fstop) = {LENS}mm/(2·{FSTOP}) = {want_r:.6g} m")
-    check("b.focus-depth", focus and close(focus[1], want_f, 1e-4),
-          f"{focus} vs depth of '{FOCUS}' along the view axis = {want_f:.6g} m")
-    enabled = find_key(camera, ("enabled", "use_dof"))
-    if enabled is None:
-        for k in ("enabled", "use_dof", "dof_enabled"):
-            v = camera.get(k, (camera.get("dof") or {}).get(k) if isinstance(camera.get("dof"), dict) else None)
-            if isinstance(v, bool):
-                enabled = (k, v)
-    record("b.dof-enabled", enabled is None or enabled[1] is True, f"{enabled}")
+    check("b.dof-enabled", dof.get("enabled") is True, f"cameras[Camera].dof.enabled = {dof.get('enabled')}")
+    check("b.radius", close(dof.get("aperture_radius"), want_r, 1e-5),
+          f"aperture_radius = {dof.get('aperture_radius')} m vs lens/(2·fstop) = {LENS} mm/(2·{FSTOP}) "
+          f"= {want_r:.7g} m")
+    check("b.focus-depth", close(dof.get("focus_distance"), want_f, 1e-5) and dof.get("focus_object") == FOCUS,
+          f"focus_distance = {dof.get('focus_distance')} m on {dof.get('focus_object')!r} vs the depth of "
+          f"'{FOCUS}' along the view axis in Blender = {want_f:.7g} m")
+    check("b.blades", dof.get("blades") == BLADES, f"blades = {dof.get('blades')}")
+
+
+def test_info_rules(binary, scene_path, cams):
+    """`aperture info --json` on the rules export: what the add-on's special cases resolve to."""
+    if not os.path.isfile(binary) or not aperture_supports(binary, "info", "--json")[0]:
+        return
+    info = info_json(binary, scene_path)
+    if info is None:
+        return
+    ortho = info_camera(info, "CamOrtho")
+    check("b.orthographic-radius", close(ortho.get("aperture_radius"), 0.25, 1e-5) and ortho.get("enabled"),
+          f"CamOrtho: aperture_radius = {ortho.get('aperture_radius')} (Cycles: 1/(2·2.0) = 0.25)")
+    custom = info_camera(info, "CamCustom")
+    want = 35.0 * 0.001 / (2.0 * 8.0)
+    check("b.custom-fstop", close(custom.get("aperture_radius"), want, 1e-5)
+          and close(custom.get("focus_distance"), 1.25, 1e-5),
+          f"CamCustom: aperture_radius = {custom.get('aperture_radius')} (35 mm/(2·8) = {want}), "
+          f"focus_distance = {custom.get('focus_distance')}")
+    off = info_camera(info, "CamOff")
+    check("b.dof-off", off.get("enabled") is False, f"CamOff: enabled = {off.get('enabled')}")
+    hidden = info_camera(info, "CamHiddenFocus")
+    depth = view_depth(cams["hidden"], bpy.data.objects["NotExported"])
+    check("b.unexported-focus", close(hidden.get("focus_distance"), depth, 1e-4),
+          f"CamHiddenFocus: focus_distance = {hidden.get('focus_distance')} (depth {depth:.6g})")
 
 
 # --------------------------------------------------------------------------------------------
@@ -667,11 +667,11 @@ def main():
         print(f"Blender {bpy.app.version_string}, working in {WORK}")
         cam = build_scene()  # reads factory settings, which resets the add-ons: install after
         install_addon()
+        binary = os.path.abspath(ARGS.aperture)
         main_path = os.path.join(WORK, "scene.gltf")
         doc, _ = export(main_path)
         test_extras_main(doc)
 
-        binary = os.path.abspath(ARGS.aperture)
         if os.path.isfile(binary) and os.access(binary, os.X_OK):
             test_info(binary, main_path, cam)
             test_render(binary, main_path, cam)
@@ -680,7 +680,7 @@ def main():
                 record(name, None if not ARGS.require_all else False, f"no aperture binary at {binary}")
 
         # The rule cameras change the scene: last.
-        test_extras_rules(add_rule_cameras())
+        test_extras_rules(add_rule_cameras(), binary)
     finally:
         shutil.rmtree(scripts, ignore_errors=True)
         if not ARGS.out:
