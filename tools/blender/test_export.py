@@ -31,6 +31,7 @@ irradiance in W/m². So the test uses a sun with angle 0 (a delta light, like gl
 strength is a radiance in both renderers; the exporter writes it as emissiveFactor ×
 KHR_materials_emissive_strength, with no 683.
 
+`--cycles-as-aperture` checks (c)'s comparison itself, with a third Cycles seed in aperture's place.
 (b) and (c) run when the `aperture` binary supports them. Otherwise they are reported as SKIP,
 with the reason, or as FAIL when --require-all is given. The last line is "N passed, N failed, N
 skipped". The exit status is non-zero when anything failed.
@@ -570,47 +571,59 @@ def render_flags(help_text):
 
 
 def test_render(binary, scene_path, cam):
-    import numpy as np
-
-    ok, help_text = aperture_supports(binary, "render", "--override-material")
-    if not ok:
-        record("c.render", None if not ARGS.require_all else False,
-               f"`aperture render --override-material` not supported by {binary}")
-        return
-    flags = render_flags(help_text)
-    spp = ARGS.spp
-    ours = os.path.join(WORK, "aperture.exr")
-    cmd = [binary, "render", scene_path, "-o", ours, flags["override"], "diffuse"]
-    if flags["width"] and flags["height"]:
-        cmd += [flags["width"], str(WIDTH), flags["height"], str(HEIGHT)]
-    if flags["spp"]:
-        cmd += [flags["spp"], str(spp)]
-    if flags["seed"]:
-        cmd += [flags["seed"], "7"]
     import time
 
-    t = time.time()
-    out = subprocess.run(cmd, capture_output=True, text=True, timeout=1800)
-    t_ours = time.time() - t
-    if not check("c.aperture-render-runs", out.returncode == 0,
-                 f"`{' '.join(cmd)}` exit {out.returncode} in {t_ours:.1f} s {out.stderr.strip()[-400:]}"):
-        return
+    ours = os.path.join(WORK, "aperture.exr")
+    if ARGS.cycles_as_aperture:
+        # Exercises the comparison itself: a third Cycles seed stands in for aperture's render.
+        candidate = "Cycles seed 3"
+        diffuse_materials()
+        t_ours = render_cycles(ours, ARGS.spp, 3)
+    else:
+        ok, help_text = aperture_supports(binary, "render", "--override-material")
+        if not ok:
+            record("c.render", None if not ARGS.require_all else False,
+                   f"`aperture render --override-material` not supported by {binary}")
+            return
+        candidate = "aperture"
+        flags = render_flags(help_text)
+        cmd = [binary, "render", scene_path, "-o", ours, flags["override"], "diffuse"]
+        if flags["width"] and flags["height"]:
+            cmd += [flags["width"], str(WIDTH), flags["height"], str(HEIGHT)]
+        if flags["spp"]:
+            cmd += [flags["spp"], str(ARGS.spp)]
+        if flags["seed"]:
+            cmd += [flags["seed"], "7"]
+        t = time.time()
+        out = subprocess.run(cmd, capture_output=True, text=True, timeout=1800)
+        t_ours = time.time() - t
+        if not check("c.aperture-render-runs", out.returncode == 0,
+                     f"`{' '.join(cmd)}` exit {out.returncode} in {t_ours:.1f} s {out.stderr.strip()[-400:]}"):
+            return
+        diffuse_materials()
+    compare(ours, candidate, t_ours, cam)
 
-    diffuse_materials()
+
+def compare(ours, candidate, t_ours, cam):
+    """Compares `ours` (an EXR) with two Cycles renders of the scene (seeds 1 and 2)."""
+    import numpy as np
+
+    spp = ARGS.spp
     a_path, b_path = os.path.join(WORK, "cycles_seed1.exr"), os.path.join(WORK, "cycles_seed2.exr")
     t_a = render_cycles(a_path, spp, 1)
     t_b = render_cycles(b_path, spp, 2)
-    print(f"Cycles: {t_a:.1f} s and {t_b:.1f} s at {WIDTH}x{HEIGHT}, {spp} spp; aperture: {t_ours:.1f} s")
+    print(f"Cycles: {t_a:.1f} s and {t_b:.1f} s at {WIDTH}x{HEIGHT}, {spp} spp; {candidate}: {t_ours:.1f} s")
     A, B, O = load_exr(a_path), load_exr(b_path), load_exr(ours)
-    if not check("c.same-size", O.shape == A.shape, f"aperture {O.shape[1]}x{O.shape[0]}, Cycles {A.shape[1]}x{A.shape[0]}"):
+    if not check("c.same-size", O.shape == A.shape,
+                 f"{candidate} {O.shape[1]}x{O.shape[0]}, Cycles {A.shape[1]}x{A.shape[0]}"):
         return
 
     noise = rmse(A, B)
     err = rmse(O, A)
     check("c.rmse-within-noise", err <= 1.5 * noise,
-          f"RMSE(aperture, Cycles) = {err:.5f}, RMSE(Cycles seed 1, seed 2) = {noise:.5f}, limit ×1.5 = {1.5 * noise:.5f}")
+          f"RMSE({candidate}, Cycles) = {err:.5f}, RMSE(Cycles seed 1, seed 2) = {noise:.5f}, limit ×1.5 = {1.5 * noise:.5f}")
     ratio = O.mean() / A.mean()
-    check("c.mean-ratio", abs(ratio - 1.0) <= 0.03, f"mean(aperture) / mean(Cycles) = {ratio:.4f} (±3 %)")
+    check("c.mean-ratio", abs(ratio - 1.0) <= 0.03, f"mean({candidate}) / mean(Cycles) = {ratio:.4f} (±3 %)")
 
     # Mean ratio away from the bulb: the lit, diffuse part of the picture.
     name, depth, nx, ny, radius, strength = BULB
@@ -624,22 +637,22 @@ def test_render(binary, scene_path, cam):
     mask[max(0, int(cy - half)):int(cy + half) + 1, max(0, int(cx - half)):int(cx + half) + 1] = False
     ratio_lit = O[mask].mean() / A[mask].mean()
     check("c.mean-ratio-lit", abs(ratio_lit - 1.0) <= 0.03,
-          f"outside the bokeh: mean(aperture) / mean(Cycles) = {ratio_lit:.4f} (±3 %)")
+          f"outside the bokeh: mean({candidate}) / mean(Cycles) = {ratio_lit:.4f} (±3 %)")
 
     # Bokeh: the blob's size, 6-fold shape and its orientation.
     ca, ra, ma, ea = bokeh_moments(A, (cx, cy), half)
     cb, rb, mb, eb = bokeh_moments(B, (cx, cy), half)
     co, ro, mo, eo = bokeh_moments(O, (cx, cy), half)
     ideal = ideal_hexagon_m6()
-    print(f"bokeh: CoC {coc:.1f} px expected; centroid Cycles {ca[0]:.1f},{ca[1]:.1f} aperture {co[0]:.1f},{co[1]:.1f}; "
-          f"RMS radius Cycles {ra:.2f}/{rb:.2f} aperture {ro:.2f}; M6 Cycles {ma:.3f}/{mb:.3f} aperture {mo:.3f} "
+    print(f"bokeh: CoC {coc:.1f} px expected; centroid Cycles {ca[0]:.1f},{ca[1]:.1f} {candidate} {co[0]:.1f},{co[1]:.1f}; "
+          f"RMS radius Cycles {ra:.2f}/{rb:.2f} {candidate} {ro:.2f}; M6 Cycles {ma:.3f}/{mb:.3f} {candidate} {mo:.3f} "
           f"(ideal sharp hexagon, corners up: {ideal:.3f}); energy ratio {eo / ea:.4f}")
     check("c.bokeh-position", math.hypot(co[0] - ca[0], co[1] - ca[1]) < 1.0,
           f"centroids {math.hypot(co[0] - ca[0], co[1] - ca[1]):.2f} px apart")
     check("c.bokeh-size", abs(ro / ra - 1.0) < 0.05, f"RMS radius ratio {ro / ra:.4f} (Cycles seeds: {rb / ra:.4f})")
     six_fold = abs(mo) > 0.25 * abs(ideal) and abs(ma) > 0.25 * abs(ideal)
     check("c.bokeh-hexagonal", six_fold,
-          f"|M6| aperture {abs(mo):.3f}, Cycles {abs(ma):.3f}, seed noise {abs(ma - mb):.3f}; a disc gives ~0")
+          f"|M6| {candidate} {abs(mo):.3f}, Cycles {abs(ma):.3f}, seed noise {abs(ma - mb):.3f}; a disc gives ~0")
     dphase = abs((math.degrees(np.angle(mo) - np.angle(ma)) + 180.0) % 360.0 - 180.0) / 6.0
     check("c.bokeh-orientation", dphase < 5.0,
           f"hexagon orientations differ by {dphase:.2f}° (phase of M6 / 6)")
@@ -655,6 +668,8 @@ def main():
                         help="the aperture binary (default: target/release/aperture)")
     parser.add_argument("--out", help="keep the exports and renders in this folder")
     parser.add_argument("--spp", type=int, default=512, help="samples per pixel for both renderers")
+    parser.add_argument("--cycles-as-aperture", action="store_true",
+                        help="check part (c)'s comparison itself: a third Cycles seed plays aperture")
     parser.add_argument("--require-all", action="store_true",
                         help="fail (rather than skip) when the binary lacks `info --json` or `render`")
     ARGS = parser.parse_args()
@@ -674,6 +689,8 @@ def main():
 
         if os.path.isfile(binary) and os.access(binary, os.X_OK):
             test_info(binary, main_path, cam)
+            test_render(binary, main_path, cam)
+        elif ARGS.cycles_as_aperture:
             test_render(binary, main_path, cam)
         else:
             for name in ("b.info-json", "c.render"):
