@@ -564,6 +564,7 @@ def render_flags(help_text):
     return {
         "width": first("--width"),
         "height": first("--height"),
+        "resolution": first("--resolution", "--size"),
         "spp": first("--spp", "--samples"),
         "seed": first("--seed"),
         "override": first("--override-material"),
@@ -590,6 +591,8 @@ def test_render(binary, scene_path, cam):
         cmd = [binary, "render", scene_path, "-o", ours, flags["override"], "diffuse"]
         if flags["width"] and flags["height"]:
             cmd += [flags["width"], str(WIDTH), flags["height"], str(HEIGHT)]
+        elif flags["resolution"]:
+            cmd += [flags["resolution"], f"{WIDTH}x{HEIGHT}"]
         if flags["spp"]:
             cmd += [flags["spp"], str(ARGS.spp)]
         if flags["seed"]:
