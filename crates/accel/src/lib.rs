@@ -1,5 +1,17 @@
 //! Ray queries over triangle meshes placed by instances: closest hit and occlusion.
 //!
+//! - **Build**: obvhs (PLOC, reinsertion, conversion to its compressed 8-wide CWBVH). A mesh drawn
+//!   by several instances gets one bottom-level BVH in object space, stored once; meshes drawn
+//!   once are flattened into one world-space BVH; a top-level obvhs BVH over instance bounds
+//!   joins them. Triangles are stored in BVH order with their original index.
+//! - **Traversal** is ours (obvhs' node layout and child ordering): the box test honours
+//!   `tmin`/`tmax` and is widened by a bound on every rounding error involved, and the stack is
+//!   sized from the measured tree depth. Rays enter instances through `object_from_world`
+//!   without renormalising, so `t` is in world units everywhere.
+//! - **Triangles**: watertight test of Woop, Benthin and Wald (2013) with an `f64` fallback for
+//!   zero edge functions and pbrt-v4's bound rejecting hits not provably in front.
+//! - **Secondary rays** start from [`SpawnPoint::origin`] (or [`offset_ray_origin`]).
+//!
 //! ```
 //! use aperture_accel::{Accel, BvhQuality, InstanceInput, MeshInput, Ray};
 //! use glam::{Affine3A, Vec3};
@@ -14,7 +26,22 @@
 //! assert!((hit.t - 2.0).abs() < 1e-6);
 //! ```
 
+mod node;
+mod triangle;
+
+pub use triangle::intersect_triangle;
+
 use glam::{Affine3A, Vec3};
+use node::BoxRay;
+use obvhs::{
+    aabb::Aabb,
+    bvh2::reinsertion::ReinsertionOptimizer,
+    cwbvh::{bvh2_to_cwbvh::bvh2_to_cwbvh, node::CwBvhNode},
+    ploc::PlocBuilder,
+    BvhBuildParams,
+};
+use rayon::prelude::*;
+use triangle::TriRay;
 
 /// A ray segment: points `origin + t * dir` for `tmin <= t <= tmax`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -86,43 +113,656 @@ pub enum BvhQuality {
     High,
 }
 
+impl BvhQuality {
+    /// Every quality, fastest build first.
+    pub const ALL: [BvhQuality; 3] = [BvhQuality::Fast, BvhQuality::Medium, BvhQuality::High];
+
+    /// The lower-case name used on the command line (`fast`, `medium`, `high`).
+    pub fn name(self) -> &'static str {
+        match self {
+            BvhQuality::Fast => "fast",
+            BvhQuality::Medium => "medium",
+            BvhQuality::High => "high",
+        }
+    }
+}
+
+impl std::fmt::Display for BvhQuality {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A `--bvh-quality` value that is not `fast`, `medium` or `high`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ParseBvhQualityError(pub String);
+
+impl std::fmt::Display for ParseBvhQualityError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "unknown BVH quality {:?} (expected fast, medium or high)",
+            self.0
+        )
+    }
+}
+
+impl std::error::Error for ParseBvhQualityError {}
+
+impl std::str::FromStr for BvhQuality {
+    type Err = ParseBvhQualityError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        BvhQuality::ALL
+            .into_iter()
+            .find(|q| q.name().eq_ignore_ascii_case(s))
+            .ok_or_else(|| ParseBvhQualityError(s.to_owned()))
+    }
+}
+
 /// Facts about a built acceleration structure.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct AccelStats {
     /// Triangles left out because they have zero area or non-finite vertices (counted per mesh).
     pub degenerate_triangles: usize,
-    /// Triangles kept, counted once per mesh.
+    /// Triangles kept, counted once per mesh (meshes no valid instance draws are not counted).
     pub unique_triangles: usize,
+    /// Triangles left out because an index is out of range of the mesh's positions (per mesh).
+    pub invalid_index_triangles: usize,
+    /// Instances left out: mesh index out of range, or a transform that is non-finite or not
+    /// invertible.
+    pub skipped_instances: usize,
+    /// Triangles drawn: kept triangles summed over instances.
+    pub drawn_triangles: usize,
+    /// Instances whose mesh is used only once, flattened into one world-space BVH.
+    pub flattened_instances: usize,
+    /// Bottom-level BVHs (one per mesh drawn more than once, plus one for all flattened meshes).
+    pub blas_count: usize,
+    /// Entries of the top-level BVH (instances of shared meshes, plus one for the flattened BVH).
+    pub tlas_entries: usize,
+    /// Wide (8-child) BVH nodes over all levels.
+    pub bvh_nodes: usize,
+    /// Deepest bottom-level BVH, in nodes (the traversal stack adapts to it).
+    pub max_blas_depth: usize,
+    /// Bytes held by the structure (nodes, triangles, instances).
+    pub memory_bytes: usize,
+    /// Wall time of [`Accel::build`].
+    pub build_time: std::time::Duration,
 }
 
+/// A triangle in BVH order: its vertices exactly as given (shared vertices stay bitwise equal,
+/// which the watertight test relies on) and its index in the mesh's original `indices`.
+#[derive(Debug, Clone, Copy)]
+#[repr(C)]
+struct Tri {
+    p: [Vec3; 3],
+    prim: u32,
+}
+
+/// A bottom-level BVH over one mesh (object space) or over all flattened meshes (world space).
+#[derive(Debug, Clone, Default)]
+struct Blas {
+    nodes: Vec<CwBvhNode>,
+    tris: Vec<Tri>,
+    /// For the flattened BVH only: the instance of each triangle (BVH order). Empty otherwise.
+    tri_instance: Vec<u32>,
+    depth: usize,
+    bounds: Option<(Vec3, Vec3)>,
+    /// `bounds`, or a zero box for an empty tree (sizes the box test's rounding slack).
+    box_bounds: (Vec3, Vec3),
+}
+
+/// One leaf of the top-level BVH: a BVH placed in the world.
+#[derive(Debug, Clone, Copy)]
+struct Entry {
+    blas: u32,
+    /// The instance, or `FLATTENED` when the triangles carry their own.
+    instance: u32,
+    object_from_world: Affine3A,
+    /// The flattened BVH is already in world space: skip the ray transform.
+    identity: bool,
+}
+
+const FLATTENED: u32 = u32::MAX;
+
 /// The acceleration structure: answers ray queries from many threads at once.
+///
+/// Layout: a top-level obvhs CWBVH over instance bounds whose leaves point at bottom-level CWBVHs
+/// (one per mesh drawn more than once, stored once however many instances draw it), plus one
+/// world-space CWBVH holding every mesh that is drawn exactly once. Rays are moved into object
+/// space per instance with `object_from_world` without renormalising the direction, so `t` stays
+/// in world units.
 #[derive(Debug, Clone)]
 pub struct Accel {
-    meshes: Vec<(Vec<Vec3>, Vec<[u32; 3]>)>,
-    instances: Vec<InstanceInput>,
+    blases: Vec<Blas>,
+    /// In top-level BVH order.
+    entries: Vec<Entry>,
+    tlas: Vec<CwBvhNode>,
+    tlas_depth: usize,
+    /// Bounds of all instance bounds.
+    tlas_bounds: (Vec3, Vec3),
+    max_blas_depth: usize,
+    /// Per input instance: a bound on the magnitudes met when moving its points between object
+    /// and world space (`|T| + |M| max|p_obj|`), for [`Accel::spawn_point`].
+    instance_magnitude: Vec<f32>,
+    /// Node tests take the 8-wide AVX2 path (detected at build time; the x86_64 baseline is
+    /// SSE2, 4 wide). Both give identical results.
+    avx2: bool,
     stats: AccelStats,
 }
 
+/// A hit's position in world space with a bound on its rounding error: where secondary rays
+/// start from (see [`SpawnPoint::origin`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpawnPoint {
+    /// The hit position, `origin + t * dir` of the ray that found it.
+    pub p: Vec3,
+    /// Bound on the distance from `p` to the exact surface point (world units, any direction).
+    pub error: f32,
+}
+
+impl SpawnPoint {
+    /// The origin of a ray leaving the surface on the side `n` points to (pass the geometric
+    /// normal flipped towards the new ray's direction): `p` pushed past its error bound along `n`,
+    /// then by a few ulps with [`offset_ray_origin`].
+    ///
+    /// Why not only `offset_ray_origin`: on instanced meshes the point's error comes from the
+    /// transform's magnitudes (say a coordinate near 0 computed from terms near 1e4), which a
+    /// few ulps of the point's own coordinates do not cover.
+    pub fn origin(&self, n: Vec3) -> Vec3 {
+        let n = n.normalize_or_zero();
+        offset_ray_origin(self.p + n * (2.0 * self.error), n)
+    }
+}
+
+/// A traversal stack entry: a node group (obvhs encoding: child base index, hit mask).
+type Group = (u32, u32);
+
+/// Stacks up to this depth live on the call stack; deeper trees (degenerate input) get a heap
+/// stack sized from the measured depth, so the stack can never overflow.
+const INLINE_STACK: usize = 48;
+
+#[inline(always)]
+fn with_stack<R>(depth: usize, f: impl FnOnce(&mut [Group]) -> R) -> R {
+    if depth < INLINE_STACK {
+        let mut stack = [(0u32, 0u32); INLINE_STACK];
+        f(&mut stack)
+    } else {
+        let mut stack = vec![(0u32, 0u32); depth + 1];
+        f(&mut stack)
+    }
+}
+
+/// Walks a CWBVH (obvhs layout) front to back for `r`, calling `leaf(primitive, &mut tmax)` for
+/// every primitive in a hit leaf; `leaf` may shrink `tmax` and returns `true` to stop. Returns
+/// whether it was stopped.
+///
+/// Each stack entry holds the unvisited siblings of one level of the current path, so `stack`
+/// needs one entry per tree level (the depth measured at build time).
+#[inline(always)]
+fn traverse<const AVX2: bool>(
+    nodes: &[CwBvhNode],
+    r: &BoxRay,
+    tmax: &mut f32,
+    stack: &mut [Group],
+    mut leaf: impl FnMut(u32, &mut f32) -> bool,
+) -> bool {
+    if nodes.is_empty() {
+        return false;
+    }
+    let mut sp = 0usize;
+    // The root as a group of one internal child at priority 7 (obvhs convention).
+    let mut current: Group = (0, 0x8000_0000);
+    let mut prims: Group = (0, 0);
+    loop {
+        while prims.1 != 0 {
+            let local = 31 - prims.1.leading_zeros();
+            prims.1 &= !(1u32 << local);
+            if leaf(prims.0 + local, tmax) {
+                return true;
+            }
+        }
+        if current.1 & 0xff00_0000 != 0 {
+            let hits = current.1;
+            let offset = 31 - hits.leading_zeros();
+            current.1 &= !(1u32 << offset);
+            if current.1 & 0xff00_0000 != 0 {
+                stack[sp] = current;
+                sp += 1;
+            }
+            let slot = (offset - 24) ^ (r.oct_inv4 & 0xff);
+            let relative = (hits & !(u32::MAX << slot)).count_ones();
+            let Some(node) = nodes.get((current.0 + relative) as usize) else {
+                // Unreachable for a well-formed tree; never read out of bounds.
+                current.1 = 0;
+                continue;
+            };
+            let mask = if AVX2 {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: `AVX2` is true only when `detect_avx2` found AVX2 on this CPU.
+                unsafe {
+                    node::intersect_node_avx2(node, r, *tmax)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                node::intersect_node(node, r, *tmax)
+            } else {
+                node::intersect_node(node, r, *tmax)
+            };
+            current = (
+                node.child_base_idx,
+                (mask & 0xff00_0000) | node.imask as u32,
+            );
+            prims = (node.primitive_base_idx, mask & 0x00ff_ffff);
+        } else {
+            current = (0, 0);
+        }
+        if prims.1 == 0 && current.1 & 0xff00_0000 == 0 {
+            if sp == 0 {
+                return false;
+            }
+            sp -= 1;
+            current = stack[sp];
+        }
+    }
+}
+
+/// Whether this CPU can take the AVX2 traversal. `APERTURE_NO_AVX2` forces the SSE2 path (to
+/// compare the two, or to rule the AVX2 path out when debugging).
+fn detect_avx2() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::env::var_os("APERTURE_NO_AVX2").is_none()
+            && std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// Depth (levels of nodes) of an obvhs CWBVH; children always follow their parent in `nodes`.
+fn cwbvh_depth(nodes: &[CwBvhNode]) -> usize {
+    let mut depth = vec![0u32; nodes.len()];
+    let mut max = 0u32;
+    for i in 0..nodes.len() {
+        let d = if i == 0 { 1 } else { depth[i] };
+        depth[i] = d;
+        max = max.max(d);
+        let n = &nodes[i];
+        let children = n.imask.count_ones();
+        for c in 0..children {
+            if let Some(slot) = depth.get_mut((n.child_base_idx + c) as usize) {
+                *slot = d + 1;
+            }
+        }
+    }
+    max as usize
+}
+
+fn build_params(quality: BvhQuality) -> BvhBuildParams {
+    // Chosen by measurement (BlenderIO-32bitIndices, Embree's 1 M thin-lens rays, one thread,
+    // interleaved runs on the shared 2-core machine; 1 M-triangle terrain build from
+    // `benches/benches/accel.rs`):
+    //   obvhs preset      closest Mrays/s   build 130 k   build 1 M
+    //   very_fast_build   2.9 - 3.1         47 - 62 ms    0.46 s
+    //   fast_build        3.3 - 3.5         63 - 75 ms    0.53 s
+    //   medium_build      2.0 - 3.0         62 - 110 ms   0.60 s
+    //   slow_build        2.3 - 2.7         110 - 160 ms  (not benched)
+    // so the default is fast_build. More PLOC search and reinsertion bought no traversal speed on
+    // this scene; High keeps medium_build for scenes with more overlap (unmeasured). Spatial
+    // pre-splits are never used: they clip triangle boxes with rounded planes, which would void
+    // the conservative box test.
+    let mut p = match quality {
+        BvhQuality::Fast => BvhBuildParams::very_fast_build(),
+        BvhQuality::Medium => BvhBuildParams::fast_build(),
+        BvhQuality::High => BvhBuildParams::medium_build(),
+    };
+    p.pre_split = false;
+    p.max_prims_per_leaf = 3;
+    p
+}
+
+fn build_cwbvh(aabbs: &[Aabb], quality: BvhQuality) -> (Vec<CwBvhNode>, Vec<u32>) {
+    if aabbs.is_empty() {
+        return (Vec::new(), Vec::new());
+    }
+    let p = build_params(quality);
+    let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
+        p.ploc_search_distance,
+        aabbs,
+        (0..aabbs.len() as u32).collect(),
+        p.sort_precision,
+        p.search_depth_threshold,
+    );
+    ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
+    let cw = bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf, true, false);
+    (cw.nodes, cw.primitive_indices)
+}
+
+/// Why a triangle is left out.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum TriCheck {
+    Ok([Vec3; 3]),
+    OutOfRange,
+    Degenerate,
+}
+
+fn check_triangle(positions: &[Vec3], tri: [u32; 3]) -> TriCheck {
+    let mut p = [Vec3::ZERO; 3];
+    for k in 0..3 {
+        match positions.get(tri[k] as usize) {
+            Some(v) => p[k] = *v,
+            None => return TriCheck::OutOfRange,
+        }
+    }
+    classify(p)
+}
+
+fn classify(p: [Vec3; 3]) -> TriCheck {
+    if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
+        return TriCheck::Degenerate;
+    }
+    // In f64 the edges of f32 points and their products are exact, so this is exactly "the
+    // three points are collinear", without a tolerance that would depend on the scene's scale.
+    let [a, b, c] = p.map(|v| v.as_dvec3());
+    if (b - a).cross(c - a) == glam::DVec3::ZERO {
+        return TriCheck::Degenerate;
+    }
+    TriCheck::Ok(p)
+}
+
+fn aabb_of(p: &[Vec3; 3]) -> Aabb {
+    let lo = p[0].min(p[1]).min(p[2]);
+    let hi = p[0].max(p[1]).max(p[2]);
+    Aabb::new(lo.into(), hi.into())
+}
+
+/// Builds one bottom-level BVH from kept triangles (`(vertices, original index, instance)`).
+fn build_blas(tris: Vec<(Tri, u32)>, quality: BvhQuality, keep_instance: bool) -> Blas {
+    let aabbs: Vec<Aabb> = tris.iter().map(|(t, _)| aabb_of(&t.p)).collect();
+    let (nodes, order) = build_cwbvh(&aabbs, quality);
+    drop(aabbs);
+    let bounds = tris.iter().fold(None, |acc: Option<(Vec3, Vec3)>, (t, _)| {
+        let (lo, hi) = (
+            t.p[0].min(t.p[1]).min(t.p[2]),
+            t.p[0].max(t.p[1]).max(t.p[2]),
+        );
+        Some(acc.map_or((lo, hi), |(a, b)| (a.min(lo), b.max(hi))))
+    });
+    let ordered: Vec<Tri> = order.iter().map(|&i| tris[i as usize].0).collect();
+    let tri_instance = if keep_instance {
+        order.iter().map(|&i| tris[i as usize].1).collect()
+    } else {
+        Vec::new()
+    };
+    let depth = cwbvh_depth(&nodes);
+    let box_bounds = bounds.unwrap_or((Vec3::ZERO, Vec3::ZERO));
+    Blas {
+        nodes,
+        tris: ordered,
+        tri_instance,
+        depth,
+        bounds,
+        box_bounds,
+    }
+}
+
+/// World bounds of an object-space box, widened by a relative margin so that rounding in the
+/// transform (of the box here, of the ray at query time) cannot make the box miss a hit.
+fn world_bounds(world_from_object: &Affine3A, (lo, hi): (Vec3, Vec3)) -> Aabb {
+    let mut wlo = Vec3::splat(f32::INFINITY);
+    let mut whi = Vec3::splat(f32::NEG_INFINITY);
+    for k in 0..8 {
+        let c = Vec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        );
+        let w = world_from_object.transform_point3(c);
+        wlo = wlo.min(w);
+        whi = whi.max(w);
+    }
+    let margin = 1e-5
+        * wlo
+            .abs()
+            .max(whi.abs())
+            .max_element()
+            .max(f32::MIN_POSITIVE);
+    Aabb::new((wlo - margin).into(), (whi + margin).into())
+}
+
+/// `object_from_world` for a usable instance transform, computed in f64 for accuracy.
+fn invert(world_from_object: &Affine3A) -> Option<Affine3A> {
+    let m = world_from_object;
+    if !(m.matrix3.is_finite() && m.translation.is_finite()) {
+        return None;
+    }
+    let d = glam::DAffine3::from_mat3_translation(m.matrix3.as_dmat3(), m.translation.as_dvec3());
+    let det = d.matrix3.determinant();
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv = d.inverse();
+    let f = Affine3A::from_mat3_translation(inv.matrix3.as_mat3(), inv.translation.as_vec3());
+    (f.matrix3.is_finite() && f.translation.is_finite()).then_some(f)
+}
+
 impl Accel {
-    /// Builds the structure. Placeholder: brute force until the BVH lands.
+    /// Builds the structure with obvhs (PLOC, reinsertion, CWBVH conversion) for each mesh drawn
+    /// more than once, one world-space BVH for the meshes drawn once, and a top-level BVH over the
+    /// instances. Invalid input is left out and counted in [`Accel::stats`], never a panic.
     pub fn build(
         meshes: &[MeshInput<'_>],
         instances: &[InstanceInput],
         quality: BvhQuality,
     ) -> Self {
-        let _ = quality;
-        let meshes: Vec<_> = meshes
-            .iter()
-            .map(|m| (m.positions.to_vec(), m.indices.to_vec()))
+        let start = std::time::Instant::now();
+        let mut stats = AccelStats::default();
+
+        // Usable instances and how often each mesh is drawn.
+        let mut usable: Vec<(u32, InstanceInput, Affine3A)> = Vec::with_capacity(instances.len());
+        let mut uses = vec![0u32; meshes.len()];
+        for (i, inst) in instances.iter().enumerate() {
+            let inv = invert(&inst.world_from_object);
+            match (meshes.get(inst.mesh as usize), inv) {
+                (Some(_), Some(inv)) => {
+                    uses[inst.mesh as usize] += 1;
+                    usable.push((i as u32, *inst, inv));
+                }
+                _ => stats.skipped_instances += 1,
+            }
+        }
+
+        // Per mesh: validity counts, and the kept triangles of meshes drawn more than once.
+        struct Checked {
+            shared: Vec<(Tri, u32)>,
+            kept: usize,
+            degenerate: usize,
+            out_of_range: usize,
+        }
+        let checked: Vec<Checked> = meshes
+            .par_iter()
+            .enumerate()
+            .map(|(m, mesh)| {
+                let mut c = Checked {
+                    shared: Vec::new(),
+                    kept: 0,
+                    degenerate: 0,
+                    out_of_range: 0,
+                };
+                for (i, tri) in mesh.indices.iter().enumerate() {
+                    match check_triangle(mesh.positions, *tri) {
+                        TriCheck::Ok(p) => {
+                            c.kept += 1;
+                            if uses[m] > 1 {
+                                c.shared.push((Tri { p, prim: i as u32 }, 0));
+                            }
+                        }
+                        TriCheck::OutOfRange => c.out_of_range += 1,
+                        TriCheck::Degenerate => c.degenerate += 1,
+                    }
+                }
+                c
+            })
             .collect();
-        let unique_triangles = meshes.iter().map(|m| m.1.len()).sum();
+
+        // Meshes drawn once: their triangles moved into world space, tagged with the instance.
+        let mut flat: Vec<(Tri, u32)> = Vec::new();
+        for (id, inst, _) in &usable {
+            let m = inst.mesh as usize;
+            if uses[m] != 1 {
+                continue;
+            }
+            stats.flattened_instances += 1;
+            let mesh = &meshes[m];
+            let world: Vec<Vec3> = mesh
+                .positions
+                .iter()
+                .map(|p| inst.world_from_object.transform_point3(*p))
+                .collect();
+            for (i, tri) in mesh.indices.iter().enumerate() {
+                // Triangles that only become degenerate in world space (rounding) are counted too.
+                match check_triangle(&world, *tri) {
+                    TriCheck::Ok(p) => flat.push((Tri { p, prim: i as u32 }, *id)),
+                    TriCheck::Degenerate
+                        if check_triangle(mesh.positions, *tri) != TriCheck::Degenerate =>
+                    {
+                        stats.degenerate_triangles += 1
+                    }
+                    _ => {}
+                }
+            }
+        }
+
+        for (m, c) in checked.iter().enumerate() {
+            stats.degenerate_triangles += c.degenerate;
+            stats.invalid_index_triangles += c.out_of_range;
+            if uses[m] > 0 {
+                stats.unique_triangles += c.kept;
+                stats.drawn_triangles += c.kept * uses[m] as usize;
+            }
+        }
+
+        // Bottom-level BVHs, built in parallel: index 0 is the flattened one (if any).
+        let has_flat = !flat.is_empty();
+        let mut jobs: Vec<(Vec<(Tri, u32)>, bool)> = Vec::new();
+        if has_flat {
+            jobs.push((flat, true));
+        }
+        let mut blas_of_mesh = vec![u32::MAX; meshes.len()];
+        for (m, c) in checked.into_iter().enumerate() {
+            if uses[m] > 1 && !c.shared.is_empty() {
+                blas_of_mesh[m] = jobs.len() as u32;
+                jobs.push((c.shared, false));
+            }
+        }
+        let blases: Vec<Blas> = jobs
+            .into_par_iter()
+            .map(|(tris, keep_instance)| build_blas(tris, quality, keep_instance))
+            .collect();
+
+        // Top-level entries and their world bounds.
+        let mut entries = Vec::new();
+        let mut bounds = Vec::new();
+        if has_flat {
+            if let Some(b) = blases[0].bounds {
+                entries.push(Entry {
+                    blas: 0,
+                    instance: FLATTENED,
+                    object_from_world: Affine3A::IDENTITY,
+                    identity: true,
+                });
+                bounds.push(world_bounds(&Affine3A::IDENTITY, b));
+            }
+        }
+        for (id, inst, inv) in &usable {
+            let b = blas_of_mesh[inst.mesh as usize];
+            if b == u32::MAX {
+                continue;
+            }
+            let Some(bb) = blases[b as usize].bounds else {
+                continue;
+            };
+            entries.push(Entry {
+                blas: b,
+                instance: *id,
+                object_from_world: *inv,
+                identity: false,
+            });
+            bounds.push(world_bounds(&inst.world_from_object, bb));
+        }
+        let (tlas, order) = if entries.len() > 1 {
+            build_cwbvh(&bounds, quality)
+        } else {
+            (Vec::new(), (0..entries.len() as u32).collect())
+        };
+        let entries: Vec<Entry> = order.iter().map(|&i| entries[i as usize]).collect();
+        let tlas_bounds = bounds
+            .iter()
+            .map(|b| (Vec3::from(b.min), Vec3::from(b.max)))
+            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
+            .unwrap_or((Vec3::ZERO, Vec3::ZERO));
+        let tlas_depth = cwbvh_depth(&tlas);
+        let max_blas_depth = blases.iter().map(|b| b.depth).max().unwrap_or(0);
+        let mut instance_magnitude = vec![0.0f32; instances.len()];
+        for (id, inst, _) in &usable {
+            let mesh = &meshes[inst.mesh as usize];
+            let obj = mesh
+                .positions
+                .iter()
+                .filter(|p| p.is_finite())
+                .fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+            let m = &inst.world_from_object;
+            let rows = m.matrix3.transpose();
+            let norm = [rows.x_axis, rows.y_axis, rows.z_axis]
+                .iter()
+                .map(|r| r.abs().element_sum())
+                .fold(0.0f32, f32::max);
+            instance_magnitude[*id as usize] = m.translation.abs().max_element() + norm * obj;
+        }
+
+        stats.blas_count = blases.len();
+        stats.tlas_entries = entries.len();
+        stats.bvh_nodes = tlas.len() + blases.iter().map(|b| b.nodes.len()).sum::<usize>();
+        stats.max_blas_depth = max_blas_depth;
+        stats.memory_bytes = blases
+            .iter()
+            .map(|b| {
+                b.nodes.len() * size_of::<CwBvhNode>()
+                    + b.tris.len() * size_of::<Tri>()
+                    + b.tri_instance.len() * 4
+            })
+            .sum::<usize>()
+            + tlas.len() * size_of::<CwBvhNode>()
+            + entries.len() * size_of::<Entry>();
+        stats.build_time = start.elapsed();
         Self {
-            meshes,
-            instances: instances.to_vec(),
-            stats: AccelStats {
-                degenerate_triangles: 0,
-                unique_triangles,
-            },
+            blases,
+            entries,
+            tlas,
+            tlas_depth,
+            tlas_bounds,
+            max_blas_depth,
+            instance_magnitude,
+            avx2: detect_avx2(),
+            stats,
+        }
+    }
+
+    /// The world position of `hit` (found by `ray`) with a bound on its error, for spawning
+    /// secondary rays with [`SpawnPoint::origin`].
+    pub fn spawn_point(&self, ray: &Ray, hit: &Hit) -> SpawnPoint {
+        let p = ray.origin + ray.dir * hit.t;
+        let ray_part = ray.origin.abs().max_element() + (ray.dir * hit.t).abs().max_element();
+        let transform_part = self
+            .instance_magnitude
+            .get(hit.instance as usize)
+            .copied()
+            .unwrap_or(0.0);
+        // A few roundings of each magnitude: o + t d (2), the triangle test's t (a few), and the
+        // object/world transforms of the ray and of the vertices (about 3 each).
+        SpawnPoint {
+            p,
+            error: 16.0 * f32::EPSILON * (ray_part + transform_part),
         }
     }
 
@@ -133,56 +773,222 @@ impl Accel {
 
     /// The closest hit in `[ray.tmin, ray.tmax]`, if any.
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if self.avx2 {
+            self.intersect_impl::<true>(ray)
+        } else {
+            self.intersect_impl::<false>(ray)
+        }
+    }
+
+    /// True when anything lies in `[ray.tmin, ray.tmax]`.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        if self.avx2 {
+            self.occluded_impl::<true>(ray)
+        } else {
+            self.occluded_impl::<false>(ray)
+        }
+    }
+
+    #[inline(always)]
+    fn intersect_impl<const AVX2: bool>(&self, ray: &Ray) -> Option<Hit> {
+        let mut best = None;
+        let mut tmax = ray.tmax;
+        with_stack(self.max_blas_depth, |blas_stack| {
+            self.for_entries::<AVX2>(ray, &mut tmax, |entry, tmax| {
+                if let Some(hit) = self.intersect_entry::<AVX2>(entry, ray, tmax, blas_stack) {
+                    best = Some(hit);
+                }
+                false
+            });
+        });
+        best
+    }
+
+    #[inline(always)]
+    fn occluded_impl<const AVX2: bool>(&self, ray: &Ray) -> bool {
+        let mut tmax = ray.tmax;
+        with_stack(self.max_blas_depth, |blas_stack| {
+            self.for_entries::<AVX2>(ray, &mut tmax, |entry, _| {
+                self.occluded_entry::<AVX2>(entry, ray, blas_stack)
+            })
+        })
+    }
+
+    /// [`Accel::intersect`] for many rays, in parallel on the current rayon pool.
+    /// `out` receives one result per ray (extra slots on either side are left alone).
+    pub fn intersect_many(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        rays.par_iter()
+            .zip(out.par_iter_mut())
+            .with_min_len(256)
+            .for_each(|(r, o)| *o = self.intersect(r));
+    }
+
+    /// [`Accel::occluded`] for many rays, in parallel on the current rayon pool.
+    pub fn occluded_many(&self, rays: &[Ray], out: &mut [bool]) {
+        rays.par_iter()
+            .zip(out.par_iter_mut())
+            .with_min_len(256)
+            .for_each(|(r, o)| *o = self.occluded(r));
+    }
+
+    /// Calls `f(entry, &mut tmax)` for the top-level entries whose bounds the ray may cross.
+    #[inline(always)]
+    fn for_entries<const AVX2: bool>(
+        &self,
+        ray: &Ray,
+        tmax: &mut f32,
+        mut f: impl FnMut(&Entry, &mut f32) -> bool,
+    ) -> bool {
+        match self.entries.len() {
+            0 => false,
+            1 => f(&self.entries[0], tmax),
+            _ => {
+                let r = BoxRay::new(ray.origin, ray.dir, ray.tmin, self.tlas_bounds);
+                with_stack(self.tlas_depth, |stack| {
+                    traverse::<AVX2>(&self.tlas, &r, tmax, stack, |i, tmax| {
+                        match self.entries.get(i as usize) {
+                            Some(e) => f(e, tmax),
+                            None => false,
+                        }
+                    })
+                })
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn object_ray(entry: &Entry, ray: &Ray) -> (Vec3, Vec3) {
+        if entry.identity {
+            (ray.origin, ray.dir)
+        } else {
+            (
+                entry.object_from_world.transform_point3(ray.origin),
+                entry.object_from_world.transform_vector3(ray.dir),
+            )
+        }
+    }
+
+    #[inline(always)]
+    fn make_hit(blas: &Blas, entry: &Entry, i: usize, (t, u, v): (f32, f32, f32)) -> Hit {
+        let instance = if entry.instance == FLATTENED {
+            blas.tri_instance.get(i).copied().unwrap_or(FLATTENED)
+        } else {
+            entry.instance
+        };
+        Hit {
+            t,
+            instance,
+            triangle: blas.tris[i].prim,
+            u,
+            v,
+        }
+    }
+
+    #[inline(always)]
+    fn intersect_entry<const AVX2: bool>(
+        &self,
+        entry: &Entry,
+        ray: &Ray,
+        tmax: &mut f32,
+        stack: &mut [Group],
+    ) -> Option<Hit> {
+        let blas = self.blases.get(entry.blas as usize)?;
+        let (o, d) = Self::object_ray(entry, ray);
+        let br = BoxRay::new(o, d, ray.tmin, blas.box_bounds);
+        let tr = TriRay::new(o, d);
+        let mut best = None;
+        traverse::<AVX2>(&blas.nodes, &br, tmax, stack, |i, tmax| {
+            if let Some(tri) = blas.tris.get(i as usize) {
+                if let Some(h) =
+                    triangle::intersect(&tr, tri.p[0], tri.p[1], tri.p[2], ray.tmin, *tmax)
+                {
+                    *tmax = h.0;
+                    best = Some((i as usize, h));
+                }
+            }
+            false
+        });
+        best.map(|(i, h)| Self::make_hit(blas, entry, i, h))
+    }
+
+    #[inline(always)]
+    fn occluded_entry<const AVX2: bool>(
+        &self,
+        entry: &Entry,
+        ray: &Ray,
+        stack: &mut [Group],
+    ) -> bool {
+        let Some(blas) = self.blases.get(entry.blas as usize) else {
+            return false;
+        };
+        let (o, d) = Self::object_ray(entry, ray);
+        let br = BoxRay::new(o, d, ray.tmin, blas.box_bounds);
+        let tr = TriRay::new(o, d);
+        let mut tmax = ray.tmax;
+        traverse::<AVX2>(&blas.nodes, &br, &mut tmax, stack, |i, tmax| {
+            blas.tris.get(i as usize).is_some_and(|tri| {
+                triangle::intersect(&tr, tri.p[0], tri.p[1], tri.p[2], ray.tmin, *tmax).is_some()
+            })
+        })
+    }
+
+    /// The closest hit by testing every triangle of every instance, with the same ray transform
+    /// and triangle test as [`Accel::intersect`]. Slow: a reference for tests and debugging.
+    pub fn intersect_brute_force(&self, ray: &Ray) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let mut tmax = ray.tmax;
-        for (ii, inst) in self.instances.iter().enumerate() {
-            let Some((pos, idx)) = self.meshes.get(inst.mesh as usize) else {
+        for entry in &self.entries {
+            let Some(blas) = self.blases.get(entry.blas as usize) else {
                 continue;
             };
-            for (ti, tri) in idx.iter().enumerate() {
-                let p = tri.map(|i| inst.world_from_object.transform_point3(pos[i as usize]));
-                if let Some((t, u, v)) = moller_trumbore(ray, p, tmax) {
-                    tmax = t;
-                    best = Some(Hit {
-                        t,
-                        instance: ii as u32,
-                        triangle: ti as u32,
-                        u,
-                        v,
-                    });
+            let (o, d) = Self::object_ray(entry, ray);
+            let tr = TriRay::new(o, d);
+            for (i, tri) in blas.tris.iter().enumerate() {
+                if let Some(h) =
+                    triangle::intersect(&tr, tri.p[0], tri.p[1], tri.p[2], ray.tmin, tmax)
+                {
+                    tmax = h.0;
+                    best = Some(Self::make_hit(blas, entry, i, h));
                 }
             }
         }
         best
     }
 
-    /// True when anything lies in `[ray.tmin, ray.tmax]`.
-    pub fn occluded(&self, ray: &Ray) -> bool {
-        self.intersect(ray).is_some()
+    /// The world-space vertices of `triangle` of `instance` as the structure stores them (for
+    /// flattened meshes these are the exact world positions the intersection used).
+    /// `None` if that triangle was left out or does not exist.
+    pub fn triangle_world(&self, instance: u32, triangle: u32) -> Option<[Vec3; 3]> {
+        for entry in &self.entries {
+            let Some(blas) = self.blases.get(entry.blas as usize) else {
+                continue;
+            };
+            if entry.instance == FLATTENED {
+                let i = (0..blas.tris.len())
+                    .find(|&i| blas.tri_instance[i] == instance && blas.tris[i].prim == triangle)?;
+                return Some(blas.tris[i].p);
+            }
+            if entry.instance == instance {
+                let world_from_object = entry.object_from_world.inverse();
+                let t = blas.tris.iter().find(|t| t.prim == triangle)?;
+                return Some(t.p.map(|p| world_from_object.transform_point3(p)));
+            }
+        }
+        None
     }
-}
-
-fn moller_trumbore(ray: &Ray, p: [Vec3; 3], tmax: f32) -> Option<(f32, f32, f32)> {
-    let e1 = p[1] - p[0];
-    let e2 = p[2] - p[0];
-    let pv = ray.dir.cross(e2);
-    let det = e1.dot(pv);
-    if det == 0.0 || !det.is_finite() {
-        return None;
-    }
-    let inv = 1.0 / det;
-    let tv = ray.origin - p[0];
-    let u = tv.dot(pv) * inv;
-    let qv = tv.cross(e1);
-    let v = ray.dir.dot(qv) * inv;
-    let t = e2.dot(qv) * inv;
-    (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t >= ray.tmin && t <= tmax).then_some((t, u, v))
 }
 
 /// Moves a surface point off its surface along the geometric normal so that a ray leaving it
 /// cannot hit the same surface again (Wächter and Binder, Ray Tracing Gems ch. 6): the offset is
 /// a few float ulps of the point's magnitude, not a fixed epsilon. `n` need not face the ray;
 /// pass the normal flipped to the side the new ray leaves on.
+///
+/// It covers the rounding of a point computed from values of its own magnitude (barycentric
+/// interpolation of world-space vertices). Points on instanced meshes, or computed as
+/// `o + t d`, can carry more error; use [`Accel::spawn_point`] and [`SpawnPoint::origin`] there.
+/// Coordinates below 1/32 move by a fixed `n / 65536` (as in the paper), which is large
+/// compared with scenes of millimetre scale: harmless for self-intersection, but such scenes
+/// are better modelled in larger units.
 pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
     const ORIGIN: f32 = 1.0 / 32.0;
     const FLOAT_SCALE: f32 = 1.0 / 65536.0;
@@ -191,8 +997,15 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
     let pa = p.to_array();
     let mut out = [0.0f32; 3];
     for k in 0..3 {
+        // Wrapping: near zero (handled by the float branch below) or for huge normals the
+        // integer step may overflow; the paper's C relies on two's complement wrapping too.
         let bits = pa[k].to_bits() as i32;
-        let moved = bits + if pa[k] < 0.0 { -of_i[k] } else { of_i[k] };
+        let step = if pa[k] < 0.0 {
+            of_i[k].wrapping_neg()
+        } else {
+            of_i[k]
+        };
+        let moved = bits.wrapping_add(step);
         let p_i = f32::from_bits(moved as u32);
         out[k] = if pa[k].abs() < ORIGIN {
             pa[k] + FLOAT_SCALE * n[k]

@@ -1,6 +1,7 @@
 //! `aperture`: render glTF scenes with physically based depth of field.
 
 mod info;
+mod progress;
 mod render_cmd;
 
 use clap::{Parser, Subcommand};
@@ -8,13 +9,13 @@ use clap::{Parser, Subcommand};
 /// Physically based depth-of-field renderer for glTF 2.0 scenes.
 #[derive(Parser)]
 #[command(name = "aperture", version, about)]
-struct Cli {
+pub(crate) struct Cli {
     #[command(subcommand)]
     command: Command,
 }
 
 #[derive(Subcommand)]
-enum Command {
+pub(crate) enum Command {
     /// Print what a scene contains and how its cameras resolve.
     Info(info::InfoArgs),
     /// Render a scene to EXR or PNG.

@@ -1,6 +1,41 @@
-//! Camera, sampler, integrator and film: turns a scene and its acceleration structure into an image.
+//! Camera, sampler, integrator and film: turns a scene and its acceleration structure into an
+//! image.
 //!
 //! ```
-//! // The render core is being written; see the issue tracker.
-//! assert_eq!(2 + 2, 4);
+//! use aperture_render::{build_accel, render, test_scenes, RenderOptions};
+//! // A white diffuse quad under a point light, seen by a thin-lens camera.
+//! let scene = test_scenes::lit_plane(1.0);
+//! let accel = build_accel(&scene, Default::default());
+//! let opts = RenderOptions { width: 8, height: 8, spp: 4, ..Default::default() };
+//! let film = render(&scene, &accel, &opts, &|_, _| {})?;
+//! assert_eq!(film.dropped_samples(), 0);
+//! assert!(film.pixel(4, 4)[0] > 0.0);
+//! # Ok::<(), aperture_render::RenderError>(())
 //! ```
+//!
+//! The pieces follow pbrt-v4's split: a [`Camera`] turns numbers ([`CameraSample`]) into rays,
+//! a [`SamplerKind`] produces those numbers as pure functions of (pixel, index, dimension,
+//! seed), the path tracer turns rays into radiance and the [`Film`] sums it.
+
+mod bsdf;
+pub mod camera;
+mod film;
+mod filter;
+mod integrator;
+mod lights;
+mod render;
+pub mod sampler;
+mod surface;
+pub mod test_scenes;
+mod texture;
+
+pub use bsdf::{Bsdf, BsdfSample, Frame};
+pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, CameraSample};
+pub use film::{Film, PixelSum};
+pub use filter::{Filter, FilterKind};
+pub use render::{
+    build_accel, render, render_with_camera, RenderError, RenderOptions, DEFAULT_MAX_BOUNCES, TILE,
+};
+pub use sampler::{SampleStream, SamplerKind, MAX_SPP};
+pub use surface::MaterialOverride;
+pub use texture::{srgb_to_linear, transform_uv};

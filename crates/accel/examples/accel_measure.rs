@@ -1,0 +1,145 @@
+//! Measures the ray-query structure on a real scene: build time, statistics and single-thread
+//! closest-hit / occlusion throughput on ray files (the Embree anchor's format: little-endian
+//! f32, 6 per ray, `tmin = 0`, `tmax = ∞`), so our figures can be quoted as a ratio to Embree's
+//! on identical rays. Run under `/usr/bin/time -v` for peak resident memory.
+//!
+//! ```text
+//! cargo run --release -p aperture-accel --example accel_measure -- \
+//!     SCENE.gltf|SCENE.tris [--quality fast|medium|high] [--rays FILE]... [--build-only]
+//! ```
+//! `.tris` files are raw world-space triangles (little-endian f32, 9 per triangle), e.g. written
+//! from the Embree anchor's `gltf_io.py`; anything else goes through `aperture_scene::load`.
+
+use std::time::Instant;
+
+use aperture_accel::{Accel, BvhQuality, InstanceInput, MeshInput, Ray};
+use glam::{Affine3A, Vec3};
+
+/// Positions and triangles of one mesh.
+type Mesh = (Vec<Vec3>, Vec<[u32; 3]>);
+
+fn read_f32s(path: &str) -> Vec<f32> {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    bytes
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut scene_path = None;
+    let mut quality = BvhQuality::default();
+    let mut ray_files = Vec::new();
+    let mut build_only = false;
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--quality" => {
+                quality = it
+                    .next()
+                    .expect("--quality VALUE")
+                    .parse()
+                    .expect("quality")
+            }
+            "--rays" => ray_files.push(it.next().expect("--rays FILE").clone()),
+            "--build-only" => build_only = true,
+            _ => scene_path = Some(a.clone()),
+        }
+    }
+    let scene_path = scene_path.expect("usage: accel_measure SCENE [--quality Q] [--rays FILE]...");
+
+    let t0 = Instant::now();
+    let (meshes, instances): (Vec<Mesh>, Vec<InstanceInput>) = if scene_path.ends_with(".tris") {
+        let f = read_f32s(&scene_path);
+        let pos: Vec<Vec3> = f.chunks_exact(3).map(Vec3::from_slice).collect();
+        let idx = (0..pos.len() as u32 / 3)
+            .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+            .collect();
+        (
+            vec![(pos, idx)],
+            vec![InstanceInput {
+                mesh: 0,
+                world_from_object: Affine3A::IDENTITY,
+            }],
+        )
+    } else {
+        let s = aperture_scene::load(scene_path.as_ref(), &Default::default())
+            .unwrap_or_else(|e| panic!("{scene_path}: {e}"));
+        let instances = s
+            .instances
+            .iter()
+            .map(|i| InstanceInput {
+                mesh: i.mesh,
+                world_from_object: i.world_from_object,
+            })
+            .collect();
+        (
+            s.meshes
+                .into_iter()
+                .map(|m| (m.positions, m.indices))
+                .collect(),
+            instances,
+        )
+    };
+    let load_s = t0.elapsed().as_secs_f64();
+    let inputs: Vec<MeshInput> = meshes
+        .iter()
+        .map(|(p, i)| MeshInput {
+            positions: p,
+            indices: i,
+        })
+        .collect();
+    let mut builds = Vec::new();
+    let mut accel = None;
+    for _ in 0..if build_only { 1 } else { 5 } {
+        let a = Accel::build(&inputs, &instances, quality);
+        builds.push(a.stats().build_time.as_secs_f64());
+        accel = Some(a);
+    }
+    let accel = accel.expect("built");
+    println!("scene {scene_path} (loaded in {load_s:.3} s), quality {quality}");
+    println!(
+        "build median {:.4} s over {} builds",
+        median(builds.clone()),
+        builds.len()
+    );
+    println!("{:#?}", accel.stats());
+
+    for file in &ray_files {
+        let f = read_f32s(file);
+        let rays: Vec<Ray> = f
+            .chunks_exact(6)
+            .map(|r| Ray::new(Vec3::from_slice(&r[0..3]), Vec3::from_slice(&r[3..6])))
+            .collect();
+        let n = rays.len() as f64;
+        // One thread, one query at a time (as Embree's rtcIntersect1 loop is measured).
+        let mut closest = Vec::new();
+        let mut occluded = Vec::new();
+        let mut hits = 0;
+        for _ in 0..3 {
+            let t = Instant::now();
+            hits = rays.iter().filter(|r| accel.intersect(r).is_some()).count();
+            closest.push(n / t.elapsed().as_secs_f64() / 1e6);
+            let t = Instant::now();
+            let occ = rays.iter().filter(|r| accel.occluded(r)).count();
+            occluded.push(n / t.elapsed().as_secs_f64() / 1e6);
+            assert_eq!(occ, hits, "occlusion disagrees with closest hit");
+        }
+        let best = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+        println!(
+            "{file}: {} rays, hit fraction {:.4}, 1 thread: closest {:.3} Mrays/s, occluded {:.3} Mrays/s (median of 3); best of 3 (Embree's statistic): closest {:.3}, occluded {:.3}",
+            rays.len(),
+            hits as f64 / n,
+            median(closest.clone()),
+            median(occluded.clone()),
+            best(&closest),
+            best(&occluded)
+        );
+    }
+}

@@ -1,0 +1,444 @@
+//! Conservative ray test against the eight quantised child boxes of an obvhs `CwBvhNode`.
+//!
+//! obvhs' own test clamps the entry distance to a fixed `1e-4` instead of `ray.tmin` and does not
+//! account for rounding, so hits are lost at small scales. This one honours `[tmin, tmax]` and
+//! widens every slab by a bound on all rounding errors involved:
+//! - obvhs quantises child boxes as `floor((child.min - p) / e)`, where the subtraction is rounded:
+//!   the stored box can be short of the true one by one rounding of a value below `255 e`;
+//! - the slab distances are evaluated as `q * (e / d) + (p - o) / d` (about four roundings);
+//! - the triangle test itself accepts hits up to a few ulps of `|v - o|` outside the triangle,
+//!   in any axis (the shear mixes them), so the box must accept at least as much.
+//!
+//! All of these are below `K ε M` in space, where `M` bounds the largest coordinate of `|p - o|`
+//! plus the node's extent. `M` is taken once per ray and tree as the largest coordinate of
+//! `|corner - o|` over the tree's bounds plus three times its extent (so the slack costs nothing
+//! per node and stays tight when the scene sits far from the world origin), and each slab
+//! is widened by `K ε M / |d_axis|` in `t` (Ize 2013 scales `tmax` by `1 + 2γ` for the same
+//! purpose; an absolute bound also covers rays that start inside a box).
+
+use glam::{Vec3, Vec3A};
+use obvhs::cwbvh::node::CwBvhNode;
+
+/// Relative spatial slack of the box test (see the module docs); 64 ulps at unit scale, which
+/// costs nothing measurable in traversal.
+const SLACK: f32 = 64.0 * f32::EPSILON;
+
+/// Largest magnitude of a reciprocal direction component: zero components become this (keeping
+/// their sign), so slab products stay finite and `0 * inf` never makes a NaN.
+const INV_LIMIT: f32 = 1e20;
+
+/// A ray prepared for box tests.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct BoxRay {
+    pub origin: Vec3A,
+    pub inv: Vec3A,
+    /// Per axis, whether the direction is negative (the far plane is the box minimum).
+    pub neg: [bool; 3],
+    /// obvhs' child-ordering key for this direction.
+    pub oct_inv4: u32,
+    pub tmin: f32,
+    /// Per-axis widening of every slab, in `t` (see the module docs).
+    pub slack: Vec3A,
+}
+
+impl BoxRay {
+    /// `bounds`: the tree's bounding box (sizes the rounding slack).
+    #[inline]
+    pub fn new(origin: Vec3, dir: Vec3, tmin: f32, (lo, hi): (Vec3, Vec3)) -> Self {
+        let inv = dir.to_array().map(|d| {
+            let i = 1.0 / d;
+            if i.is_finite() {
+                i.clamp(-INV_LIMIT, INV_LIMIT)
+            } else if d.is_sign_negative() {
+                -INV_LIMIT
+            } else {
+                INV_LIMIT
+            }
+        });
+        let neg = inv.map(|i| i < 0.0);
+        let oct_inv4 = (if neg[0] { 0 } else { 0x0404_0404 })
+            | (if neg[1] { 0 } else { 0x0202_0202 })
+            | (if neg[2] { 0 } else { 0x0101_0101 });
+        let inv = Vec3A::from_array(inv);
+        let m = (lo - origin).abs().max((hi - origin).abs()).max_element()
+            + 3.0 * (hi - lo).max_element();
+        Self {
+            origin: origin.into(),
+            inv,
+            neg,
+            oct_inv4,
+            tmin,
+            slack: inv.abs() * (SLACK * m),
+        }
+    }
+}
+
+/// Per-node constants of the slab test: `t = q * scale + offset_{lo,hi}` per axis.
+#[derive(Clone, Copy)]
+struct NodeFrame {
+    scale: Vec3A,
+    off_lo: Vec3A,
+    off_hi: Vec3A,
+}
+
+#[inline(always)]
+fn frame(node: &CwBvhNode, r: &BoxRay) -> NodeFrame {
+    let e = Vec3A::new(
+        f32::from_bits((node.e[0] as u32) << 23),
+        f32::from_bits((node.e[1] as u32) << 23),
+        f32::from_bits((node.e[2] as u32) << 23),
+    );
+    let off = (Vec3A::from(node.p) - r.origin) * r.inv;
+    NodeFrame {
+        scale: e * r.inv,
+        off_lo: off - r.slack,
+        off_hi: off + r.slack,
+    }
+}
+
+/// obvhs' encoding of a child hit into the node hit mask: internal children set a bit in the top
+/// byte (at their traversal priority), leaves set their primitives' bits in the low 24 bits.
+#[inline(always)]
+fn hitmask_from_children(node: &CwBvhNode, oct_inv4: u32, mut hit8: u32) -> u32 {
+    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+    let mut mask = 0u32;
+    while hit8 != 0 {
+        let c = hit8.trailing_zeros() as usize;
+        hit8 &= hit8 - 1;
+        let bits = ((child_bits8 >> (c * 8)) & 0xff) as u32;
+        let index = ((bit_index8 >> (c * 8)) & 0xff) as u32;
+        mask |= bits << index;
+    }
+    mask
+}
+
+/// The node's hit mask for `[r.tmin, tmax]`, in obvhs' encoding.
+#[inline(always)]
+pub(crate) fn intersect_node(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
+    let f = frame(node, r);
+    let hit8 = child_hits(node, r, &f, tmax);
+    hitmask_from_children(node, r.oct_inv4, hit8)
+}
+
+/// [`intersect_node`] testing all eight children at once with AVX2.
+///
+/// A real call (not inlined into the traversal): the traversal's closures cannot inherit a
+/// target feature, so this function carries it and its intrinsics inline here.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub(crate) unsafe fn intersect_node_avx2(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
+    let f = frame(node, r);
+    // SAFETY: forwarded from the caller.
+    let hit8 = unsafe { child_hits_avx2(node, r, &f, tmax) };
+    hitmask_from_children(node, r.oct_inv4, hit8)
+}
+
+/// The SSE2 test below, eight lanes wide: the same operations in the same order (separate
+/// multiply and add, never fused; `max`/`min`/ordered `<=` with the same NaN behaviour), so both
+/// paths give identical masks.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn child_hits_avx2(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
+    use std::arch::x86_64::*;
+    // SAFETY: AVX2 is guaranteed by the caller; each load reads exactly one `[u8; 8]` field.
+    unsafe {
+        #[inline(always)]
+        unsafe fn load8(b: &[u8; 8]) -> __m256 {
+            // SAFETY: as above.
+            unsafe {
+                _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(
+                    b.as_ptr() as *const __m128i
+                )))
+            }
+        }
+        // Macros, not closures: closures do not inherit the caller's target features, and an
+        // AVX2 intrinsic that is not inlined costs a call per instruction.
+        macro_rules! pick {
+            ($neg:expr, $lo:expr, $hi:expr) => {
+                if $neg {
+                    (load8($hi), load8($lo))
+                } else {
+                    (load8($lo), load8($hi))
+                }
+            };
+        }
+        macro_rules! t {
+            ($q:expr, $s:expr, $o:expr) => {
+                _mm256_add_ps(_mm256_mul_ps($q, _mm256_set1_ps($s)), _mm256_set1_ps($o))
+            };
+        }
+        let (nx, fx) = pick!(r.neg[0], &node.child_min_x, &node.child_max_x);
+        let (ny, fy) = pick!(r.neg[1], &node.child_min_y, &node.child_max_y);
+        let (nz, fz) = pick!(r.neg[2], &node.child_min_z, &node.child_max_z);
+        let enter = _mm256_max_ps(
+            _mm256_max_ps(_mm256_set1_ps(r.tmin), t!(nx, f.scale.x, f.off_lo.x)),
+            _mm256_max_ps(t!(ny, f.scale.y, f.off_lo.y), t!(nz, f.scale.z, f.off_lo.z)),
+        );
+        let exit = _mm256_min_ps(
+            _mm256_min_ps(_mm256_set1_ps(tmax), t!(fx, f.scale.x, f.off_hi.x)),
+            _mm256_min_ps(t!(fy, f.scale.y, f.off_hi.y), t!(fz, f.scale.z, f.off_hi.z)),
+        );
+        _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)) as u32
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn child_hits(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
+    use std::arch::x86_64::*;
+    // SAFETY: SSE2 is part of the x86_64 baseline; the loads read exactly 8 bytes of `[u8; 8]`
+    // fields.
+    unsafe {
+        #[inline(always)]
+        unsafe fn load8(b: &[u8; 8]) -> (__m128, __m128) {
+            // SAFETY: `b` is 8 readable bytes; SSE2 is baseline.
+            unsafe {
+                let z = _mm_setzero_si128();
+                let v = _mm_loadl_epi64(b.as_ptr() as *const __m128i);
+                let v16 = _mm_unpacklo_epi8(v, z);
+                (
+                    _mm_cvtepi32_ps(_mm_unpacklo_epi16(v16, z)),
+                    _mm_cvtepi32_ps(_mm_unpackhi_epi16(v16, z)),
+                )
+            }
+        }
+        let (near_x, far_x) = if r.neg[0] {
+            (&node.child_max_x, &node.child_min_x)
+        } else {
+            (&node.child_min_x, &node.child_max_x)
+        };
+        let (near_y, far_y) = if r.neg[1] {
+            (&node.child_max_y, &node.child_min_y)
+        } else {
+            (&node.child_min_y, &node.child_max_y)
+        };
+        let (near_z, far_z) = if r.neg[2] {
+            (&node.child_max_z, &node.child_min_z)
+        } else {
+            (&node.child_min_z, &node.child_max_z)
+        };
+        let sx = _mm_set1_ps(f.scale.x);
+        let sy = _mm_set1_ps(f.scale.y);
+        let sz = _mm_set1_ps(f.scale.z);
+        let lx = _mm_set1_ps(f.off_lo.x);
+        let ly = _mm_set1_ps(f.off_lo.y);
+        let lz = _mm_set1_ps(f.off_lo.z);
+        let hx = _mm_set1_ps(f.off_hi.x);
+        let hy = _mm_set1_ps(f.off_hi.y);
+        let hz = _mm_set1_ps(f.off_hi.z);
+        let (nx0, nx1) = load8(near_x);
+        let (fx0, fx1) = load8(far_x);
+        let (ny0, ny1) = load8(near_y);
+        let (fy0, fy1) = load8(far_y);
+        let (nz0, nz1) = load8(near_z);
+        let (fz0, fz1) = load8(far_z);
+        let t0 = _mm_set1_ps(r.tmin);
+        let t1 = _mm_set1_ps(tmax);
+        // A NaN ray may enter boxes here (SSE max/min pass NaN through unevenly); it then misses
+        // every triangle, so only time is lost on input that is invalid anyway.
+        let enter0 = _mm_max_ps(
+            _mm_max_ps(t0, _mm_add_ps(_mm_mul_ps(nx0, sx), lx)),
+            _mm_max_ps(
+                _mm_add_ps(_mm_mul_ps(ny0, sy), ly),
+                _mm_add_ps(_mm_mul_ps(nz0, sz), lz),
+            ),
+        );
+        let exit0 = _mm_min_ps(
+            _mm_min_ps(t1, _mm_add_ps(_mm_mul_ps(fx0, sx), hx)),
+            _mm_min_ps(
+                _mm_add_ps(_mm_mul_ps(fy0, sy), hy),
+                _mm_add_ps(_mm_mul_ps(fz0, sz), hz),
+            ),
+        );
+        let enter1 = _mm_max_ps(
+            _mm_max_ps(t0, _mm_add_ps(_mm_mul_ps(nx1, sx), lx)),
+            _mm_max_ps(
+                _mm_add_ps(_mm_mul_ps(ny1, sy), ly),
+                _mm_add_ps(_mm_mul_ps(nz1, sz), lz),
+            ),
+        );
+        let exit1 = _mm_min_ps(
+            _mm_min_ps(t1, _mm_add_ps(_mm_mul_ps(fx1, sx), hx)),
+            _mm_min_ps(
+                _mm_add_ps(_mm_mul_ps(fy1, sy), hy),
+                _mm_add_ps(_mm_mul_ps(fz1, sz), hz),
+            ),
+        );
+        let m0 = _mm_movemask_ps(_mm_cmple_ps(enter0, exit0)) as u32;
+        let m1 = _mm_movemask_ps(_mm_cmple_ps(enter1, exit1)) as u32;
+        m0 | (m1 << 4)
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+#[inline(always)]
+fn child_hits(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
+    let mut hit8 = 0;
+    let lo = [&node.child_min_x, &node.child_min_y, &node.child_min_z];
+    let hi = [&node.child_max_x, &node.child_max_y, &node.child_max_z];
+    let scale = f.scale.to_array();
+    let off_lo = f.off_lo.to_array();
+    let off_hi = f.off_hi.to_array();
+    for c in 0..8 {
+        let mut enter = r.tmin;
+        let mut exit = tmax;
+        for a in 0..3 {
+            let (n, fa) = if r.neg[a] {
+                (hi[a][c], lo[a][c])
+            } else {
+                (lo[a][c], hi[a][c])
+            };
+            enter = enter.max(n as f32 * scale[a] + off_lo[a]);
+            exit = exit.min(fa as f32 * scale[a] + off_hi[a]);
+        }
+        if enter <= exit {
+            hit8 |= 1 << c;
+        }
+    }
+    hit8
+}
+
+/// Scalar reference of the same test, for unit tests.
+#[cfg(test)]
+pub(crate) fn child_hits_reference(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
+    let f = frame(node, r);
+    let mut hit8 = 0;
+    let lo = [&node.child_min_x, &node.child_min_y, &node.child_min_z];
+    let hi = [&node.child_max_x, &node.child_max_y, &node.child_max_z];
+    let scale = f.scale.to_array();
+    let off_lo = f.off_lo.to_array();
+    let off_hi = f.off_hi.to_array();
+    for c in 0..8 {
+        let mut enter = r.tmin;
+        let mut exit = tmax;
+        for a in 0..3 {
+            let (n, fa) = if r.neg[a] {
+                (hi[a][c], lo[a][c])
+            } else {
+                (lo[a][c], hi[a][c])
+            };
+            enter = enter.max(n as f32 * scale[a] + off_lo[a]);
+            exit = exit.min(fa as f32 * scale[a] + off_hi[a]);
+        }
+        if enter <= exit {
+            hit8 |= 1 << c;
+        }
+    }
+    hit8
+}
+
+#[cfg(test)]
+pub(crate) fn child_hits_fast(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
+    let f = frame(node, r);
+    child_hits(node, r, &f, tmax)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use obvhs::{aabb::Aabb, cwbvh::builder::build_cwbvh, BvhBuildParams};
+    use std::time::Duration;
+
+    fn lcg(s: &mut u64) -> f32 {
+        *s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*s >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    #[test]
+    fn simd_matches_scalar_reference() {
+        let mut s = 7u64;
+        let boxes: Vec<Aabb> = (0..500)
+            .map(|_| {
+                let c = Vec3A::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 100.0;
+                let h = Vec3A::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 3.0;
+                Aabb::new(c - h, c + h)
+            })
+            .collect();
+        let bvh = build_cwbvh(
+            &boxes,
+            BvhBuildParams::fast_build(),
+            &mut Duration::default(),
+        );
+        let mut nonzero = 0;
+        for i in 0..2000 {
+            let o = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 120.0 - 10.0;
+            let mut d = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) - 0.5;
+            if i % 5 == 0 {
+                d.y = 0.0; // exercises the clamped reciprocal
+            }
+            let r = BoxRay::new(
+                o,
+                d,
+                if i % 3 == 0 { 5.0 } else { 0.0 },
+                (Vec3::splat(-10.0), Vec3::splat(110.0)),
+            );
+            let tmax = if i % 4 == 0 { 50.0 } else { f32::INFINITY };
+            for node in &bvh.nodes {
+                let a = child_hits_fast(node, &r, tmax);
+                assert_eq!(a, child_hits_reference(node, &r, tmax));
+                #[cfg(target_arch = "x86_64")]
+                if std::arch::is_x86_feature_detected!("avx2") {
+                    let f = frame(node, &r);
+                    // SAFETY: AVX2 was detected.
+                    assert_eq!(a, unsafe { child_hits_avx2(node, &r, &f, tmax) });
+                }
+                nonzero += (a != 0) as usize;
+            }
+        }
+        assert!(nonzero > 100);
+    }
+
+    #[test]
+    fn honours_tmin() {
+        // obvhs' own test ignores tmin; this one must reject boxes entirely before it.
+        let boxes = vec![
+            Aabb::new(Vec3A::new(0.0, -1.0, -1.0), Vec3A::new(1.0, 1.0, 1.0)),
+            Aabb::new(Vec3A::new(10.0, -1.0, -1.0), Vec3A::new(11.0, 1.0, 1.0)),
+        ];
+        let bvh = build_cwbvh(
+            &boxes,
+            BvhBuildParams::fast_build(),
+            &mut Duration::default(),
+        );
+        let root = &bvh.nodes[0];
+        let all = child_hits_fast(
+            root,
+            &BoxRay::new(
+                Vec3::new(-5.0, 0.0, 0.0),
+                Vec3::X,
+                0.0,
+                (Vec3::splat(-1.0), Vec3::splat(11.0)),
+            ),
+            f32::INFINITY,
+        );
+        let late = child_hits_fast(
+            root,
+            &BoxRay::new(
+                Vec3::new(-5.0, 0.0, 0.0),
+                Vec3::X,
+                8.0,
+                (Vec3::splat(-1.0), Vec3::splat(11.0)),
+            ),
+            f32::INFINITY,
+        );
+        let early = child_hits_fast(
+            root,
+            &BoxRay::new(
+                Vec3::new(-5.0, 0.0, 0.0),
+                Vec3::X,
+                0.0,
+                (Vec3::splat(-1.0), Vec3::splat(11.0)),
+            ),
+            8.0,
+        );
+        assert_eq!(all.count_ones(), 2);
+        assert_eq!(late.count_ones(), 1);
+        assert_eq!(early.count_ones(), 1);
+        assert_ne!(late, early);
+    }
+}

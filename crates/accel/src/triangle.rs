@@ -1,0 +1,268 @@
+//! Watertight ray/triangle intersection (Woop, Benthin and Wald, "Watertight Ray/Triangle
+//! Intersection", JCGT 2013) with the error bounds of pbrt-v4.
+//!
+//! Why this test: the vertices are moved into a space where the ray is the +z axis, and the 2D
+//! edge functions are evaluated on those moved vertices. A vertex is moved identically for every
+//! triangle that shares it, so the edge function of a shared edge is bitwise the same (negated)
+//! on both sides: a ray cannot slip through. Edge values of exactly zero are recomputed in `f64`,
+//! where the products of two `f32` are exact, so the sign of the edge function is never lost.
+
+use glam::{Mat3A, Vec3, Vec3A};
+
+/// Per-ray values of the watertight test, computed once per ray (and per instance, for rays
+/// moved into object space).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TriRay {
+    /// Ray origin.
+    pub origin: Vec3A,
+    /// Rows `e_kx + sx e_kz`, `e_ky + sy e_kz`, `e_kz`: maps `v - origin` to the sheared
+    /// `(x, y)` and the unscaled `z`. `kz` is the axis of the largest direction component; `kx`,
+    /// `ky` are the others, swapped when `dir[kz] < 0` to keep the winding. Each row has at most
+    /// two non-zero entries and the others are exact zeros, so the SIMD product rounds exactly
+    /// like `v[kx] + sx * v[kz]` (one product, one sum): the same value for every triangle sharing
+    /// the vertex, which is what makes the test watertight.
+    pub shear: Mat3A,
+    /// `1 / dir[kz]`: scales z into units of `t`.
+    pub sz: f32,
+}
+
+impl TriRay {
+    /// Precomputes the shear for a ray.
+    #[inline]
+    pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        let a = dir.abs();
+        let kz = if a.x > a.y {
+            if a.x > a.z {
+                0
+            } else {
+                2
+            }
+        } else if a.y > a.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        let d = dir.to_array();
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let sz = 1.0 / d[kz];
+        let (sx, sy) = (-d[kx] * sz, -d[ky] * sz);
+        let mut rows = [[0.0f32; 3]; 3];
+        rows[0][kx] = 1.0;
+        rows[0][kz] = sx;
+        rows[1][ky] = 1.0;
+        rows[1][kz] = sy;
+        rows[2][kz] = 1.0;
+        Self {
+            origin: origin.into(),
+            shear: Mat3A::from_cols_array_2d(&rows).transpose(),
+            sz,
+        }
+    }
+}
+
+#[inline(always)]
+fn gamma(n: i32) -> f32 {
+    let e = f32::EPSILON * 0.5;
+    (n as f32 * e) / (1.0 - n as f32 * e)
+}
+
+/// Intersects the ray with triangle `(p0, p1, p2)`. Returns `(t, b1, b2)` (barycentric weights of
+/// `p1` and `p2`) for a hit with `tmin <= t <= tmax`. Both faces count.
+#[inline(always)]
+pub(crate) fn intersect(
+    r: &TriRay,
+    p0: Vec3,
+    p1: Vec3,
+    p2: Vec3,
+    tmin: f32,
+    tmax: f32,
+) -> Option<(f32, f32, f32)> {
+    let a = r.shear * (Vec3A::from(p0) - r.origin);
+    let b = r.shear * (Vec3A::from(p1) - r.origin);
+    let c = r.shear * (Vec3A::from(p2) - r.origin);
+    let (ax, ay, az) = (a.x, a.y, a.z);
+    let (bx, by, bz) = (b.x, b.y, b.z);
+    let (cx, cy, cz) = (c.x, c.y, c.z);
+
+    // Edge functions; e0 is the weight of p0, e1 of p1, e2 of p2.
+    let mut e0 = bx * cy - by * cx;
+    let mut e1 = cx * ay - cy * ax;
+    let mut e2 = ax * by - ay * bx;
+    if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
+        // Exactly zero may be a lost sign: products of two f32 are exact in f64.
+        let (ax, ay, bx, by, cx, cy) = (
+            ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64,
+        );
+        e0 = (bx * cy - by * cx) as f32;
+        e1 = (cx * ay - cy * ax) as f32;
+        e2 = (ax * by - ay * bx) as f32;
+    }
+    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+        return None;
+    }
+    let det = e0 + e1 + e2;
+    if det == 0.0 || det.is_nan() {
+        return None;
+    }
+    // pbrt-v4's x/y error terms add max|z| assuming |dir| is about 1; for unnormalised directions
+    // (any scale) they need z before it is scaled by 1/dir[kz], in the same units as x and y.
+    let max_z = az.abs().max(bz.abs()).max(cz.abs());
+    let az = az * r.sz;
+    let bz = bz * r.sz;
+    let cz = cz * r.sz;
+    let t_scaled = e0 * az + e1 * bz + e2 * cz;
+    let inv_det = 1.0 / det;
+    let t = t_scaled * inv_det;
+    if !(t >= tmin && t <= tmax) {
+        return None;
+    }
+    // pbrt-v4: reject hits whose t is not provably positive (they may lie behind the origin).
+    let max_zt = az.abs().max(bz.abs()).max(cz.abs());
+    let delta_z = gamma(3) * max_zt;
+    let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
+    let max_yt = ay.abs().max(by.abs()).max(cy.abs());
+    let delta_x = gamma(5) * (max_xt + max_z);
+    let delta_y = gamma(5) * (max_yt + max_z);
+    let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    let max_e = e0.abs().max(e1.abs()).max(e2.abs());
+    let delta_t =
+        3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
+    if t <= delta_t {
+        return None;
+    }
+    Some((t, e1 * inv_det, e2 * inv_det))
+}
+
+/// Watertight intersection of a ray with one triangle, in the ray's space: `(t, u, v)` with `u`, `v`
+/// the barycentric weights of `p[1]` and `p[2]`, for hits with `ray.tmin <= t <= ray.tmax`.
+///
+/// This is the exact test the BVH runs on every triangle; it is public so that callers (and tests)
+/// can compare against brute force with identical arithmetic.
+pub fn intersect_triangle(ray: &crate::Ray, p: [Vec3; 3]) -> Option<(f32, f32, f32)> {
+    let r = TriRay::new(ray.origin, ray.dir);
+    intersect(&r, p[0], p[1], p[2], ray.tmin, ray.tmax)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Ray;
+
+    #[test]
+    fn barycentrics_reconstruct_the_hit_point() {
+        let p = [
+            Vec3::new(-1.0, -1.0, -3.0),
+            Vec3::new(2.0, -1.0, -3.5),
+            Vec3::new(0.0, 1.5, -2.5),
+        ];
+        for (x, y) in [(0.1, 0.2), (-0.1, -0.2), (0.15, 0.0)] {
+            let ray = Ray::new(Vec3::ZERO, Vec3::new(x, y, -1.0));
+            let (t, u, v) = intersect_triangle(&ray, p).expect("inside");
+            let on_tri = p[0] * (1.0 - u - v) + p[1] * u + p[2] * v;
+            let on_ray = ray.origin + ray.dir * t;
+            assert!((on_tri - on_ray).length() < 1e-5, "{on_tri} vs {on_ray}");
+        }
+    }
+
+    #[test]
+    fn hits_do_not_depend_on_direction_length() {
+        // Tiny and huge scenes give tiny and huge unnormalised directions (dir = target - origin).
+        for scale in [1e-6f32, 1e-4, 1.0, 1e4, 1e6] {
+            let p = [
+                Vec3::new(-1.0, -1.0, -3.0) * scale,
+                Vec3::new(2.0, -1.0, -3.5) * scale,
+                Vec3::new(0.0, 1.5, -2.5) * scale,
+            ];
+            for k in 0..3 {
+                let target = (p[0] + p[1] + p[2]) / 3.0 * 0.5 + p[k] * 0.5;
+                for len in [1e-3f32, 1.0, 1e3] {
+                    let dir = target / target.length() * scale * len;
+                    let hit = intersect_triangle(&Ray::new(Vec3::ZERO, dir), p);
+                    let t = hit.map(|h| h.0 * dir.length());
+                    assert!(
+                        t.is_some_and(|t| (t - target.length()).abs() < 1e-4 * target.length()),
+                        "scale {scale} len {len} vertex {k}: {hit:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn both_faces_and_all_axes() {
+        let p = [Vec3::X, Vec3::Y, Vec3::Z];
+        let c = (p[0] + p[1] + p[2]) / 3.0;
+        for dir in [c, -c, Vec3::new(1.0, 0.2, 0.3), Vec3::new(0.2, -1.0, 0.3)] {
+            let o = c - dir * 2.0;
+            let hit = intersect_triangle(&Ray::new(o, dir), p);
+            assert!(
+                hit.is_some_and(|h| (h.0 - 2.0).abs() < 1e-5),
+                "{dir}: {hit:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn honours_tmin_and_tmax() {
+        let p = [
+            Vec3::new(-1.0, -1.0, -2.0),
+            Vec3::new(1.0, -1.0, -2.0),
+            Vec3::new(0.0, 1.0, -2.0),
+        ];
+        let mut ray = Ray::new(Vec3::ZERO, Vec3::NEG_Z);
+        assert!(intersect_triangle(&ray, p).is_some());
+        ray.tmax = 1.9;
+        assert!(intersect_triangle(&ray, p).is_none());
+        ray.tmax = 3.0;
+        ray.tmin = 2.1;
+        assert!(intersect_triangle(&ray, p).is_none());
+        // Behind the origin.
+        ray = Ray::new(Vec3::ZERO, Vec3::Z);
+        assert!(intersect_triangle(&ray, p).is_none());
+    }
+
+    #[test]
+    fn degenerate_input_does_not_panic_or_hit() {
+        let ray = Ray::new(Vec3::ZERO, Vec3::NEG_Z);
+        let flat = [
+            Vec3::new(-1.0, 0.0, -1.0),
+            Vec3::new(1.0, 0.0, -1.0),
+            Vec3::new(3.0, 0.0, -1.0),
+        ];
+        assert!(intersect_triangle(&ray, flat).is_none());
+        let nan = [Vec3::NAN, Vec3::X, Vec3::Y];
+        assert!(intersect_triangle(&ray, nan).is_none());
+        let zero_dir = Ray::new(Vec3::ZERO, Vec3::ZERO);
+        let _ = intersect_triangle(&zero_dir, [Vec3::X, Vec3::Y, Vec3::Z]);
+    }
+
+    #[test]
+    fn shared_edge_is_hit_exactly_once_or_twice_never_zero() {
+        // Two triangles sharing the diagonal of a square, rays through points on the diagonal.
+        let q = [
+            Vec3::new(0.0, 0.0, -1.0),
+            Vec3::new(1.0, 0.0, -1.3),
+            Vec3::new(1.0, 1.0, -1.1),
+            Vec3::new(0.0, 1.0, -0.7),
+        ];
+        let t0 = [q[0], q[1], q[2]];
+        let t1 = [q[0], q[2], q[3]];
+        // Interior points of the diagonal (its ends are corners of the square's outline).
+        for i in 1..1000 {
+            let s = i as f32 / 1000.0;
+            let target = q[0] + (q[2] - q[0]) * s;
+            let origin = Vec3::new(0.3137, 0.771, 2.0);
+            let ray = Ray::new(origin, target - origin);
+            let hits = intersect_triangle(&ray, t0).is_some() as u32
+                + intersect_triangle(&ray, t1).is_some() as u32;
+            assert!(
+                hits >= 1,
+                "ray through the shared edge at s={s} slipped through"
+            );
+        }
+    }
+}

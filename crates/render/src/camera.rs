@@ -1,0 +1,476 @@
+//! The thin-lens camera of SPEC §2: numbers in (a film position and a lens position), a ray out.
+//!
+//! For each primary sample the pixel sample's centre ray meets the focal plane at a point found
+//! by similar triangles; the primary ray runs from a point on the aperture to that point. A
+//! pinhole (`R = 0`) ignores the lens numbers entirely.
+
+use aperture_scene::Projection;
+use glam::{Affine3A, Vec2, Vec3};
+use std::f32::consts::{FRAC_PI_4, PI, TAU};
+
+/// The numbers one primary sample gives the camera.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraSample {
+    /// Film position in raster coordinates: x right in `[0, width]`, y down in `[0, height]`
+    /// (row 0 at the top).
+    pub p_film: Vec2,
+    /// Lens sample in `[0, 1)²`; ignored by a pinhole.
+    pub p_lens: Vec2,
+}
+
+/// A primary ray in world space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraRay {
+    /// Origin (a point on the aperture).
+    pub origin: Vec3,
+    /// Unit direction.
+    pub dir: Vec3,
+}
+
+/// The shape of the aperture, radius included.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Aperture {
+    /// No lens: every ray starts at the camera's centre.
+    Pinhole,
+    /// A round aperture of radius `radius`, x divided by `ratio` (anamorphic squeeze).
+    Disc {
+        /// Lens radius `R`.
+        radius: f32,
+        /// `aperture_ratio`.
+        ratio: f32,
+    },
+    /// A regular polygon inscribed in the radius-`radius` circle.
+    Polygon {
+        /// Lens radius `R` (of the circumscribed circle).
+        radius: f32,
+        /// Number of blades, ≥ 3.
+        blades: u32,
+        /// `aperture_rotation`, radians.
+        rotation: f32,
+        /// `aperture_ratio`.
+        ratio: f32,
+    },
+}
+
+impl Aperture {
+    /// The aperture a resolved [`aperture_scene::Dof`] describes.
+    pub fn from_dof(dof: &aperture_scene::Dof) -> Self {
+        let radius = dof.effective_radius();
+        let ratio = if dof.ratio > 0.0 { dof.ratio } else { 1.0 };
+        if radius <= 0.0 {
+            Self::Pinhole
+        } else if dof.blades >= 3 {
+            Self::Polygon {
+                radius,
+                blades: dof.blades,
+                rotation: dof.rotation,
+                ratio,
+            }
+        } else {
+            Self::Disc { radius, ratio }
+        }
+    }
+
+    /// Maps `u ∈ [0,1)²` uniformly onto the aperture, in lens-plane units (x right, y up).
+    pub fn sample(&self, u: Vec2) -> Vec2 {
+        match *self {
+            Self::Pinhole => Vec2::ZERO,
+            Self::Disc { radius, ratio } => {
+                let d = concentric_disc(u) * radius;
+                Vec2::new(d.x / ratio, d.y)
+            }
+            Self::Polygon {
+                radius,
+                blades,
+                rotation,
+                ratio,
+            } => {
+                let d = uniform_polygon(u, blades, rotation) * radius;
+                Vec2::new(d.x / ratio, d.y)
+            }
+        }
+    }
+
+    /// The lens radius, 0 for a pinhole.
+    pub fn radius(&self) -> f32 {
+        match *self {
+            Self::Pinhole => 0.0,
+            Self::Disc { radius, .. } | Self::Polygon { radius, .. } => radius,
+        }
+    }
+}
+
+/// Shirley–Chiu concentric mapping of the unit square onto the unit disc: continuous and
+/// area-preserving, so strata of the square stay compact strata of the disc.
+pub fn concentric_disc(u: Vec2) -> Vec2 {
+    let o = 2.0 * u - Vec2::ONE;
+    if o.x == 0.0 && o.y == 0.0 {
+        return Vec2::ZERO;
+    }
+    let (r, theta) = if o.x.abs() > o.y.abs() {
+        (o.x, FRAC_PI_4 * (o.y / o.x))
+    } else {
+        (o.y, 2.0 * FRAC_PI_4 - FRAC_PI_4 * (o.x / o.y))
+    };
+    r * Vec2::new(theta.cos(), theta.sin())
+}
+
+/// The `k`-th corner of a regular `n`-gon inscribed in the unit circle, placed as Cycles places
+/// blades: at angle `rotation + π/n + 2πk/n`.
+pub fn polygon_corner(k: u32, n: u32, rotation: f32) -> Vec2 {
+    let a = rotation + PI / n as f32 + TAU * k as f32 / n as f32;
+    Vec2::new(a.cos(), a.sin())
+}
+
+/// Uniform point in the regular `n`-gon inscribed in the unit circle: `u.x` picks one of the `n`
+/// equal-area wedges of the fan around the centre (its fractional part is reused), then a
+/// uniform point in that triangle.
+pub fn uniform_polygon(u: Vec2, n: u32, rotation: f32) -> Vec2 {
+    let scaled = u.x * n as f32;
+    let k = (scaled as u32).min(n - 1);
+    let a = scaled - k as f32;
+    let c0 = polygon_corner(k, n, rotation);
+    let c1 = polygon_corner((k + 1) % n, n, rotation);
+    // Uniform in the triangle (0, c0, c1): sqrt(a) spreads along the wedge's depth.
+    let s = a.sqrt();
+    s * ((1.0 - u.y) * c0 + u.y * c1)
+}
+
+/// A camera ready to generate rays for an image of a given size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Camera to world: rotation and translation.
+    pub world_from_camera: Affine3A,
+    /// Projection model with its image-plane extent.
+    pub model: CameraModel,
+    /// The aperture.
+    pub aperture: Aperture,
+    /// Focus distance `f` along the view axis.
+    pub focus_distance: f32,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+}
+
+/// Perspective or orthographic, with the half-extents of the image plane at distance `d = 1`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CameraModel {
+    /// Perspective: the image plane at `z = −1` spans `±tan_half_x`, `±tan_half_y`.
+    ThinLens {
+        /// `tan(xfov/2)` (from `yfov` and the image aspect).
+        tan_half_x: f32,
+        /// `tan(yfov/2)`.
+        tan_half_y: f32,
+    },
+    /// Orthographic: the view volume spans `±half_x`, `±half_y` scene units.
+    Orthographic {
+        /// Half-width.
+        half_x: f32,
+        /// Half-height (glTF `ymag`).
+        half_y: f32,
+    },
+}
+
+impl Camera {
+    /// The camera of a scene camera for a `width × height` image. The vertical extent comes from
+    /// the file (`yfov` or `ymag`); the horizontal one from the image's aspect `width / height`.
+    pub fn new(cam: &aperture_scene::Camera, width: u32, height: u32) -> Self {
+        let aspect = width as f32 / height as f32;
+        let model = match cam.projection {
+            Projection::Perspective { yfov, .. } => {
+                let tan_half_y = (0.5 * yfov).tan();
+                CameraModel::ThinLens {
+                    tan_half_x: tan_half_y * aspect,
+                    tan_half_y,
+                }
+            }
+            Projection::Orthographic { ymag, .. } => CameraModel::Orthographic {
+                half_x: ymag.abs() * aspect,
+                half_y: ymag.abs(),
+            },
+        };
+        Self {
+            world_from_camera: cam.world_from_camera,
+            model,
+            aperture: Aperture::from_dof(&cam.dof),
+            focus_distance: cam.dof.focus_distance,
+            width,
+            height,
+        }
+    }
+
+    /// The point of the image plane (at `d = 1` for perspective, in scene units for
+    /// orthographic) a raster position maps to; +Y up, row 0 at the top.
+    pub fn screen_point(&self, p_film: Vec2) -> Vec2 {
+        let ndc = Vec2::new(
+            2.0 * p_film.x / self.width as f32 - 1.0,
+            1.0 - 2.0 * p_film.y / self.height as f32,
+        );
+        match self.model {
+            CameraModel::ThinLens {
+                tan_half_x,
+                tan_half_y,
+            } => ndc * Vec2::new(tan_half_x, tan_half_y),
+            CameraModel::Orthographic { half_x, half_y } => ndc * Vec2::new(half_x, half_y),
+        }
+    }
+
+    /// The primary ray for one sample, in camera space (the camera looks down −Z).
+    pub fn generate_ray_camera_space(&self, s: &CameraSample) -> Option<CameraRay> {
+        let ps = self.screen_point(s.p_film);
+        let (origin, dir) = match (self.model, self.aperture) {
+            (CameraModel::ThinLens { .. }, Aperture::Pinhole) => {
+                (Vec3::ZERO, Vec3::new(ps.x, ps.y, -1.0))
+            }
+            (CameraModel::ThinLens { .. }, aperture) => {
+                let f = self.focus_distance;
+                // Similar triangles: the centre ray through (ps, −1) meets z = −f here.
+                let focus = Vec3::new(ps.x * f, ps.y * f, -f);
+                let lens = aperture.sample(s.p_lens).extend(0.0);
+                (lens, focus - lens)
+            }
+            (CameraModel::Orthographic { .. }, Aperture::Pinhole) => (ps.extend(0.0), Vec3::NEG_Z),
+            (CameraModel::Orthographic { .. }, aperture) => {
+                let f = self.focus_distance;
+                let focus = Vec3::new(ps.x, ps.y, -f);
+                let origin = focus.with_z(0.0) + aperture.sample(s.p_lens).extend(0.0);
+                (origin, focus - origin)
+            }
+        };
+        let dir = dir.normalize();
+        dir.is_finite().then_some(CameraRay { origin, dir })
+    }
+
+    /// The primary ray for one sample, in world space.
+    pub fn generate_ray(&self, s: &CameraSample) -> Option<CameraRay> {
+        let r = self.generate_ray_camera_space(s)?;
+        let dir = self.world_from_camera.transform_vector3(r.dir).normalize();
+        Some(CameraRay {
+            origin: self.world_from_camera.transform_point3(r.origin),
+            dir,
+        })
+    }
+
+    /// Circle-of-confusion diameter in pixels of a point at depth `z` (SPEC §2), perspective only.
+    pub fn coc_pixels(&self, z: f32) -> f32 {
+        match self.model {
+            CameraModel::ThinLens { tan_half_y, .. } => {
+                self.aperture.radius()
+                    * (1.0 / self.focus_distance - 1.0 / z).abs()
+                    * self.height as f32
+                    / tan_half_y
+            }
+            CameraModel::Orthographic { .. } => 0.0,
+        }
+    }
+}
+
+/// The image height for `width` pixels that keeps the camera's aspect ratio (the file's
+/// `aspectRatio`, or `xmag / ymag`; 16:9 when the file gives none).
+pub fn default_height(cam: &aperture_scene::Camera, width: u32) -> u32 {
+    let aspect = match cam.projection {
+        Projection::Perspective {
+            aspect_ratio: Some(a),
+            ..
+        } if a.is_finite() && a > 0.0 => a,
+        Projection::Orthographic { xmag, ymag } if xmag != 0.0 && ymag != 0.0 => {
+            (xmag / ymag).abs()
+        }
+        _ => 16.0 / 9.0,
+    };
+    ((width as f32 / aspect).round() as u32).max(1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aperture_scene::Dof;
+
+    fn scene_camera(radius: f32, blades: u32, focus: f32) -> aperture_scene::Camera {
+        aperture_scene::Camera {
+            name: "test".into(),
+            node: None,
+            world_from_camera: Affine3A::from_translation(Vec3::new(0.5, -1.0, 3.0))
+                * Affine3A::from_rotation_y(0.3),
+            projection: Projection::Perspective {
+                yfov: 0.8,
+                aspect_ratio: None,
+            },
+            dof: Dof {
+                enabled: true,
+                aperture_radius: radius,
+                focus_distance: focus,
+                blades,
+                rotation: 0.2,
+                ..Dof::default()
+            },
+        }
+    }
+
+    fn grid(n: u32) -> impl Iterator<Item = Vec2> {
+        (0..n * n).map(move |i| {
+            Vec2::new(
+                ((i % n) as f32 + 0.37) / n as f32,
+                ((i / n) as f32 + 0.61) / n as f32,
+            )
+        })
+    }
+
+    #[test]
+    fn focal_plane_point_is_the_same_for_every_lens_sample() {
+        for blades in [0, 6] {
+            for ortho in [false, true] {
+                let mut sc = scene_camera(0.1, blades, 4.0);
+                if ortho {
+                    sc.projection = Projection::Orthographic {
+                        xmag: 2.0,
+                        ymag: 1.5,
+                    };
+                }
+                let cam = Camera::new(&sc, 64, 48);
+                let p_film = Vec2::new(13.3, 40.2);
+                let pin = Camera {
+                    aperture: Aperture::Pinhole,
+                    ..cam
+                }
+                .generate_ray_camera_space(&CameraSample {
+                    p_film,
+                    p_lens: Vec2::ZERO,
+                })
+                .unwrap();
+                let target = pin.origin + pin.dir * (4.0 / -pin.dir.z);
+                let mut origins = Vec::new();
+                for p_lens in grid(8) {
+                    let r = cam
+                        .generate_ray_camera_space(&CameraSample { p_film, p_lens })
+                        .unwrap();
+                    let t = (-4.0 - r.origin.z) / r.dir.z;
+                    let hit = r.origin + t * r.dir;
+                    assert!(hit.distance(target) < 1e-5, "{hit} vs {target}");
+                    origins.push(r.origin);
+                }
+                // And the lens samples really differ (so the check above means something).
+                let spread = origins
+                    .iter()
+                    .map(|o| o.distance(origins[0]))
+                    .fold(0.0f32, f32::max);
+                assert!(spread > 0.1, "{spread}");
+            }
+        }
+    }
+
+    #[test]
+    fn primary_rays_start_inside_the_aperture() {
+        // Disc with squeeze: (x·ratio)² + y² ≤ R².
+        let mut sc = scene_camera(0.2, 0, 3.0);
+        sc.dof.ratio = 2.0;
+        let cam = Camera::new(&sc, 32, 32);
+        let mut max_x: f32 = 0.0;
+        for p_lens in grid(32) {
+            let o = cam
+                .generate_ray_camera_space(&CameraSample {
+                    p_film: Vec2::new(16.0, 16.0),
+                    p_lens,
+                })
+                .unwrap()
+                .origin;
+            assert!(o.z == 0.0);
+            assert!((o.x * 2.0).hypot(o.y) <= 0.2 * (1.0 + 1e-5));
+            max_x = max_x.max(o.x.abs());
+        }
+        assert!(max_x > 0.09 && max_x <= 0.1 + 1e-6, "{max_x}");
+        // Hexagon: inside every edge's half-plane.
+        let sc = scene_camera(0.2, 6, 3.0);
+        let cam = Camera::new(&sc, 32, 32);
+        let corners: Vec<Vec2> = (0..6).map(|k| polygon_corner(k, 6, 0.2) * 0.2).collect();
+        for p_lens in grid(32) {
+            let o = cam
+                .generate_ray_camera_space(&CameraSample {
+                    p_film: Vec2::new(3.0, 29.0),
+                    p_lens,
+                })
+                .unwrap()
+                .origin
+                .truncate();
+            for k in 0..6 {
+                let (a, b) = (corners[k], corners[(k + 1) % 6]);
+                assert!((b - a).perp_dot(o - a) >= -1e-6, "{o} outside edge {k}");
+            }
+        }
+    }
+
+    #[test]
+    fn polygon_sampling_is_uniform_over_the_polygon() {
+        // Mean of |p|² over a regular hexagon of circumradius 1 is 5/12. A centred grid whose
+        // columns split evenly among the 6 wedges.
+        let n = 192;
+        let mut sum = 0.0;
+        let mut centroid = Vec2::ZERO;
+        for i in 0..n * n {
+            let u = Vec2::new(
+                ((i % n) as f32 + 0.5) / n as f32,
+                ((i / n) as f32 + 0.5) / n as f32,
+            );
+            let p = uniform_polygon(u, 6, 0.0);
+            sum += p.length_squared();
+            centroid += p;
+        }
+        let mean = sum / (n * n) as f32;
+        assert!((mean - 5.0 / 12.0).abs() < 1e-3, "{mean}");
+        assert!(centroid.length() / ((n * n) as f32) < 1e-3);
+    }
+
+    #[test]
+    fn concentric_disc_is_uniform() {
+        // Mean of r² over the unit disc is 1/2.
+        let n = 128;
+        let mean: f32 = grid(n)
+            .map(|u| concentric_disc(u).length_squared())
+            .sum::<f32>()
+            / (n * n) as f32;
+        assert!((mean - 0.5).abs() < 1e-3, "{mean}");
+    }
+
+    #[test]
+    fn zero_radius_is_a_pinhole() {
+        let cam = Camera::new(&scene_camera(0.0, 6, 3.0), 16, 16);
+        assert_eq!(cam.aperture, Aperture::Pinhole);
+        let mut sc = scene_camera(0.3, 0, 3.0);
+        sc.dof.enabled = false;
+        assert_eq!(Camera::new(&sc, 16, 16).aperture, Aperture::Pinhole);
+    }
+
+    #[test]
+    fn image_plane_orientation() {
+        let mut sc = scene_camera(0.0, 0, 1.0);
+        sc.world_from_camera = Affine3A::IDENTITY;
+        let cam = Camera::new(&sc, 40, 20);
+        let top_left = cam
+            .generate_ray(&CameraSample {
+                p_film: Vec2::ZERO,
+                p_lens: Vec2::ZERO,
+            })
+            .unwrap();
+        assert!(top_left.dir.x < 0.0 && top_left.dir.y > 0.0 && top_left.dir.z < 0.0);
+        // Vertical half-angle is yfov/2, horizontal follows the aspect.
+        let top = cam
+            .generate_ray(&CameraSample {
+                p_film: Vec2::new(20.0, 0.0),
+                p_lens: Vec2::ZERO,
+            })
+            .unwrap();
+        assert!((top.dir.y / -top.dir.z - (0.4f32).tan()).abs() < 1e-6);
+        assert!((top_left.dir.x / top_left.dir.z - 2.0 * (0.4f32).tan()).abs() < 1e-5);
+    }
+
+    #[test]
+    fn default_height_follows_the_aspect() {
+        let mut sc = scene_camera(0.0, 0, 1.0);
+        sc.projection = Projection::Perspective {
+            yfov: 0.5,
+            aspect_ratio: Some(2.0),
+        };
+        assert_eq!(default_height(&sc, 960), 480);
+    }
+}

@@ -1,0 +1,265 @@
+//! Unidirectional path tracing with next-event estimation: punctual lights by NEE alone (they are
+//! deltas), emissive triangles by NEE and BSDF sampling combined with multiple importance
+//! sampling (power heuristic). Russian roulette from the fourth vertex on.
+//!
+//! `max_bounces` has Blender Cycles' meaning: 0 is direct light only (the camera ray's hit is lit
+//! by light sampling and by one BSDF-sampled ray that may find an emitter or the environment).
+
+use crate::bsdf::Frame;
+use crate::lights::{punctual_incident, EmissiveLights};
+use crate::sampler::SampleStream;
+use crate::surface::{Geometry, Surface};
+use aperture_accel::{offset_ray_origin, Accel, Hit, Ray, SpawnPoint};
+use glam::Vec3;
+
+/// Vertices before Russian roulette may end a path.
+const RR_START: u32 = 3;
+/// Surfaces a single ray may pass through by alpha before it is stopped.
+const MAX_ALPHA_PASSES: u32 = 64;
+
+/// Everything a path needs, shared by all threads.
+pub(crate) struct Integrator<'a> {
+    pub geom: Geometry<'a>,
+    pub accel: &'a Accel,
+    pub emissive: Option<EmissiveLights>,
+    pub env: Vec3,
+    pub max_bounces: u32,
+}
+
+/// Power heuristic with β = 2.
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 && a2.is_finite() {
+        a2 / (a2 + b2)
+    } else if a2.is_infinite() {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+impl Integrator<'_> {
+    /// The closest opaque hit along `ray`, passing through alpha-cut or blended surfaces, with
+    /// the rounding-error bound of the hit point (from the ray segment that found it).
+    fn trace(
+        &self,
+        ray: &Ray,
+        stream: &SampleStream,
+        vertex: u32,
+        u_alpha: f32,
+    ) -> Option<(Hit, Surface, f32)> {
+        let mut r = *ray;
+        for pass in 0..MAX_ALPHA_PASSES {
+            let hit = self.accel.intersect(&r)?;
+            let s = self.geom.surface(hit.instance, hit.triangle, hit.u, hit.v);
+            let error = self.accel.spawn_point(&r, &hit).error;
+            if !self.geom.has_alpha {
+                return Some((hit, s, error));
+            }
+            let u = if pass == 0 {
+                u_alpha
+            } else {
+                stream.extra(vertex, pass)
+            };
+            if self.geom.is_opaque(&s, u) {
+                return Some((hit, s, error));
+            }
+            // Continue on the far side of the surface.
+            let n = if s.ng.dot(r.dir) > 0.0 { s.ng } else { -s.ng };
+            r = Ray::new(SpawnPoint { p: s.p, error }.origin(n), r.dir);
+        }
+        None
+    }
+
+    /// Fraction of light arriving along a shadow ray from `origin` in unit direction `dir` over
+    /// `dist`.
+    fn visibility(&self, origin: Vec3, dir: Vec3, dist: f32) -> f32 {
+        let tmax = if dist.is_finite() {
+            dist * (1.0 - 1e-4)
+        } else {
+            f32::INFINITY
+        };
+        let mut ray = Ray {
+            origin,
+            dir,
+            tmin: 0.0,
+            tmax,
+        };
+        if !self.geom.has_alpha {
+            return if self.accel.occluded(&ray) { 0.0 } else { 1.0 };
+        }
+        let mut tr = 1.0;
+        for _ in 0..MAX_ALPHA_PASSES {
+            let Some(hit) = self.accel.intersect(&ray) else {
+                return tr;
+            };
+            let s = self.geom.surface(hit.instance, hit.triangle, hit.u, hit.v);
+            tr *= self.geom.transmittance(&s);
+            if tr <= 0.0 {
+                return 0.0;
+            }
+            let n = if s.ng.dot(dir) > 0.0 { s.ng } else { -s.ng };
+            let o = offset_ray_origin(s.p, n);
+            let travelled = (o - ray.origin).dot(dir);
+            ray.origin = o;
+            ray.tmax -= travelled;
+            if ray.tmax <= 0.0 {
+                return tr;
+            }
+        }
+        0.0
+    }
+
+    /// Radiance along a primary ray (unit direction), and whether it hit geometry.
+    pub fn li(&self, origin: Vec3, dir: Vec3, stream: &SampleStream) -> (Vec3, bool) {
+        let mut l = Vec3::ZERO;
+        let mut beta = Vec3::ONE;
+        let mut ray = Ray::new(origin, dir);
+        let mut prev_p = origin;
+        let mut prev_pdf = 0.0f32;
+        let mut covered = false;
+        let mut vertex = 0u32;
+        loop {
+            let bs = stream.bounce(vertex);
+            let Some((hit, s, error)) = self.trace(&ray, stream, vertex, bs.alpha) else {
+                // The environment is not light-sampled, so BSDF sampling finds it at weight 1.
+                l += beta * self.env;
+                break;
+            };
+            if vertex == 0 {
+                covered = true;
+            }
+            let wo = -ray.dir;
+            let ng = if s.ng.dot(wo) < 0.0 { -s.ng } else { s.ng };
+            let ns = if s.ns.dot(ng) < 0.0 { -s.ns } else { s.ns };
+            let shading = self.geom.shade(&s);
+            if let Some(c) = shading.unlit {
+                l += beta * c;
+                break;
+            }
+            if shading.emission != Vec3::ZERO {
+                let w = if vertex == 0 {
+                    1.0
+                } else {
+                    match &self.emissive {
+                        Some(em) => {
+                            let pick = em.pick_probability(hit.instance, hit.triangle);
+                            let cos_l = ng.dot(wo).abs();
+                            let d2 = (s.p - prev_p).length_squared();
+                            let light_pdf = if cos_l > 0.0 && s.area > 0.0 {
+                                pick / s.area * d2 / cos_l
+                            } else {
+                                0.0
+                            };
+                            power_heuristic(prev_pdf, light_pdf)
+                        }
+                        None => 1.0,
+                    }
+                };
+                l += beta * shading.emission * w;
+            }
+            if vertex > self.max_bounces {
+                break;
+            }
+            let Some(bsdf) = shading.bsdf else { break };
+            // A shading normal may disagree with the view; fall back to the geometric frame.
+            let mut frame = Frame::from_normal(ns);
+            let mut wo_l = frame.to_local(wo);
+            if wo_l.z <= 0.0 {
+                frame = Frame::from_normal(ng);
+                wo_l = frame.to_local(wo);
+            }
+            // Our point is interpolated from the vertices; the accel's bound covers the rounding
+            // of instanced transforms, which a few ulps of the point alone would not.
+            let p_out = SpawnPoint { p: s.p, error }.origin(ng);
+
+            for light in &self.geom.scene.lights {
+                let Some((wi, dist, e)) = punctual_incident(light, s.p) else {
+                    continue;
+                };
+                if wi.dot(ng) <= 0.0 || e == Vec3::ZERO {
+                    continue;
+                }
+                let wi_l = frame.to_local(wi);
+                let (f, _) = bsdf.eval(wo_l, wi_l);
+                let c = beta * f * wi_l.z * e;
+                if c != Vec3::ZERO {
+                    let dist = if dist.is_finite() {
+                        (light.position - p_out).length()
+                    } else {
+                        dist
+                    };
+                    l += c * self.visibility(p_out, wi, dist);
+                }
+            }
+
+            if let Some(em) = &self.emissive {
+                let i = em.table.sample(bs.light_pick);
+                let t = em.triangles[i];
+                let (a, b) = (bs.light[0].sqrt(), bs.light[1]);
+                let q = self
+                    .geom
+                    .surface(t.instance, t.triangle, a * (1.0 - b), a * b);
+                let d = q.p - s.p;
+                let d2 = d.length_squared();
+                let dist = d2.sqrt();
+                let wi = d / dist;
+                let cos_l = q.ng.dot(wi).abs();
+                if d2 > 0.0 && cos_l > 0.0 && wi.dot(ng) > 0.0 && q.area > 0.0 {
+                    let light_pdf = em.table.pmf(i) / q.area * d2 / cos_l;
+                    let wi_l = frame.to_local(wi);
+                    let (f, bsdf_pdf) = bsdf.eval(wo_l, wi_l);
+                    let le = self.geom.emission(&q);
+                    let c =
+                        beta * f * wi_l.z * le * (power_heuristic(light_pdf, bsdf_pdf) / light_pdf);
+                    if c != Vec3::ZERO && c.is_finite() {
+                        let qn = if q.ng.dot(wi) < 0.0 { q.ng } else { -q.ng };
+                        let target = offset_ray_origin(q.p, qn);
+                        let to = target - p_out;
+                        let len = to.length();
+                        l += c * self.visibility(p_out, to / len, len);
+                    }
+                }
+            }
+
+            let Some(sample) = bsdf.sample(wo_l, bs.lobe, bs.bsdf) else {
+                break;
+            };
+            let wi = frame.to_world(sample.wi);
+            if wi.dot(ng) <= 0.0 {
+                break;
+            }
+            beta *= sample.f * (sample.wi.z / sample.pdf);
+            prev_pdf = sample.pdf;
+            if vertex >= RR_START {
+                // Survive with probability q and divide by it: unbiased.
+                let q = beta.max_element().min(1.0);
+                if bs.rr >= q || q.is_nan() {
+                    break;
+                }
+                beta /= q;
+            }
+            if beta == Vec3::ZERO {
+                break;
+            }
+            prev_p = s.p;
+            ray = Ray::new(p_out, wi);
+            vertex += 1;
+        }
+        (l, covered)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn power_heuristic_limits() {
+        assert_eq!(power_heuristic(1.0, 0.0), 1.0);
+        assert_eq!(power_heuristic(0.0, 1.0), 0.0);
+        assert_eq!(power_heuristic(0.0, 0.0), 0.0);
+        assert!((power_heuristic(1.0, 1.0) - 0.5).abs() < 1e-7);
+        assert!((power_heuristic(3.0, 1.0) + power_heuristic(1.0, 3.0) - 1.0).abs() < 1e-7);
+    }
+}

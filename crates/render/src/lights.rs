@@ -1,0 +1,230 @@
+//! Lights: punctual lights (sampled by next-event estimation only: they are deltas) and emissive
+//! triangles, chosen in proportion to their power through an alias table. The triangle
+//! structures exist only when the scene has emissive triangles.
+
+use crate::surface::Geometry;
+use aperture_scene::{Light, LightKind};
+use glam::Vec3;
+
+/// Walker/Vose alias table: O(1) sampling of a discrete distribution.
+#[derive(Debug, Clone)]
+pub(crate) struct AliasTable {
+    /// Probability of keeping bin `i` (else take `alias[i]`).
+    prob: Vec<f32>,
+    alias: Vec<u32>,
+    /// Normalised probability of each outcome.
+    pmf: Vec<f32>,
+}
+
+impl AliasTable {
+    /// A table for non-negative weights with a positive sum.
+    pub fn new(weights: &[f64]) -> Self {
+        let n = weights.len();
+        let total: f64 = weights.iter().sum();
+        let pmf: Vec<f32> = weights.iter().map(|w| (w / total) as f32).collect();
+        let mut scaled: Vec<f64> = weights.iter().map(|w| w / total * n as f64).collect();
+        let mut prob = vec![1.0f32; n];
+        let mut alias: Vec<u32> = (0..n as u32).collect();
+        let (mut small, mut large): (Vec<usize>, Vec<usize>) =
+            (0..n).partition(|&i| scaled[i] < 1.0);
+        while let (Some(s), Some(&l)) = (small.pop(), large.last()) {
+            prob[s] = scaled[s] as f32;
+            alias[s] = l as u32;
+            scaled[l] -= 1.0 - scaled[s];
+            if scaled[l] < 1.0 {
+                large.pop();
+                small.push(l);
+            }
+        }
+        // Leftovers (rounding) keep themselves with probability 1.
+        Self { prob, alias, pmf }
+    }
+
+    /// Picks an outcome for `u ∈ [0, 1)`.
+    pub fn sample(&self, u: f32) -> usize {
+        let n = self.prob.len();
+        let x = u * n as f32;
+        let i = (x as usize).min(n - 1);
+        let frac = x - i as f32;
+        if frac < self.prob[i] {
+            i
+        } else {
+            self.alias[i] as usize
+        }
+    }
+
+    /// Probability of outcome `i`.
+    pub fn pmf(&self, i: usize) -> f32 {
+        self.pmf[i]
+    }
+}
+
+/// One emissive triangle.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct EmissiveTriangle {
+    pub instance: u32,
+    pub triangle: u32,
+}
+
+/// The emissive triangles of a scene, with their selection table.
+#[derive(Debug)]
+pub(crate) struct EmissiveLights {
+    pub triangles: Vec<EmissiveTriangle>,
+    pub table: AliasTable,
+    /// For each instance, the light index of each of its triangles (`u32::MAX` when not
+    /// emissive); `None` for instances without emissive triangles.
+    index: Vec<Option<Box<[u32]>>>,
+}
+
+impl EmissiveLights {
+    /// Collects emissive triangles; `None` when there are none (no structure is built).
+    pub fn build(geom: &Geometry<'_>) -> Option<Self> {
+        let scene = geom.scene;
+        let emissive: Vec<bool> = scene.materials.iter().map(|m| m.is_emissive()).collect();
+        if !emissive.iter().any(|&e| e) {
+            return None;
+        }
+        let mut triangles = Vec::new();
+        let mut weights = Vec::new();
+        let mut index = Vec::with_capacity(scene.instances.len());
+        for (ii, inst) in scene.instances.iter().enumerate() {
+            let mesh = &scene.meshes[inst.mesh as usize];
+            let mut map: Option<Box<[u32]>> = None;
+            for (ti, &mid) in mesh.material_ids.iter().enumerate() {
+                if !emissive.get(mid as usize).copied().unwrap_or(false) {
+                    continue;
+                }
+                let s = geom.surface(ii as u32, ti as u32, 1.0 / 3.0, 1.0 / 3.0);
+                let m = geom.material(mid);
+                // Power up to constant factors (π, two sides); the emissive texture is left out.
+                let radiance = m.emissive_factor * m.emissive_strength;
+                let w = (luminance(radiance) * s.area) as f64;
+                if !(w > 0.0 && w.is_finite()) {
+                    continue;
+                }
+                map.get_or_insert_with(|| vec![u32::MAX; mesh.indices.len()].into())[ti] =
+                    triangles.len() as u32;
+                triangles.push(EmissiveTriangle {
+                    instance: ii as u32,
+                    triangle: ti as u32,
+                });
+                weights.push(w);
+            }
+            index.push(map);
+        }
+        if triangles.is_empty() {
+            return None;
+        }
+        Some(Self {
+            triangles,
+            table: AliasTable::new(&weights),
+            index,
+        })
+    }
+
+    /// Probability that light sampling picks this triangle (0 when it is not a light).
+    pub fn pick_probability(&self, instance: u32, triangle: u32) -> f32 {
+        match self.index.get(instance as usize) {
+            Some(Some(map)) => match map.get(triangle as usize) {
+                Some(&i) if i != u32::MAX => self.table.pmf(i as usize),
+                _ => 0.0,
+            },
+            _ => 0.0,
+        }
+    }
+}
+
+/// Rec.709 luminance.
+pub(crate) fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+/// Incident light from a punctual light at `p`: direction towards the light, distance (∞ for
+/// directional) and the radiance-times-solid-angle it delivers (irradiance at normal incidence).
+pub(crate) fn punctual_incident(light: &Light, p: Vec3) -> Option<(Vec3, f32, Vec3)> {
+    match light.kind {
+        LightKind::Directional => Some((-light.direction, f32::INFINITY, light.intensity)),
+        LightKind::Point | LightKind::Spot { .. } => {
+            let d = light.position - p;
+            let d2 = d.length_squared();
+            if d2 <= 0.0 || d2.is_nan() {
+                return None;
+            }
+            let dist = d2.sqrt();
+            let wi = d / dist;
+            let mut e = light.intensity / d2;
+            if let LightKind::Spot {
+                inner_cone,
+                outer_cone,
+            } = light.kind
+            {
+                // glTF's smooth falloff between the cones.
+                let cos_outer = outer_cone.cos();
+                let scale = 1.0 / (inner_cone.cos() - cos_outer).max(1e-3);
+                let cd = light.direction.dot(-wi);
+                let a = ((cd - cos_outer) * scale).clamp(0.0, 1.0);
+                e *= a * a;
+            }
+            Some((wi, dist, e))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn alias_table_reproduces_the_weights() {
+        let w = [1.0, 0.0, 3.0, 0.5, 2.5];
+        let t = AliasTable::new(&w);
+        let n = 70000;
+        let mut counts = [0usize; 5];
+        for i in 0..n {
+            counts[t.sample((i as f32 + 0.5) / n as f32)] += 1;
+        }
+        for i in 0..5 {
+            let want = w[i] / 7.0;
+            assert!((t.pmf(i) as f64 - want).abs() < 1e-6);
+            let got = counts[i] as f64 / n as f64;
+            assert!((got - want).abs() < 2e-3, "{i}: {got} vs {want}");
+        }
+    }
+
+    #[test]
+    fn emissive_structures_exist_only_with_emitters() {
+        use crate::surface::{Geometry, MaterialOverride};
+        let plain = crate::test_scenes::lit_plane(1.0);
+        assert!(EmissiveLights::build(&Geometry::new(&plain, MaterialOverride::None)).is_none());
+        let mut lit = plain.clone();
+        lit.materials.push(crate::test_scenes::emitter(Vec3::ONE));
+        // A material that nothing uses builds nothing either.
+        assert!(EmissiveLights::build(&Geometry::new(&lit, MaterialOverride::None)).is_none());
+        lit.meshes[0].material_ids[1] = 1;
+        let em = EmissiveLights::build(&Geometry::new(&lit, MaterialOverride::None)).unwrap();
+        assert_eq!(em.triangles.len(), 1);
+        assert_eq!(em.pick_probability(0, 1), 1.0);
+        assert_eq!(em.pick_probability(0, 0), 0.0);
+    }
+
+    #[test]
+    fn spot_falloff() {
+        let light = Light {
+            name: None,
+            kind: LightKind::Spot {
+                inner_cone: 0.2,
+                outer_cone: 0.4,
+            },
+            position: Vec3::ZERO,
+            direction: Vec3::NEG_Y,
+            intensity: Vec3::splat(4.0),
+        };
+        let (_, _, on_axis) = punctual_incident(&light, Vec3::new(0.0, -2.0, 0.0)).unwrap();
+        assert_eq!(on_axis, Vec3::ONE);
+        let outside = Vec3::new(2.0 * 0.5f32.tan(), -2.0, 0.0);
+        assert_eq!(punctual_incident(&light, outside).unwrap().2, Vec3::ZERO);
+        let between = Vec3::new(2.0 * 0.3f32.tan(), -2.0, 0.0);
+        let e = punctual_incident(&light, between).unwrap().2.x;
+        assert!(e > 0.0 && e < 4.0 / between.length_squared());
+    }
+}

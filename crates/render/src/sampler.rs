@@ -1,0 +1,294 @@
+//! Sample values as pure functions of (pixel, sample index, dimension, seed).
+//!
+//! Every primary sample draws one 4-D point: the pixel pair in dimensions 0–1 (the best
+//! stratified pair of a Sobol sequence) and the lens pair in dimensions 2–3 of the *same* point,
+//! so pixel and lens are stratified jointly (SPEC §2). Each path vertex then draws its own two
+//! 4-D dimension sets. Pixels are decorrelated by hashing (pixel, seed) into the sequence's seed,
+//! so neighbouring pixels show noise rather than structure.
+
+/// Which sequence generates sample values (`--sampler`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SamplerKind {
+    /// Owen-scrambled Sobol (Burley 2020), stratified in every 4-D dimension set.
+    #[default]
+    Sobol,
+    /// Independent uniform values from a counter-based hash, for comparison.
+    Random,
+}
+
+/// The largest sample count per pixel the Sobol sampler supports (its index is 16 bits).
+pub const MAX_SPP: u32 = 1 << 16;
+
+/// 4-D dimension sets the Sobol tables hold; later sets reuse them under another scramble seed.
+const SOBOL_SETS: u32 = sobol_burley::NUM_DIMENSION_SETS_4D;
+
+/// A 32-bit integer hash with good avalanche (the "lowbias32" finaliser by Chris Wellons).
+#[inline]
+pub(crate) fn hash_u32(mut x: u32) -> u32 {
+    x ^= x >> 16;
+    x = x.wrapping_mul(0x7feb_352d);
+    x ^= x >> 15;
+    x = x.wrapping_mul(0x846c_a68b);
+    x ^= x >> 16;
+    x
+}
+
+/// SplitMix64's finaliser: the counter-based generator of the random sampler.
+#[inline]
+fn mix_u64(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// Maps the top 24 bits of `x` to a float in `[0, 1)`: every value is exactly representable, so
+/// the result never rounds up to 1.
+#[inline]
+fn u32_to_unit(x: u32) -> f32 {
+    (x >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+}
+
+/// The per-pixel seed: decorrelates pixels while keeping each pixel's sequence a pure function of
+/// (pixel, seed).
+pub fn pixel_seed(x: u32, y: u32, seed: u32) -> u32 {
+    hash_u32(x ^ hash_u32(y.wrapping_add(0x9e37_79b9) ^ hash_u32(seed.wrapping_add(0x85eb_ca6b))))
+}
+
+impl SamplerKind {
+    /// Dimensions `4·set .. 4·set + 4` of sample `index` of the pixel whose seed is `pixel_seed`.
+    ///
+    /// Sobol: at most [`MAX_SPP`] samples per pixel; sets past the tables' 64 are padded by
+    /// re-scrambling (Burley's padding), so each set is stratified within itself.
+    pub fn sample_4d(self, pixel_seed: u32, index: u32, set: u32) -> [f32; 4] {
+        match self {
+            Self::Sobol => {
+                let (set, seed) = sobol_set(pixel_seed, set);
+                sobol_burley::sample_4d(index, set, seed)
+            }
+            Self::Random => {
+                let (a, b) = random_words(pixel_seed, index, set);
+                [
+                    u32_to_unit(a as u32),
+                    u32_to_unit((a >> 32) as u32),
+                    u32_to_unit(b as u32),
+                    u32_to_unit((b >> 32) as u32),
+                ]
+            }
+        }
+    }
+
+    /// The first two dimensions of [`SamplerKind::sample_4d`], computing nothing else: what a
+    /// pinhole camera draws.
+    pub fn sample_2d(self, pixel_seed: u32, index: u32, set: u32) -> [f32; 2] {
+        match self {
+            Self::Sobol => {
+                let (set, seed) = sobol_set(pixel_seed, set);
+                [
+                    sobol_burley::sample(index, 4 * set, seed),
+                    sobol_burley::sample(index, 4 * set + 1, seed),
+                ]
+            }
+            Self::Random => {
+                let (a, _) = random_words(pixel_seed, index, set);
+                [u32_to_unit(a as u32), u32_to_unit((a >> 32) as u32)]
+            }
+        }
+    }
+}
+
+/// The table set and scramble seed of dimension set `set`.
+fn sobol_set(pixel_seed: u32, set: u32) -> (u32, u32) {
+    if set < SOBOL_SETS {
+        (set, pixel_seed)
+    } else {
+        (
+            set % SOBOL_SETS,
+            hash_u32(pixel_seed ^ hash_u32(set / SOBOL_SETS)),
+        )
+    }
+}
+
+/// The random sampler's two 64-bit words for one dimension set: a hash of the counter
+/// (pixel seed, index, set), so the values are a pure function of it.
+fn random_words(pixel_seed: u32, index: u32, set: u32) -> (u64, u64) {
+    let key = ((pixel_seed as u64) << 32) | index as u64;
+    let base = mix_u64(key ^ mix_u64(set as u64 ^ 0x5851_f42d_4c95_7f2d));
+    (mix_u64(base), mix_u64(base ^ 0xd6e8_feb8_6659_fd93))
+}
+
+/// The dimensions of one primary sample: which sequence, which pixel, which sample.
+#[derive(Debug, Clone, Copy)]
+pub struct SampleStream {
+    kind: SamplerKind,
+    pixel_seed: u32,
+    index: u32,
+}
+
+/// The values one path vertex draws.
+#[derive(Debug, Clone, Copy)]
+pub struct BounceSample {
+    /// BSDF lobe choice.
+    pub lobe: f32,
+    /// BSDF direction sample.
+    pub bsdf: [f32; 2],
+    /// Russian roulette.
+    pub rr: f32,
+    /// Which light to sample.
+    pub light_pick: f32,
+    /// Where on the light.
+    pub light: [f32; 2],
+    /// Stochastic alpha (coverage) decisions.
+    pub alpha: f32,
+}
+
+impl SampleStream {
+    /// The stream of sample `index` in the pixel `(x, y)`.
+    pub fn new(kind: SamplerKind, x: u32, y: u32, index: u32, seed: u32) -> Self {
+        Self {
+            kind,
+            pixel_seed: pixel_seed(x, y, seed),
+            index,
+        }
+    }
+
+    /// The pixel pair alone (dimensions 0–1), for a pinhole camera.
+    pub fn pixel(&self) -> [f32; 2] {
+        self.kind.sample_2d(self.pixel_seed, self.index, 0)
+    }
+
+    /// The camera's 4-D point: pixel pair (dimensions 0–1), lens pair (dimensions 2–3).
+    pub fn camera(&self) -> [f32; 4] {
+        self.kind.sample_4d(self.pixel_seed, self.index, 0)
+    }
+
+    /// The values of path vertex `k` (0 = the camera ray's hit): dimension sets `1 + 2k` and
+    /// `2 + 2k`, so no two vertices share a dimension.
+    pub fn bounce(&self, k: u32) -> BounceSample {
+        let a = self.kind.sample_4d(self.pixel_seed, self.index, 1 + 2 * k);
+        let b = self.kind.sample_4d(self.pixel_seed, self.index, 2 + 2 * k);
+        BounceSample {
+            lobe: a[0],
+            bsdf: [a[1], a[2]],
+            rr: a[3],
+            light_pick: b[0],
+            light: [b[1], b[2]],
+            alpha: b[3],
+        }
+    }
+
+    /// An extra value for the `n`-th repeated decision at vertex `k` (alpha pass-through after
+    /// the first), hashed so it stays a pure function of the sample.
+    pub fn extra(&self, k: u32, n: u32) -> f32 {
+        let h = hash_u32(
+            self.pixel_seed ^ hash_u32(self.index ^ hash_u32(k.wrapping_mul(0x2545_f491) ^ n)),
+        );
+        u32_to_unit(h)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn points(kind: SamplerKind, n: u32, seed: u32) -> Vec<[f32; 4]> {
+        let ps = pixel_seed(3, 7, seed);
+        (0..n).map(|i| kind.sample_4d(ps, i, 0)).collect()
+    }
+
+    #[test]
+    fn values_are_deterministic_and_in_unit_interval() {
+        for kind in [SamplerKind::Sobol, SamplerKind::Random] {
+            let a = points(kind, 64, 11);
+            let b = points(kind, 64, 11);
+            assert_eq!(a, b);
+            assert!(a.iter().flatten().all(|v| (0.0..1.0).contains(v)));
+            // Another seed and another pixel give other values.
+            assert_ne!(a, points(kind, 64, 12));
+            let other: Vec<_> = (0..64)
+                .map(|i| kind.sample_4d(pixel_seed(4, 7, 11), i, 0))
+                .collect();
+            assert_ne!(a, other);
+        }
+    }
+
+    #[test]
+    fn two_d_values_are_the_first_two_of_four() {
+        for kind in [SamplerKind::Sobol, SamplerKind::Random] {
+            for set in [0, 3, 70] {
+                let a = kind.sample_4d(99, 7, set);
+                assert_eq!(kind.sample_2d(99, 7, set), [a[0], a[1]]);
+            }
+        }
+    }
+
+    #[test]
+    fn padded_dimension_sets_differ_from_the_tables() {
+        let ps = pixel_seed(0, 0, 0);
+        let s = SamplerKind::Sobol;
+        assert_ne!(s.sample_4d(ps, 5, 1), s.sample_4d(ps, 5, 1 + SOBOL_SETS));
+    }
+
+    /// True when the points, binned into `cx × cy` equal cells along dimensions (`i`, `j`), put
+    /// the same number of points into every cell.
+    fn stratified(pts: &[[f32; 4]], i: usize, j: usize, cx: usize, cy: usize) -> bool {
+        let mut count = vec![0usize; cx * cy];
+        for p in pts {
+            let a = (p[i] * cx as f32) as usize;
+            let b = (p[j] * cy as f32) as usize;
+            count[b * cx + a] += 1;
+        }
+        let want = pts.len() / (cx * cy);
+        count.iter().all(|&c| c == want)
+    }
+
+    /// The quality parameter `t` of a 2-D projection of `2^m` points: the smallest `t` such that
+    /// every elementary interval of area `2^(t−m)` (all `2^k × 2^(m−t−k)` grids) holds exactly
+    /// `2^t` points. `t = 0` is perfect stratification; independent points have `t` close to `m`.
+    fn t_value(pts: &[[f32; 4]], i: usize, j: usize) -> u32 {
+        let m = pts.len().trailing_zeros();
+        (0..=m)
+            .find(|&t| (0..=m - t).all(|k| stratified(pts, i, j, 1 << k, 1 << (m - t - k))))
+            .unwrap_or(m)
+    }
+
+    /// Every 2-D projection of the camera's 4-D set is stratified for power-of-two counts: the
+    /// pixel pair perfectly (a (0,m,2)-net: every elementary interval of area 1/n holds one
+    /// point), every other pair in every elementary interval of area 4/n (t ≤ 2), and every 1-D
+    /// projection in n strata. (t = 0 for all six pairs is impossible for any 4-D set: at n = 4
+    /// it would need four mutually orthogonal balanced binary columns of length 4, and at most
+    /// three exist.)
+    #[test]
+    fn sobol_every_2d_projection_is_stratified_for_power_of_two_spp() {
+        for m in 1u32..=10 {
+            let n = 1u32 << m;
+            for seed in [0, 1, 1234] {
+                let pts = points(SamplerKind::Sobol, n, seed);
+                for i in 0..4 {
+                    assert!(stratified(&pts, i, i, n as usize, 1), "1-D dim {i}, n {n}");
+                    for j in i + 1..4 {
+                        let t = t_value(&pts, i, j);
+                        let bound = if (i, j) == (0, 1) { 0 } else { 2 };
+                        assert!(t <= bound, "dims ({i},{j}), n {n}, seed {seed}: t = {t}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn random_sampler_is_not_stratified() {
+        // The check above must be able to fail: independent values miss strata.
+        let pts = points(SamplerKind::Random, 256, 0);
+        assert!(!stratified(&pts, 0, 1, 16, 16));
+        assert!(t_value(&pts, 0, 1) > 2 && t_value(&pts, 2, 3) > 2);
+    }
+
+    #[test]
+    fn bounces_use_distinct_dimensions() {
+        let s = SampleStream::new(SamplerKind::Sobol, 1, 2, 3, 4);
+        let a = s.bounce(0);
+        let b = s.bounce(1);
+        assert_ne!(a.bsdf, b.bsdf);
+        assert_ne!(s.camera()[0], a.lobe);
+    }
+}

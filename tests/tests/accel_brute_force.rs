@@ -1,0 +1,187 @@
+//! The BVH answers exactly as brute force over every triangle (same ray transform, same triangle
+//! test), for flattened and instanced scenes, closest hit and occlusion; and every reported hit
+//! lies on the triangle it names (checked against the input meshes, independently of the BVH).
+
+#[path = "accel_util.rs"]
+mod util;
+
+use aperture_accel::{Accel, BvhQuality, InstanceInput, Ray};
+use glam::{Affine3A, Vec3};
+use util::{icosphere, random_rays, random_transform, soup, Rng, Scene};
+
+fn check(scene: &Scene, accel: &Accel, rays: &[Ray]) -> usize {
+    let mut hits = 0;
+    for (k, ray) in rays.iter().enumerate() {
+        let bvh = accel.intersect(ray);
+        let brute = accel.intersect_brute_force(ray);
+        match (bvh, brute) {
+            (None, None) => {}
+            (Some(a), Some(b)) => {
+                hits += 1;
+                assert_eq!(a.t, b.t, "ray {k} {ray:?}: bvh {a:?} brute {b:?}");
+                // Different triangles at the same t are a tie on a shared edge or vertex; the
+                // checks below still require the BVH's triangle to contain the hit point.
+                let w = 1.0 - a.u - a.v;
+                assert!(
+                    [a.u, a.v, w]
+                        .iter()
+                        .all(|b| (-1e-6..=1.0 + 1e-6).contains(b)),
+                    "ray {k}: barycentrics out of range: {a:?} (brute {b:?})"
+                );
+                // Independent check: the hit point lies on the named triangle.
+                let p = scene.world_triangle(a.instance, a.triangle);
+                let on_tri = p[0] * (1.0 - a.u - a.v) + p[1] * a.u + p[2] * a.v;
+                let on_ray = ray.origin + ray.dir * a.t;
+                let size = (p[1] - p[0]).length() + (p[2] - p[0]).length() + on_ray.length();
+                assert!(
+                    (on_tri - on_ray).length() <= 1e-4 * size,
+                    "ray {k}: {a:?}: triangle point {on_tri} vs ray point {on_ray}"
+                );
+                assert!(
+                    a.t >= ray.tmin && a.t <= ray.tmax,
+                    "ray {k}: {a:?} outside range"
+                );
+            }
+            (a, b) => panic!("ray {k} {ray:?}: bvh {a:?} brute {b:?}"),
+        }
+        assert_eq!(
+            accel.occluded(ray),
+            brute.is_some(),
+            "occlusion of ray {k} {ray:?}"
+        );
+    }
+    hits
+}
+
+fn assert_mixed(hits: usize, n: usize) {
+    // Both outcomes must be exercised or the comparison proves little.
+    assert!(hits > n / 10 && hits < n, "{hits} of {n} rays hit");
+}
+
+#[test]
+fn flattened_random_soup() {
+    let mut rng = Rng(1);
+    let (lo, hi) = (Vec3::splat(-10.0), Vec3::splat(10.0));
+    let mesh = soup(&mut rng, 20_000, lo, hi, 0.6);
+    let scene = Scene {
+        meshes: vec![mesh],
+        instances: vec![InstanceInput {
+            mesh: 0,
+            world_from_object: Affine3A::IDENTITY,
+        }],
+    };
+    let rays = random_rays(&mut rng, 2000, lo, hi);
+    for q in BvhQuality::ALL {
+        let accel = scene.build(q);
+        assert_eq!(accel.stats().unique_triangles, 20_000);
+        assert_mixed(check(&scene, &accel, &rays), rays.len());
+    }
+}
+
+#[test]
+fn instanced_meshes_with_mirrors_and_single_use_meshes() {
+    let mut rng = Rng(2);
+    let (lo, hi) = (Vec3::splat(-20.0), Vec3::splat(20.0));
+    let sphere = icosphere(2);
+    let blob = soup(&mut rng, 300, Vec3::splat(-1.0), Vec3::splat(1.0), 0.4);
+    let once = soup(&mut rng, 2000, lo, hi, 0.8);
+    let mut instances = Vec::new();
+    for i in 0..150 {
+        instances.push(InstanceInput {
+            mesh: (i % 2) as u32,
+            world_from_object: random_transform(&mut rng, lo, hi, i % 3 == 0),
+        });
+    }
+    instances.push(InstanceInput {
+        mesh: 2,
+        world_from_object: random_transform(&mut rng, Vec3::ZERO, Vec3::ZERO, false),
+    });
+    let scene = Scene {
+        meshes: vec![sphere, blob, once],
+        instances,
+    };
+    let accel = scene.build(BvhQuality::default());
+    let s = accel.stats();
+    assert_eq!(s.flattened_instances, 1);
+    assert_eq!(s.blas_count, 3);
+    assert_eq!(s.tlas_entries, 151);
+    assert_eq!(s.drawn_triangles, 75 * 320 + 75 * 300 + 2000);
+    let rays = random_rays(&mut rng, 3000, lo, hi);
+    assert_mixed(check(&scene, &accel, &rays), rays.len());
+}
+
+#[test]
+fn simple_instancing_shape_cube_grid() {
+    // SimpleInstancing-like: one 12-triangle cube drawn 125 times on a grid.
+    let c = [-0.4f32, 0.4];
+    let pos: Vec<Vec3> = (0..8)
+        .map(|i| Vec3::new(c[i & 1], c[(i >> 1) & 1], c[(i >> 2) & 1]))
+        .collect();
+    let idx = vec![
+        [0, 2, 1],
+        [1, 2, 3],
+        [4, 5, 6],
+        [5, 7, 6],
+        [0, 1, 4],
+        [1, 5, 4],
+        [2, 6, 3],
+        [3, 6, 7],
+        [0, 4, 2],
+        [2, 4, 6],
+        [1, 3, 5],
+        [3, 7, 5],
+    ];
+    let mut instances = Vec::new();
+    for x in 0..5 {
+        for y in 0..5 {
+            for z in 0..5 {
+                instances.push(InstanceInput {
+                    mesh: 0,
+                    world_from_object: Affine3A::from_translation(Vec3::new(
+                        x as f32, y as f32, z as f32,
+                    )),
+                });
+            }
+        }
+    }
+    let scene = Scene {
+        meshes: vec![(pos, idx)],
+        instances,
+    };
+    let accel = scene.build(BvhQuality::default());
+    assert_eq!(accel.stats().drawn_triangles, 1500);
+    assert_eq!(accel.stats().unique_triangles, 12);
+    let mut rng = Rng(3);
+    let rays = random_rays(&mut rng, 3000, Vec3::splat(-1.0), Vec3::splat(5.0));
+    assert_mixed(check(&scene, &accel, &rays), rays.len());
+    // Axis-aligned rays along the grid lines and through the gaps (zero direction components).
+    let mut hits = 0;
+    for i in 0..200 {
+        let o = Vec3::new(-2.0, rng.range(-0.5, 4.5), rng.range(-0.5, 4.5));
+        let o = if i % 2 == 0 { o.round() } else { o };
+        hits += check(&scene, &accel, &[Ray::new(o, Vec3::X)]);
+    }
+    assert_mixed(hits, 200);
+}
+
+#[test]
+fn thin_lens_like_rays_from_outside() {
+    let mut rng = Rng(4);
+    let sphere = icosphere(4);
+    let scene = Scene {
+        meshes: vec![sphere],
+        instances: vec![InstanceInput {
+            mesh: 0,
+            world_from_object: Affine3A::from_scale(Vec3::splat(3.0)),
+        }],
+    };
+    let accel = scene.build(BvhQuality::default());
+    let rays: Vec<Ray> = (0..2000)
+        .map(|_| {
+            let lens = Vec3::new(rng.range(-0.2, 0.2), rng.range(-0.2, 0.2), 10.0);
+            let target = Vec3::new(rng.range(-4.0, 4.0), rng.range(-4.0, 4.0), 0.0);
+            Ray::new(lens, target - lens)
+        })
+        .collect();
+    assert_mixed(check(&scene, &accel, &rays), rays.len());
+}
