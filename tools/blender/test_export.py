@@ -459,6 +459,13 @@ def setup_cycles(spp, seed):
     cy.seed = seed
     cy.use_animated_seed = False
     cy.blur_glossy = 0.0
+    # Unbiased paths of up to 12 bounces of any kind, as aperture's default --max-bounces 12
+    # (Cycles' defaults stop diffuse paths after 4 bounces and cull dim lights).
+    cy.max_bounces = 12
+    cy.diffuse_bounces = 12
+    cy.glossy_bounces = 12
+    cy.transmission_bounces = 12
+    cy.light_sampling_threshold = 0.0
     sc.world = None  # black, as glTF has no environment
     sc.render.film_transparent = False
     sc.render.use_persistent_data = False
@@ -568,6 +575,7 @@ def render_flags(help_text):
         "spp": first("--spp", "--samples"),
         "seed": first("--seed"),
         "override": first("--override-material"),
+        "filter": first("--filter"),
     }
 
 
@@ -597,6 +605,8 @@ def test_render(binary, scene_path, cam):
             cmd += [flags["spp"], str(ARGS.spp)]
         if flags["seed"]:
             cmd += [flags["seed"], "7"]
+        if flags["filter"]:
+            cmd += [flags["filter"], "box"]  # Cycles is set to a 1-pixel box too
         t = time.time()
         out = subprocess.run(cmd, capture_output=True, text=True, timeout=1800)
         t_ours = time.time() - t
