@@ -1,5 +1,7 @@
 //! Shared helpers for the end-to-end tests in `tests/tests/`.
 
+pub mod demo;
+
 use std::path::PathBuf;
 
 /// The folder of third-party glTF samples: `APERTURE_SAMPLES`, else `../shared/gltf-samples`

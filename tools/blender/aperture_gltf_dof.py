@@ -1,0 +1,247 @@
+# SPDX-License-Identifier: MIT OR Apache-2.0
+"""aperture: export Blender's camera depth of field to glTF camera extras.
+
+A single-file Blender add-on. It hooks the official glTF 2.0 exporter (io_scene_gltf2) through its
+user-extension interface (``glTF2ExportUserExtension``) and writes each camera's native settings to
+``cameras[i].extras`` under Blender's own property names. The aperture renderer reads them there
+(its SPEC, section 3):
+
+    use_dof, focus_distance, focus_object, aperture_fstop, aperture_blades, aperture_rotation,
+    aperture_ratio, lens, sensor_width, sensor_height, sensor_fit
+
+The rules:
+
+- Custom properties win. If you set a custom property with one of these names on the camera data
+  by hand, its value is exported, whether or not the exporter's "Custom Properties" option is on.
+- A camera with depth of field off still exports ``use_dof: false``, together with the other keys.
+- ``focus_object`` is the name of the focused object's glTF node. The exporter names nodes after
+  their objects. Focusing on a bone (``focus_subtarget``) is not supported: the exporter warns, and
+  the focus goes to the armature object's origin. If the focus object is not exported (for example
+  "Selected Objects" is on and the object is not selected), ``focus_object`` is replaced by
+  ``focus_distance``, the object's depth along the camera's view axis as it is in Blender, and the
+  exporter warns.
+- Orthographic cameras: Cycles uses a lens radius of ``1 / (2 * fstop)`` scene units for these
+  (no focal length); the test measured this with Blender 5.0.1. The add-on writes that radius as
+  ``aperture_radius``, which wins over ``aperture_fstop``, so the renderer gets the same aperture
+  as Cycles. A hand-set ``aperture_fstop`` is used for it, and a hand-set ``aperture_radius`` is
+  kept.
+- Blade counts of 1 and 2 (Blender's own settings cannot hold them) are written as 0, a round
+  aperture, which is what Cycles renders.
+
+Install: Edit > Preferences > Add-ons > Install from Disk (this file), then enable
+"aperture: glTF camera depth of field". After that, File > Export > glTF 2.0 writes the extras.
+"""
+
+bl_info = {
+    "name": "aperture: glTF camera depth of field",
+    "author": "the aperture authors",
+    "version": (0, 1, 0),
+    "blender": (4, 2, 0),
+    "location": "File > Export > glTF 2.0 (cameras' extras)",
+    "description": "Writes each camera's depth of field, lens and sensor to cameras[i].extras "
+    "of the glTF export, under Blender's property names",
+    "doc_url": "",
+    "category": "Import-Export",
+}
+
+import struct
+
+import bpy
+
+# The keys this add-on writes, in SPEC section 3's order.
+KEYS = (
+    "use_dof",
+    "focus_distance",
+    "focus_object",
+    "aperture_fstop",
+    "aperture_blades",
+    "aperture_rotation",
+    "aperture_ratio",
+    "lens",
+    "sensor_width",
+    "sensor_height",
+    "sensor_fit",
+)
+
+# Written for orthographic cameras only (Cycles' radius for them).
+ORTHO_RADIUS_KEY = "aperture_radius"
+
+_PREFIX = "aperture_gltf_dof: "
+
+
+def _json_value(value):
+    """A custom property's value in a form the exporter can write (as its own extras code does)."""
+    if isinstance(value, bpy.types.ID):
+        return value  # the exporter writes an ID as {"name": ..., "type": ...}
+    if isinstance(value, (bool, int, float, str)):
+        return value
+    if hasattr(value, "to_list"):
+        return value.to_list()
+    if hasattr(value, "to_dict"):
+        return value.to_dict()
+    if isinstance(value, (list, tuple)):
+        return [_json_value(v) for v in value]
+    return None
+
+
+def _f32(value):
+    """The shortest decimal that reads back as the same 32-bit float Blender stores (1.4, not
+    1.399999976158142)."""
+    value = float(value)
+    packed = struct.pack("<f", value)
+    for digits in range(6, 10):
+        short = float(f"{value:.{digits}g}")
+        if struct.pack("<f", short) == packed:
+            return short
+    return value
+
+
+def native_extras(camera):
+    """The camera data's native settings as SPEC section 3 extras: ``(extras, warnings)``.
+
+    ``camera`` is a ``bpy.types.Camera`` (the object's data). Custom properties are not read here.
+    """
+    dof = camera.dof
+    warnings = []
+    blades = int(dof.aperture_blades)
+    extras = {
+        "use_dof": bool(dof.use_dof),
+        "focus_distance": _f32(dof.focus_distance),
+        "aperture_fstop": _f32(dof.aperture_fstop),
+        "aperture_blades": blades if blades >= 3 else 0,
+        "aperture_rotation": _f32(dof.aperture_rotation),
+        "aperture_ratio": _f32(dof.aperture_ratio),
+        "lens": _f32(camera.lens),
+        "sensor_width": _f32(camera.sensor_width),
+        "sensor_height": _f32(camera.sensor_height),
+        "sensor_fit": str(camera.sensor_fit),
+    }
+    target = dof.focus_object
+    if target is not None:
+        extras["focus_object"] = target.name
+        subtarget = getattr(dof, "focus_subtarget", "")
+        if subtarget:
+            warnings.append(
+                f"camera '{camera.name}': focusing on bone '{subtarget}' of '{target.name}' is "
+                f"not supported; the focus is on the origin of '{target.name}' instead"
+            )
+    return extras, warnings
+
+
+def _warn(export_settings, message):
+    log = export_settings.get("log") if hasattr(export_settings, "get") else None
+    if log is not None and hasattr(log, "warning"):
+        log.warning(_PREFIX + message)
+    else:
+        print("WARNING: " + _PREFIX + message)
+
+
+def _view_depth(camera_object, target_object):
+    """Distance of ``target_object``'s origin along ``camera_object``'s view axis (its local -Z)."""
+    matrix = camera_object.matrix_world
+    rotation = matrix.to_quaternion()  # scale removed, as SPEC section 1 says for cameras
+    view = rotation @ bpy_vector((0.0, 0.0, -1.0))
+    return (target_object.matrix_world.translation - matrix.translation).dot(view)
+
+
+def bpy_vector(xyz):
+    """A ``mathutils.Vector`` (imported lazily so the module loads without Blender's mathutils)."""
+    from mathutils import Vector
+
+    return Vector(xyz)
+
+
+class glTF2ExportUserExtension:
+    """Found by the glTF exporter among the enabled add-ons; one instance per export."""
+
+    def __init__(self):
+        # id(gltf camera) -> (camera data name, keys this add-on wrote from native values)
+        self._written = {}
+
+    def gather_camera_hook(self, gltf2_camera, blender_camera, export_settings):
+        """Adds the camera's depth of field to ``gltf2_camera.extras`` (custom properties win)."""
+        if isinstance(blender_camera, bpy.types.Object):  # older exporters passed the object
+            blender_camera = blender_camera.data
+        if not isinstance(blender_camera, bpy.types.Camera):
+            return
+        native, warnings = native_extras(blender_camera)
+        for message in warnings:
+            _warn(export_settings, message)
+
+        extras = gltf2_camera.extras if isinstance(gltf2_camera.extras, dict) else {}
+        written = set()
+
+        def put(key, value):
+            if key in extras:
+                return  # exported from a custom property already: it wins
+            if key in blender_camera.keys():  # set by hand, "Custom Properties" export off
+                custom = _json_value(blender_camera[key])
+                if custom is not None:
+                    extras[key] = custom
+                    return
+            extras[key] = value
+            written.add(key)
+
+        for key in KEYS:
+            if key in native:
+                put(key, native[key])
+
+        if blender_camera.type == "ORTHO":
+            fstop = extras.get("aperture_fstop")
+            if isinstance(fstop, (int, float)) and not isinstance(fstop, bool) and fstop > 0:
+                put(ORTHO_RADIUS_KEY, _f32(1.0 / (2.0 * float(fstop))))
+
+        gltf2_camera.extras = extras
+        self._written[id(gltf2_camera)] = (blender_camera.name, written)
+
+    def gather_gltf_extensions_hook(self, gltf2_plan, export_settings):
+        """Checks that each ``focus_object`` names an exported node, else falls back to a distance."""
+        nodes = getattr(gltf2_plan, "nodes", None) or []
+        cameras = getattr(gltf2_plan, "cameras", None) or []
+        names = {getattr(n, "name", None) for n in nodes}
+        for index, camera in enumerate(cameras):
+            extras = getattr(camera, "extras", None)
+            if not isinstance(extras, dict) or "focus_object" not in extras:
+                continue
+            target = extras["focus_object"]
+            if not isinstance(target, str) or target in names:
+                continue
+            data_name, written = self._written.get(id(camera), (getattr(camera, "name", "?"), set()))
+            if "focus_object" not in written:
+                _warn(
+                    export_settings,
+                    f"camera '{data_name}': custom property focus_object = '{target}' names no "
+                    "exported node",
+                )
+                continue
+            del extras["focus_object"]
+            camera_nodes = [
+                n for n in nodes if getattr(n, "camera", None) in (index, camera)
+            ]
+            target_object = bpy.data.objects.get(target)
+            camera_object = (
+                bpy.data.objects.get(camera_nodes[0].name) if camera_nodes else None
+            )
+            if target_object is not None and camera_object is not None and "focus_distance" in written:
+                depth = _view_depth(camera_object, target_object)
+                if depth > 0.0:
+                    extras["focus_distance"] = depth
+                    _warn(
+                        export_settings,
+                        f"camera '{data_name}': focus object '{target}' is not exported; "
+                        f"writing its depth, focus_distance = {depth:.6g}, instead",
+                    )
+                    continue
+            _warn(
+                export_settings,
+                f"camera '{data_name}': focus object '{target}' is not exported; "
+                f"focus_distance = {extras.get('focus_distance')} is used instead",
+            )
+
+
+def register():
+    """Nothing to register: the exporter finds ``glTF2ExportUserExtension`` in this module."""
+
+
+def unregister():
+    """Nothing to unregister."""

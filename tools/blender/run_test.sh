@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Runs the Blender add-on acceptance test (tools/blender/test_export.py) with Blender as a Python
+# module: bpy 5.0.1 (or APERTURE_BPY) on Python 3.11, in a cached virtual environment that is
+# created and filled on first use. Never part of the Rust build.
+#
+#   tools/blender/run_test.sh [test_export.py options, e.g. --require-all --out DIR --spp 512]
+#
+# Environment:
+#   APERTURE_BPY       the bpy version (default 5.0.1; 4.2.0 also passes part (a))
+#   APERTURE_BPY_VENV  the virtual environment (default ${XDG_CACHE_HOME:-$HOME/.cache}/aperture/bpy-$APERTURE_BPY)
+#   PYTHON311          the Python 3.11 interpreter to create it with (default: python3.11, else python3)
+#   APERTURE_BIN       the aperture binary (default: target/release/aperture, built here when missing
+#                      or older than the sources)
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+
+bpy_version="${APERTURE_BPY:-5.0.1}"
+venv="${APERTURE_BPY_VENV:-${XDG_CACHE_HOME:-$HOME/.cache}/aperture/bpy-$bpy_version}"
+python="${PYTHON311:-$(command -v python3.11 || command -v python3)}"
+start=$(date +%s)
+
+if ! "$venv/bin/python" -c 'import bpy' >/dev/null 2>&1; then
+    version=$("$python" -c 'import sys; print("%d.%d" % sys.version_info[:2])')
+    if [ "$version" != "3.11" ]; then
+        echo "error: bpy $bpy_version needs Python 3.11; $python is $version (set PYTHON311)" >&2
+        exit 1
+    fi
+    echo "== installing bpy $bpy_version into $venv (about 1 GB)"
+    rm -rf "$venv"
+    mkdir -p "$(dirname "$venv")"
+    "$python" -m venv "$venv"
+    "$venv/bin/pip" install --quiet --disable-pip-version-check "bpy==$bpy_version"
+    echo "== bpy installed in $(($(date +%s) - start)) s"
+fi
+
+bin="${APERTURE_BIN:-target/release/aperture}"
+if [ -z "${APERTURE_BIN:-}" ]; then
+    echo "== cargo build --release -p aperture-cli"
+    cargo build --release --quiet -p aperture-cli
+fi
+
+echo "== tools/blender/test_export.py"
+status=0
+"$venv/bin/python" tools/blender/test_export.py --aperture "$bin" "$@" || status=$?
+echo "== blender test: exit $status after $(($(date +%s) - start)) s"
+exit $status
