@@ -486,7 +486,14 @@ fn draw_plot<DB: plotters::prelude::DrawingBackend>(
         RGBColor(148, 103, 189),
     ];
     for (i, (name, p)) in series.iter().enumerate() {
-        let color = palette[i % palette.len()];
+        // A configuration keeps its colour whichever others are plotted.
+        let slot = match name.as_str() {
+            "sobol" => 0,
+            "random" => 1,
+            "adaptive" => 2,
+            _ => i,
+        };
+        let color = palette[slot % palette.len()];
         let p: Vec<(f64, f64)> = p
             .iter()
             .copied()
