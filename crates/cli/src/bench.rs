@@ -559,4 +559,49 @@ mod tests {
         assert_eq!(interpolate_time(&[(1.0, 1e-2), (2.0, 5e-3)], 1e-3), None);
         assert_eq!(interpolate_time(&[(1.0, 1e-4)], 1e-3), Some(1.0));
     }
+
+    /// The whole command on a real sample, without a reference: it renders one, then writes
+    /// the CSV (one row per configuration and budget) and the plot.
+    #[test]
+    fn writes_reference_csv_and_plot() {
+        let samples = std::env::var_os("APERTURE_SAMPLES")
+            .map(PathBuf::from)
+            .unwrap_or_else(|| {
+                PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/gltf-samples")
+            });
+        let box_glb = samples.join("correctness/BoxTextured/BoxTextured.glb");
+        if !box_glb.is_file() {
+            eprintln!("skipping: {} not found", box_glb.display());
+            return;
+        }
+        let dir = std::env::temp_dir().join(format!("aperture-bench-{}", std::process::id()));
+        let mut args = parse(&[
+            "--spp",
+            "1,4",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "--reference-spp",
+            "16",
+        ])
+        .unwrap();
+        args.scene = box_glb;
+        args.output = dir.clone();
+        run(args).unwrap();
+        let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines.len(), 1 + 3 * 2, "{csv}");
+        assert!(lines[0].starts_with("config,spp,"));
+        assert!(lines[1].starts_with("sobol,1,16,12,"));
+        assert!(lines[6].starts_with("adaptive,4,"));
+        let reference = aperture_imageio::read_exr(&dir.join("reference.exr")).unwrap();
+        assert_eq!((reference.width, reference.height), (16, 12));
+        if load_font() {
+            let svg = std::fs::read_to_string(dir.join("error_vs_time.svg")).unwrap();
+            assert!(svg.contains("relative MSE") && svg.contains("adaptive"));
+            assert!(dir.join("error_vs_time.png").is_file());
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -508,6 +508,38 @@ mod tests {
             std::fs::remove_file(&out).unwrap();
         }
         assert_eq!(images[0].rgba, images[1].rgba);
+        // Adaptive sampling with the samples pass: the layer holds each pixel's count.
+        let out = dir.join(format!("aperture-cli-{}-adaptive.exr", std::process::id()));
+        let mut args = parse(&[
+            "--width",
+            "24",
+            "--height",
+            "16",
+            "--spp",
+            "16",
+            "--noise-threshold",
+            "0.05",
+            "--min-spp",
+            "4",
+            "--samples-pass",
+            "--env",
+            "1,1,1",
+            "--quiet",
+        ])
+        .unwrap();
+        args.scene = box_glb.clone();
+        args.output = out.clone();
+        run(args).unwrap();
+        let adaptive = aperture_imageio::read_exr(&out).unwrap();
+        std::fs::remove_file(&out).unwrap();
+        let counts = &adaptive.layer("samples").expect("samples layer").data;
+        assert_eq!(counts.len(), 24 * 16);
+        assert!(counts.iter().all(|&n| (4.0..=16.0).contains(&n)));
+        // The uniform environment converges at the minimum; the box's edges do not.
+        assert!(
+            counts.contains(&4.0) && counts.contains(&16.0),
+            "{counts:?}"
+        );
         assert_eq!((images[0].width, images[0].height), (24, 16));
         assert!(images[0].rgba.iter().any(|p| p[3] == 1.0));
         assert_eq!(
