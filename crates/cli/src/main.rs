@@ -1,5 +1,6 @@
 //! `aperture`: render glTF scenes with physically based depth of field.
 
+mod bench;
 mod info;
 mod progress;
 mod render_cmd;
@@ -20,6 +21,8 @@ pub(crate) enum Command {
     Info(info::InfoArgs),
     /// Render a scene to EXR or PNG.
     Render(render_cmd::RenderArgs),
+    /// Error against time per sampler configuration: CSV, log-log plot and table.
+    Bench(bench::BenchArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -27,6 +30,7 @@ fn main() -> std::process::ExitCode {
     let result = match cli.command {
         Command::Info(args) => info::run(args),
         Command::Render(args) => render_cmd::run(args),
+        Command::Bench(args) => bench::run(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

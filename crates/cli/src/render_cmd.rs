@@ -169,6 +169,18 @@ pub struct RenderArgs {
     /// partial coverage (bokeh against the sky) stays visible. EXR always stores coverage.
     #[arg(long)]
     pub transparent: bool,
+    /// Adaptive sampling (as Blender Cycles'): a pixel stops once its estimated relative noise
+    /// is below this (0.01 is Cycles' default; smaller is cleaner and slower). `--spp` becomes
+    /// the most samples a pixel takes.
+    #[arg(long, value_parser = positive_f32, allow_hyphen_values = true)]
+    pub noise_threshold: Option<f32>,
+    /// With --noise-threshold: samples every pixel takes before it may stop [default: √spp
+    /// rounded up to a power of two, at least 4].
+    #[arg(long, requires = "noise_threshold", value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub min_spp: Option<u32>,
+    /// Add a `samples` layer to EXR output: the samples each pixel took.
+    #[arg(long)]
+    pub samples_pass: bool,
     /// No progress bar and no summary.
     #[arg(long, short)]
     pub quiet: bool,
@@ -258,7 +270,23 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         BvhQualityArg::Medium => aperture_accel::BvhQuality::Medium,
         BvhQualityArg::High => aperture_accel::BvhQuality::High,
     };
+    if args.min_spp.is_some_and(|m| m > args.spp) {
+        usage_error(format!(
+            "invalid value '{}' for '--min-spp': must be at most --spp ({})",
+            args.min_spp.unwrap_or(0),
+            args.spp
+        ));
+    }
+    let adaptive = args
+        .noise_threshold
+        .map(|threshold| aperture_render::AdaptiveOptions {
+            threshold,
+            min_spp: args
+                .min_spp
+                .unwrap_or_else(|| aperture_render::AdaptiveOptions::auto_min_spp(args.spp)),
+        });
     let opts = RenderOptions {
+        adaptive,
         width,
         height,
         spp: args.spp,
@@ -302,6 +330,30 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     drop(accel);
 
     let mut image = crate::progress::film_to_image(&film, cam, &opts, render_secs);
+    if let Some(a) = opts.adaptive {
+        let mean = film.total_samples() as f64 / (width as f64 * height as f64);
+        image.metadata.extend([
+            (
+                "aperture:noiseThreshold".to_string(),
+                aperture_imageio::MetaValue::Float(a.threshold),
+            ),
+            (
+                "aperture:minSpp".to_string(),
+                aperture_imageio::MetaValue::Int(a.min_spp as i32),
+            ),
+            (
+                "aperture:meanSpp".to_string(),
+                aperture_imageio::MetaValue::Float(mean as f32),
+            ),
+        ]);
+    }
+    if args.samples_pass {
+        image.layers.push(aperture_imageio::Layer {
+            name: "samples".into(),
+            channels: vec!["N".into()],
+            data: film.samples_per_pixel().iter().map(|&n| n as f32).collect(),
+        });
+    }
     if ext.as_deref() == Some("png") && !args.transparent {
         // RGB is already the radiance over the environment (associated alpha), so an opaque
         // pixel is the same RGB with A = 1.
@@ -320,13 +372,22 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     aperture_imageio::write_image(&args.output, &image, &png)
         .with_context(|| format!("writing {}", args.output.display()))?;
 
-    let samples = width as f64 * height as f64 * opts.spp as f64;
+    let samples = film.total_samples() as f64;
     let dropped = film.dropped_samples();
     if !args.quiet || dropped > 0 {
+        let spp = match opts.adaptive {
+            None => format!("{} spp", opts.spp),
+            Some(a) => format!(
+                "adaptive {}..{} spp (mean {:.1}, threshold {})",
+                a.min_spp,
+                opts.spp,
+                samples / (width as f64 * height as f64),
+                a.threshold
+            ),
+        };
         eprintln!(
-            "{}: {width}x{height}, {} spp, {render_secs:.2} s ({load_secs:.2} s loading), {:.2} Msamples/s, {dropped} dropped samples (NaN/Inf)",
+            "{}: {width}x{height}, {spp}, {render_secs:.2} s ({load_secs:.2} s loading), {:.2} Msamples/s, {dropped} dropped samples (NaN/Inf)",
             args.output.display(),
-            opts.spp,
             samples / render_secs.max(1e-9) / 1e6,
         );
     }
@@ -370,6 +431,10 @@ mod tests {
             &["--focus-distance", "3", "--focus-object", "Cube"],
             &["--no-dof", "--aperture-radius", "0.1"],
             &["--sampler", "halton"],
+            &["--noise-threshold", "0"],
+            &["--noise-threshold", "-0.1"],
+            &["--min-spp", "4"],
+            &["--noise-threshold", "0.01", "--min-spp", "0"],
         ] {
             let e = parse(bad).expect_err("must be refused");
             assert_eq!(e.exit_code(), 2, "{bad:?}");
@@ -443,6 +508,38 @@ mod tests {
             std::fs::remove_file(&out).unwrap();
         }
         assert_eq!(images[0].rgba, images[1].rgba);
+        // Adaptive sampling with the samples pass: the layer holds each pixel's count.
+        let out = dir.join(format!("aperture-cli-{}-adaptive.exr", std::process::id()));
+        let mut args = parse(&[
+            "--width",
+            "24",
+            "--height",
+            "16",
+            "--spp",
+            "16",
+            "--noise-threshold",
+            "0.05",
+            "--min-spp",
+            "4",
+            "--samples-pass",
+            "--env",
+            "1,1,1",
+            "--quiet",
+        ])
+        .unwrap();
+        args.scene = box_glb.clone();
+        args.output = out.clone();
+        run(args).unwrap();
+        let adaptive = aperture_imageio::read_exr(&out).unwrap();
+        std::fs::remove_file(&out).unwrap();
+        let counts = &adaptive.layer("samples").expect("samples layer").data;
+        assert_eq!(counts.len(), 24 * 16);
+        assert!(counts.iter().all(|&n| (4.0..=16.0).contains(&n)));
+        // The uniform environment converges at the minimum; the box's edges do not.
+        assert!(
+            counts.contains(&4.0) && counts.contains(&16.0),
+            "{counts:?}"
+        );
         assert_eq!((images[0].width, images[0].height), (24, 16));
         assert!(images[0].rgba.iter().any(|p| p[3] == 1.0));
         assert_eq!(

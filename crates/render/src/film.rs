@@ -51,6 +51,8 @@ pub struct Film {
     width: u32,
     height: u32,
     pixels: Vec<PixelSum>,
+    /// Samples each pixel took, dropped ones included (all `spp` unless sampling was adaptive).
+    taken: Vec<u32>,
     dropped: u64,
 }
 
@@ -61,6 +63,7 @@ impl Film {
             width,
             height,
             pixels: vec![PixelSum::default(); width as usize * height as usize],
+            taken: vec![0; width as usize * height as usize],
             dropped: 0,
         }
     }
@@ -85,6 +88,22 @@ impl Film {
         &self.pixels[y as usize * self.width as usize + x as usize]
     }
 
+    /// Samples pixel `(x, y)` took, dropped ones included: the render's `spp`, or fewer where
+    /// adaptive sampling stopped it early.
+    pub fn samples_taken(&self, x: u32, y: u32) -> u32 {
+        self.taken[y as usize * self.width as usize + x as usize]
+    }
+
+    /// Samples taken per pixel, rows top to bottom (the `samples` pass).
+    pub fn samples_per_pixel(&self) -> &[u32] {
+        &self.taken
+    }
+
+    /// Samples taken over the whole image, dropped ones included.
+    pub fn total_samples(&self) -> u64 {
+        self.taken.iter().map(|&n| u64::from(n)).sum()
+    }
+
     /// Mean RGBA of pixel `(x, y)`; A is the fraction of primary rays that hit geometry.
     pub fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
         self.pixel_sum(x, y).resolve()
@@ -97,12 +116,26 @@ impl Film {
 
     /// Copies a finished tile in. Tiles own disjoint pixels, so the order of calls does not
     /// change the result; the renderer still merges in a fixed order.
-    pub(crate) fn merge_tile(&mut self, x0: u32, y0: u32, w: u32, sums: &[PixelSum], dropped: u64) {
+    pub(crate) fn merge_tile(
+        &mut self,
+        x0: u32,
+        y0: u32,
+        w: u32,
+        sums: &[PixelSum],
+        taken: u32,
+        dropped: u64,
+    ) {
         for (row, chunk) in sums.chunks(w as usize).enumerate() {
             let start = (y0 as usize + row) * self.width as usize + x0 as usize;
             self.pixels[start..start + chunk.len()].copy_from_slice(chunk);
+            self.taken[start..start + chunk.len()].fill(taken);
         }
         self.dropped += dropped;
+    }
+
+    /// Mutable sums and sample counts of every pixel, for the adaptive renderer's rounds.
+    pub(crate) fn state_mut(&mut self) -> (&mut [PixelSum], &mut [u32], &mut u64) {
+        (&mut self.pixels, &mut self.taken, &mut self.dropped)
     }
 }
 
@@ -130,6 +163,7 @@ mod tests {
             1,
             2,
             &[s, PixelSum::default(), PixelSum::default(), s],
+            7,
             5,
         );
         assert_eq!(f.pixel(2, 1), [1.0; 4]);
@@ -137,5 +171,8 @@ mod tests {
         assert_eq!(f.pixel(3, 1), [0.0; 4]);
         assert_eq!(f.pixel(0, 0), [0.0; 4]);
         assert_eq!(f.dropped_samples(), 5);
+        assert_eq!(f.samples_taken(3, 2), 7);
+        assert_eq!(f.samples_taken(0, 0), 0);
+        assert_eq!(f.total_samples(), 4 * 7);
     }
 }

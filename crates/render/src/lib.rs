@@ -17,6 +17,7 @@
 //! a [`SamplerKind`] produces those numbers as pure functions of (pixel, index, dimension,
 //! seed), the path tracer turns rays into radiance and the [`Film`] sums it.
 
+pub mod adaptive;
 mod bsdf;
 pub mod camera;
 mod film;
@@ -29,6 +30,7 @@ mod surface;
 pub mod test_scenes;
 mod texture;
 
+pub use adaptive::AdaptiveOptions;
 pub use bsdf::{Bsdf, BsdfSample, Frame};
 pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, CameraSample};
 pub use film::{Film, PixelSum};

@@ -2,6 +2,7 @@
 //! sample value is a pure function of (pixel, index, dimension, seed) and every pixel is owned
 //! by one tile, so the image is bit-identical for any thread count and any run.
 
+use crate::adaptive::{self, AdaptiveOptions};
 use crate::camera::{Camera, CameraSample};
 use crate::film::{Film, PixelSum};
 use crate::filter::{Filter, FilterKind};
@@ -28,7 +29,7 @@ pub struct RenderOptions {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
-    /// Samples per pixel (1 ..= 65536).
+    /// Samples per pixel (1 ..= 65536); with adaptive sampling, the most any pixel takes.
     pub spp: u32,
     /// Seed of every sample value.
     pub seed: u32,
@@ -44,6 +45,8 @@ pub struct RenderOptions {
     pub env: Vec3,
     /// Material override.
     pub material_override: MaterialOverride,
+    /// Adaptive sampling (`None`: every pixel takes `spp` samples).
+    pub adaptive: Option<AdaptiveOptions>,
 }
 
 impl Default for RenderOptions {
@@ -59,6 +62,7 @@ impl Default for RenderOptions {
             sampler: SamplerKind::default(),
             env: Vec3::ZERO,
             material_override: MaterialOverride::None,
+            adaptive: None,
         }
     }
 }
@@ -98,6 +102,18 @@ fn check(opts: &RenderOptions) -> Result<(), RenderError> {
     }
     if opts.spp == 0 || opts.spp > MAX_SPP {
         return bad("spp", opts.spp.to_string(), "must be in 1..=65536");
+    }
+    if let Some(a) = opts.adaptive {
+        if !(a.threshold.is_finite() && a.threshold > 0.0) {
+            return bad(
+                "noise_threshold",
+                a.threshold.to_string(),
+                "must be finite and > 0",
+            );
+        }
+        if a.min_spp == 0 || a.min_spp > opts.spp {
+            return bad("min_spp", a.min_spp.to_string(), "must be in 1..=spp");
+        }
     }
     if !opts.env.is_finite() || opts.env.min_element() < 0.0 {
         return bad("env", format!("{}", opts.env), "must be finite and ≥ 0");
@@ -164,6 +180,13 @@ pub fn render_with_camera(
         max_bounces: opts.max_bounces,
     };
     let filter = Filter::new(opts.filter);
+    let job = Job {
+        integrator: &integrator,
+        camera,
+        filter: &filter,
+        opts,
+        pinhole: camera.aperture == crate::camera::Aperture::Pinhole,
+    };
     let (w, h) = (opts.width, opts.height);
     let tiles: Vec<(u32, u32, u32, u32)> = (0..h.div_ceil(TILE))
         .flat_map(|ty| {
@@ -173,66 +196,156 @@ pub fn render_with_camera(
             })
         })
         .collect();
+    if let Some(a) = opts.adaptive {
+        return Ok(render_adaptive(&job, &a, &tiles, progress));
+    }
     let total = tiles.len();
     let done = AtomicUsize::new(0);
     let results: Vec<(Vec<PixelSum>, u64)> = tiles
         .par_iter()
         .map(|&(x0, y0, tw, th)| {
-            let r = render_tile(&integrator, camera, &filter, opts, x0, y0, tw, th);
+            let r = job.render_tile(x0, y0, tw, th);
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
             r
         })
         .collect();
     let mut film = Film::new(w, h);
     for (&(x0, y0, tw, _), (sums, dropped)) in tiles.iter().zip(&results) {
-        film.merge_tile(x0, y0, tw, sums, *dropped);
+        film.merge_tile(x0, y0, tw, sums, opts.spp, *dropped);
     }
     Ok(film)
 }
 
-#[allow(clippy::too_many_arguments)]
-fn render_tile(
-    integrator: &Integrator<'_>,
-    camera: &Camera,
-    filter: &Filter,
-    opts: &RenderOptions,
-    x0: u32,
-    y0: u32,
-    tw: u32,
-    th: u32,
-) -> (Vec<PixelSum>, u64) {
-    let mut sums = vec![PixelSum::default(); (tw * th) as usize];
-    let mut dropped = 0u64;
-    let pinhole = camera.aperture == crate::camera::Aperture::Pinhole;
-    for y in y0..y0 + th {
-        for x in x0..x0 + tw {
-            let sum = &mut sums[((y - y0) * tw + (x - x0)) as usize];
-            for i in 0..opts.spp {
-                let stream = SampleStream::new(opts.sampler, x, y, i, opts.seed);
-                // A pinhole draws only the pixel pair; a lens draws the 4-D point.
-                let (u_film, p_lens) = if pinhole {
-                    (stream.pixel(), Vec2::ZERO)
-                } else {
-                    let c = stream.camera();
-                    ([c[0], c[1]], Vec2::new(c[2], c[3]))
-                };
-                let offset = filter.sample(u_film);
-                let sample = CameraSample {
-                    p_film: Vec2::new(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y),
-                    p_lens,
-                };
-                let Some(ray) = camera.generate_ray(&sample) else {
-                    dropped += 1;
-                    continue;
-                };
-                let (l, hit) = integrator.li(ray.origin, ray.dir, &stream);
-                if !sum.add(l, hit) {
-                    dropped += 1;
+/// What every sample of one render shares.
+struct Job<'a> {
+    integrator: &'a Integrator<'a>,
+    camera: &'a Camera,
+    filter: &'a Filter,
+    opts: &'a RenderOptions,
+    pinhole: bool,
+}
+
+impl Job<'_> {
+    /// Radiance and coverage of sample `i` of pixel `(x, y)`; `None` when the camera makes no
+    /// ray for it.
+    #[inline]
+    fn sample(&self, x: u32, y: u32, i: u32) -> Option<(Vec3, bool)> {
+        let stream = SampleStream::new(self.opts.sampler, x, y, i, self.opts.seed);
+        // A pinhole draws only the pixel pair; a lens draws the 4-D point.
+        let (u_film, p_lens) = if self.pinhole {
+            (stream.pixel(), Vec2::ZERO)
+        } else {
+            let c = stream.camera();
+            ([c[0], c[1]], Vec2::new(c[2], c[3]))
+        };
+        let offset = self.filter.sample(u_film);
+        let sample = CameraSample {
+            p_film: Vec2::new(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y),
+            p_lens,
+        };
+        let ray = self.camera.generate_ray(&sample)?;
+        Some(self.integrator.li(ray.origin, ray.dir, &stream))
+    }
+
+    /// Every pixel of a tile at `spp` samples: the sums and the dropped-sample count.
+    fn render_tile(&self, x0: u32, y0: u32, tw: u32, th: u32) -> (Vec<PixelSum>, u64) {
+        let mut sums = vec![PixelSum::default(); (tw * th) as usize];
+        let mut dropped = 0u64;
+        for y in y0..y0 + th {
+            for x in x0..x0 + tw {
+                let sum = &mut sums[((y - y0) * tw + (x - x0)) as usize];
+                for i in 0..self.opts.spp {
+                    match self.sample(x, y, i) {
+                        Some((l, hit)) if sum.add(l, hit) => {}
+                        _ => dropped += 1,
+                    }
                 }
             }
         }
+        (sums, dropped)
     }
-    (sums, dropped)
+}
+
+/// One pixel's running state in an adaptive render.
+#[derive(Clone, Copy, Default)]
+struct AdaptivePixel {
+    sum: PixelSum,
+    /// Sum of the odd-indexed samples, for the error estimate.
+    odd: [f64; 3],
+    taken: u32,
+    dropped: u64,
+}
+
+/// Rounds of doubling sample counts over the active pixels; between rounds, pixels whose error
+/// is below the threshold (and whose neighbours are too) stop. See [`crate::adaptive`].
+fn render_adaptive(
+    job: &Job<'_>,
+    a: &AdaptiveOptions,
+    tiles: &[(u32, u32, u32, u32)],
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Film {
+    let (w, h) = (job.opts.width as usize, job.opts.height as usize);
+    let rounds = a.rounds(job.opts.spp);
+    let mut state = vec![AdaptivePixel::default(); w * h];
+    let mut active = vec![true; w * h];
+    let total = tiles.len() * rounds.len();
+    let done = AtomicUsize::new(0);
+    for (r, &target) in rounds.iter().enumerate() {
+        let updates: Vec<Vec<(usize, AdaptivePixel)>> = tiles
+            .par_iter()
+            .map(|&(x0, y0, tw, th)| {
+                let mut out = Vec::new();
+                for y in y0..y0 + th {
+                    for x in x0..x0 + tw {
+                        let idx = y as usize * w + x as usize;
+                        if !active[idx] {
+                            continue;
+                        }
+                        let mut p = state[idx];
+                        for i in p.taken..target {
+                            match job.sample(x, y, i) {
+                                Some((l, hit)) if p.sum.add(l, hit) => {
+                                    if i % 2 == 1 {
+                                        p.odd[0] += l.x as f64;
+                                        p.odd[1] += l.y as f64;
+                                        p.odd[2] += l.z as f64;
+                                    }
+                                }
+                                _ => p.dropped += 1,
+                            }
+                        }
+                        p.taken = target;
+                        out.push((idx, p));
+                    }
+                }
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+                out
+            })
+            .collect();
+        for (idx, p) in updates.into_iter().flatten() {
+            state[idx] = p;
+        }
+        if r + 1 == rounds.len() {
+            break;
+        }
+        let converged: Vec<bool> = state
+            .iter()
+            .map(|p| adaptive::pixel_error(&p.sum, &p.odd) < f64::from(a.threshold))
+            .collect();
+        let budget: Vec<bool> = state.iter().map(|p| p.taken < job.opts.spp).collect();
+        active = adaptive::dilate(&converged, &budget, w);
+        if !active.iter().any(|&b| b) {
+            break;
+        }
+    }
+    let mut film = Film::new(w as u32, h as u32);
+    let (sums, taken, dropped) = film.state_mut();
+    for (i, p) in state.iter().enumerate() {
+        sums[i] = p.sum;
+        taken[i] = p.taken;
+        *dropped += p.dropped;
+    }
+    film
 }
 
 #[cfg(test)]
