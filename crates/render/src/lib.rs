@@ -29,7 +29,7 @@ mod surface;
 pub mod test_scenes;
 mod texture;
 
-pub use bsdf::{Bsdf, BsdfSample, Frame};
+pub use bsdf::{Bsdf, BsdfSample, Dielectric, Frame};
 pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, CameraSample};
 pub use film::{Film, PixelSum};
 pub use filter::{Filter, FilterKind};

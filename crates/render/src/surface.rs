@@ -1,7 +1,7 @@
 //! What a ray hit: world-space position and normals recomputed from the barycentrics, texture
 //! coordinates, vertex colour, and the material evaluated there.
 
-use crate::bsdf::Bsdf;
+use crate::bsdf::{Bsdf, Dielectric};
 use crate::texture;
 use aperture_scene::{AlphaMode, Material, Scene, TextureRef};
 use glam::{Mat3, Vec2, Vec3, Vec4, Vec4Swizzles};
@@ -227,10 +227,15 @@ impl<'a> Geometry<'a> {
         }
         let mr = self.lookup(&m.metallic_roughness_texture, s);
         Shading {
-            bsdf: Some(Bsdf::metal_rough(
+            bsdf: Some(Bsdf::metal_rough_dielectric(
                 base.min(Vec3::ONE),
                 m.metallic_factor * mr.z,
                 m.roughness_factor * mr.y,
+                &Dielectric {
+                    ior: m.ior,
+                    specular: m.specular_factor,
+                    specular_color: m.specular_color_factor,
+                },
             )),
             emission,
             unlit: None,
