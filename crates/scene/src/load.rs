@@ -187,6 +187,7 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
 
     out.materials = std::mem::take(&mut materials.materials);
     stats.warnings.append(&mut materials.warnings);
+    crate::tangents::generate_missing_tangents(&mut out);
     out.textures = materials.textures(&doc, &buffers, base_dir, options.skip_textures)?;
     if out.cameras.is_empty() {
         out.cameras.push(automatic_camera(&out, &info, options)?);

@@ -34,8 +34,10 @@ pub struct Mesh {
     pub positions: Vec<Vec3>,
     /// Unit shading normals. Always present: primitives without `NORMAL` get flat normals.
     pub normals: Vec<Vec3>,
-    /// Tangents (xyz) with handedness sign (w), from `TANGENT`; empty when no primitive has them.
-    /// Vertices of primitives without `TANGENT` hold `Vec4::ZERO` (derive a tangent there).
+    /// Tangents (xyz) with handedness sign (w; bitangent = cross(normal, tangent) · w), from
+    /// `TANGENT`, else MikkTSpace tangents for normal-mapped triangles (the loader generates them,
+    /// see [`crate::generate_missing_tangents`]). Empty when nothing needs them; other vertices may
+    /// hold `Vec4::ZERO`.
     pub tangents: Vec<Vec4>,
     /// `TEXCOORD_0`; empty when no primitive has it (zeros fill primitives that lack it).
     pub uv0: Vec<Vec2>,
