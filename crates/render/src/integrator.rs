@@ -26,6 +26,21 @@ pub(crate) struct Integrator<'a> {
     pub max_bounces: u32,
 }
 
+/// Smallest cosine between the view and a shading normal.
+const MIN_VIEW_COS: f32 = 0.02;
+
+/// A shading normal bent just far enough towards the viewer `wo` that `wo` is above its
+/// hemisphere. Normal maps and interpolated normals can face away from the viewer; shading with
+/// such a normal would see the view below the surface and return black. Bending (instead of
+/// switching to the geometric normal) keeps the result continuous as the normal crosses over.
+fn bend_towards(n: Vec3, wo: Vec3) -> Vec3 {
+    let c = n.dot(wo);
+    if c >= MIN_VIEW_COS {
+        return n;
+    }
+    (n + wo * (MIN_VIEW_COS - c)).try_normalize().unwrap_or(wo)
+}
+
 /// Power heuristic with β = 2.
 fn power_heuristic(a: f32, b: f32) -> f32 {
     let (a2, b2) = (a * a, b * b);
@@ -131,8 +146,15 @@ impl Integrator<'_> {
             }
             let wo = -ray.dir;
             let ng = if s.ng.dot(wo) < 0.0 { -s.ng } else { s.ng };
-            let ns = if s.ns.dot(ng) < 0.0 { -s.ns } else { s.ns };
             let shading = self.geom.shade(&s);
+            // Both sides are shaded: the (mapped) normal turns with the vertex normal to the
+            // viewer's side of the surface.
+            let ns = if s.ns.dot(ng) < 0.0 {
+                -shading.normal
+            } else {
+                shading.normal
+            };
+            let ns = bend_towards(ns, wo);
             if let Some(c) = shading.unlit {
                 l += beta * c;
                 break;
@@ -162,7 +184,8 @@ impl Integrator<'_> {
                 break;
             }
             let Some(bsdf) = shading.bsdf else { break };
-            // A shading normal may disagree with the view; fall back to the geometric frame.
+            // `bend_towards` keeps the view above the shading hemisphere; if rounding still
+            // says otherwise, fall back to the geometric frame rather than return black.
             let mut frame = Frame::from_normal(ns);
             let mut wo_l = frame.to_local(wo);
             if wo_l.z <= 0.0 {
@@ -253,6 +276,23 @@ impl Integrator<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bent_normals_face_the_viewer() {
+        let wo = Vec3::new(0.0, 0.6, 0.8);
+        // Already facing: unchanged.
+        assert_eq!(bend_towards(Vec3::Z, wo), Vec3::Z);
+        for n in [
+            Vec3::new(0.0, -1.0, 0.0),
+            Vec3::new(0.0, -0.8, 0.6),
+            -wo,
+            Vec3::new(1.0, -0.6, 0.0).normalize(),
+        ] {
+            let b = bend_towards(n, wo);
+            assert!(b.is_finite() && (b.length() - 1.0).abs() < 1e-5, "{b}");
+            assert!(b.dot(wo) > 0.0, "{n} -> {b}");
+        }
+    }
 
     #[test]
     fn power_heuristic_limits() {
