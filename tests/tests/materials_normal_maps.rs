@@ -164,7 +164,7 @@ fn normals_facing_away_from_the_viewer_are_never_black_or_nan() {
         height: 16,
         spp: 8,
         max_bounces: 2,
-        env: Vec3::ONE,
+        env: aperture_render::Environment::Constant(Vec3::ONE),
         ..RenderOptions::default()
     };
     let accel = build_accel(&scene, Default::default());

@@ -1,11 +1,12 @@
 //! Unidirectional path tracing with next-event estimation: punctual lights by NEE alone (they are
-//! deltas), emissive triangles by NEE and BSDF sampling combined with multiple importance
-//! sampling (power heuristic). Russian roulette from the fourth vertex on.
+//! deltas), emissive triangles and environment images by NEE and BSDF sampling combined with
+//! multiple importance sampling (power heuristic). Russian roulette from the fourth vertex on.
 //!
 //! `max_bounces` has Blender Cycles' meaning: 0 is direct light only (the camera ray's hit is lit
 //! by light sampling and by one BSDF-sampled ray that may find an emitter or the environment).
 
 use crate::bsdf::Frame;
+use crate::environment::EnvLight;
 use crate::lights::{punctual_incident, EmissiveLights};
 use crate::sampler::SampleStream;
 use crate::surface::{Geometry, Surface};
@@ -22,7 +23,7 @@ pub(crate) struct Integrator<'a> {
     pub geom: Geometry<'a>,
     pub accel: &'a Accel,
     pub emissive: Option<EmissiveLights>,
-    pub env: Vec3,
+    pub env: EnvLight,
     pub max_bounces: u32,
 }
 
@@ -137,8 +138,14 @@ impl Integrator<'_> {
         loop {
             let bs = stream.bounce(vertex);
             let Some((hit, s, error)) = self.trace(&ray, stream, vertex, bs.alpha) else {
-                // The environment is not light-sampled, so BSDF sampling finds it at weight 1.
-                l += beta * self.env;
+                // A constant environment is found by BSDF sampling alone (weight 1); an image is
+                // also light-sampled, so escaping BSDF rays share it by MIS.
+                let w = if vertex == 0 || !self.env.is_sampled() {
+                    1.0
+                } else {
+                    power_heuristic(prev_pdf, self.env.pdf(ray.dir))
+                };
+                l += beta * self.env.radiance(ray.dir) * w;
                 break;
             };
             if vertex == 0 {
@@ -241,6 +248,21 @@ impl Integrator<'_> {
                         let to = target - p_out;
                         let len = to.length();
                         l += c * self.visibility(p_out, to / len, len);
+                    }
+                }
+            }
+
+            if let Some(es) = self.env.sample(stream.environment(vertex)) {
+                let wi_l = frame.to_local(es.wi);
+                if es.wi.dot(ng) > 0.0 && es.radiance != Vec3::ZERO {
+                    let (f, bsdf_pdf) = bsdf.eval(wo_l, wi_l);
+                    let c = beta
+                        * f
+                        * wi_l.z
+                        * es.radiance
+                        * (power_heuristic(es.pdf, bsdf_pdf) / es.pdf);
+                    if c != Vec3::ZERO && c.is_finite() {
+                        l += c * self.visibility(p_out, es.wi, f32::INFINITY);
                     }
                 }
             }

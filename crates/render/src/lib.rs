@@ -19,6 +19,7 @@
 
 mod bsdf;
 pub mod camera;
+mod environment;
 mod film;
 mod filter;
 mod integrator;
@@ -31,6 +32,7 @@ mod texture;
 
 pub use bsdf::{Bsdf, BsdfSample, Dielectric, Frame};
 pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, CameraSample};
+pub use environment::{EnvImage, EnvSampling, Environment};
 pub use film::{Film, PixelSum};
 pub use filter::{Filter, FilterKind};
 pub use render::{

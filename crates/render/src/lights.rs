@@ -6,6 +6,9 @@ use crate::surface::Geometry;
 use aperture_scene::{Light, LightKind};
 use glam::Vec3;
 
+/// The largest f32 below 1.
+const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
 /// Walker/Vose alias table: O(1) sampling of a discrete distribution.
 #[derive(Debug, Clone)]
 pub(crate) struct AliasTable {
@@ -50,6 +53,22 @@ impl AliasTable {
             i
         } else {
             self.alias[i] as usize
+        }
+    }
+
+    /// Picks an outcome for `u ∈ [0, 1)` and returns with it a fresh uniform number in
+    /// `[0, 1)` recovered from the part of `u` the choice did not use.
+    pub fn sample_remap(&self, u: f32) -> (usize, f32) {
+        let n = self.prob.len();
+        let x = u * n as f32;
+        let i = (x as usize).min(n - 1);
+        let frac = (x - i as f32).clamp(0.0, 1.0);
+        let p = self.prob[i];
+        if frac < p {
+            (i, (frac / p).min(ONE_MINUS_EPSILON))
+        } else {
+            let rest = ((frac - p) / (1.0 - p)).clamp(0.0, ONE_MINUS_EPSILON);
+            (self.alias[i] as usize, rest)
         }
     }
 
@@ -217,6 +236,17 @@ mod tests {
             assert!((t.pmf(i) as f64 - want).abs() < 1e-6);
             let got = counts[i] as f64 / n as f64;
             assert!((got - want).abs() < 2e-3, "{i}: {got} vs {want}");
+        }
+        // The remapped number is uniform within each outcome: its mean is 1/2.
+        let mut sums = [0.0f64; 5];
+        for i in 0..n {
+            let (k, r) = t.sample_remap((i as f32 + 0.5) / n as f32);
+            assert!((0.0..1.0).contains(&r));
+            sums[k] += r as f64;
+        }
+        for i in [0, 2, 3, 4] {
+            let mean = sums[i] / (t.pmf(i) as f64 * n as f64);
+            assert!((mean - 0.5).abs() < 0.01, "{i}: {mean}");
         }
     }
 

@@ -3,6 +3,7 @@
 //! by one tile, so the image is bit-identical for any thread count and any run.
 
 use crate::camera::{Camera, CameraSample};
+use crate::environment::{EnvLight, Environment};
 use crate::film::{Film, PixelSum};
 use crate::filter::{Filter, FilterKind};
 use crate::integrator::Integrator;
@@ -11,7 +12,7 @@ use crate::sampler::{SampleStream, SamplerKind, MAX_SPP};
 use crate::surface::{Geometry, MaterialOverride};
 use aperture_accel::Accel;
 use aperture_scene::Scene;
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -40,8 +41,8 @@ pub struct RenderOptions {
     pub filter: FilterKind,
     /// Sample sequence.
     pub sampler: SamplerKind,
-    /// Uniform environment radiance (linear RGB).
-    pub env: Vec3,
+    /// What rays leaving the scene see: a colour (black by default) or an HDR image.
+    pub env: Environment,
     /// Material override.
     pub material_override: MaterialOverride,
 }
@@ -57,7 +58,7 @@ impl Default for RenderOptions {
             max_bounces: DEFAULT_MAX_BOUNCES,
             filter: FilterKind::default(),
             sampler: SamplerKind::default(),
-            env: Vec3::ZERO,
+            env: Environment::default(),
             material_override: MaterialOverride::None,
         }
     }
@@ -99,8 +100,12 @@ fn check(opts: &RenderOptions) -> Result<(), RenderError> {
     if opts.spp == 0 || opts.spp > MAX_SPP {
         return bad("spp", opts.spp.to_string(), "must be in 1..=65536");
     }
-    if !opts.env.is_finite() || opts.env.min_element() < 0.0 {
-        return bad("env", format!("{}", opts.env), "must be finite and ≥ 0");
+    if let Some(why) = opts.env.problem() {
+        return bad(
+            "env",
+            why,
+            "must be finite and ≥ 0, with width × height texels",
+        );
     }
     Ok(())
 }
@@ -160,7 +165,7 @@ pub fn render_with_camera(
         geom,
         accel,
         emissive,
-        env: opts.env,
+        env: EnvLight::new(&opts.env),
         max_bounces: opts.max_bounces,
     };
     let filter = Filter::new(opts.filter);
@@ -239,7 +244,7 @@ fn render_tile(
 mod tests {
     use super::*;
     use crate::test_scenes;
-    use glam::Affine3A;
+    use glam::{Affine3A, Vec3};
 
     /// A plane under a point light, an emissive ball, depth of field: every code path.
     fn busy_scene() -> Scene {
@@ -353,7 +358,7 @@ mod tests {
                 ..RenderOptions::default()
             },
             RenderOptions {
-                env: Vec3::new(-1.0, 0.0, 0.0),
+                env: Environment::Constant(Vec3::new(-1.0, 0.0, 0.0)),
                 ..RenderOptions::default()
             },
         ] {
