@@ -1,0 +1,333 @@
+//! glTF sample models render as their READMEs intend, checked by probing pixel colours.
+//!
+//! Pixels are attributed to scene objects by tracing each pixel's centre ray through the same
+//! camera the render uses: a pixel belongs to an object when it and its 8 neighbours all hit
+//! that object (so edges and antialiasing are left out). Expected colours come from the
+//! samples' READMEs and reference screenshots, never from the renderer's own texture code.
+
+use aperture_accel::{Accel, Ray};
+use aperture_render::{
+    build_accel, render, Camera, CameraSample, Environment, Film, FilterKind, RenderOptions,
+};
+use aperture_scene::{LoadOptions, Scene};
+use glam::{Vec2, Vec3};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+fn sample(rel: &str) -> Option<PathBuf> {
+    let p = aperture_tests::samples_dir()?.join(rel);
+    assert!(p.is_file(), "{} missing", p.display());
+    Some(p)
+}
+
+/// The glTF JSON of a `.gltf` or `.glb` file.
+fn gltf_json(path: &Path) -> serde_json::Value {
+    let bytes = std::fs::read(path).unwrap();
+    let json = if bytes.starts_with(b"glTF") {
+        let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        bytes[20..20 + len].to_vec()
+    } else {
+        bytes
+    };
+    serde_json::from_slice(&json).unwrap()
+}
+
+/// Names of the glTF nodes, by node index.
+fn node_names(path: &Path) -> Vec<String> {
+    gltf_json(path)["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n["name"].as_str().unwrap_or("").to_owned())
+        .collect()
+}
+
+/// A render with, per pixel, the instance its centre ray hits.
+struct Probe {
+    film: Film,
+    width: u32,
+    height: u32,
+    hits: Vec<Option<u32>>,
+}
+
+impl Probe {
+    fn new(scene: &Scene, opts: &RenderOptions) -> Self {
+        let accel = build_accel(scene, Default::default());
+        let film = render(scene, &accel, opts, &|_, _| {}).unwrap();
+        assert_eq!(film.dropped_samples(), 0, "NaN or infinite samples");
+        let camera = Camera::new(&scene.cameras[opts.camera], opts.width, opts.height);
+        let hits = pixel_hits(&accel, &camera, opts.width, opts.height);
+        Self {
+            film,
+            width: opts.width,
+            height: opts.height,
+            hits,
+        }
+    }
+
+    /// Interior pixels of the instances drawn by node `node`.
+    fn pixels_of(&self, scene: &Scene, node: u32) -> Vec<(u32, u32)> {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let at = |x: i64, y: i64| -> Option<u32> {
+            if x < 0 || y < 0 || x >= w || y >= h {
+                None
+            } else {
+                self.hits[(y * w + x) as usize]
+            }
+        };
+        let mut out = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                let Some(i) = at(x, y) else { continue };
+                if scene.instances[i as usize].node != node {
+                    continue;
+                }
+                let interior = (-1..=1).all(|dy| (-1..=1).all(|dx| at(x + dx, y + dy) == Some(i)));
+                if interior {
+                    out.push((x as u32, y as u32));
+                }
+            }
+        }
+        out
+    }
+
+    /// Mean colour of a node's interior pixels (and how many there are).
+    fn mean_of(&self, scene: &Scene, node: u32) -> (Vec3, usize) {
+        let px = self.pixels_of(scene, node);
+        let sum: Vec3 = px
+            .iter()
+            .map(|&(x, y)| {
+                let p = self.film.pixel(x, y);
+                Vec3::new(p[0], p[1], p[2])
+            })
+            .sum();
+        (sum / px.len().max(1) as f32, px.len())
+    }
+}
+
+fn pixel_hits(accel: &Accel, camera: &Camera, w: u32, h: u32) -> Vec<Option<u32>> {
+    (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let s = CameraSample {
+                p_film: Vec2::new(x as f32 + 0.5, y as f32 + 0.5),
+                p_lens: Vec2::ZERO,
+            };
+            let r = camera.generate_ray(&s)?;
+            accel
+                .intersect(&Ray::new(r.origin, r.dir))
+                .map(|h| h.instance)
+        })
+        .collect()
+}
+
+/// Node index by name.
+fn node(names: &[String], name: &str) -> u32 {
+    names
+        .iter()
+        .position(|n| n == name)
+        .unwrap_or_else(|| panic!("no node {name}")) as u32
+}
+
+/// Under a white sky of radiance 1, a Lambertian surface shows its albedo.
+fn white_sky(width: u32, height: u32, spp: u32) -> RenderOptions {
+    RenderOptions {
+        width,
+        height,
+        spp,
+        max_bounces: 1,
+        filter: FilterKind::Box,
+        env: Environment::Constant(Vec3::ONE),
+        ..RenderOptions::default()
+    }
+}
+
+fn load(path: &Path) -> Scene {
+    aperture_scene::load(path, &LoadOptions::default()).unwrap()
+}
+
+/// TextureCoordinateTest: each quad samples its own corner of the texture (uv (0, 0) is the
+/// image's top-left), so the quads show yellow (top left), orange (top right), blue (bottom
+/// left) and green (bottom right), as in the reference screenshot. A flipped v would swap
+/// top and bottom; a flipped u left and right.
+#[test]
+fn texture_coordinate_test_quadrants() {
+    let Some(path) = sample("correctness/TextureCoordinateTest/TextureCoordinateTest.glb") else {
+        return;
+    };
+    let scene = load(&path);
+    let names = node_names(&path);
+    let probe = Probe::new(&scene, &white_sky(96, 96, 8));
+    let check = |name: &str, ok: &dyn Fn(Vec3) -> bool| {
+        let (c, n) = probe.mean_of(&scene, node(&names, name));
+        println!("{name}: mean {c} over {n} pixels");
+        assert!(n > 30, "{name}: {n} pixels");
+        assert!(ok(c), "{name}: {c}");
+    };
+    check("TopLeftObj", &|c| {
+        c.x > 0.3 && c.y > 0.6 * c.x && c.z < 0.2 * c.x
+    });
+    check("TopRightObj", &|c| {
+        c.x > 0.3 && c.y < 0.4 * c.x && c.z < 0.2 * c.x
+    });
+    check("BottomLeftObj", &|c| {
+        c.z > 0.3 && c.x < 0.2 * c.z && c.y < 0.5 * c.z
+    });
+    check("BottomRightObj", &|c| {
+        c.y > 0.3 && c.x < 0.2 * c.y && c.z < 0.2 * c.y
+    });
+}
+
+/// MultiUVTest: the emissive texture reads `TEXCOORD_1`. In the dark (no lights, black sky) the
+/// cube shows only emission; every interior pixel must match the emissive texture looked up at
+/// the hit point's second UV set (nearest texel, decoded here from the glTF image), and match it
+/// better than a lookup through the first set would.
+#[test]
+fn multi_uv_test_emission_uses_texcoord_1() {
+    let Some(path) = sample("correctness/MultiUVTest/MultiUVTest.glb") else {
+        return;
+    };
+    let scene = load(&path);
+    let m = &scene.materials[0];
+    let et = m.emissive_texture.expect("emissive texture");
+    assert_eq!(et.tex_coord, 1);
+    let opts = RenderOptions {
+        width: 64,
+        height: 36,
+        spp: 4,
+        max_bounces: 0,
+        filter: FilterKind::Box,
+        ..RenderOptions::default()
+    };
+    let accel = build_accel(&scene, Default::default());
+    let film = render(&scene, &accel, &opts, &|_, _| {}).unwrap();
+    assert_eq!(film.dropped_samples(), 0);
+    let camera = Camera::new(&scene.cameras[0], opts.width, opts.height);
+    // Decode the image ourselves (sRGB, nearest texel) as the reference.
+    let json = gltf_json(&path);
+    let image_index = json["textures"][et.texture as usize]["source"]
+        .as_u64()
+        .unwrap_or(1);
+    let tex = &scene.textures[et.texture as usize];
+    let aperture_scene::Texels::Rgba8(texels) = &tex.texels else {
+        panic!("8-bit texture expected (image {image_index})");
+    };
+    let lookup = |uv: Vec2| {
+        let x = ((uv.x.rem_euclid(1.0)) * tex.width as f32) as usize % tex.width as usize;
+        let y = ((uv.y.rem_euclid(1.0)) * tex.height as f32) as usize % tex.height as usize;
+        let t = texels[y * tex.width as usize + x];
+        Vec3::new(t[0] as f32, t[1] as f32, t[2] as f32) / 255.0
+    };
+    let mesh = &scene.meshes[0];
+    let (mut err1, mut err0, mut n) = (0.0f32, 0.0f32, 0);
+    for y in 1..opts.height - 1 {
+        for x in 1..opts.width - 1 {
+            let ray = |x: u32, y: u32| {
+                let s = CameraSample {
+                    p_film: Vec2::new(x as f32 + 0.5, y as f32 + 0.5),
+                    p_lens: Vec2::ZERO,
+                };
+                let r = camera.generate_ray(&s).unwrap();
+                accel.intersect(&Ray::new(r.origin, r.dir))
+            };
+            let Some(hit) = ray(x, y) else { continue };
+            let tri = mesh.indices[hit.triangle as usize].map(|i| i as usize);
+            let bary = |v: &[Vec2]| {
+                (1.0 - hit.u - hit.v) * v[tri[0]] + hit.u * v[tri[1]] + hit.v * v[tri[2]]
+            };
+            let (uv0, uv1) = (bary(&mesh.uv0), bary(&mesh.uv1));
+            let p = film.pixel(x, y);
+            // Compare in sRGB-encoded space against the stored texel; skip texel edges where
+            // the 4 samples straddle two texels.
+            let enc = |c: f32| {
+                if c <= 0.0031308 {
+                    12.92 * c
+                } else {
+                    1.055 * c.powf(1.0 / 2.4) - 0.055
+                }
+            };
+            let got = Vec3::new(enc(p[0]), enc(p[1]), enc(p[2]));
+            err1 += (got - lookup(uv1)).abs().max_element();
+            err0 += (got - lookup(uv0)).abs().max_element();
+            n += 1;
+        }
+    }
+    let (e1, e0) = (err1 / n as f32, err0 / n as f32);
+    println!("MultiUVTest: {n} pixels, mean error via uv1 {e1:.4}, via uv0 {e0:.4}");
+    assert!(n > 200);
+    assert!(e1 < 0.08, "{e1}");
+    assert!(e1 < 0.5 * e0, "uv1 {e1} vs uv0 {e0}");
+}
+
+/// Big textured models render with every texture kind, and not one sample is NaN or infinite.
+#[test]
+fn textured_models_render_without_dropped_samples() {
+    for rel in [
+        "benchmark/FlightHelmet/FlightHelmet.gltf",
+        "benchmark/ToyCar/ToyCar.glb",
+        "benchmark/GlamVelvetSofa/GlamVelvetSofa.glb",
+        "benchmark/StainedGlassLamp/StainedGlassLamp.gltf",
+    ] {
+        let Some(dir) = aperture_tests::samples_dir() else {
+            return;
+        };
+        let path = dir.join(rel);
+        let path = if path.is_file() {
+            path
+        } else {
+            // Some folders hold the .glb or .gltf variant only.
+            let stem = path.with_extension("");
+            ["glb", "gltf"]
+                .iter()
+                .map(|e| stem.with_extension(e))
+                .find(|p| p.is_file())
+                .unwrap_or_else(|| panic!("{rel} missing"))
+        };
+        let scene = load(&path);
+        let textured = scene
+            .materials
+            .iter()
+            .filter(|m| {
+                m.base_color_texture.is_some()
+                    || m.metallic_roughness_texture.is_some()
+                    || m.normal_texture.is_some()
+                    || m.emissive_texture.is_some()
+            })
+            .count();
+        let normal_mapped: Vec<_> = scene
+            .materials
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| m.normal_texture.is_some())
+            .map(|(i, _)| i as u32)
+            .collect();
+        // Every normal-mapped triangle has a tangent frame (given or MikkTSpace).
+        for mesh in &scene.meshes {
+            for (t, mid) in mesh.material_ids.iter().enumerate() {
+                if normal_mapped.contains(mid) && !mesh.uv0.is_empty() {
+                    for &v in &mesh.indices[t] {
+                        assert!(
+                            mesh.tangents[v as usize].truncate() != Vec3::ZERO,
+                            "{rel}: no tangent"
+                        );
+                    }
+                }
+            }
+        }
+        let probe = Probe::new(&scene, &white_sky(40, 30, 4));
+        let px = probe.film.to_rgba();
+        assert!(px.iter().flatten().all(|c| c.is_finite()));
+        let mut distinct: HashMap<[u32; 3], ()> = HashMap::new();
+        for p in &px {
+            distinct.insert([p[0].to_bits(), p[1].to_bits(), p[2].to_bits()], ());
+        }
+        println!(
+            "{rel}: {textured} textured and {} normal-mapped materials, {} distinct pixels, warnings {:?}",
+            normal_mapped.len(),
+            distinct.len(),
+            scene.stats.warnings
+        );
+        assert!(textured > 0, "{rel}: no texture");
+        assert!(distinct.len() > 100, "{rel}: image too flat");
+    }
+}
