@@ -48,6 +48,8 @@ struct Probe {
     width: u32,
     height: u32,
     hits: Vec<Option<u32>>,
+    /// Material of each pixel's centre hit.
+    materials: Vec<Option<u32>>,
 }
 
 impl Probe {
@@ -56,12 +58,23 @@ impl Probe {
         let film = render(scene, &accel, opts, &|_, _| {}).unwrap();
         assert_eq!(film.dropped_samples(), 0, "NaN or infinite samples");
         let camera = Camera::new(&scene.cameras[opts.camera], opts.width, opts.height);
-        let hits = pixel_hits(&accel, &camera, opts.width, opts.height);
+        let full = pixel_hits(&accel, &camera, opts.width, opts.height);
+        let hits = full.iter().map(|h| h.map(|(i, _)| i)).collect();
+        let materials = full
+            .iter()
+            .map(|h| {
+                h.map(|(i, t)| {
+                    let mesh = scene.instances[i as usize].mesh as usize;
+                    scene.meshes[mesh].material_ids[t as usize]
+                })
+            })
+            .collect();
         Self {
             film,
             width: opts.width,
             height: opts.height,
             hits,
+            materials,
         }
     }
 
@@ -91,6 +104,34 @@ impl Probe {
         out
     }
 
+    /// Interior pixels (all 8 neighbours hit the same material) of the material named `name`,
+    /// with their colours.
+    fn material_pixels(&self, scene: &Scene, name: &str) -> Vec<Vec3> {
+        let id = scene
+            .materials
+            .iter()
+            .position(|m| m.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("no material {name}")) as u32;
+        let (w, h) = (self.width as i64, self.height as i64);
+        let at = |x: i64, y: i64| -> Option<u32> {
+            if x < 0 || y < 0 || x >= w || y >= h {
+                None
+            } else {
+                self.materials[(y * w + x) as usize]
+            }
+        };
+        let mut out = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                if (-1..=1).all(|dy| (-1..=1).all(|dx| at(x + dx, y + dy) == Some(id))) {
+                    let p = self.film.pixel(x as u32, y as u32);
+                    out.push(Vec3::new(p[0], p[1], p[2]));
+                }
+            }
+        }
+        out
+    }
+
     /// Mean colour of a node's interior pixels (and how many there are).
     fn mean_of(&self, scene: &Scene, node: u32) -> (Vec3, usize) {
         let px = self.pixels_of(scene, node);
@@ -105,7 +146,7 @@ impl Probe {
     }
 }
 
-fn pixel_hits(accel: &Accel, camera: &Camera, w: u32, h: u32) -> Vec<Option<u32>> {
+fn pixel_hits(accel: &Accel, camera: &Camera, w: u32, h: u32) -> Vec<Option<(u32, u32)>> {
     (0..h)
         .flat_map(|y| (0..w).map(move |x| (x, y)))
         .map(|(x, y)| {
@@ -116,7 +157,7 @@ fn pixel_hits(accel: &Accel, camera: &Camera, w: u32, h: u32) -> Vec<Option<u32>
             let r = camera.generate_ray(&s)?;
             accel
                 .intersect(&Ray::new(r.origin, r.dir))
-                .map(|h| h.instance)
+                .map(|h| (h.instance, h.triangle))
         })
         .collect()
 }
@@ -329,5 +370,219 @@ fn textured_models_render_without_dropped_samples() {
         );
         assert!(textured > 0, "{rel}: no texture");
         assert!(distinct.len() > 100, "{rel}: image too flat");
+    }
+}
+
+/// Strongly red: the colour of every failure mark in the checkmark tests.
+fn is_red(c: Vec3) -> bool {
+    c.x > 0.15 && c.y < 0.35 * c.x && c.z < 0.35 * c.x
+}
+
+/// Strongly green: the colour of their success marks.
+fn is_green(c: Vec3) -> bool {
+    c.y > 0.15 && c.x < 0.5 * c.y && c.z < 0.5 * c.y
+}
+
+/// TextureSettingsTest: every "Test" cell shows a green check (or a solid green box for the
+/// clamp tests) and no red X: repeat, mirrored repeat and clamp-to-edge in s and t, and the
+/// double-sided polygon. The single-sided cell is not checked: SPEC §5 shades both sides of
+/// every surface (a path tracer has no back-face culling), so its red X is expected.
+#[test]
+fn texture_settings_test_wrap_modes() {
+    let Some(path) = sample("correctness/TextureSettingsTest/TextureSettingsTest.glb") else {
+        return;
+    };
+    let scene = load(&path);
+    let probe = Probe::new(&scene, &white_sky(200, 200, 4));
+    for name in [
+        "TextureMirrorMaterialS",
+        "TextureMirrorMaterialT",
+        "TextureRepeatMaterialS",
+        "TextureRepeatMaterialT",
+        "TextureClampMaterialS",
+        "TextureClampMaterialT",
+        "DoubleSidedMaterial",
+    ] {
+        let px = probe.material_pixels(&scene, name);
+        let red = px.iter().filter(|&&c| is_red(c)).count();
+        let green = px.iter().filter(|&&c| is_green(c)).count();
+        println!("{name}: {} pixels, {green} green, {red} red", px.len());
+        assert!(px.len() > 50, "{name}: {} pixels", px.len());
+        assert_eq!(red, 0, "{name}: a red failure mark is visible");
+        assert!(green * 5 > px.len(), "{name}: too little green ({green})");
+    }
+}
+
+/// AlphaBlendModeTest: MASK cuts at each cutoff and BLEND blends, so every hidden red X stays
+/// hidden and the green check marks show; nowhere in the image is there a red mark.
+#[test]
+fn alpha_blend_mode_test_shows_no_red_marks() {
+    let Some(path) = sample("correctness/AlphaBlendModeTest/AlphaBlendModeTest.glb") else {
+        return;
+    };
+    let scene = load(&path);
+    let probe = Probe::new(&scene, &white_sky(640, 240, 4));
+    let px: Vec<Vec3> = probe
+        .film
+        .to_rgba()
+        .iter()
+        .map(|p| Vec3::new(p[0], p[1], p[2]))
+        .collect();
+    let red = px.iter().filter(|&&c| is_red(c)).count();
+    let green = px.iter().filter(|&&c| is_green(c)).count();
+    println!("AlphaBlendModeTest: {green} green, {red} red pixels");
+    assert!(red <= 2, "{red} red pixels");
+    assert!(green > 20, "{green} green pixels");
+    // The blended and cut boxes show the marble behind them: their alpha ramps end in holes.
+    for name in ["MatBlend", "MatCutoff25", "MatCutoffDefault", "MatCutoff75"] {
+        assert!(!probe.material_pixels(&scene, name).is_empty(), "{name}");
+    }
+}
+
+/// VertexColorTest: the top row's checks are multiplied by red, green and blue vertex colours,
+/// which zero the other channels; if they were ignored, cyan, magenta and yellow X's would show.
+#[test]
+fn vertex_color_test_zeroes_the_other_channels() {
+    let Some(path) = sample("correctness/VertexColorTest/VertexColorTest.glb") else {
+        return;
+    };
+    let scene = load(&path);
+    let probe = Probe::new(&scene, &white_sky(160, 120, 4));
+    let px = probe.material_pixels(&scene, "VC_Checks_Mat");
+    // Two strong channels and a weak third: a secondary colour.
+    let secondary = |c: Vec3| {
+        let v = c.to_array();
+        let strong = v.iter().filter(|&&x| x > 0.3).count();
+        let weak = v.iter().filter(|&&x| x < 0.1).count();
+        strong == 2 && weak == 1
+    };
+    let bad = px.iter().filter(|&&c| secondary(c)).count();
+    let prim = px
+        .iter()
+        .filter(|&&c| {
+            is_red(c) || is_green(c) || (c.z > 0.15 && c.x < 0.35 * c.z && c.y < 0.35 * c.z)
+        })
+        .count();
+    println!(
+        "VertexColorTest: {} pixels, {prim} primary, {bad} secondary",
+        px.len()
+    );
+    assert!(px.len() > 500);
+    assert!(bad * 100 < px.len(), "{bad} cyan/magenta/yellow pixels");
+    assert!(prim * 10 > px.len(), "{prim} primary-coloured pixels");
+}
+
+/// UnlitTest: each object is one flat colour, #FF7F00 and #007FFF decoded from sRGB, whatever
+/// the light.
+#[test]
+fn unlit_test_objects_are_flat_colours() {
+    let Some(path) = sample("correctness/UnlitTest/UnlitTest.glb") else {
+        return;
+    };
+    let scene = load(&path);
+    let probe = Probe::new(&scene, &white_sky(96, 64, 4));
+    let half = aperture_render::srgb_to_linear(127.0 / 255.0);
+    for (name, want) in [
+        ("Orange", Vec3::new(1.0, half, 0.0)),
+        ("Blue", Vec3::new(0.0, half, 1.0)),
+    ] {
+        let px = probe.material_pixels(&scene, name);
+        assert!(px.len() > 100, "{name}: {} pixels", px.len());
+        let mean = px.iter().sum::<Vec3>() / px.len() as f32;
+        // Flat: no shading at all across the object.
+        let spread = px
+            .iter()
+            .map(|c| (*c - mean).abs().max_element())
+            .fold(0.0f32, f32::max);
+        println!(
+            "{name}: {} pixels, mean {mean} (want {want}), spread {spread}",
+            px.len()
+        );
+        assert!(spread < 1e-4, "{name}: spread {spread}");
+        assert!((mean - want).abs().max_element() < 0.01, "{name}: {mean}");
+    }
+}
+
+/// EmissiveStrengthTest: cubes of emissive colour [0.1, 0.5, 0.9] with strengths 1, 2, 4, 8
+/// and 16: in the dark their faces are that many times brighter.
+#[test]
+fn emissive_strength_test_scales_radiance() {
+    let Some(path) = sample("correctness/EmissiveStrengthTest/EmissiveStrengthTest.glb") else {
+        return;
+    };
+    let scene = load(&path);
+    let opts = RenderOptions {
+        width: 480,
+        height: 180,
+        spp: 2,
+        max_bounces: 0,
+        filter: FilterKind::Box,
+        ..RenderOptions::default()
+    };
+    let probe = Probe::new(&scene, &opts);
+    let median_blue = |name: &str| {
+        let mut v: Vec<f32> = probe
+            .material_pixels(&scene, name)
+            .iter()
+            .map(|c| c.z)
+            .collect();
+        assert!(v.len() > 10, "{name}: {} pixels", v.len());
+        v.sort_by(f32::total_cmp);
+        v[v.len() / 2]
+    };
+    let one = median_blue("Emit1");
+    assert!((one - 0.9).abs() < 0.1, "{one}");
+    for (name, k) in [
+        ("Emit2", 2.0),
+        ("Emit4", 4.0),
+        ("Emit8", 8.0),
+        ("Emit16", 16.0),
+    ] {
+        let r = median_blue(name) / one;
+        println!("{name}: {r:.3} × Emit1");
+        assert!((r - k).abs() < 0.1 * k, "{name}: {r} vs {k}");
+    }
+}
+
+/// Cubes-PointLight: in a black world the point light alone lights the cubes: each shows lit
+/// faces, in its own colour.
+#[test]
+fn cubes_point_light_lights_the_cubes() {
+    let Some(path) = sample("correctness/Cubes-PointLight/Cubes.glb") else {
+        return;
+    };
+    let scene = load(&path);
+    assert_eq!(scene.lights.len(), 1);
+    let opts = RenderOptions {
+        width: 240,
+        height: 160,
+        spp: 4,
+        max_bounces: 2,
+        filter: FilterKind::Box,
+        ..RenderOptions::default()
+    };
+    let probe = Probe::new(&scene, &opts);
+    for name in ["Material.001", "Material.002", "Material.003"] {
+        let px = probe.material_pixels(&scene, name);
+        // 79.6 cd is 0.117 W/sr (SPEC §4): a few metres away that is a few thousandths.
+        let lit = px.iter().filter(|c| c.max_element() > 1e-4).count();
+        println!("{name}: {} pixels, {lit} lit", px.len());
+        assert!(px.len() > 20, "{name}");
+        // The light sits above the cubes: their tops and some sides are lit, the rest dark.
+        assert!(lit >= 10, "{name}: {lit} lit pixels");
+        let sum: Vec3 = px.iter().sum();
+        let base = scene
+            .materials
+            .iter()
+            .find(|m| m.name.as_deref() == Some(name))
+            .unwrap()
+            .base_color_factor
+            .truncate();
+        // The dominant channel of the lit colour is the base colour's.
+        assert_eq!(
+            sum.max_position(),
+            base.max_position(),
+            "{name}: {sum} vs {base}"
+        );
     }
 }
