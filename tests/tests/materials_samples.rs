@@ -607,17 +607,13 @@ fn horizon_sky() -> Environment {
     }))
 }
 
-/// How far the normal-mapped cells differ from the real-geometry cells beside them: for each
-/// pixel on curved geometry (geometric normal more than 10° off the view axis), the difference
-/// to the pixel `s` to its right, where a flat (normal-mapped) quad must be; the best shift `s`
-/// is searched, so the layout need not be known.
-fn normal_map_mismatch(scene: &Scene) -> f32 {
+/// An orthographic camera looking down −Z at the whole scene, so every part of it is seen
+/// from the same direction.
+fn front_ortho(scene: &Scene, w: u32, h: u32) -> aperture_scene::Camera {
     let b = scene.bounds();
-    let (w, h) = (240u32, 200u32);
     let half = 0.5 * (b.max - b.min);
     let ymag = half.y.max(half.x * h as f32 / w as f32) * 1.05;
-    let mut scene = scene.clone();
-    scene.cameras = vec![aperture_scene::Camera {
+    aperture_scene::Camera {
         name: "front".into(),
         node: None,
         world_from_camera: glam::Affine3A::from_translation(Vec3::new(
@@ -630,7 +626,17 @@ fn normal_map_mismatch(scene: &Scene) -> f32 {
             ymag,
         },
         dof: aperture_scene::Dof::default(),
-    }];
+    }
+}
+
+/// How far the normal-mapped cells differ from the real-geometry cells beside them: for each
+/// pixel on curved geometry (geometric normal more than 10° off the view axis), the difference
+/// to the pixel `s` to its right, where a flat (normal-mapped) quad must be; the best shift `s`
+/// is searched, so the layout need not be known.
+fn normal_map_mismatch(scene: &Scene) -> f32 {
+    let (w, h) = (240u32, 200u32);
+    let mut scene = scene.clone();
+    scene.cameras = vec![front_ortho(&scene, w, h)];
     let opts = RenderOptions {
         width: w,
         height: h,
@@ -712,5 +718,58 @@ fn normal_tangent_tests_match_real_geometry() {
         let flipped = normal_map_mismatch(&flip_normal_map_green(&scene));
         println!("{rel}: mismatch {good:.4}, with green inverted {flipped:.4}");
         assert!(good < 0.7 * flipped, "{rel}: {good} vs {flipped}");
+    }
+}
+
+/// TextureEncodingTest: in each row (base colour, emissive, metallic-roughness) the spheres
+/// textured by 1×1 images (plain, with a gamma chunk, with an ICC profile) look like the one
+/// with the same value as a plain factor: base colour and emissive are decoded from sRGB,
+/// metallic-roughness is linear, and image colour metadata is ignored. Each sphere is rendered
+/// alone through an orthographic camera, so neighbours and viewing angle cannot tell them
+/// apart; the metal row is lit by a horizon, whose reflection's contrast depends on roughness.
+#[test]
+fn texture_encoding_test_rows_match_their_factor_sphere() {
+    let Some(path) = sample("correctness/TextureEncodingTest/TextureEncodingTest.glb") else {
+        return;
+    };
+    let scene = load(&path);
+    // Mean and standard deviation of luminance over the sphere of `node`, rendered alone.
+    let stats = |node: u32, env: Environment| {
+        let mut s = scene.clone();
+        s.instances.retain(|i| i.node == node);
+        s.cameras = vec![front_ortho(&s, 64, 64)];
+        let probe = Probe::new(
+            &s,
+            &RenderOptions {
+                env,
+                ..white_sky(64, 64, 16)
+            },
+        );
+        let px = probe.pixels_of(&s, node);
+        assert!(px.len() > 500, "node {node}: {} pixels", px.len());
+        let l: Vec<f32> = px
+            .iter()
+            .map(|&(x, y)| {
+                let p = probe.film.pixel(x, y);
+                p[0] + p[1] + p[2]
+            })
+            .collect();
+        let mean = l.iter().sum::<f32>() / l.len() as f32;
+        let var = l.iter().map(|v| (v - mean).powi(2)).sum::<f32>() / l.len() as f32;
+        (mean, var.sqrt())
+    };
+    let white = Environment::Constant(Vec3::ONE);
+    for (row, nodes, env) in [
+        ("base colour", 1..5, white.clone()),
+        ("emissive", 5..9, white),
+        ("metal-rough", 9..13, horizon_sky()),
+    ] {
+        let st: Vec<(f32, f32)> = nodes.map(|n| stats(n, env.clone())).collect();
+        println!("{row}: (mean, std) {st:?}");
+        let (m0, s0) = st[0];
+        for &(m, s) in &st[1..] {
+            assert!((m - m0).abs() < 0.005 * m0, "{row}: mean {m} vs {m0}");
+            assert!((s - s0).abs() < 0.02 * s0 + 1e-4, "{row}: std {s} vs {s0}");
+        }
     }
 }
