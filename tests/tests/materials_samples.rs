@@ -773,3 +773,118 @@ fn texture_encoding_test_rows_match_their_factor_sphere() {
         }
     }
 }
+
+/// TextureTransformTest: the offset quads show the green (U), blue (V) and cyan (UV) quadrants
+/// of the UV texture, never its yellow "not supported" quadrant; and the arrows, rotated, scaled
+/// and transformed by all three, point at their green "correct" markers. The markers are taken
+/// out of the scene, and the arrow's tip must be nearer the correct marker than the "not
+/// supported" or "error" ones.
+#[test]
+fn texture_transform_test_offsets_and_arrows() {
+    let Some(path) = sample("correctness/TextureTransformTest/TextureTransformTest.gltf") else {
+        return;
+    };
+    let names = node_names(&path);
+    let json = gltf_json(&path);
+    // World position of each node: the parents here only translate.
+    let translation = |i: usize| {
+        json["nodes"][i]["translation"]
+            .as_array()
+            .map_or(Vec3::ZERO, |t| {
+                Vec3::new(
+                    t[0].as_f64().unwrap() as f32,
+                    t[1].as_f64().unwrap() as f32,
+                    t[2].as_f64().unwrap() as f32,
+                )
+            })
+    };
+    let mut world = vec![Vec3::ZERO; names.len()];
+    for (p, n) in json["nodes"].as_array().unwrap().iter().enumerate() {
+        world[p] += translation(p);
+        for c in n["children"].as_array().into_iter().flatten() {
+            let c = c.as_u64().unwrap() as usize;
+            world[c] += translation(p);
+        }
+    }
+    let full = load(&path);
+    let mut scene = full.clone();
+    let markers: Vec<u32> = (0..names.len() as u32)
+        .filter(|&n| names[n as usize].contains(" - "))
+        .collect();
+    scene.instances.retain(|i| !markers.contains(&i.node));
+    let (w, h) = (330u32, 220u32);
+    // Frame the full scene (markers included) so both renders share one camera.
+    let camera = front_ortho(&full, w, h);
+    scene.cameras = vec![camera.clone()];
+    let probe = Probe::new(&scene, &white_sky(w, h, 8));
+
+    for (quad, ok) in [
+        (
+            "Offset U",
+            &(|c: Vec3| c.y > 2.0 * c.x && c.y > 2.0 * c.z) as &dyn Fn(Vec3) -> bool,
+        ),
+        ("Offset V", &|c: Vec3| c.z > 2.0 * c.x && c.z > 2.0 * c.y),
+        ("Offset UV", &|c: Vec3| c.y > 2.0 * c.x && c.z > 2.0 * c.x),
+    ] {
+        let (c, n) = probe.mean_of(&scene, node(&names, quad));
+        println!("{quad}: mean {c} over {n} pixels");
+        assert!(n > 200, "{quad}: {n} pixels");
+        assert!(ok(c), "{quad}: {c}");
+    }
+
+    // World point to pixel through the orthographic camera.
+    let aperture_scene::Projection::Orthographic { xmag, ymag } = camera.projection else {
+        unreachable!()
+    };
+    let centre = Vec3::from(camera.world_from_camera.translation);
+    let pixel = |p: Vec3| {
+        let x = (p.x - centre.x) / xmag * 0.5 * w as f32 + 0.5 * w as f32;
+        let y = (centre.y - p.y) / ymag * 0.5 * h as f32 + 0.5 * h as f32;
+        (x as i64, y as i64)
+    };
+    // Distance in pixels from a marker to the nearest dark (arrow) pixel of the quad's
+    // material: the arrow points at the correct marker, so its tip is nearest to it.
+    let nearest_dark = |quad: &str, marker: &str| {
+        let id = full
+            .materials
+            .iter()
+            .position(|m| m.name.as_deref() == Some(quad))
+            .unwrap() as u32;
+        let (mx, my) = pixel(world[node(&names, marker) as usize]);
+        let mut best = f32::INFINITY;
+        for y in 0..h {
+            for x in 0..w {
+                if probe.materials[(y * w + x) as usize] != Some(id) {
+                    continue;
+                }
+                let p = probe.film.pixel(x, y);
+                if p[0] + p[1] + p[2] < 0.3 {
+                    let d = ((x as i64 - mx) as f32).hypot((y as i64 - my) as f32);
+                    best = best.min(d);
+                }
+            }
+        }
+        best
+    };
+    for (quad, correct, wrong) in [
+        (
+            "Rotation",
+            "Rotation - Correct",
+            &["Rotation - Not Supported", "Rotation - Error"][..],
+        ),
+        ("Scale", "Scale - Correct", &["Scale - Not Supported"][..]),
+    ] {
+        let c = nearest_dark(quad, correct);
+        for bad in wrong {
+            let b = nearest_dark(quad, bad);
+            println!("{correct}: arrow {c:.1} px away; {bad}: {b:.1} px");
+            assert!(c < 0.6 * b, "{correct} {c} vs {bad} {b}");
+        }
+    }
+    // "All" has a single marker: the arrow's tip is there.
+    let all = nearest_dark("All", "All - Correct");
+    println!("All - Correct: arrow {all:.1} px away");
+    // The tip stops short of the marker by about the marker's size (0.1 of a 1-unit quad).
+    let px_per_unit = w as f32 / (2.0 * xmag);
+    assert!(all < 0.15 * px_per_unit, "{all} px");
+}
