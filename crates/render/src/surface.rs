@@ -1,5 +1,11 @@
 //! What a ray hit: world-space position and normals recomputed from the barycentrics, texture
-//! coordinates, vertex colour, and the material evaluated there.
+//! coordinates, vertex colour, tangent frame, and the material evaluated there.
+//!
+//! Every texture a glTF material references is used — base colour with alpha, metallic (B) and
+//! roughness (G), normal map, emissive — each through its own `texCoord` set (0 or 1) and
+//! `KHR_texture_transform` — except the occlusion map. Ambient occlusion is a raster
+//! approximation of the shadowing that path tracing computes anyway; applying it too would
+//! darken creases twice, so occlusion maps are deliberately ignored.
 
 use crate::bsdf::{Bsdf, Dielectric};
 use crate::texture;

@@ -165,7 +165,8 @@ pub struct Material {
     pub normal_texture: Option<TextureRef>,
     /// Normal map scale.
     pub normal_scale: f32,
-    /// Occlusion texture (R), linear. Read but not used by a path tracer.
+    /// Occlusion texture (R), linear. Read (for `info`) but ignored by the renderer: ambient
+    /// occlusion approximates the shadowing a path tracer computes anyway.
     pub occlusion_texture: Option<TextureRef>,
     /// Occlusion strength.
     pub occlusion_strength: f32,
