@@ -558,4 +558,69 @@ mod tests {
             Some(&aperture_imageio::MetaValue::Int(2))
         );
     }
+
+    /// `--env FILE.hdr` and `--env FILE.exr` with a constant colour light a scene like the
+    /// same `--env R,G,B`; `--env-strength 2` doubles it.
+    #[test]
+    fn environment_files_light_like_the_constant_colour() {
+        let samples = std::env::var_os("APERTURE_SAMPLES")
+            .map(std::path::PathBuf::from)
+            .unwrap_or_else(|| {
+                std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                    .join("../../../shared/gltf-samples")
+            });
+        let box_glb = samples.join("correctness/BoxTextured/BoxTextured.glb");
+        if !box_glb.is_file() {
+            eprintln!("skipping: {} not found", box_glb.display());
+            return;
+        }
+        let dir = std::env::temp_dir();
+        let id = std::process::id();
+        let c = [0.4f32, 0.6, 0.9];
+        let hdr = dir.join(format!("aperture-env-{id}.hdr"));
+        image::DynamicImage::ImageRgb32F(image::Rgb32FImage::from_pixel(16, 8, image::Rgb(c)))
+            .save(&hdr)
+            .unwrap();
+        let exr = dir.join(format!("aperture-env-{id}.exr"));
+        let mut im = aperture_imageio::Image::new(16, 8);
+        im.rgba = vec![[c[0], c[1], c[2], 1.0]; 16 * 8];
+        aperture_imageio::write_exr(&exr, &im).unwrap();
+        let mean = |env: &[&str]| {
+            let out = dir.join(format!("aperture-env-out-{id}.exr"));
+            let mut argv = vec!["--width", "24", "--height", "16", "--spp", "16", "--quiet"];
+            argv.extend_from_slice(env);
+            let mut args = parse(&argv).unwrap();
+            args.scene = box_glb.clone();
+            args.output = out.clone();
+            run(args).unwrap();
+            let img = aperture_imageio::read_exr(&out).unwrap();
+            std::fs::remove_file(&out).unwrap();
+            let n = img.rgba.len() as f32;
+            img.rgba
+                .iter()
+                .fold(Vec3::ZERO, |s, p| s + Vec3::new(p[0], p[1], p[2]))
+                / n
+        };
+        let constant = mean(&["--env", "0.4,0.6,0.9"]);
+        let hdr_s = hdr.to_str().unwrap().to_owned();
+        let exr_s = exr.to_str().unwrap().to_owned();
+        let from_hdr = mean(&["--env", &hdr_s, "--env-rotation", "30"]);
+        let from_exr = mean(&["--env", &exr_s]);
+        let doubled = mean(&["--env", &exr_s, "--env-strength", "2"]);
+        std::fs::remove_file(&hdr).unwrap();
+        std::fs::remove_file(&exr).unwrap();
+        // RGBE stores 8-bit mantissas: about 1% error.
+        assert!(
+            (from_hdr - constant).abs().max_element() < 0.03 * constant.max_element(),
+            "{from_hdr} vs {constant}"
+        );
+        assert!(
+            (from_exr - constant).abs().max_element() < 0.02 * constant.max_element(),
+            "{from_exr} vs {constant}"
+        );
+        assert!(
+            (doubled - 2.0 * from_exr).abs().max_element() < 0.02 * doubled.max_element(),
+            "{doubled} vs 2 × {from_exr}"
+        );
+    }
 }
