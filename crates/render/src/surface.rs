@@ -285,8 +285,9 @@ impl<'a> Geometry<'a> {
                 m.roughness_factor * mr.y,
                 &Dielectric {
                     ior: m.ior,
-                    specular: m.specular_factor,
-                    specular_color: m.specular_color_factor,
+                    specular: m.specular_factor * self.lookup(&m.specular_texture, s).w,
+                    specular_color: m.specular_color_factor
+                        * self.lookup(&m.specular_color_texture, s).xyz(),
                 },
             )),
             emission,

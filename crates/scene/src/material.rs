@@ -188,6 +188,12 @@ impl Materials {
         });
         let emissive_texture = self.info(m.emissive_texture(), true);
         let specular = m.specular();
+        let specular_texture = specular
+            .as_ref()
+            .and_then(|s| self.info(s.specular_texture(), false));
+        let specular_color_texture = specular
+            .as_ref()
+            .and_then(|s| self.info(s.specular_color_texture(), true));
         Material {
             name: m.name().map(str::to_owned),
             base_color_factor: Vec4::from(pbr.base_color_factor()),
@@ -216,6 +222,8 @@ impl Materials {
             specular_color_factor: specular
                 .as_ref()
                 .map_or(Vec3::ONE, |s| Vec3::from(s.specular_color_factor())),
+            specular_texture,
+            specular_color_texture,
         }
     }
 

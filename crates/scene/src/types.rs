@@ -188,6 +188,10 @@ pub struct Material {
     pub specular_factor: f32,
     /// `KHR_materials_specular` colour factor (1 when absent).
     pub specular_color_factor: Vec3,
+    /// `KHR_materials_specular` texture: its alpha multiplies the specular factor (linear).
+    pub specular_texture: Option<TextureRef>,
+    /// `KHR_materials_specular` colour texture (sRGB-encoded): multiplies the colour factor.
+    pub specular_color_texture: Option<TextureRef>,
 }
 
 impl Default for Material {
@@ -213,6 +217,8 @@ impl Default for Material {
             ior: 1.5,
             specular_factor: 1.0,
             specular_color_factor: Vec3::ONE,
+            specular_texture: None,
+            specular_color_texture: None,
         }
     }
 }
