@@ -120,14 +120,13 @@ impl EnvLight {
                 let (w, h) = (im.width as usize, im.height as usize);
                 let table = (im.sampling == EnvSampling::Importance)
                     .then(|| {
-                        // Texel power: luminance × solid angle (∝ sin θ of the row centre).
+                        // Texel power: luminance × solid angle.
                         let weights: Vec<f64> = (0..w * h)
                             .map(|i| {
-                                let row = i / w;
-                                let sin = ((row as f32 + 0.5) / h as f32 * PI).sin();
+                                let omega = texel_solid_angle(im.width, im.height, i / w);
                                 let l = luminance(im.texels[i]);
                                 if l.is_finite() && l > 0.0 {
-                                    (l * sin) as f64
+                                    (l * omega) as f64
                                 } else {
                                     0.0
                                 }
@@ -206,10 +205,12 @@ impl EnvLight {
                 // Kept off the texel's edges, where rounding in the inverse mapping could name
                 // the neighbour and pair this texel's density with another's radiance.
                 let su = (x as f32 + fx.clamp(1e-3, 1.0 - 1e-3)) / w as f32;
-                let sv = (y as f32 + u[1].clamp(1e-3, 1.0 - 1e-3)) / h as f32;
-                let theta = sv * PI;
                 let phi = TAU * (su - 0.5);
-                let (st, ct) = theta.sin_cos();
+                // Uniform in cos θ between the row's edges: uniform in solid angle.
+                let c0 = (y as f32 / h as f32 * PI).cos();
+                let c1 = ((y + 1) as f32 / h as f32 * PI).cos();
+                let ct = c0 + (c1 - c0) * u[1].clamp(1e-3, 1.0 - 1e-3);
+                let st = (1.0 - ct * ct).max(0.0).sqrt();
                 let local = Vec3::new(st * phi.cos(), ct, st * phi.sin());
                 let wi = im.to_world(local);
                 let pdf = im.texel_pdf(t.pmf(i), y);
@@ -255,20 +256,25 @@ impl ImageLight {
         (x, y)
     }
 
-    /// Solid-angle density of a direction inside texel row `y` picked with probability `pmf`:
-    /// the texel spans 2π/w × π/h in (φ, θ), and dω = sin θ dθ dφ.
+    /// Solid-angle density of a direction inside texel row `y` picked with probability `pmf`.
+    /// Directions are drawn uniformly in solid angle within the texel (uniform in φ and in
+    /// cos θ), so the density is the pick probability over the texel's solid angle, exactly.
     fn texel_pdf(&self, pmf: f32, y: usize) -> f32 {
-        let (w, h) = (self.image.width as f32, self.image.height as f32);
-        let sin = ((y as f32 + 0.5) / h * PI).sin();
-        // Within a texel the density is taken at the row centre's sin θ, the same value the
-        // weights used; sampling draws θ uniformly within the row, so the exact density varies
-        // slightly with θ. Using the row-centre value everywhere keeps sample() and pdf()
-        // consistent, which is what MIS needs.
-        if sin <= 0.0 {
-            return 0.0;
+        let omega = texel_solid_angle(self.image.width, self.image.height, y);
+        if omega > 0.0 {
+            pmf / omega
+        } else {
+            0.0
         }
-        pmf * w * h / (2.0 * PI * PI * sin)
     }
+}
+
+/// Solid angle of a texel in row `y` of a `w × h` equirectangular image:
+/// (2π / w) · (cos θ_top − cos θ_bottom).
+fn texel_solid_angle(w: u32, h: u32, y: usize) -> f32 {
+    let t0 = y as f32 / h as f32 * PI;
+    let t1 = (y + 1) as f32 / h as f32 * PI;
+    TAU / w as f32 * (t0.cos() - t1.cos())
 }
 
 #[cfg(test)]
