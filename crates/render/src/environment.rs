@@ -4,8 +4,9 @@
 //! Mapping (Blender's equirectangular convention, turned into glTF's +Y up): the image centre
 //! looks along +X, u grows towards +Z (`u = 0.5 + atan2(z, x) / 2π`), the top row is straight up
 //! (`row = acos(y) / π`). `rotation` turns the environment counter-clockwise about +Y, seen from
-//! above. Radiance is piecewise constant per texel (nearest lookup), exactly the density the
-//! sampler draws from, so a texel is never sampled with the wrong weight.
+//! above. For lighting, radiance is piecewise constant per texel (nearest lookup), exactly the
+//! density the sampler draws from, so a texel is never sampled with the wrong weight; camera
+//! rays that see the environment directly get a bilinear lookup.
 
 use crate::lights::{luminance, AliasTable};
 use glam::{Vec2, Vec3};
@@ -164,6 +165,17 @@ impl EnvLight {
         }
     }
 
+    /// Radiance seen directly by a camera ray: bilinearly filtered (as Blender's environment
+    /// texture), so a low-resolution map does not show its texels behind the scene. Camera
+    /// rays are not weighted by MIS, so filtering them differently from what light sampling
+    /// integrates costs nothing in correctness.
+    pub fn radiance_seen(&self, dir: Vec3) -> Vec3 {
+        match self {
+            Self::Constant(c) => *c,
+            Self::Image(im) => im.bilinear(dir),
+        }
+    }
+
     /// Solid-angle density with which [`EnvLight::sample`] draws `dir`.
     pub fn pdf(&self, dir: Vec3) -> f32 {
         match self {
@@ -242,6 +254,27 @@ impl ImageLight {
         Vec3::new(c * l.x + s * l.z, l.y, -s * l.x + c * l.z)
     }
 
+    /// Bilinear lookup: u wraps around, v clamps at the poles.
+    fn bilinear(&self, dir: Vec3) -> Vec3 {
+        let d = self.to_local(dir);
+        let (w, h) = (self.image.width as i64, self.image.height as i64);
+        let u = 0.5 + d.z.atan2(d.x) / TAU;
+        let v = d.y.clamp(-1.0, 1.0).acos() / PI;
+        if !(u.is_finite() && v.is_finite()) {
+            return self.texel(0, 0);
+        }
+        let x = u * w as f32 - 0.5;
+        let y = v * h as f32 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let at =
+            |xi: i64, yi: i64| self.texel(xi.rem_euclid(w) as usize, yi.clamp(0, h - 1) as usize);
+        let top = at(x0, y0).lerp(at(x0 + 1, y0), fx);
+        let bottom = at(x0, y0 + 1).lerp(at(x0 + 1, y0 + 1), fx);
+        top.lerp(bottom, fy)
+    }
+
     /// The texel a world direction falls in.
     fn texel_of(&self, dir: Vec3) -> (usize, usize) {
         let d = self.to_local(dir);
@@ -317,6 +350,38 @@ mod tests {
         assert_eq!(im.texel_of(Vec3::new(0.01, 0.1, -1.0).normalize()), (2, 0));
         let d = Vec3::new(0.3, -0.5, 0.8).normalize();
         assert!((im.to_world(im.to_local(d)) - d).length() < 1e-6);
+    }
+
+    #[test]
+    fn camera_rays_see_a_bilinear_map() {
+        let e = image(4, 2, |x, _| Vec3::splat(x as f32), EnvSampling::Importance);
+        let EnvLight::Image(im) = &e else {
+            unreachable!()
+        };
+        // Texel values are 2 × column (strength 2). At column 1's centre: 2; halfway between
+        // columns 1 and 2: their mean, 3.
+        let dir = |u: f32, v: f32| {
+            let (phi, theta) = (TAU * (u - 0.5), v * PI);
+            im.to_world(Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            ))
+        };
+        let centre = e.radiance_seen(dir(1.5 / 4.0, 0.25));
+        assert!(
+            (centre - Vec3::splat(2.0)).abs().max_element() < 1e-4,
+            "{centre}"
+        );
+        let between = e.radiance_seen(dir(0.5, 0.25));
+        assert!(
+            (between - Vec3::splat(3.0)).abs().max_element() < 1e-4,
+            "{between}"
+        );
+        // u wraps: between the last column (3) and the first (0).
+        let wrap = e.radiance_seen(dir(0.999, 0.25));
+        // Clamping would give the last column's 6 here.
+        assert!(wrap.x > 2.0 && wrap.x < 4.0, "{wrap}");
     }
 
     /// pdf() agrees with what sample() draws, and the density integrates to 1 over the sphere.

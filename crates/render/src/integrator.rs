@@ -140,12 +140,16 @@ impl Integrator<'_> {
             let Some((hit, s, error)) = self.trace(&ray, stream, vertex, bs.alpha) else {
                 // A constant environment is found by BSDF sampling alone (weight 1); an image is
                 // also light-sampled, so escaping BSDF rays share it by MIS.
-                let w = if vertex == 0 || !self.env.is_sampled() {
-                    1.0
+                if vertex == 0 {
+                    l += beta * self.env.radiance_seen(ray.dir);
                 } else {
-                    power_heuristic(prev_pdf, self.env.pdf(ray.dir))
-                };
-                l += beta * self.env.radiance(ray.dir) * w;
+                    let w = if self.env.is_sampled() {
+                        power_heuristic(prev_pdf, self.env.pdf(ray.dir))
+                    } else {
+                        1.0
+                    };
+                    l += beta * self.env.radiance(ray.dir) * w;
+                }
                 break;
             };
             if vertex == 0 {
