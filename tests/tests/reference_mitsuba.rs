@@ -211,7 +211,7 @@ fn measure(name: &str) -> Agreement {
                 seed,
                 max_bounces: as_u32(&entry, "max_bounces"),
                 filter: FilterKind::Box,
-                env,
+                env: aperture_render::Environment::Constant(env),
                 material_override: MaterialOverride::Diffuse,
                 ..RenderOptions::default()
             };

@@ -25,7 +25,7 @@ fn white_furnace_renders_one() {
     let scene = test_scenes::furnace();
     let accel = build_accel(&scene, Default::default());
     let o = RenderOptions {
-        env: Vec3::ONE,
+        env: aperture_render::Environment::Constant(Vec3::ONE),
         max_bounces: 64,
         material_override: MaterialOverride::Diffuse,
         ..opts(32, 16)

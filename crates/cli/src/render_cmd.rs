@@ -2,7 +2,9 @@
 
 use crate::progress::Progress;
 use anyhow::Context as _;
-use aperture_render::{FilterKind, MaterialOverride, RenderOptions, SamplerKind};
+use aperture_render::{
+    EnvImage, EnvSampling, Environment, FilterKind, MaterialOverride, RenderOptions, SamplerKind,
+};
 use aperture_scene::{DofOverrides, LoadOptions};
 use clap::error::ErrorKind;
 use clap::{CommandFactory as _, ValueEnum};
@@ -96,6 +98,75 @@ fn parse_rgb(s: &str) -> Result<Vec3, String> {
     Ok(Vec3::new(v[0], v[1], v[2]))
 }
 
+/// `--env`: a colour or an equirectangular HDR image.
+#[derive(Debug, Clone, PartialEq)]
+pub enum EnvArg {
+    /// Uniform radiance, linear R,G,B.
+    Color(Vec3),
+    /// An equirectangular `.hdr` (Radiance RGBE) or `.exr` file.
+    File(PathBuf),
+}
+
+/// A value with a comma is a colour; otherwise it names an `.hdr` or `.exr` file.
+fn parse_env(s: &str) -> Result<EnvArg, String> {
+    if s.contains(',') {
+        return parse_rgb(s).map(EnvArg::Color);
+    }
+    let path = PathBuf::from(s);
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("hdr" | "exr") => Ok(EnvArg::File(path)),
+        _ => Err(format!(
+            "expected R,G,B or an equirectangular .hdr or .exr file, got {s:?}"
+        )),
+    }
+}
+
+/// Reads an equirectangular environment image as linear RGB texels, rows top to bottom.
+fn load_env_image(path: &std::path::Path) -> anyhow::Result<(u32, u32, Vec<Vec3>)> {
+    let is_exr = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    let (w, h, texels) = if is_exr {
+        let im = aperture_imageio::read_exr(path)?;
+        let t: Vec<Vec3> = im
+            .rgba
+            .iter()
+            .map(|p| Vec3::new(p[0], p[1], p[2]))
+            .collect();
+        (im.width, im.height, t)
+    } else {
+        let im = image::open(path)?.into_rgb32f();
+        let (w, h) = im.dimensions();
+        let t: Vec<Vec3> = im
+            .into_raw()
+            .chunks_exact(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect();
+        (w, h, t)
+    };
+    if w == 0 || h == 0 {
+        anyhow::bail!("the image has no pixels");
+    }
+    // Non-finite or negative texels would poison every sample that sees them.
+    let texels = texels
+        .into_iter()
+        .map(|t: Vec3| {
+            if t.is_finite() {
+                t.max(Vec3::ZERO)
+            } else {
+                Vec3::ZERO
+            }
+        })
+        .collect();
+    Ok((w, h, texels))
+}
+
 /// Arguments of `aperture render`.
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
@@ -149,9 +220,17 @@ pub struct RenderArgs {
     /// Sample sequence.
     #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
     pub sampler: SamplerArg,
-    /// Uniform environment radiance, linear R,G,B [default: black].
-    #[arg(long, value_parser = parse_rgb, allow_hyphen_values = true)]
-    pub env: Option<Vec3>,
+    /// Environment: uniform radiance as linear R,G,B, or an equirectangular .hdr or .exr image
+    /// (importance-sampled by luminance) [default: black].
+    #[arg(long, value_parser = parse_env, allow_hyphen_values = true)]
+    pub env: Option<EnvArg>,
+    /// Rotation of the environment image about the up axis (+Y), degrees, counter-clockwise
+    /// seen from above.
+    #[arg(long, default_value_t = 0.0, value_parser = finite_f32, allow_hyphen_values = true)]
+    pub env_rotation: f32,
+    /// Multiplier on the environment's radiance (image or colour).
+    #[arg(long, default_value_t = 1.0, value_parser = non_negative_f32)]
+    pub env_strength: f32,
     /// Exposure in stops applied before the PNG view transform.
     #[arg(long, default_value_t = 0.0, value_parser = finite_f32, allow_hyphen_values = true)]
     pub exposure: f32,
@@ -302,7 +381,22 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             SamplerArg::Sobol => SamplerKind::Sobol,
             SamplerArg::Random => SamplerKind::Random,
         },
-        env: args.env.unwrap_or(Vec3::ZERO),
+        env: match &args.env {
+            None => Environment::Constant(Vec3::ZERO),
+            Some(EnvArg::Color(c)) => Environment::Constant(*c * args.env_strength),
+            Some(EnvArg::File(path)) => {
+                let (width, height, texels) = load_env_image(path)
+                    .with_context(|| format!("reading the environment {}", path.display()))?;
+                Environment::Image(std::sync::Arc::new(EnvImage {
+                    width,
+                    height,
+                    texels,
+                    rotation: args.env_rotation.to_radians(),
+                    strength: args.env_strength,
+                    sampling: EnvSampling::Importance,
+                }))
+            }
+        },
         material_override: match args.override_material {
             Some(OverrideArg::Diffuse) => MaterialOverride::Diffuse,
             None => MaterialOverride::None,
@@ -426,6 +520,9 @@ mod tests {
             &["--fstop", "0"],
             &["--env", "1,2"],
             &["--env", "1,nan,2"],
+            &["--env", "sky.png"],
+            &["--env-strength", "-1"],
+            &["--env-rotation", "inf"],
             &["--filter", "mitchell"],
             &["--aperture-radius", "0.1", "--fstop", "2"],
             &["--focus-distance", "3", "--focus-object", "Cube"],
@@ -460,7 +557,18 @@ mod tests {
             "0",
         ])
         .unwrap();
-        assert_eq!(a.env, Some(Vec3::new(0.5, 1.0, 2.0)));
+        assert_eq!(a.env, Some(EnvArg::Color(Vec3::new(0.5, 1.0, 2.0))));
+        let b = parse(&[
+            "--env",
+            "sky.HDR",
+            "--env-rotation",
+            "-90",
+            "--env-strength",
+            "2.5",
+        ])
+        .unwrap();
+        assert_eq!(b.env, Some(EnvArg::File("sky.HDR".into())));
+        assert_eq!((b.env_rotation, b.env_strength), (-90.0, 2.5));
         assert_eq!(a.exposure, -1.5);
         assert_eq!(a.override_material, Some(OverrideArg::Diffuse));
         assert_eq!(a.view, ViewArg::Agx);
@@ -545,6 +653,71 @@ mod tests {
         assert_eq!(
             images[0].meta("aperture:spp"),
             Some(&aperture_imageio::MetaValue::Int(2))
+        );
+    }
+
+    /// `--env FILE.hdr` and `--env FILE.exr` with a constant colour light a scene like the
+    /// same `--env R,G,B`; `--env-strength 2` doubles it.
+    #[test]
+    fn environment_files_light_like_the_constant_colour() {
+        let samples = std::env::var_os("APERTURE_SAMPLES")
+            .map(std::path::PathBuf::from)
+            .unwrap_or_else(|| {
+                std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                    .join("../../../shared/gltf-samples")
+            });
+        let box_glb = samples.join("correctness/BoxTextured/BoxTextured.glb");
+        if !box_glb.is_file() {
+            eprintln!("skipping: {} not found", box_glb.display());
+            return;
+        }
+        let dir = std::env::temp_dir();
+        let id = std::process::id();
+        let c = [0.4f32, 0.6, 0.9];
+        let hdr = dir.join(format!("aperture-env-{id}.hdr"));
+        image::DynamicImage::ImageRgb32F(image::Rgb32FImage::from_pixel(16, 8, image::Rgb(c)))
+            .save(&hdr)
+            .unwrap();
+        let exr = dir.join(format!("aperture-env-{id}.exr"));
+        let mut im = aperture_imageio::Image::new(16, 8);
+        im.rgba = vec![[c[0], c[1], c[2], 1.0]; 16 * 8];
+        aperture_imageio::write_exr(&exr, &im).unwrap();
+        let mean = |env: &[&str]| {
+            let out = dir.join(format!("aperture-env-out-{id}.exr"));
+            let mut argv = vec!["--width", "24", "--height", "16", "--spp", "16", "--quiet"];
+            argv.extend_from_slice(env);
+            let mut args = parse(&argv).unwrap();
+            args.scene = box_glb.clone();
+            args.output = out.clone();
+            run(args).unwrap();
+            let img = aperture_imageio::read_exr(&out).unwrap();
+            std::fs::remove_file(&out).unwrap();
+            let n = img.rgba.len() as f32;
+            img.rgba
+                .iter()
+                .fold(Vec3::ZERO, |s, p| s + Vec3::new(p[0], p[1], p[2]))
+                / n
+        };
+        let constant = mean(&["--env", "0.4,0.6,0.9"]);
+        let hdr_s = hdr.to_str().unwrap().to_owned();
+        let exr_s = exr.to_str().unwrap().to_owned();
+        let from_hdr = mean(&["--env", &hdr_s, "--env-rotation", "30"]);
+        let from_exr = mean(&["--env", &exr_s]);
+        let doubled = mean(&["--env", &exr_s, "--env-strength", "2"]);
+        std::fs::remove_file(&hdr).unwrap();
+        std::fs::remove_file(&exr).unwrap();
+        // RGBE stores 8-bit mantissas: about 1% error.
+        assert!(
+            (from_hdr - constant).abs().max_element() < 0.03 * constant.max_element(),
+            "{from_hdr} vs {constant}"
+        );
+        assert!(
+            (from_exr - constant).abs().max_element() < 0.02 * constant.max_element(),
+            "{from_exr} vs {constant}"
+        );
+        assert!(
+            (doubled - 2.0 * from_exr).abs().max_element() < 0.02 * doubled.max_element(),
+            "{doubled} vs 2 × {from_exr}"
         );
     }
 }

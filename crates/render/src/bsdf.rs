@@ -1,8 +1,11 @@
 //! Scattering at a surface point, in a local frame whose +Z is the shading normal.
 //!
 //! glTF metallic-roughness (glTF 2.0 Appendix B): a Lambertian base under a GGX/Smith specular
-//! layer mixed by Schlick's Fresnel (F0 = 0.04), and a GGX conductor with F0 = base colour, mixed
-//! by `metallic`. Specular directions are drawn from the visible normals (Heitz 2018), so few
+//! layer mixed by Schlick's Fresnel, and a GGX conductor with F0 = base colour, mixed by
+//! `metallic`. The dielectric F0 is 0.04 by default; `KHR_materials_ior` and
+//! `KHR_materials_specular` change it (F0 = ((ior − 1)/(ior + 1))² × specular colour, capped at 1)
+//! and weight the layer by the specular factor, exactly as those extensions' `fresnel_mix` does:
+//! `(1 − w · max(F)) · diffuse + w · F · specular`. Specular directions are drawn from the visible normals (Heitz 2018), so few
 //! samples are wasted below the horizon. Callers orient the frame so `wo.z > 0` (both sides are
 //! shaded).
 
@@ -64,7 +67,59 @@ pub enum Bsdf {
         metallic: f32,
         /// GGX alpha = perceptual roughness².
         alpha: f32,
+        /// Dielectric reflectance at normal incidence (0.04 for glTF's default IOR 1.5).
+        f0: Vec3,
+        /// Dielectric specular weight (`KHR_materials_specular`'s factor, 1 by default).
+        spec_weight: f32,
     },
+}
+
+/// Dielectric Fresnel parameters of `KHR_materials_ior` and `KHR_materials_specular`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Dielectric {
+    /// Index of refraction (glTF default 1.5).
+    pub ior: f32,
+    /// Specular weight (`specularFactor` × texture alpha).
+    pub specular: f32,
+    /// Specular F0 tint (`specularColorFactor` × texture).
+    pub specular_color: Vec3,
+}
+
+impl Default for Dielectric {
+    /// glTF's defaults: IOR 1.5 (F0 = 0.04), untinted, full weight.
+    fn default() -> Self {
+        Self {
+            ior: 1.5,
+            specular: 1.0,
+            specular_color: Vec3::ONE,
+        }
+    }
+}
+
+impl Dielectric {
+    /// F0 and weight: `min(((ior − 1)/(ior + 1))² · colour, 1)` and the weight clamped to [0, 1].
+    /// Bad values (NaN, negative) fall back to the defaults instead of poisoning the image.
+    fn f0_and_weight(&self) -> (Vec3, f32) {
+        // KHR_materials_ior allows ior = 0 to mean "infinitely reflective" (F0 = 1).
+        let r = if self.ior == 0.0 {
+            1.0
+        } else if self.ior.is_finite() && self.ior >= 1.0 {
+            ((self.ior - 1.0) / (self.ior + 1.0)).powi(2)
+        } else {
+            0.04
+        };
+        let tint = if self.specular_color.is_finite() {
+            self.specular_color.max(Vec3::ZERO)
+        } else {
+            Vec3::ONE
+        };
+        let w = if self.specular.is_finite() {
+            self.specular.clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        ((r * tint).min(Vec3::ONE), w)
+    }
 }
 
 /// A sampled direction with its value and density.
@@ -133,17 +188,32 @@ fn sample_vndf(wo: Vec3, alpha: f32, u: [f32; 2]) -> Vec3 {
 impl Bsdf {
     /// glTF metallic-roughness from its factors (roughness is perceptual).
     pub fn metal_rough(base: Vec3, metallic: f32, roughness: f32) -> Self {
+        Self::metal_rough_dielectric(base, metallic, roughness, &Dielectric::default())
+    }
+
+    /// glTF metallic-roughness with the dielectric layer of `KHR_materials_ior` and
+    /// `KHR_materials_specular`.
+    pub fn metal_rough_dielectric(
+        base: Vec3,
+        metallic: f32,
+        roughness: f32,
+        dielectric: &Dielectric,
+    ) -> Self {
         let r = roughness.clamp(0.0, 1.0);
+        let (f0, spec_weight) = dielectric.f0_and_weight();
         Self::MetalRough {
             base,
             metallic: metallic.clamp(0.0, 1.0),
             alpha: (r * r).max(MIN_ALPHA),
+            f0,
+            spec_weight,
         }
     }
 
     /// Probability of drawing the specular lobe, from the Fresnel weight at normal view.
-    fn specular_probability(base: Vec3, metallic: f32, nv: f32) -> f32 {
-        let fd = 0.04 + 0.96 * schlick_weight(nv);
+    fn specular_probability(base: Vec3, metallic: f32, f0: Vec3, w: f32, nv: f32) -> f32 {
+        let f0 = f0.max_element();
+        let fd = w * (f0 + (1.0 - f0) * schlick_weight(nv));
         let spec = metallic + (1.0 - metallic) * fd;
         let diff = (1.0 - metallic) * (1.0 - fd) * base.max_element();
         if diff <= 0.0 {
@@ -164,6 +234,8 @@ impl Bsdf {
                 base,
                 metallic,
                 alpha,
+                f0,
+                spec_weight,
             } => {
                 let h = (wo + wi).normalize();
                 let voh = wo.dot(h).max(0.0);
@@ -171,12 +243,13 @@ impl Bsdf {
                 let d = ggx_d(h.z, a2);
                 let spec = smith_v(wi.z, wo.z, a2) * d;
                 let w = schlick_weight(voh);
-                let f_dielectric = 0.04 + 0.96 * w;
+                let f_dielectric = f0 + (Vec3::ONE - f0) * w;
                 let dielectric =
-                    (1.0 - f_dielectric) * base * FRAC_1_PI + Vec3::splat(f_dielectric * spec);
+                    (1.0 - spec_weight * f_dielectric.max_element()) * base * FRAC_1_PI
+                        + spec_weight * f_dielectric * spec;
                 let metal = (base + (Vec3::ONE - base) * w) * spec;
                 let f = dielectric.lerp(metal, metallic);
-                let p_spec = Self::specular_probability(base, metallic, wo.z);
+                let p_spec = Self::specular_probability(base, metallic, f0, spec_weight, wo.z);
                 let pdf_spec = smith_g1(wo.z, a2) * d / (4.0 * wo.z);
                 let pdf = p_spec * pdf_spec + (1.0 - p_spec) * wi.z * FRAC_1_PI;
                 (f, pdf)
@@ -195,8 +268,10 @@ impl Bsdf {
                 base,
                 metallic,
                 alpha,
+                f0,
+                spec_weight,
             } => {
-                if u_lobe < Self::specular_probability(base, metallic, wo.z) {
+                if u_lobe < Self::specular_probability(base, metallic, f0, spec_weight, wo.z) {
                     let m = sample_vndf(wo, alpha, u);
                     2.0 * wo.dot(m) * m - wo
                 } else {
@@ -296,6 +371,52 @@ mod tests {
         }
         let total = sum * TAU / (n * n) as f32;
         assert!((total - rate).abs() < 0.01, "{total} vs {rate}");
+    }
+
+    /// IOR and specular change only the dielectric Fresnel term: the glTF default equals
+    /// IOR 1.5; a higher IOR reflects more at normal incidence; specular 0 leaves pure diffuse;
+    /// metals ignore both.
+    #[test]
+    fn ior_and_specular_change_the_dielectric_fresnel() {
+        let base = Vec3::new(0.5, 0.4, 0.3);
+        let wo = Vec3::Z;
+        let mirror = Vec3::new(0.01, 0.0, 1.0).normalize();
+        let d = |ior, specular, specular_color| Dielectric {
+            ior,
+            specular,
+            specular_color,
+        };
+        let default = Bsdf::metal_rough(base, 0.0, 0.3);
+        let ior15 = Bsdf::metal_rough_dielectric(base, 0.0, 0.3, &d(1.5, 1.0, Vec3::ONE));
+        assert_eq!(default, ior15);
+        let ior2 = Bsdf::metal_rough_dielectric(base, 0.0, 0.3, &d(2.0, 1.0, Vec3::ONE));
+        assert!(ior2.eval(wo, mirror).0.x > default.eval(wo, mirror).0.x);
+        if let Bsdf::MetalRough { f0, .. } = ior2 {
+            assert!((f0.x - 1.0 / 9.0).abs() < 1e-6, "{f0}");
+        }
+        // Specular weight 0: exactly Lambert of the base colour.
+        let off = Bsdf::metal_rough_dielectric(base, 0.0, 0.3, &d(1.5, 0.0, Vec3::ONE));
+        let wi = Vec3::new(0.3, 0.2, 0.9).normalize();
+        assert!((off.eval(wo, wi).0 - base * FRAC_1_PI).abs().max_element() < 1e-6);
+        // A red specular tint reflects red more than blue in the highlight.
+        let tinted = Bsdf::metal_rough_dielectric(Vec3::ZERO, 0.0, 0.3, &d(1.5, 1.0, Vec3::X));
+        let f = tinted.eval(wo, mirror).0;
+        assert!(f.x > 0.0 && f.x > 100.0 * f.z, "{f}");
+        // Energy is still conserved for a strong, tinted layer.
+        let strong = Bsdf::metal_rough_dielectric(
+            Vec3::ONE,
+            0.0,
+            0.5,
+            &d(3.0, 1.0, Vec3::new(2.0, 1.0, 0.5)),
+        );
+        let q = albedo_quadrature(&strong, Vec3::new(0.4, 0.0, 0.6).normalize());
+        assert!(q.max_element() <= 1.0 + 1e-3, "{q}");
+        let is = albedo_is(&strong, Vec3::new(0.4, 0.0, 0.6).normalize());
+        assert!((is - q).abs().max_element() < 0.01, "{is} vs {q}");
+        // Metals ignore the dielectric layer.
+        let metal = Bsdf::metal_rough(base, 1.0, 0.3);
+        let metal2 = Bsdf::metal_rough_dielectric(base, 1.0, 0.3, &d(2.5, 0.2, Vec3::X));
+        assert_eq!(metal.eval(wo, wi).0, metal2.eval(wo, wi).0);
     }
 
     #[test]

@@ -1,11 +1,12 @@
 //! Unidirectional path tracing with next-event estimation: punctual lights by NEE alone (they are
-//! deltas), emissive triangles by NEE and BSDF sampling combined with multiple importance
-//! sampling (power heuristic). Russian roulette from the fourth vertex on.
+//! deltas), emissive triangles and environment images by NEE and BSDF sampling combined with
+//! multiple importance sampling (power heuristic). Russian roulette from the fourth vertex on.
 //!
 //! `max_bounces` has Blender Cycles' meaning: 0 is direct light only (the camera ray's hit is lit
 //! by light sampling and by one BSDF-sampled ray that may find an emitter or the environment).
 
 use crate::bsdf::Frame;
+use crate::environment::EnvLight;
 use crate::lights::{punctual_incident, EmissiveLights};
 use crate::sampler::SampleStream;
 use crate::surface::{Geometry, Surface};
@@ -22,8 +23,23 @@ pub(crate) struct Integrator<'a> {
     pub geom: Geometry<'a>,
     pub accel: &'a Accel,
     pub emissive: Option<EmissiveLights>,
-    pub env: Vec3,
+    pub env: EnvLight,
     pub max_bounces: u32,
+}
+
+/// Smallest cosine between the view and a shading normal.
+const MIN_VIEW_COS: f32 = 0.02;
+
+/// A shading normal bent just far enough towards the viewer `wo` that `wo` is above its
+/// hemisphere. Normal maps and interpolated normals can face away from the viewer; shading with
+/// such a normal would see the view below the surface and return black. Bending (instead of
+/// switching to the geometric normal) keeps the result continuous as the normal crosses over.
+fn bend_towards(n: Vec3, wo: Vec3) -> Vec3 {
+    let c = n.dot(wo);
+    if c >= MIN_VIEW_COS {
+        return n;
+    }
+    (n + wo * (MIN_VIEW_COS - c)).try_normalize().unwrap_or(wo)
 }
 
 /// Power heuristic with β = 2.
@@ -122,8 +138,18 @@ impl Integrator<'_> {
         loop {
             let bs = stream.bounce(vertex);
             let Some((hit, s, error)) = self.trace(&ray, stream, vertex, bs.alpha) else {
-                // The environment is not light-sampled, so BSDF sampling finds it at weight 1.
-                l += beta * self.env;
+                // A constant environment is found by BSDF sampling alone (weight 1); an image is
+                // also light-sampled, so escaping BSDF rays share it by MIS.
+                if vertex == 0 {
+                    l += beta * self.env.radiance_seen(ray.dir);
+                } else {
+                    let w = if self.env.is_sampled() {
+                        power_heuristic(prev_pdf, self.env.pdf(ray.dir))
+                    } else {
+                        1.0
+                    };
+                    l += beta * self.env.radiance(ray.dir) * w;
+                }
                 break;
             };
             if vertex == 0 {
@@ -131,8 +157,15 @@ impl Integrator<'_> {
             }
             let wo = -ray.dir;
             let ng = if s.ng.dot(wo) < 0.0 { -s.ng } else { s.ng };
-            let ns = if s.ns.dot(ng) < 0.0 { -s.ns } else { s.ns };
             let shading = self.geom.shade(&s);
+            // Both sides are shaded: the (mapped) normal turns with the vertex normal to the
+            // viewer's side of the surface.
+            let ns = if s.ns.dot(ng) < 0.0 {
+                -shading.normal
+            } else {
+                shading.normal
+            };
+            let ns = bend_towards(ns, wo);
             if let Some(c) = shading.unlit {
                 l += beta * c;
                 break;
@@ -162,7 +195,8 @@ impl Integrator<'_> {
                 break;
             }
             let Some(bsdf) = shading.bsdf else { break };
-            // A shading normal may disagree with the view; fall back to the geometric frame.
+            // `bend_towards` keeps the view above the shading hemisphere; if rounding still
+            // says otherwise, fall back to the geometric frame rather than return black.
             let mut frame = Frame::from_normal(ns);
             let mut wo_l = frame.to_local(wo);
             if wo_l.z <= 0.0 {
@@ -222,6 +256,21 @@ impl Integrator<'_> {
                 }
             }
 
+            if let Some(es) = self.env.sample(stream.environment(vertex)) {
+                let wi_l = frame.to_local(es.wi);
+                if es.wi.dot(ng) > 0.0 && es.radiance != Vec3::ZERO {
+                    let (f, bsdf_pdf) = bsdf.eval(wo_l, wi_l);
+                    let c = beta
+                        * f
+                        * wi_l.z
+                        * es.radiance
+                        * (power_heuristic(es.pdf, bsdf_pdf) / es.pdf);
+                    if c != Vec3::ZERO && c.is_finite() {
+                        l += c * self.visibility(p_out, es.wi, f32::INFINITY);
+                    }
+                }
+            }
+
             let Some(sample) = bsdf.sample(wo_l, bs.lobe, bs.bsdf) else {
                 break;
             };
@@ -253,6 +302,23 @@ impl Integrator<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bent_normals_face_the_viewer() {
+        let wo = Vec3::new(0.0, 0.6, 0.8);
+        // Already facing: unchanged.
+        assert_eq!(bend_towards(Vec3::Z, wo), Vec3::Z);
+        for n in [
+            Vec3::new(0.0, -1.0, 0.0),
+            Vec3::new(0.0, -0.8, 0.6),
+            -wo,
+            Vec3::new(1.0, -0.6, 0.0).normalize(),
+        ] {
+            let b = bend_towards(n, wo);
+            assert!(b.is_finite() && (b.length() - 1.0).abs() < 1e-5, "{b}");
+            assert!(b.dot(wo) > 0.0, "{n} -> {b}");
+        }
+    }
 
     #[test]
     fn power_heuristic_limits() {

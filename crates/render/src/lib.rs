@@ -20,6 +20,7 @@
 pub mod adaptive;
 mod bsdf;
 pub mod camera;
+mod environment;
 mod film;
 mod filter;
 mod integrator;
@@ -31,8 +32,9 @@ pub mod test_scenes;
 mod texture;
 
 pub use adaptive::AdaptiveOptions;
-pub use bsdf::{Bsdf, BsdfSample, Frame};
+pub use bsdf::{Bsdf, BsdfSample, Dielectric, Frame};
 pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, CameraSample};
+pub use environment::{EnvImage, EnvSampling, Environment};
 pub use film::{Film, PixelSum};
 pub use filter::{Filter, FilterKind};
 pub use render::{

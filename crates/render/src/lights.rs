@@ -6,6 +6,9 @@ use crate::surface::Geometry;
 use aperture_scene::{Light, LightKind};
 use glam::Vec3;
 
+/// The largest f32 below 1.
+const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
 /// Walker/Vose alias table: O(1) sampling of a discrete distribution.
 #[derive(Debug, Clone)]
 pub(crate) struct AliasTable {
@@ -53,6 +56,22 @@ impl AliasTable {
         }
     }
 
+    /// Picks an outcome for `u ∈ [0, 1)` and returns with it a fresh uniform number in
+    /// `[0, 1)` recovered from the part of `u` the choice did not use.
+    pub fn sample_remap(&self, u: f32) -> (usize, f32) {
+        let n = self.prob.len();
+        let x = u * n as f32;
+        let i = (x as usize).min(n - 1);
+        let frac = (x - i as f32).clamp(0.0, 1.0);
+        let p = self.prob[i];
+        if frac < p {
+            (i, (frac / p).min(ONE_MINUS_EPSILON))
+        } else {
+            let rest = ((frac - p) / (1.0 - p)).clamp(0.0, ONE_MINUS_EPSILON);
+            (self.alias[i] as usize, rest)
+        }
+    }
+
     /// Probability of outcome `i`.
     pub fn pmf(&self, i: usize) -> f32 {
         self.pmf[i]
@@ -94,11 +113,7 @@ impl EmissiveLights {
                 if !emissive.get(mid as usize).copied().unwrap_or(false) {
                     continue;
                 }
-                let s = geom.surface(ii as u32, ti as u32, 1.0 / 3.0, 1.0 / 3.0);
-                let m = geom.material(mid);
-                // Power up to constant factors (π, two sides); the emissive texture is left out.
-                let radiance = m.emissive_factor * m.emissive_strength;
-                let w = (luminance(radiance) * s.area) as f64;
+                let w = triangle_power(geom, ii as u32, ti as u32);
                 if !(w > 0.0 && w.is_finite()) {
                     continue;
                 }
@@ -132,6 +147,39 @@ impl EmissiveLights {
             _ => 0.0,
         }
     }
+}
+
+/// Barycentrics where a triangle's emission is probed: the centroid and six points towards the
+/// corners and edges, so a texture that lights only part of a triangle still gets weight.
+const PROBES: [(f32, f32); 7] = [
+    (1.0 / 3.0, 1.0 / 3.0),
+    (0.1, 0.1),
+    (0.8, 0.1),
+    (0.1, 0.8),
+    (0.45, 0.1),
+    (0.45, 0.45),
+    (0.1, 0.45),
+];
+
+/// A triangle's emitted power up to constant factors (π, two sides): area × mean luminance of
+/// its radiance, the emissive texture included (probed at [`PROBES`]), so dark parts of an
+/// emissive texture are rarely picked. Any weight is unbiased: a triangle the probes miss
+/// (weight 0) is still found by BSDF sampling, which MIS then weights fully.
+fn triangle_power(geom: &Geometry<'_>, instance: u32, triangle: u32) -> f64 {
+    let m = geom.material(geom.surface(instance, triangle, 0.0, 0.0).material);
+    let probes: &[(f32, f32)] = if m.emissive_texture.is_some() {
+        &PROBES
+    } else {
+        &PROBES[..1]
+    };
+    let mut sum = 0.0f64;
+    let mut area = 0.0f32;
+    for &(b1, b2) in probes {
+        let s = geom.surface(instance, triangle, b1, b2);
+        area = s.area;
+        sum += luminance(geom.emission(&s)).max(0.0) as f64;
+    }
+    sum / probes.len() as f64 * area as f64
 }
 
 /// Rec.709 luminance.
@@ -189,6 +237,17 @@ mod tests {
             let got = counts[i] as f64 / n as f64;
             assert!((got - want).abs() < 2e-3, "{i}: {got} vs {want}");
         }
+        // The remapped number is uniform within each outcome: its mean is 1/2.
+        let mut sums = [0.0f64; 5];
+        for i in 0..n {
+            let (k, r) = t.sample_remap((i as f32 + 0.5) / n as f32);
+            assert!((0.0..1.0).contains(&r));
+            sums[k] += r as f64;
+        }
+        for i in [0, 2, 3, 4] {
+            let mean = sums[i] / (t.pmf(i) as f64 * n as f64);
+            assert!((mean - 0.5).abs() < 0.01, "{i}: {mean}");
+        }
     }
 
     #[test]
@@ -205,6 +264,54 @@ mod tests {
         assert_eq!(em.triangles.len(), 1);
         assert_eq!(em.pick_probability(0, 1), 1.0);
         assert_eq!(em.pick_probability(0, 0), 0.0);
+    }
+
+    /// Two equal emissive triangles, one under the black half of an emissive texture: the
+    /// lit one is picked far more often.
+    #[test]
+    fn emissive_texture_weights_light_selection() {
+        use crate::surface::{Geometry, MaterialOverride};
+        use aperture_scene::{ColorSpace, Sampler, Texels, Texture, TextureRef};
+        let mut s = crate::test_scenes::lit_plane(1.0);
+        let mut m = crate::test_scenes::emitter(Vec3::ONE);
+        m.emissive_texture = Some(TextureRef {
+            texture: 0,
+            tex_coord: 0,
+            transform: None,
+        });
+        s.materials.push(m);
+        let mid = (s.materials.len() - 1) as u32;
+        s.meshes[0].material_ids = vec![mid; s.meshes[0].indices.len()];
+        // The texture is white left of u = 0.5 and black right of it.
+        s.textures.push(Texture {
+            name: None,
+            width: 2,
+            height: 1,
+            texels: Texels::Rgba8(vec![[255; 4], [0, 0, 0, 255]]),
+            color_space: ColorSpace::Srgb,
+            sampler: Sampler {
+                wrap_u: aperture_scene::Wrap::ClampToEdge,
+                wrap_v: aperture_scene::Wrap::ClampToEdge,
+                mag_filter: aperture_scene::Filter::Nearest,
+            },
+        });
+        // Two triangles of the same area with their own corners: triangle 0 samples the white
+        // texel, triangle 1 the black one.
+        let mesh = &mut s.meshes[0];
+        let p = [mesh.positions[0], mesh.positions[1], mesh.positions[2]];
+        mesh.positions = [p, p.map(|v| v + Vec3::X)].concat();
+        mesh.normals = vec![Vec3::Y; 6];
+        mesh.indices = vec![[0, 1, 2], [3, 4, 5]];
+        mesh.material_ids = vec![mid; 2];
+        mesh.uv0 = [
+            [glam::Vec2::new(0.1, 0.5); 3],
+            [glam::Vec2::new(0.9, 0.5); 3],
+        ]
+        .concat();
+        let geom = Geometry::new(&s, MaterialOverride::None);
+        let em = EmissiveLights::build(&geom).unwrap();
+        let (p0, p1) = (em.pick_probability(0, 0), em.pick_probability(0, 1));
+        assert_eq!((p0, p1), (1.0, 0.0));
     }
 
     #[test]

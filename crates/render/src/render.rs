@@ -4,6 +4,7 @@
 
 use crate::adaptive::{self, AdaptiveOptions};
 use crate::camera::{Camera, CameraSample};
+use crate::environment::{EnvLight, Environment};
 use crate::film::{Film, PixelSum};
 use crate::filter::{Filter, FilterKind};
 use crate::integrator::Integrator;
@@ -41,8 +42,8 @@ pub struct RenderOptions {
     pub filter: FilterKind,
     /// Sample sequence.
     pub sampler: SamplerKind,
-    /// Uniform environment radiance (linear RGB).
-    pub env: Vec3,
+    /// What rays leaving the scene see: a colour (black by default) or an HDR image.
+    pub env: Environment,
     /// Material override.
     pub material_override: MaterialOverride,
     /// Adaptive sampling (`None`: every pixel takes `spp` samples).
@@ -60,7 +61,7 @@ impl Default for RenderOptions {
             max_bounces: DEFAULT_MAX_BOUNCES,
             filter: FilterKind::default(),
             sampler: SamplerKind::default(),
-            env: Vec3::ZERO,
+            env: Environment::default(),
             material_override: MaterialOverride::None,
             adaptive: None,
         }
@@ -115,8 +116,12 @@ fn check(opts: &RenderOptions) -> Result<(), RenderError> {
             return bad("min_spp", a.min_spp.to_string(), "must be in 1..=spp");
         }
     }
-    if !opts.env.is_finite() || opts.env.min_element() < 0.0 {
-        return bad("env", format!("{}", opts.env), "must be finite and ≥ 0");
+    if let Some(why) = opts.env.problem() {
+        return bad(
+            "env",
+            why,
+            "must be finite and ≥ 0, with width × height texels",
+        );
     }
     Ok(())
 }
@@ -176,7 +181,7 @@ pub fn render_with_camera(
         geom,
         accel,
         emissive,
-        env: opts.env,
+        env: EnvLight::new(&opts.env),
         max_bounces: opts.max_bounces,
     };
     let filter = Filter::new(opts.filter);
@@ -352,7 +357,7 @@ fn render_adaptive(
 mod tests {
     use super::*;
     use crate::test_scenes;
-    use glam::Affine3A;
+    use glam::{Affine3A, Vec3};
 
     /// A plane under a point light, an emissive ball, depth of field: every code path.
     fn busy_scene() -> Scene {
@@ -466,7 +471,7 @@ mod tests {
                 ..RenderOptions::default()
             },
             RenderOptions {
-                env: Vec3::new(-1.0, 0.0, 0.0),
+                env: Environment::Constant(Vec3::new(-1.0, 0.0, 0.0)),
                 ..RenderOptions::default()
             },
         ] {

@@ -176,6 +176,13 @@ impl SampleStream {
         }
     }
 
+    /// The environment light's pair at path vertex `k`: dimension set `2^20 + k`, far above the
+    /// bounce sets, so drawing it changes no other value of the stream.
+    pub fn environment(&self, k: u32) -> [f32; 2] {
+        self.kind
+            .sample_2d(self.pixel_seed, self.index, (1 << 20) + k)
+    }
+
     /// An extra value for the `n`-th repeated decision at vertex `k` (alpha pass-through after
     /// the first), hashed so it stays a pure function of the sample.
     pub fn extra(&self, k: u32, n: u32) -> f32 {

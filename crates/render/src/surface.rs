@@ -1,7 +1,13 @@
 //! What a ray hit: world-space position and normals recomputed from the barycentrics, texture
-//! coordinates, vertex colour, and the material evaluated there.
+//! coordinates, vertex colour, tangent frame, and the material evaluated there.
+//!
+//! Every texture a glTF material references is used — base colour with alpha, metallic (B) and
+//! roughness (G), normal map, emissive — each through its own `texCoord` set (0 or 1) and
+//! `KHR_texture_transform` — except the occlusion map. Ambient occlusion is a raster
+//! approximation of the shadowing that path tracing computes anyway; applying it too would
+//! darken creases twice, so occlusion maps are deliberately ignored.
 
-use crate::bsdf::Bsdf;
+use crate::bsdf::{Bsdf, Dielectric};
 use crate::texture;
 use aperture_scene::{AlphaMode, Material, Scene, TextureRef};
 use glam::{Mat3, Vec2, Vec3, Vec4, Vec4Swizzles};
@@ -24,8 +30,11 @@ pub(crate) struct Surface {
     pub p: Vec3,
     /// Unit geometric normal, on the side the (transformed) vertex normals point to.
     pub ng: Vec3,
-    /// Unit shading normal.
+    /// Unit shading normal (interpolated vertex normal, before normal mapping).
     pub ns: Vec3,
+    /// World tangent (xyz, not unit) with bitangent sign (w, mirroring included); zero when the
+    /// mesh has none here.
+    pub tangent: Vec4,
     /// Texture coordinate sets 0 and 1.
     pub uv: [Vec2; 2],
     /// Vertex colour (white when absent).
@@ -45,6 +54,8 @@ pub(crate) struct Shading {
     pub emission: Vec3,
     /// `KHR_materials_unlit`: the colour the surface shows.
     pub unlit: Option<Vec3>,
+    /// Unit shading normal after normal mapping, on the side of `Surface::ns`.
+    pub normal: Vec3,
 }
 
 /// Per-instance data the hit shader needs, computed once per render.
@@ -123,6 +134,21 @@ impl<'a> Geometry<'a> {
                 b0 * v[i0] + b1 * v[i1] + b2 * v[i2]
             }
         };
+        let tangent = if mesh.tangents.is_empty() {
+            Vec4::ZERO
+        } else {
+            let t = b0 * mesh.tangents[i0] + b1 * mesh.tangents[i1] + b2 * mesh.tangents[i2];
+            // The handedness sign is per vertex (±1); MikkTSpace splits vertices where it
+            // changes, so the first corner's sign is the triangle's. A mirroring transform
+            // reverses the cross product that builds the bitangent: flip the sign with it.
+            let w = if mesh.tangents[i0].w < 0.0 { -1.0 } else { 1.0 };
+            let w = if self.mirrored[instance as usize] {
+                -w
+            } else {
+                w
+            };
+            m.transform_vector3(t.xyz()).extend(w)
+        };
         let color = if mesh.colors.is_empty() {
             Vec4::ONE
         } else {
@@ -132,6 +158,7 @@ impl<'a> Geometry<'a> {
             p,
             ng,
             ns,
+            tangent,
             uv: [lerp2(&mesh.uv0), lerp2(&mesh.uv1)],
             color,
             material: mesh
@@ -204,11 +231,42 @@ impl<'a> Geometry<'a> {
         }
     }
 
+    /// The shading normal with the material's normal map applied (glTF: tangent-space, +X
+    /// along the tangent, +Y along the bitangent, scaled in X and Y by `normal_scale`). Falls
+    /// back to the interpolated normal when there is no map, no tangent frame, or the result
+    /// is degenerate, so a bad texel never yields NaN.
+    pub fn shading_normal(&self, m: &Material, s: &Surface) -> Vec3 {
+        if m.normal_texture.is_none() || s.tangent.xyz() == Vec3::ZERO {
+            return s.ns;
+        }
+        let tex = self.lookup(&m.normal_texture, s).xyz() * 2.0 - Vec3::ONE;
+        let local = Vec3::new(tex.x * m.normal_scale, tex.y * m.normal_scale, tex.z);
+        let n = s.ns;
+        // Gram-Schmidt: interpolated tangents drift off the interpolated normal.
+        let Some(t) = (s.tangent.xyz() - n * n.dot(s.tangent.xyz())).try_normalize() else {
+            return n;
+        };
+        let b = n.cross(t) * s.tangent.w;
+        (t * local.x + b * local.y + n * local.z)
+            .try_normalize()
+            .filter(|v| v.is_finite())
+            .unwrap_or(n)
+    }
+
     /// The material evaluated at `s`.
     pub fn shade(&self, s: &Surface) -> Shading {
         let m = self.material(s.material);
         let base = self.base_color(m, s).xyz().max(Vec3::ZERO);
         let emission = self.emission(s);
+        if m.unlit && self.material_override == MaterialOverride::None {
+            return Shading {
+                bsdf: None,
+                emission: Vec3::ZERO,
+                unlit: Some(base),
+                normal: s.ns,
+            };
+        }
+        let normal = self.shading_normal(m, s);
         if self.material_override == MaterialOverride::Diffuse {
             return Shading {
                 bsdf: Some(Bsdf::Lambert {
@@ -216,24 +274,25 @@ impl<'a> Geometry<'a> {
                 }),
                 emission,
                 unlit: None,
-            };
-        }
-        if m.unlit {
-            return Shading {
-                bsdf: None,
-                emission: Vec3::ZERO,
-                unlit: Some(base),
+                normal,
             };
         }
         let mr = self.lookup(&m.metallic_roughness_texture, s);
         Shading {
-            bsdf: Some(Bsdf::metal_rough(
+            bsdf: Some(Bsdf::metal_rough_dielectric(
                 base.min(Vec3::ONE),
                 m.metallic_factor * mr.z,
                 m.roughness_factor * mr.y,
+                &Dielectric {
+                    ior: m.ior,
+                    specular: m.specular_factor * self.lookup(&m.specular_texture, s).w,
+                    specular_color: m.specular_color_factor
+                        * self.lookup(&m.specular_color_texture, s).xyz(),
+                },
             )),
             emission,
             unlit: None,
+            normal,
         }
     }
 }

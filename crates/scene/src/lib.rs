@@ -18,6 +18,8 @@
 //!   parallel.
 //! - Bad input is an [`Error`] saying where, never a panic; every count is checked against the
 //!   bytes that back it before anything is allocated.
+//! - Normal-mapped triangles always have tangents: `TANGENT` where given, MikkTSpace tangents
+//!   otherwise ([`generate_missing_tangents`]).
 //! - External URIs resolve only inside the scene file's folder: no `..`, absolute paths or
 //!   `http:`.
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
@@ -30,6 +32,7 @@ mod load;
 mod material;
 mod mesh;
 mod prepass;
+mod tangents;
 mod types;
 mod uri;
 
@@ -37,4 +40,5 @@ pub use dof::{lens_from_yfov, DEFAULT_ASPECT};
 pub use error::Error;
 pub use load::{load, load_bytes};
 pub use prepass::SUPPORTED_EXTENSIONS;
+pub use tangents::generate_missing_tangents;
 pub use types::*;

@@ -186,6 +186,8 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
     }
 
     out.materials = std::mem::take(&mut materials.materials);
+    stats.warnings.append(&mut materials.warnings);
+    crate::tangents::generate_missing_tangents(&mut out);
     out.textures = materials.textures(&doc, &buffers, base_dir, options.skip_textures)?;
     if out.cameras.is_empty() {
         out.cameras.push(automatic_camera(&out, &info, options)?);
@@ -776,5 +778,35 @@ mod tests {
         bytes["meshes"][0]["primitives"][0]["material"] = json!(1);
         let e = load_json(&serde_json::to_vec(&bytes).unwrap()).unwrap_err();
         assert!(e.to_string().contains("images[0].uri"), "{e}");
+    }
+
+    #[test]
+    fn unsupported_material_extensions_warn_once_naming_material_and_extension() {
+        let extra = json!({
+            "materials": [{"name": "Glass", "extensions": {
+                "KHR_materials_transmission": {"transmissionFactor": 1.0},
+                "KHR_materials_volume": {},
+                "KHR_materials_ior": {"ior": 1.4}
+            }}]
+        });
+        let mut bytes: Value = serde_json::from_slice(&gltf(
+            json!([{"mesh": 0}, {"mesh": 0}]),
+            json!([0, 1]),
+            extra,
+        ))
+        .unwrap();
+        bytes["meshes"][0]["primitives"][0]["material"] = json!(0);
+        let s = load_json(&serde_json::to_vec(&bytes).unwrap()).unwrap();
+        let w: Vec<&String> = s
+            .stats
+            .warnings
+            .iter()
+            .filter(|w| w.contains("Glass"))
+            .collect();
+        // Two nodes draw the material, yet each extension is reported once; IOR is implemented.
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert!(w.iter().any(|w| w.contains("KHR_materials_transmission")));
+        assert!(w.iter().any(|w| w.contains("KHR_materials_volume")));
+        assert_eq!(s.materials[0].ior, 1.4);
     }
 }

@@ -29,6 +29,48 @@ pub(crate) struct Materials {
     pub materials: Vec<Material>,
     keys: Vec<TexKey>,
     by_key: HashMap<TexKey, u32>,
+    /// One line per (material, extension) the renderer shows only approximately.
+    pub warnings: Vec<String>,
+}
+
+/// Material extensions the renderer cannot show exactly yet, with what it renders instead. Each
+/// degrades to the metallic-roughness base underneath it, which is what the extension's own
+/// fallback rule asks of a viewer that ignores it.
+const DEGRADED: &[(&str, &str)] = &[
+    ("KHR_materials_clearcoat", "without the clear coat layer"),
+    ("KHR_materials_sheen", "without the sheen layer"),
+    (
+        "KHR_materials_transmission",
+        "as an opaque surface (no transmission)",
+    ),
+    (
+        "KHR_materials_diffuse_transmission",
+        "as an opaque surface (no diffuse transmission)",
+    ),
+    ("KHR_materials_volume", "without volume absorption"),
+    ("KHR_materials_iridescence", "without iridescence"),
+    ("KHR_materials_anisotropy", "with isotropic roughness"),
+    ("KHR_materials_dispersion", "without dispersion"),
+    (
+        "KHR_materials_pbrSpecularGlossiness",
+        "from its metallic-roughness fallback",
+    ),
+];
+
+/// Warnings for the extensions of `m` that degrade (see [`DEGRADED`]), naming the material.
+fn degrade_warnings(m: &gltf::Material<'_>) -> Vec<String> {
+    let Some(ext) = m.extensions() else {
+        return Vec::new();
+    };
+    let who = match m.name() {
+        Some(n) => format!("material \"{n}\" (materials[{}])", m.index().unwrap_or(0)),
+        None => format!("materials[{}]", m.index().unwrap_or(0)),
+    };
+    DEGRADED
+        .iter()
+        .filter(|(name, _)| ext.contains_key(*name))
+        .map(|(name, instead)| format!("{who}: {name} is not supported; rendered {instead}"))
+        .collect()
 }
 
 /// `KHR_texture_transform` from its JSON (normal and occlusion textures expose only JSON).
@@ -122,6 +164,7 @@ impl Materials {
     }
 
     fn build(&mut self, m: &gltf::Material<'_>) -> Material {
+        self.warnings.extend(degrade_warnings(m));
         let pbr = m.pbr_metallic_roughness();
         let base_color_texture = self.info(pbr.base_color_texture(), true);
         let metallic_roughness_texture = self.info(pbr.metallic_roughness_texture(), false);
@@ -145,6 +188,12 @@ impl Materials {
         });
         let emissive_texture = self.info(m.emissive_texture(), true);
         let specular = m.specular();
+        let specular_texture = specular
+            .as_ref()
+            .and_then(|s| self.info(s.specular_texture(), false));
+        let specular_color_texture = specular
+            .as_ref()
+            .and_then(|s| self.info(s.specular_color_texture(), true));
         Material {
             name: m.name().map(str::to_owned),
             base_color_factor: Vec4::from(pbr.base_color_factor()),
@@ -173,6 +222,8 @@ impl Materials {
             specular_color_factor: specular
                 .as_ref()
                 .map_or(Vec3::ONE, |s| Vec3::from(s.specular_color_factor())),
+            specular_texture,
+            specular_color_texture,
         }
     }
 

@@ -34,8 +34,10 @@ pub struct Mesh {
     pub positions: Vec<Vec3>,
     /// Unit shading normals. Always present: primitives without `NORMAL` get flat normals.
     pub normals: Vec<Vec3>,
-    /// Tangents (xyz) with handedness sign (w), from `TANGENT`; empty when no primitive has them.
-    /// Vertices of primitives without `TANGENT` hold `Vec4::ZERO` (derive a tangent there).
+    /// Tangents (xyz) with handedness sign (w; bitangent = cross(normal, tangent) · w), from
+    /// `TANGENT`, else MikkTSpace tangents for normal-mapped triangles (the loader generates them,
+    /// see [`crate::generate_missing_tangents`]). Empty when nothing needs them; other vertices may
+    /// hold `Vec4::ZERO`.
     pub tangents: Vec<Vec4>,
     /// `TEXCOORD_0`; empty when no primitive has it (zeros fill primitives that lack it).
     pub uv0: Vec<Vec2>,
@@ -163,7 +165,8 @@ pub struct Material {
     pub normal_texture: Option<TextureRef>,
     /// Normal map scale.
     pub normal_scale: f32,
-    /// Occlusion texture (R), linear. Read but not used by a path tracer.
+    /// Occlusion texture (R), linear. Read (for `info`) but ignored by the renderer: ambient
+    /// occlusion approximates the shadowing a path tracer computes anyway.
     pub occlusion_texture: Option<TextureRef>,
     /// Occlusion strength.
     pub occlusion_strength: f32,
@@ -185,6 +188,10 @@ pub struct Material {
     pub specular_factor: f32,
     /// `KHR_materials_specular` colour factor (1 when absent).
     pub specular_color_factor: Vec3,
+    /// `KHR_materials_specular` texture: its alpha multiplies the specular factor (linear).
+    pub specular_texture: Option<TextureRef>,
+    /// `KHR_materials_specular` colour texture (sRGB-encoded): multiplies the colour factor.
+    pub specular_color_texture: Option<TextureRef>,
 }
 
 impl Default for Material {
@@ -210,6 +217,8 @@ impl Default for Material {
             ior: 1.5,
             specular_factor: 1.0,
             specular_color_factor: Vec3::ONE,
+            specular_texture: None,
+            specular_color_texture: None,
         }
     }
 }
