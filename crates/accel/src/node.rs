@@ -137,13 +137,23 @@ pub(crate) unsafe fn intersect_node_avx2(node: &CwBvhNode, r: &BoxRay, tmax: f32
     // `hitmask_from_children` without its data-dependent loop (one iteration per hit child, a
     // branch that mispredicts often): each lane shifts its child's bits to their index, lanes of
     // missed children are masked off, and the eight lanes are OR-ed together.
-    let (child_bits8, bit_index8) = node.get_child_and_index_bits(r.oct_inv4);
-    // SAFETY: AVX2 is guaranteed by the caller; register-only operations (safe in a
-    // `target_feature` function on newer compilers, hence the allow).
-    #[allow(unused_unsafe)]
+    // The child bits and their indices are `CwBvhNode::get_child_and_index_bits` lane by lane
+    // (there on the eight bytes of a `u64`): a child is internal when bits 3 and 4 of its meta
+    // byte are both set; its index is then its slot (low 5 bits) XOR the ray's octant, a leaf's is
+    // its first primitive's offset; the bits are the meta byte's top three.
+    // SAFETY: AVX2 is guaranteed by the caller; the load reads exactly the 8 bytes of
+    // `child_meta`, the rest are register-only operations.
     unsafe {
-        let bits = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(child_bits8 as i64));
-        let index = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(bit_index8 as i64));
+        let meta =
+            _mm256_cvtepu8_epi32(_mm_loadl_epi64(node.child_meta.as_ptr() as *const __m128i));
+        let inner_bits = _mm256_set1_epi32(0x18);
+        let inner = _mm256_cmpeq_epi32(_mm256_and_si256(meta, inner_bits), inner_bits);
+        let oct = _mm256_set1_epi32((r.oct_inv4 & 0xff) as i32);
+        let index = _mm256_and_si256(
+            _mm256_xor_si256(meta, _mm256_and_si256(oct, inner)),
+            _mm256_set1_epi32(0x1f),
+        );
+        let bits = _mm256_srli_epi32::<5>(meta);
         let m = _mm256_and_si256(_mm256_sllv_epi32(bits, index), _mm256_castps_si256(hit));
         let x = _mm_or_si128(_mm256_castsi256_si128(m), _mm256_extracti128_si256::<1>(m));
         let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b01_00_11_10>(x));
