@@ -348,9 +348,6 @@ fn traverse_impl<const AVX2: bool>(
     if nodes.is_empty() {
         return false;
     }
-    // A local copy: the compiler keeps its fields (and their broadcasts) in registers.
-    let r_local = *r;
-    let r = &r_local;
     let mut sp = 0usize;
     // The root as a group of one internal child at priority 7 (obvhs convention).
     let mut current: Group = (0, 0x8000_0000);
