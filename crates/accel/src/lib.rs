@@ -32,7 +32,7 @@ mod triangle;
 pub use triangle::intersect_triangle;
 
 use glam::{Affine3A, Vec3};
-use node::{BoxRay, WideNode};
+use node::BoxRay;
 use obvhs::{
     aabb::Aabb,
     bvh2::reinsertion::ReinsertionOptimizer,
@@ -202,7 +202,7 @@ struct Tri {
 /// A bottom-level BVH over one mesh (object space) or over all flattened meshes (world space).
 #[derive(Debug, Clone, Default)]
 struct Blas {
-    nodes: Vec<WideNode>,
+    nodes: Vec<CwBvhNode>,
     tris: Vec<Tri>,
     /// For the flattened BVH only: the instance of each triangle (BVH order). Empty otherwise.
     tri_instance: Vec<u32>,
@@ -237,7 +237,7 @@ pub struct Accel {
     blases: Vec<Blas>,
     /// In top-level BVH order.
     entries: Vec<Entry>,
-    tlas: Vec<WideNode>,
+    tlas: Vec<CwBvhNode>,
     tlas_depth: usize,
     /// Bounds of all instance bounds.
     tlas_bounds: (Vec3, Vec3),
@@ -304,7 +304,7 @@ fn with_stack<R>(depth: usize, f: impl FnOnce(&mut [MaybeUninit<Group>]) -> R) -
 /// needs one entry per tree level (the depth measured at build time).
 #[inline(always)]
 fn traverse<const AVX2: bool>(
-    nodes: &[WideNode],
+    nodes: &[CwBvhNode],
     r: &BoxRay,
     tmax: &mut f32,
     stack: &mut [MaybeUninit<Group>],
@@ -328,7 +328,7 @@ fn traverse<const AVX2: bool>(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1,bmi2")]
 unsafe fn traverse_avx2(
-    nodes: &[WideNode],
+    nodes: &[CwBvhNode],
     r: &BoxRay,
     tmax: &mut f32,
     stack: &mut [MaybeUninit<Group>],
@@ -339,7 +339,7 @@ unsafe fn traverse_avx2(
 
 #[inline(always)]
 fn traverse_impl<const AVX2: bool>(
-    nodes: &[WideNode],
+    nodes: &[CwBvhNode],
     r: &BoxRay,
     tmax: &mut f32,
     stack: &mut [MaybeUninit<Group>],
@@ -541,7 +541,6 @@ fn build_blas(tris: Vec<(Tri, u32)>, quality: BvhQuality, keep_instance: bool) -
     };
     let depth = cwbvh_depth(&nodes);
     let box_bounds = bounds.unwrap_or((Vec3::ZERO, Vec3::ZERO));
-    let nodes = wide_nodes(&nodes, box_bounds);
     Blas {
         nodes,
         tris: ordered,
@@ -550,12 +549,6 @@ fn build_blas(tris: Vec<(Tri, u32)>, quality: BvhQuality, keep_instance: bool) -
         bounds,
         box_bounds,
     }
-}
-
-/// Decompresses obvhs' nodes for a tree whose `BoxRay`s are made with `bounds`.
-fn wide_nodes(nodes: &[CwBvhNode], bounds: (Vec3, Vec3)) -> Vec<WideNode> {
-    let c = node::centre(bounds);
-    nodes.iter().map(|n| WideNode::from_cwbvh(n, c)).collect()
 }
 
 /// World bounds of an object-space box, widened by a relative margin so that rounding in the
@@ -754,7 +747,6 @@ impl Accel {
             .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
             .unwrap_or((Vec3::ZERO, Vec3::ZERO));
         let tlas_depth = cwbvh_depth(&tlas);
-        let tlas = wide_nodes(&tlas, tlas_bounds);
         let max_blas_depth = blases.iter().map(|b| b.depth).max().unwrap_or(0);
         let mut instance_magnitude = vec![0.0f32; instances.len()];
         for (id, inst, _) in &usable {
@@ -780,12 +772,12 @@ impl Accel {
         stats.memory_bytes = blases
             .iter()
             .map(|b| {
-                b.nodes.len() * size_of::<WideNode>()
+                b.nodes.len() * size_of::<CwBvhNode>()
                     + b.tris.len() * size_of::<Tri>()
                     + b.tri_instance.len() * 4
             })
             .sum::<usize>()
-            + tlas.len() * size_of::<WideNode>()
+            + tlas.len() * size_of::<CwBvhNode>()
             + entries.len() * size_of::<Entry>();
         stats.build_time = start.elapsed();
         Self {
