@@ -129,19 +129,60 @@ pub(crate) fn intersect_node(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
 /// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
+#[inline]
 pub(crate) unsafe fn intersect_node_avx2(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
+    use std::arch::x86_64::*;
     let f = frame(node, r);
     // SAFETY: forwarded from the caller.
-    let hit8 = unsafe { child_hits_avx2(node, r, &f, tmax) };
-    hitmask_from_children(node, r.oct_inv4, hit8)
+    let hit = unsafe { child_hits_avx2_lanes(node, r, &f, tmax) };
+    // `hitmask_from_children` without its data-dependent loop (one iteration per hit child, a
+    // branch that mispredicts often): each lane shifts its child's bits to their index, lanes of
+    // missed children are masked off, and the eight lanes are OR-ed together.
+    // The child bits and their indices are `CwBvhNode::get_child_and_index_bits` lane by lane
+    // (there on the eight bytes of a `u64`): a child is internal when bits 3 and 4 of its meta
+    // byte are both set; its index is then its slot (low 5 bits) XOR the ray's octant, a leaf's is
+    // its first primitive's offset; the bits are the meta byte's top three.
+    // SAFETY: AVX2 is guaranteed by the caller; the load reads exactly the 8 bytes of
+    // `child_meta`, the rest are register-only operations.
+    unsafe {
+        let meta =
+            _mm256_cvtepu8_epi32(_mm_loadl_epi64(node.child_meta.as_ptr() as *const __m128i));
+        let inner_bits = _mm256_set1_epi32(0x18);
+        let inner = _mm256_cmpeq_epi32(_mm256_and_si256(meta, inner_bits), inner_bits);
+        let oct = _mm256_set1_epi32((r.oct_inv4 & 0xff) as i32);
+        let index = _mm256_and_si256(
+            _mm256_xor_si256(meta, _mm256_and_si256(oct, inner)),
+            _mm256_set1_epi32(0x1f),
+        );
+        let bits = _mm256_srli_epi32::<5>(meta);
+        let m = _mm256_and_si256(_mm256_sllv_epi32(bits, index), _mm256_castps_si256(hit));
+        let x = _mm_or_si128(_mm256_castsi256_si128(m), _mm256_extracti128_si256::<1>(m));
+        let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b01_00_11_10>(x));
+        let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b10_11_00_01>(x));
+        _mm_cvtsi128_si32(x) as u32
+    }
 }
 
 /// The SSE2 test below, eight lanes wide: the same operations in the same order (separate
 /// multiply and add, never fused; `max`/`min`/ordered `<=` with the same NaN behaviour), so both
 /// paths give identical masks.
-#[cfg(target_arch = "x86_64")]
+#[cfg(all(test, target_arch = "x86_64"))]
 #[inline(always)]
 unsafe fn child_hits_avx2(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
+    use std::arch::x86_64::*;
+    // SAFETY: forwarded from the caller.
+    unsafe { _mm256_movemask_ps(child_hits_avx2_lanes(node, r, f, tmax)) as u32 }
+}
+
+/// [`child_hits_avx2`] as a lane mask (all ones for a hit child).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn child_hits_avx2_lanes(
+    node: &CwBvhNode,
+    r: &BoxRay,
+    f: &NodeFrame,
+    tmax: f32,
+) -> std::arch::x86_64::__m256 {
     use std::arch::x86_64::*;
     // SAFETY: AVX2 is guaranteed by the caller; each load reads exactly one `[u8; 8]` field.
     unsafe {
@@ -181,7 +222,7 @@ unsafe fn child_hits_avx2(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32
             _mm256_min_ps(_mm256_set1_ps(tmax), t!(fx, f.scale.x, f.off_hi.x)),
             _mm256_min_ps(t!(fy, f.scale.y, f.off_hi.y), t!(fz, f.scale.z, f.off_hi.z)),
         );
-        _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)) as u32
+        _mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)
     }
 }
 
@@ -386,6 +427,9 @@ mod tests {
                     let f = frame(node, &r);
                     // SAFETY: AVX2 was detected.
                     assert_eq!(a, unsafe { child_hits_avx2(node, &r, &f, tmax) });
+                    // SAFETY: AVX2 was detected.
+                    let full = unsafe { intersect_node_avx2(node, &r, tmax) };
+                    assert_eq!(full, intersect_node(node, &r, tmax));
                 }
                 nonzero += (a != 0) as usize;
             }
