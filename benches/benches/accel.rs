@@ -253,25 +253,9 @@ fn build(c: &mut Criterion) {
         .join("benchmark/BlenderIO-32bitIndices/01_vertex_count_32bit.gltf");
     match aperture_scene::load(&path, &Default::default()) {
         Ok(s) => {
-            let meshes: Vec<MeshInput> = s
-                .meshes
-                .iter()
-                .map(|m| MeshInput {
-                    positions: &m.positions,
-                    indices: &m.indices,
-                })
-                .collect();
-            let instances: Vec<InstanceInput> = s
-                .instances
-                .iter()
-                .map(|i| InstanceInput {
-                    mesh: i.mesh,
-                    world_from_object: i.world_from_object,
-                })
-                .collect();
             for q in BvhQuality::ALL {
                 g.bench_function(BenchmarkId::new("BlenderIO-32bitIndices", q), |b| {
-                    b.iter(|| Accel::build(&meshes, &instances, q))
+                    b.iter(|| aperture_render::build_accel(&s, q))
                 });
             }
         }

@@ -6,7 +6,7 @@
 #[path = "accel_util.rs"]
 mod util;
 
-use aperture_accel::{Accel, BvhQuality, InstanceInput, MeshInput, Ray};
+use aperture_accel::{Accel, BvhQuality, Ray};
 use aperture_scene::{load, LoadOptions, Scene};
 use util::Rng;
 
@@ -20,23 +20,7 @@ fn load_sample(folder: &str, file: &str) -> Option<Scene> {
 }
 
 fn build(scene: &Scene) -> Accel {
-    let meshes: Vec<MeshInput> = scene
-        .meshes
-        .iter()
-        .map(|m| MeshInput {
-            positions: &m.positions,
-            indices: &m.indices,
-        })
-        .collect();
-    let instances: Vec<InstanceInput> = scene
-        .instances
-        .iter()
-        .map(|i| InstanceInput {
-            mesh: i.mesh,
-            world_from_object: i.world_from_object,
-        })
-        .collect();
-    Accel::build(&meshes, &instances, BvhQuality::default())
+    aperture_render::build_accel(scene, BvhQuality::default())
 }
 
 /// Rays from around and inside the scene bounds towards random points inside them, so most hit.

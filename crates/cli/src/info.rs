@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use aperture_accel::{Accel, BvhQuality, InstanceInput, MeshInput};
+use aperture_accel::BvhQuality;
 use aperture_scene::{Camera, LightKind, LoadOptions, Projection, Scene};
 use serde_json::{json, Value};
 
@@ -50,23 +50,7 @@ fn counts(s: &Scene) -> Counts {
         .map(|i| emissive_per_mesh.get(i.mesh as usize).copied().unwrap_or(0))
         .sum();
     // Degenerate triangles are what the BVH builder leaves out, so ask it.
-    let meshes: Vec<MeshInput<'_>> = s
-        .meshes
-        .iter()
-        .map(|m| MeshInput {
-            positions: &m.positions,
-            indices: &m.indices,
-        })
-        .collect();
-    let instances: Vec<InstanceInput> = s
-        .instances
-        .iter()
-        .map(|i| InstanceInput {
-            mesh: i.mesh,
-            world_from_object: i.world_from_object,
-        })
-        .collect();
-    let degenerate = Accel::build(&meshes, &instances, BvhQuality::Fast)
+    let degenerate = aperture_render::build_accel(s, BvhQuality::Fast)
         .stats()
         .degenerate_triangles;
     Counts {
