@@ -51,62 +51,8 @@ fn terrain(nx: u32, ny: u32, size: f32, origin: Vec3) -> (Vec<Vec3>, Vec<[u32; 3
 
 /// A unit icosphere with `20 * 4^sub` triangles (vertices shared).
 fn icosphere(sub: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut pos: Vec<Vec3> = [
-        [-1.0, t, 0.0],
-        [1.0, t, 0.0],
-        [-1.0, -t, 0.0],
-        [1.0, -t, 0.0],
-        [0.0, -1.0, t],
-        [0.0, 1.0, t],
-        [0.0, -1.0, -t],
-        [0.0, 1.0, -t],
-        [t, 0.0, -1.0],
-        [t, 0.0, 1.0],
-        [-t, 0.0, -1.0],
-        [-t, 0.0, 1.0],
-    ]
-    .iter()
-    .map(|p| Vec3::from_array(*p).normalize())
-    .collect();
-    let mut idx: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..sub {
-        let mut mid = std::collections::HashMap::new();
-        let mut next = Vec::with_capacity(idx.len() * 4);
-        for [a, b, c] in idx {
-            let mut m = |u: u32, v: u32| -> u32 {
-                *mid.entry((u.min(v), u.max(v))).or_insert_with(|| {
-                    pos.push(((pos[u as usize] + pos[v as usize]) * 0.5).normalize());
-                    pos.len() as u32 - 1
-                })
-            };
-            let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        idx = next;
-    }
-    (pos, idx)
+    let m = aperture_render::test_scenes::icosphere(sub, 0);
+    (m.positions, m.indices)
 }
 
 struct OwnedScene {
