@@ -6,39 +6,9 @@
 #[path = "accel_util.rs"]
 mod util;
 
-use aperture_accel::{offset_ray_origin, Accel, BvhQuality, InstanceInput, Ray, SpawnPoint};
-use glam::{Affine3A, Quat, Vec3};
-use util::{icosphere, Rng, Scene};
-
-fn scene(scale: f32, center: Vec3, instanced: bool) -> Scene {
-    let (pos, idx) = icosphere(4);
-    if instanced {
-        let rot = Quat::from_axis_angle(Vec3::new(3.0, 1.0, 2.0).normalize(), 1.1);
-        let at = |c: Vec3| Affine3A::from_scale_rotation_translation(Vec3::splat(scale), rot, c);
-        Scene {
-            meshes: vec![(pos, idx)],
-            instances: vec![
-                InstanceInput {
-                    mesh: 0,
-                    world_from_object: at(center),
-                },
-                InstanceInput {
-                    mesh: 0,
-                    world_from_object: at(center + Vec3::Y * 1e3 * scale),
-                },
-            ],
-        }
-    } else {
-        let world = pos.iter().map(|p| center + *p * scale).collect();
-        Scene {
-            meshes: vec![(world, idx)],
-            instances: vec![InstanceInput {
-                mesh: 0,
-                world_from_object: Affine3A::IDENTITY,
-            }],
-        }
-    }
-}
+use aperture_accel::{offset_ray_origin, Accel, BvhQuality, Ray, SpawnPoint};
+use glam::Vec3;
+use util::{sphere_scene, Rng};
 
 /// A direction at `angle` radians above the plane with normal `n` (unit), in a random tangent
 /// direction.
@@ -50,7 +20,7 @@ fn grazing(rng: &mut Rng, n: Vec3, angle: f32) -> Vec3 {
 }
 
 fn run(scale: f32, center: Vec3, instanced: bool) {
-    let scene = scene(scale, center, instanced);
+    let scene = sphere_scene(4, scale, center, instanced);
     let accel: Accel = scene.build(BvhQuality::default());
     let sphere_center = if instanced {
         scene.instances[0]

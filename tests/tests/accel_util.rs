@@ -131,3 +131,35 @@ pub fn random_rays(rng: &mut Rng, n: usize, lo: Vec3, hi: Vec3) -> Vec<Ray> {
         })
         .collect()
 }
+
+/// Places the unit icosphere at `center` with radius `scale`. Flattened: vertices given in world
+/// space. Instanced: drawn twice (so it is not flattened), the second copy far out of the way.
+pub fn sphere_scene(sub: u32, scale: f32, center: Vec3, instanced: bool) -> Scene {
+    let (pos, idx) = icosphere(sub);
+    if instanced {
+        let rot = Quat::from_axis_angle(Vec3::new(1.0, 2.0, 3.0).normalize(), 0.7);
+        let at = |c: Vec3| Affine3A::from_scale_rotation_translation(Vec3::splat(scale), rot, c);
+        Scene {
+            meshes: vec![(pos, idx)],
+            instances: vec![
+                InstanceInput {
+                    mesh: 0,
+                    world_from_object: at(center),
+                },
+                InstanceInput {
+                    mesh: 0,
+                    world_from_object: at(center + Vec3::Y * 1e3 * scale),
+                },
+            ],
+        }
+    } else {
+        let world = pos.iter().map(|p| center + *p * scale).collect();
+        Scene {
+            meshes: vec![(world, idx)],
+            instances: vec![InstanceInput {
+                mesh: 0,
+                world_from_object: Affine3A::IDENTITY,
+            }],
+        }
+    }
+}

@@ -5,41 +5,9 @@
 #[path = "accel_util.rs"]
 mod util;
 
-use aperture_accel::{Accel, BvhQuality, Hit, InstanceInput, Ray};
-use glam::{Affine3A, Quat, Vec3};
-use util::{icosphere, Rng, Scene};
-
-/// Places the unit icosphere at `center` with radius `scale`. Flattened: vertices given in world
-/// space. Instanced: drawn twice (so it is not flattened), the second copy out of the way.
-fn sphere_scene(sub: u32, scale: f32, center: Vec3, instanced: bool) -> Scene {
-    let (pos, idx) = icosphere(sub);
-    if instanced {
-        let rot = Quat::from_axis_angle(Vec3::new(1.0, 2.0, 3.0).normalize(), 0.7);
-        let at = |c: Vec3| Affine3A::from_scale_rotation_translation(Vec3::splat(scale), rot, c);
-        Scene {
-            meshes: vec![(pos, idx)],
-            instances: vec![
-                InstanceInput {
-                    mesh: 0,
-                    world_from_object: at(center),
-                },
-                InstanceInput {
-                    mesh: 0,
-                    world_from_object: at(center + Vec3::X * 10.0 * scale),
-                },
-            ],
-        }
-    } else {
-        let world = pos.iter().map(|p| center + *p * scale).collect();
-        Scene {
-            meshes: vec![(world, idx)],
-            instances: vec![InstanceInput {
-                mesh: 0,
-                world_from_object: Affine3A::IDENTITY,
-            }],
-        }
-    }
-}
+use aperture_accel::{Accel, BvhQuality, Hit, Ray};
+use glam::Vec3;
+use util::{sphere_scene, Rng};
 
 /// Counts rays that do not hit instance 0 near their target (t = 1, as `dir = target - origin`).
 fn leaks(accel: &Accel, origin: Vec3, targets: &[Vec3]) -> Vec<(Vec3, Option<Hit>)> {

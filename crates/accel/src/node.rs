@@ -314,9 +314,11 @@ fn child_hits(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
     }
 }
 
-#[cfg(not(target_arch = "x86_64"))]
+/// The box test one child at a time: the whole test on targets without the SIMD paths, and
+/// the reference those paths are checked against.
+#[cfg(any(test, not(target_arch = "x86_64")))]
 #[inline(always)]
-fn child_hits(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
+fn child_hits_scalar(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
     let mut hit8 = 0;
     let lo = [&node.child_min_x, &node.child_min_y, &node.child_min_z];
     let hi = [&node.child_max_x, &node.child_max_y, &node.child_max_z];
@@ -342,33 +344,17 @@ fn child_hits(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
     hit8
 }
 
+#[cfg(not(target_arch = "x86_64"))]
+#[inline(always)]
+fn child_hits(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
+    child_hits_scalar(node, r, f, tmax)
+}
+
 /// Scalar reference of the same test, for unit tests.
 #[cfg(test)]
 pub(crate) fn child_hits_reference(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
     let f = frame(node, r);
-    let mut hit8 = 0;
-    let lo = [&node.child_min_x, &node.child_min_y, &node.child_min_z];
-    let hi = [&node.child_max_x, &node.child_max_y, &node.child_max_z];
-    let scale = f.scale.to_array();
-    let off_lo = f.off_lo.to_array();
-    let off_hi = f.off_hi.to_array();
-    for c in 0..8 {
-        let mut enter = r.tmin;
-        let mut exit = tmax;
-        for a in 0..3 {
-            let (n, fa) = if r.neg[a] {
-                (hi[a][c], lo[a][c])
-            } else {
-                (lo[a][c], hi[a][c])
-            };
-            enter = enter.max(n as f32 * scale[a] + off_lo[a]);
-            exit = exit.min(fa as f32 * scale[a] + off_hi[a]);
-        }
-        if enter <= exit {
-            hit8 |= 1 << c;
-        }
-    }
-    hit8
+    child_hits_scalar(node, r, &f, tmax)
 }
 
 #[cfg(test)]
