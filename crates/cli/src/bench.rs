@@ -564,16 +564,9 @@ mod tests {
     /// the CSV (one row per configuration and budget) and the plot.
     #[test]
     fn writes_reference_csv_and_plot() {
-        let samples = std::env::var_os("APERTURE_SAMPLES")
-            .map(PathBuf::from)
-            .unwrap_or_else(|| {
-                PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/gltf-samples")
-            });
-        let box_glb = samples.join("correctness/BoxTextured/BoxTextured.glb");
-        if !box_glb.is_file() {
-            eprintln!("skipping: {} not found", box_glb.display());
+        let Some(box_glb) = crate::box_textured_sample() else {
             return;
-        }
+        };
         let dir = std::env::temp_dir().join(format!("aperture-bench-{}", std::process::id()));
         let mut args = parse(&[
             "--spp",

@@ -40,3 +40,27 @@ fn main() -> std::process::ExitCode {
         }
     }
 }
+
+#[cfg(test)]
+/// `BoxTextured.glb` from the samples folder (`APERTURE_SAMPLES`, else `../shared/gltf-samples`
+/// beside the repository). Missing: a skip with a message, but a failure with `CI=true`, where
+/// a silent skip would hide that the test never ran.
+fn box_textured_sample() -> Option<std::path::PathBuf> {
+    let samples = std::env::var_os("APERTURE_SAMPLES")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| {
+            std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                .join("../../../shared/gltf-samples")
+        });
+    let path = samples.join("correctness/BoxTextured/BoxTextured.glb");
+    if path.is_file() {
+        return Some(path);
+    }
+    assert!(
+        std::env::var("CI").map_or(true, |v| v != "true"),
+        "CI=true but the glTF sample {} is missing",
+        path.display()
+    );
+    eprintln!("skipping: {} not found", path.display());
+    None
+}

@@ -576,34 +576,11 @@ mod tests {
         assert_eq!(a.aperture_radius, Some(0.0));
     }
 
-    /// `BoxTextured.glb` from the samples folder (`APERTURE_SAMPLES`, else `../shared/gltf-samples`
-    /// beside the repository). Missing: a skip with a message, but a failure with `CI=true`, where
-    /// a silent skip would hide that the test never ran.
-    fn box_textured_sample() -> Option<std::path::PathBuf> {
-        let samples = std::env::var_os("APERTURE_SAMPLES")
-            .map(std::path::PathBuf::from)
-            .unwrap_or_else(|| {
-                std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-                    .join("../../../shared/gltf-samples")
-            });
-        let path = samples.join("correctness/BoxTextured/BoxTextured.glb");
-        if path.is_file() {
-            return Some(path);
-        }
-        assert!(
-            std::env::var("CI").map_or(true, |v| v != "true"),
-            "CI=true but the glTF sample {} is missing",
-            path.display()
-        );
-        eprintln!("skipping: {} not found", path.display());
-        None
-    }
-
     /// The whole command on a real sample: EXR out, read back; `--threads 1` and `--threads 2`
     /// give the same pixels.
     #[test]
     fn renders_a_sample_to_exr_identically_for_any_thread_count() {
-        let Some(box_glb) = box_textured_sample() else {
+        let Some(box_glb) = crate::box_textured_sample() else {
             return;
         };
         let dir = std::env::temp_dir();
@@ -675,7 +652,7 @@ mod tests {
     /// same `--env R,G,B`; `--env-strength 2` doubles it.
     #[test]
     fn environment_files_light_like_the_constant_colour() {
-        let Some(box_glb) = box_textured_sample() else {
+        let Some(box_glb) = crate::box_textured_sample() else {
             return;
         };
         let dir = std::env::temp_dir();
