@@ -2,7 +2,7 @@
 //! emissive triangles, Russian roulette), and a plane under a point light against E = I cos θ / r².
 
 use aperture_render::{
-    build_accel, render, test_scenes, Camera, CameraSample, FilterKind, MaterialOverride,
+    build_accel, render, test_scenes, Camera, CameraSample, Clamp, FilterKind, MaterialOverride,
     RenderOptions,
 };
 use aperture_scene::{Dof, Light, LightKind, Scene};
@@ -31,6 +31,7 @@ fn white_furnace_renders_one() {
         ..opts(32, 16)
     };
     let film = render(&scene, &accel, &o, &|_, _| {}).unwrap();
+    assert_eq!(film.dropped_samples(), 0);
     let (mut sum, mut n) = (0.0f64, 0usize);
     for p in film.to_rgba() {
         // Pixels fully on the sphere.
@@ -51,18 +52,7 @@ fn white_furnace_renders_one() {
 /// are combined by MIS, and Russian roulette must stay unbiased.
 #[test]
 fn integrating_sphere_renders_le_over_one_minus_albedo() {
-    let cam =
-        test_scenes::look_at_camera(Vec3::ZERO, Vec3::new(0.3, 0.1, -1.0), 1.2, Dof::default());
-    let mut wall = test_scenes::matte(Vec3::splat(0.5));
-    wall.emissive_factor = Vec3::ONE;
-    let scene = test_scenes::scene(
-        vec![(
-            test_scenes::icosphere(2, 0),
-            Affine3A::from_scale(Vec3::splat(3.0)),
-        )],
-        vec![wall],
-        cam,
-    );
+    let scene = integrating_sphere();
     let accel = build_accel(&scene, Default::default());
     let o = RenderOptions {
         max_bounces: 64,
@@ -70,6 +60,7 @@ fn integrating_sphere_renders_le_over_one_minus_albedo() {
         ..opts(24, 16)
     };
     let film = render(&scene, &accel, &o, &|_, _| {}).unwrap();
+    assert_eq!(film.dropped_samples(), 0);
     let px = film.to_rgba();
     let mean = px.iter().map(|p| p[1] as f64).sum::<f64>() / px.len() as f64;
     println!("integrating sphere: mean {mean:.5} (expected 2)");
@@ -80,10 +71,68 @@ fn integrating_sphere_renders_le_over_one_minus_albedo() {
         ..o
     };
     let film = render(&scene, &accel, &direct, &|_, _| {}).unwrap();
+    assert_eq!(film.dropped_samples(), 0);
     let px = film.to_rgba();
     let mean0 = px.iter().map(|p| p[1] as f64).sum::<f64>() / px.len() as f64;
     println!("integrating sphere, max bounces 0: mean {mean0:.5} (expected 1.5)");
     assert!((mean0 - 1.5).abs() < 0.015, "{mean0}");
+}
+
+/// A closed sphere of radius 3 whose walls emit Le = 1 and reflect diffusely with albedo 0.5,
+/// seen from its centre.
+fn integrating_sphere() -> Scene {
+    let cam =
+        test_scenes::look_at_camera(Vec3::ZERO, Vec3::new(0.3, 0.1, -1.0), 1.2, Dof::default());
+    let mut wall = test_scenes::matte(Vec3::splat(0.5));
+    wall.emissive_factor = Vec3::ONE;
+    test_scenes::scene(
+        vec![(
+            test_scenes::icosphere(2, 0),
+            Affine3A::from_scale(Vec3::splat(3.0)),
+        )],
+        vec![wall],
+        cam,
+    )
+}
+
+/// Cycles' clamps in the integrating sphere: an indirect limit near 0 leaves only light that
+/// scattered at most once (Le + a·Le = 1.5, as `max_bounces` 0 gives), a limit no sample reaches
+/// changes no bit, and a direct limit caps what the walls show.
+#[test]
+fn clamping_cuts_only_the_light_it_is_meant_to() {
+    let scene = integrating_sphere();
+    let accel = build_accel(&scene, Default::default());
+    let o = RenderOptions {
+        max_bounces: 64,
+        material_override: MaterialOverride::Diffuse,
+        ..opts(24, 16)
+    };
+    let mean = |o: &RenderOptions| {
+        let film = render(&scene, &accel, o, &|_, _| {}).unwrap();
+        assert_eq!(film.dropped_samples(), 0);
+        let px = film.to_rgba();
+        px.iter().map(|p| p[1] as f64).sum::<f64>() / px.len() as f64
+    };
+    let clamp = |direct, indirect| RenderOptions {
+        clamp: Clamp { direct, indirect },
+        ..o.clone()
+    };
+    let unclamped = render(&scene, &accel, &o, &|_, _| {}).unwrap();
+    assert_eq!(unclamped.dropped_samples(), 0);
+    let loose = render(&scene, &accel, &clamp(1e9, 1e9), &|_, _| {}).unwrap();
+    assert_eq!(loose.dropped_samples(), 0);
+    assert_eq!(unclamped.to_rgba(), loose.to_rgba());
+    // Same tolerance as the unclamped test: 1 % noise at 16 spp over 576 pixels.
+    let only_direct = mean(&clamp(0.0, 1e-9));
+    println!("clamp indirect ~0: mean {only_direct:.5} (expected 1.5)");
+    assert!((only_direct - 1.5).abs() < 0.015, "{only_direct}");
+    // The walls' own emission (R + G + B = 3 per sample) is capped at 1.5: 0.5 per channel
+    // remains. Their direct lighting (mean a·Le = 0.5) loses its samples above the cap, so it
+    // lies in (0, 0.5); light that scattered twice or more (mean 0.5) is untouched. Without the
+    // clamp the mean is 2.
+    let capped = mean(&clamp(1.5, 0.0));
+    println!("clamp direct 1.5: mean {capped:.5}");
+    assert!(capped < 1.5 && capped > 1.0, "{capped}");
 }
 
 /// A diffuse plane under a point light: L = albedo/π · I cos θ / r² at every pixel.
@@ -99,6 +148,7 @@ fn point_light_on_a_plane_matches_inverse_square_cosine() {
         ..opts(size, 16)
     };
     let film = render(&scene, &accel, &o, &|_, _| {}).unwrap();
+    assert_eq!(film.dropped_samples(), 0);
     let cam = Camera::new(&scene.cameras[0], size, size);
     let light = Vec3::new(0.0, test_scenes::LIT_PLANE_LIGHT_HEIGHT, 0.0);
     let mut worst = 0.0f32;
@@ -148,6 +198,7 @@ fn directional_and_spot_lights() {
         ..opts(16, 4)
     };
     let film = render(&scene, &accel, &o, &|_, _| {}).unwrap();
+    assert_eq!(film.dropped_samples(), 0);
     let want = 0.8 / std::f32::consts::PI * 2.0;
     for p in film.to_rgba() {
         assert!((p[0] - want).abs() < 1e-4 * want, "{} vs {want}", p[0]);
@@ -163,6 +214,7 @@ fn directional_and_spot_lights() {
         intensity: Vec3::splat(5.0),
     };
     let film = render(&scene, &accel, &o, &|_, _| {}).unwrap();
+    assert_eq!(film.dropped_samples(), 0);
     let px = film.to_rgba();
     let lit = px.iter().filter(|p| p[0] > 0.0).count();
     assert!(lit > 0 && lit < px.len() / 2, "{lit}");

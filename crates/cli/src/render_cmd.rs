@@ -51,6 +51,9 @@ pub enum ViewArg {
 /// `--bvh-quality`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum BvhQualityArg {
+    /// Chosen from the job: `fast` when the render takes fewer samples than half the scene's
+    /// triangles (a preview of a big scene), else `medium`.
+    Auto,
     /// Fastest build.
     Fast,
     /// Balanced.
@@ -214,6 +217,14 @@ pub struct RenderArgs {
     /// Maximum bounces, as Blender Cycles counts them (0 = direct light only).
     #[arg(long, default_value_t = aperture_render::DEFAULT_MAX_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=1024))]
     pub max_bounces: u32,
+    /// Cycles' "Clamp Direct": the most one sample may add (sum of R, G, B) for light seen
+    /// directly or after one scattering; 0 = off. Biased: removes fireflies, darkens highlights.
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative_f32)]
+    pub clamp_direct: f32,
+    /// Cycles' "Clamp Indirect" (Blender's default for new scenes is 10): the most one sample
+    /// may add for light that scattered more than once; 0 = off (the default here: unbiased).
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative_f32)]
+    pub clamp_indirect: f32,
     /// Pixel filter.
     #[arg(long, value_enum, default_value_t = FilterArg::BlackmanHarris)]
     pub filter: FilterArg,
@@ -238,7 +249,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum)]
     pub override_material: Option<OverrideArg>,
     /// BVH build quality.
-    #[arg(long, value_enum, default_value_t = BvhQualityArg::Medium)]
+    #[arg(long, value_enum, default_value_t = BvhQualityArg::Auto)]
     pub bvh_quality: BvhQualityArg,
     /// View transform of PNG output.
     #[arg(long, value_enum, default_value_t = ViewArg::Standard)]
@@ -345,6 +356,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         (None, None) => (960, aperture_render::default_height(cam, 960)),
     };
     let quality = match args.bvh_quality {
+        BvhQualityArg::Auto => aperture_render::auto_bvh_quality(
+            scene.unique_triangle_count(),
+            u64::from(width) * u64::from(height) * u64::from(args.spp),
+        ),
         BvhQualityArg::Fast => aperture_accel::BvhQuality::Fast,
         BvhQualityArg::Medium => aperture_accel::BvhQuality::Medium,
         BvhQualityArg::High => aperture_accel::BvhQuality::High,
@@ -372,6 +387,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         seed: args.seed,
         camera: camera_index,
         max_bounces: args.max_bounces,
+        clamp: aperture_render::Clamp {
+            direct: args.clamp_direct,
+            indirect: args.clamp_indirect,
+        },
         filter: match args.filter {
             FilterArg::Box => FilterKind::Box,
             FilterArg::Gaussian => FilterKind::Gaussian,
@@ -441,6 +460,17 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             ),
         ]);
     }
+    // A clamped image is biased; the header says so, so a compositor can tell.
+    for (key, v) in [
+        ("aperture:clampDirect", opts.clamp.direct),
+        ("aperture:clampIndirect", opts.clamp.indirect),
+    ] {
+        if v > 0.0 {
+            image
+                .metadata
+                .push((key.to_string(), aperture_imageio::MetaValue::Float(v)));
+        }
+    }
     if args.samples_pass {
         image.layers.push(aperture_imageio::Layer {
             name: "samples".into(),
@@ -480,7 +510,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             ),
         };
         eprintln!(
-            "{}: {width}x{height}, {spp}, {render_secs:.2} s ({load_secs:.2} s loading), {:.2} Msamples/s, {dropped} dropped samples (NaN/Inf)",
+            "{}: {width}x{height}, {spp}, {render_secs:.2} s ({load_secs:.2} s loading, BVH {quality}), {:.2} Msamples/s, {dropped} dropped samples (NaN/Inf)",
             args.output.display(),
             samples / render_secs.max(1e-9) / 1e6,
         );
@@ -532,6 +562,8 @@ mod tests {
             &["--noise-threshold", "-0.1"],
             &["--min-spp", "4"],
             &["--noise-threshold", "0.01", "--min-spp", "0"],
+            &["--clamp-indirect", "-1"],
+            &["--clamp-direct", "nan"],
         ] {
             let e = parse(bad).expect_err("must be refused");
             assert_eq!(e.exit_code(), 2, "{bad:?}");
@@ -574,6 +606,9 @@ mod tests {
         assert_eq!(a.view, ViewArg::Agx);
         assert_eq!(a.scene_index, Some(1));
         assert_eq!(a.aperture_radius, Some(0.0));
+        assert_eq!((a.clamp_direct, a.clamp_indirect), (0.0, 0.0));
+        let c = parse(&["--clamp-indirect", "10", "--clamp-direct", "100"]).unwrap();
+        assert_eq!((c.clamp_direct, c.clamp_indirect), (100.0, 10.0));
     }
 
     /// The whole command on a real sample: EXR out, read back; `--threads 1` and `--threads 2`

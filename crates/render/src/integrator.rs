@@ -25,6 +25,44 @@ pub(crate) struct Integrator<'a> {
     pub emissive: Option<EmissiveLights>,
     pub env: EnvLight,
     pub max_bounces: u32,
+    pub clamp: Clamp,
+}
+
+/// Blender Cycles' "Clamp Direct" / "Clamp Indirect": the largest value one sample's
+/// contribution may add, as the sum of its R, G and B (0 = no limit). Clamping trades bias
+/// (bright caustics and highlights come out darker) for the removal of rare, very bright
+/// samples that unidirectional path tracing otherwise converges on very slowly.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Clamp {
+    /// Limit for light reaching the camera after at most one scattering (the camera ray's hit
+    /// seen directly, and that hit lit by a light or emitter).
+    pub direct: f32,
+    /// Limit for light that scattered more than once.
+    pub indirect: f32,
+}
+
+impl Clamp {
+    /// No clamping: the unbiased estimate.
+    pub const OFF: Clamp = Clamp {
+        direct: 0.0,
+        indirect: 0.0,
+    };
+
+    /// `c` scaled down (hue kept) so that its channel sum is at most the limit for light that
+    /// scattered `scatterings` times before reaching the camera (Cycles' `kernel_accum_clamp`).
+    fn apply(self, c: Vec3, scatterings: u32) -> Vec3 {
+        let limit = if scatterings <= 1 {
+            self.direct
+        } else {
+            self.indirect
+        };
+        let sum = c.x.abs() + c.y.abs() + c.z.abs();
+        if limit > 0.0 && sum > limit {
+            c * (limit / sum)
+        } else {
+            c
+        }
+    }
 }
 
 /// Smallest cosine between the view and a shading normal.
@@ -141,14 +179,16 @@ impl Integrator<'_> {
                 // A constant environment is found by BSDF sampling alone (weight 1); an image is
                 // also light-sampled, so escaping BSDF rays share it by MIS.
                 if vertex == 0 {
-                    l += beta * self.env.radiance_seen(ray.dir);
+                    l += self.clamp.apply(beta * self.env.radiance_seen(ray.dir), 0);
                 } else {
                     let w = if self.env.is_sampled() {
                         power_heuristic(prev_pdf, self.env.pdf(ray.dir))
                     } else {
                         1.0
                     };
-                    l += beta * self.env.radiance(ray.dir) * w;
+                    l += self
+                        .clamp
+                        .apply(beta * self.env.radiance(ray.dir) * w, vertex);
                 }
                 break;
             };
@@ -167,7 +207,7 @@ impl Integrator<'_> {
             };
             let ns = bend_towards(ns, wo);
             if let Some(c) = shading.unlit {
-                l += beta * c;
+                l += self.clamp.apply(beta * c, vertex);
                 break;
             }
             if shading.emission != Vec3::ZERO {
@@ -189,7 +229,8 @@ impl Integrator<'_> {
                         None => 1.0,
                     }
                 };
-                l += beta * shading.emission * w;
+                // An emitter found from vertex v has scattered v times on the way to the camera.
+                l += self.clamp.apply(beta * shading.emission * w, vertex);
             }
             if vertex > self.max_bounces {
                 break;
@@ -223,7 +264,7 @@ impl Integrator<'_> {
                     } else {
                         dist
                     };
-                    l += c * self.visibility(p_out, wi, dist);
+                    l += self.clamp.apply(c, vertex + 1) * self.visibility(p_out, wi, dist);
                 }
             }
 
@@ -251,7 +292,8 @@ impl Integrator<'_> {
                         let target = offset_ray_origin(q.p, qn);
                         let to = target - p_out;
                         let len = to.length();
-                        l += c * self.visibility(p_out, to / len, len);
+                        l +=
+                            self.clamp.apply(c, vertex + 1) * self.visibility(p_out, to / len, len);
                     }
                 }
             }
@@ -266,7 +308,8 @@ impl Integrator<'_> {
                         * es.radiance
                         * (power_heuristic(es.pdf, bsdf_pdf) / es.pdf);
                     if c != Vec3::ZERO && c.is_finite() {
-                        l += c * self.visibility(p_out, es.wi, f32::INFINITY);
+                        l += self.clamp.apply(c, vertex + 1)
+                            * self.visibility(p_out, es.wi, f32::INFINITY);
                     }
                 }
             }
@@ -318,6 +361,26 @@ mod tests {
             assert!(b.is_finite() && (b.length() - 1.0).abs() < 1e-5, "{b}");
             assert!(b.dot(wo) > 0.0, "{n} -> {b}");
         }
+    }
+
+    #[test]
+    fn clamp_scales_by_channel_sum_and_keeps_hue() {
+        let c = Clamp {
+            direct: 3.0,
+            indirect: 1.0,
+        };
+        let v = Vec3::new(4.0, 2.0, 0.0);
+        // Direct: the camera ray's hit (0 scatterings) and its lighting (1).
+        for n in [0, 1] {
+            let d = c.apply(v, n);
+            assert!((d.x + d.y + d.z - 3.0).abs() < 1e-6, "{d}");
+            assert!((d.x / d.y - 2.0).abs() < 1e-6);
+        }
+        let i = c.apply(v, 2);
+        assert!((i.x + i.y + i.z - 1.0).abs() < 1e-6, "{i}");
+        // Below the limit, or with no limit: unchanged.
+        assert_eq!(c.apply(Vec3::splat(0.2), 2), Vec3::splat(0.2));
+        assert_eq!(Clamp::OFF.apply(v * 1e6, 5), v * 1e6);
     }
 
     #[test]

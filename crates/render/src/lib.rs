@@ -37,8 +37,10 @@ pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, Camer
 pub use environment::{EnvImage, EnvSampling, Environment};
 pub use film::{Film, PixelSum};
 pub use filter::{Filter, FilterKind};
+pub use integrator::Clamp;
 pub use render::{
-    build_accel, render, render_with_camera, RenderError, RenderOptions, DEFAULT_MAX_BOUNCES, TILE,
+    auto_bvh_quality, build_accel, render, render_with_camera, RenderError, RenderOptions,
+    DEFAULT_MAX_BOUNCES, TILE,
 };
 pub use sampler::{SampleStream, SamplerKind, MAX_SPP};
 pub use surface::MaterialOverride;

@@ -7,7 +7,7 @@ use crate::camera::{Camera, CameraSample};
 use crate::environment::{EnvLight, Environment};
 use crate::film::{Film, PixelSum};
 use crate::filter::{Filter, FilterKind};
-use crate::integrator::Integrator;
+use crate::integrator::{Clamp, Integrator};
 use crate::lights::EmissiveLights;
 use crate::sampler::{SampleStream, SamplerKind, MAX_SPP};
 use crate::surface::{Geometry, MaterialOverride};
@@ -48,6 +48,8 @@ pub struct RenderOptions {
     pub material_override: MaterialOverride,
     /// Adaptive sampling (`None`: every pixel takes `spp` samples).
     pub adaptive: Option<AdaptiveOptions>,
+    /// Cycles' sample clamping ([`Clamp::OFF`] by default: unbiased).
+    pub clamp: Clamp,
 }
 
 impl Default for RenderOptions {
@@ -64,6 +66,7 @@ impl Default for RenderOptions {
             env: Environment::default(),
             material_override: MaterialOverride::None,
             adaptive: None,
+            clamp: Clamp::OFF,
         }
     }
 }
@@ -116,6 +119,18 @@ fn check(opts: &RenderOptions) -> Result<(), RenderError> {
             return bad("min_spp", a.min_spp.to_string(), "must be in 1..=spp");
         }
     }
+    for (name, v) in [
+        ("clamp_direct", opts.clamp.direct),
+        ("clamp_indirect", opts.clamp.indirect),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return bad(
+                name,
+                v.to_string(),
+                "must be finite and ≥ 0 (0 = no clamping)",
+            );
+        }
+    }
     if let Some(why) = opts.env.problem() {
         return bad(
             "env",
@@ -145,6 +160,24 @@ pub fn build_accel(scene: &Scene, quality: aperture_accel::BvhQuality) -> Accel 
         })
         .collect();
     Accel::build(&meshes, &instances, quality)
+}
+
+/// The BVH preset for a job of `samples` camera samples over `triangles` stored triangles, so a
+/// preview does not pay for a build it cannot win back.
+///
+/// Measured on `BlenderIO-32bitIndices` (130 k triangles): `fast` builds in 33 ms against
+/// `medium`'s 46 ms (0.1 µs less per triangle), and its trees cost 18 % more instructions per
+/// closest-hit ray (1,630 against 1,377, callgrind), about 0.045 µs per ray at 4 Mrays/s. A
+/// path-traced sample casts about three rays, so `fast` wins while
+/// `samples < 0.1 / (3 · 0.045) · triangles ≈ 0.74 · triangles`; the rule keeps a margin and
+/// switches at one half. `high` is never chosen: its trees were no faster on any measured ray
+/// set (1,560 instructions per ray there).
+pub fn auto_bvh_quality(triangles: usize, samples: u64) -> aperture_accel::BvhQuality {
+    if samples.saturating_mul(2) < triangles as u64 {
+        aperture_accel::BvhQuality::Fast
+    } else {
+        aperture_accel::BvhQuality::Medium
+    }
 }
 
 /// Renders with the scene camera `opts.camera`. `progress(done, total)` is called after each
@@ -183,6 +216,7 @@ pub fn render_with_camera(
         emissive,
         env: EnvLight::new(&opts.env),
         max_bounces: opts.max_bounces,
+        clamp: opts.clamp,
     };
     let filter = Filter::new(opts.filter);
     let job = Job {
@@ -357,7 +391,22 @@ fn render_adaptive(
 mod tests {
     use super::*;
     use crate::test_scenes;
+    use aperture_accel::BvhQuality;
     use glam::{Affine3A, Vec3};
+
+    #[test]
+    fn previews_of_big_scenes_build_fast() {
+        // A 1-spp 960×540 preview of a 7.7 M-triangle scene, and of a 130 k one.
+        assert_eq!(auto_bvh_quality(7_700_000, 518_400), BvhQuality::Fast);
+        assert_eq!(auto_bvh_quality(130_000, 518_400), BvhQuality::Medium);
+        // The README's demo render (18 k triangles, 64 spp) and an empty scene.
+        assert_eq!(auto_bvh_quality(18_000, 33_177_600), BvhQuality::Medium);
+        assert_eq!(auto_bvh_quality(0, 1), BvhQuality::Medium);
+        // The switch sits at samples = triangles / 2, and huge jobs do not overflow.
+        assert_eq!(auto_bvh_quality(1_000_001, 500_000), BvhQuality::Fast);
+        assert_eq!(auto_bvh_quality(1_000_000, 500_000), BvhQuality::Medium);
+        assert_eq!(auto_bvh_quality(usize::MAX, u64::MAX), BvhQuality::Medium);
+    }
 
     /// A plane under a point light, an emissive ball, depth of field: every code path.
     fn busy_scene() -> Scene {
