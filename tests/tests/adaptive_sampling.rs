@@ -53,11 +53,13 @@ fn adaptive(threshold: f32) -> Option<AdaptiveOptions> {
 
 fn render_in_pool(threads: usize, scene: &Scene, opts: &RenderOptions) -> Film {
     let accel = build_accel(scene, Default::default());
-    rayon::ThreadPoolBuilder::new()
+    let film = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .unwrap()
-        .install(|| render(scene, &accel, opts, &|_, _| {}).unwrap())
+        .install(|| render(scene, &accel, opts, &|_, _| {}).unwrap());
+    assert_eq!(film.dropped_samples(), 0);
+    film
 }
 
 fn mean_taken(film: &Film, xs: std::ops::Range<u32>, ys: std::ops::Range<u32>) -> f64 {

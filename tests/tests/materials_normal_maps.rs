@@ -102,6 +102,7 @@ fn centre(scene: &Scene, opts: &RenderOptions) -> f32 {
         &|_, _| {},
     )
     .unwrap();
+    assert_eq!(film.dropped_samples(), 0);
     let mut sum = 0.0;
     for y in 2..6 {
         for x in 2..6 {

@@ -24,7 +24,9 @@ fn render_scene(scene: &Scene, spp: u32, sampler: SamplerKind, seed: u32) -> Fil
         sampler,
         ..RenderOptions::default()
     };
-    render(scene, &accel, &opts, &|_, _| {}).expect("renders")
+    let film = render(scene, &accel, &opts, &|_, _| {}).expect("renders");
+    assert_eq!(film.dropped_samples(), 0);
+    film
 }
 
 /// Energy-weighted moments of the red channel about its centroid: (total, E[r²], the 6th

@@ -98,6 +98,7 @@ fn unlit_shows_base_colour_times_vertex_colour_times_texture() {
         &|_, _| {},
     )
     .unwrap();
+    assert_eq!(film.dropped_samples(), 0);
     // Pixel centres of each quadrant, away from the edges: (x, y) with row 0 at the top.
     for (q, (x, y)) in [(0, (3, 3)), (1, (12, 3)), (2, (3, 12)), (3, (12, 12))] {
         let p = film.pixel(x, y);
@@ -130,6 +131,7 @@ fn diffuse_override_is_lambertian_of_the_base_colour() {
         ..opts()
     };
     let film = render(&scene, &accel, &clay, &|_, _| {}).unwrap();
+    assert_eq!(film.dropped_samples(), 0);
     for (q, (x, y)) in [(0, (3, 3)), (3, (12, 12))] {
         let p = film.pixel(x, y);
         let want = expected(q) / std::f32::consts::PI * 3.0;
@@ -140,6 +142,7 @@ fn diffuse_override_is_lambertian_of_the_base_colour() {
     }
     // Without the override the polished metal reflects the head-on light very differently.
     let film = render(&scene, &accel, &opts(), &|_, _| {}).unwrap();
+    assert_eq!(film.dropped_samples(), 0);
     let p = film.pixel(3, 3);
     let clay_value = expected(0).x / std::f32::consts::PI * 3.0;
     assert!((p[0] - clay_value).abs() > 0.1 * clay_value, "{p:?}");
@@ -160,6 +163,7 @@ fn alpha_mask_cuts_holes() {
         &|_, _| {},
     )
     .unwrap();
+    assert_eq!(film.dropped_samples(), 0);
     assert_eq!(film.pixel(12, 3)[3], 0.0, "cut out");
     assert_eq!(film.pixel(3, 3)[3], 1.0, "kept");
 }
