@@ -73,7 +73,7 @@ fn schlick(f0: f64, c: f64) -> f64 {
     f0 + (1.0 - f0) * (1.0 - c).clamp(0.0, 1.0).powi(5)
 }
 
-/// Smith's Λ for GGX (Heitz 2014, eq. 72) in terms of the tangent of the polar angle.
+/// Smith's Λ for GGX (Heitz 2014, "Understanding the masking-shadowing function") in terms of the tangent of the polar angle.
 fn smith_lambda(alpha: f64, cos: f64) -> f64 {
     let tan2 = (1.0 - cos * cos).max(0.0) / (cos * cos);
     0.5 * (-1.0 + (1.0 + alpha * alpha * tan2).sqrt())
@@ -83,10 +83,10 @@ fn smith_lambda(alpha: f64, cos: f64) -> f64 {
 /// (glTF 2.0 Appendix B), by midpoint quadrature in f64.
 ///
 /// The renderer's `smith_v` is the *height-correlated* Smith visibility, so the reference uses
-/// the height-correlated masking-shadowing G2 = 1 / (1 + Λ(ωo) + Λ(ωi)) (Heitz 2014, eq. 99),
+/// the height-correlated masking-shadowing G2 = 1 / (1 + Λ(ωo) + Λ(ωi)) (Heitz 2014),
 /// written with Λ instead of the renderer's algebraic form. The specular part is integrated
 /// over half-vectors in the variables (u, φ) in which D(h) cos θh dωh = du dφ / 2π, i.e.
-/// tan² θh = α² u / (1 − u) (Walter et al. 2007, eq. 35): with
+/// tan² θh = α² u / (1 − u) (Walter et al. 2007, the GGX sampling formula): with
 /// f cos θi dωi = F D G2 (ωo·h) / μo dωh the integrand F G2 (ωo·h) / (μo cos θh) is smooth, so
 /// even α = 0.0025 needs no special care. The Lambertian part of a dielectric,
 /// (1 − F(ωo·h)) / π, is integrated with cosine-weighted (u, φ).
@@ -342,7 +342,7 @@ fn albedo_quadrature_reproduces_known_limits() {
     let e = directional_albedo(1.0, 1.0, true);
     assert!((e - (1.0 - 2f64.ln())).abs() < 1e-4, "{e}");
     // A different parametrisation must agree: a brute-force sum over ωi on a uniform (μ, φ)
-    // grid, with the textbook D (Walter et al. 2007, eq. 33) written out.
+    // grid, with the textbook D (Walter et al. 2007) written out.
     let (alpha, mu_o) = (0.5f64, 0.6f64);
     let wo = DVec3::new((1.0 - mu_o * mu_o).sqrt(), 0.0, mu_o);
     let n = 1200;
@@ -770,8 +770,13 @@ fn coc_measure(case: CocCase) -> CocMeasure {
     // Film offset per unit of lens offset: behind the focal plane (z > f) the figure keeps the
     // aperture's orientation, in front of it it is point-reflected. Raster y points down.
     let k = (1.0 / f - 1.0 / z) * px_per_unit;
+    // SPEC §2: corners on the unit circle at rotation + π/n + 2πk/n, counter-clockwise.
+    let n_blades = case.blades as f64;
     let corners: Vec<DVec2> = (0..case.blades)
-        .map(|i| aperture_render::camera::polygon_corner(i, case.blades, case.rotation).as_dvec2())
+        .map(|i| {
+            let a = case.rotation as f64 + PI / n_blades + 2.0 * PI * i as f64 / n_blades;
+            DVec2::new(a.cos(), a.sin())
+        })
         .collect();
     let mut m = CocMeasure {
         c_spec,
