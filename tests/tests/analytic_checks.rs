@@ -73,7 +73,8 @@ fn schlick(f0: f64, c: f64) -> f64 {
     f0 + (1.0 - f0) * (1.0 - c).clamp(0.0, 1.0).powi(5)
 }
 
-/// Smith's Λ for GGX (Heitz 2014, "Understanding the masking-shadowing function") in terms of the tangent of the polar angle.
+/// Smith's Λ for GGX in terms of the tangent of the polar angle (Heitz 2014, "Understanding
+/// the masking-shadowing function").
 fn smith_lambda(alpha: f64, cos: f64) -> f64 {
     let tan2 = (1.0 - cos * cos).max(0.0) / (cos * cos);
     0.5 * (-1.0 + (1.0 + alpha * alpha * tan2).sqrt())
@@ -87,8 +88,8 @@ fn smith_lambda(alpha: f64, cos: f64) -> f64 {
 /// written with Λ instead of the renderer's algebraic form. The specular part is integrated
 /// over half-vectors in the variables (u, φ) in which D(h) cos θh dωh = du dφ / 2π, i.e.
 /// tan² θh = α² u / (1 − u) (Walter et al. 2007, the GGX sampling formula): with
-/// f cos θi dωi = F D G2 (ωo·h) / μo dωh the integrand F G2 (ωo·h) / (μo cos θh) is smooth, so
-/// even α = 0.0025 needs no special care. The Lambertian part of a dielectric,
+/// f cos θi dωi = F D G2 (ωo·h) / μo dωh the integrand F G2 (ωo·h) / (μo cos θh) is
+/// smooth, so even α = 0.0025 needs no special care. The Lambertian part of a dielectric,
 /// (1 − F(ωo·h)) / π, is integrated with cosine-weighted (u, φ).
 ///
 /// `metallic` 1 means F = 1 (base colour 1); `metallic` 0 is the glTF dielectric with F0 = 0.04
@@ -143,7 +144,7 @@ impl AlbedoTable {
     }
 
     fn at(&self, mu: f64) -> f64 {
-        let x = ((mu - self.lo) / (1.0 - self.lo) * Self::STEPS as f64).clamp(0.0, 1e9);
+        let x = ((mu - self.lo) / (1.0 - self.lo) * Self::STEPS as f64).max(0.0);
         let i = (x as usize).min(Self::STEPS - 1);
         let t = (x - i as f64).min(1.0);
         self.values[i] * (1.0 - t) + self.values[i + 1] * t
@@ -232,9 +233,9 @@ fn furnace(
 
 /// A white GGX conductor (F = 1) at five roughnesses, a white glTF dielectric, and the Lambert
 /// clay in a furnace of radiance 1: every view-cosine bin matches the quadrature of E(μo), and
-/// the conductors and the clay never create energy. On a convex sphere only the first bounce reaches the environment
-/// (a reflected ray leaves above the facet's plane and cannot meet the sphere again), so the
-/// image is E(μo) itself.
+/// the conductors and the clay never create energy. On a convex sphere only the first bounce
+/// reaches the environment (a reflected ray leaves above the facet's plane and cannot meet the
+/// sphere again), so the image is E(μo) itself.
 #[test]
 fn ggx_white_furnace_matches_directional_albedo_quadrature() {
     // Tolerances.
@@ -296,7 +297,8 @@ fn ggx_white_furnace_matches_directional_albedo_quadrature() {
             line += &format!(" {got:.4}/{want:.4}");
         }
         println!(
-            "furnace {name:<18} worst |bin − E| {worst:.4}, max pixel {:.5}; rendered/E per bin (μ {FURNACE_MU_MIN}..1):{line}",
+            "furnace {name:<18} worst |bin − E| {worst:.4}, max pixel {:.5}; \
+             rendered/E per bin (μ {FURNACE_MU_MIN}..1):{line}",
             r.max_pixel
         );
         assert!(worst < BIN_TOL, "{name}: {worst}");
@@ -340,6 +342,10 @@ fn albedo_quadrature_reproduces_known_limits() {
     // GGX with α = 1 has D = 1/π and, at normal view, G2 = 2μi / (1 + μi), so
     // E(1) = ∫₀¹ μi / (1 + μi) dμi = 1 − ln 2.
     let e = directional_albedo(1.0, 1.0, true);
+    println!(
+        "quadrature check: α 1, μo 1: {e:.6} vs 1 − ln 2 = {:.6}",
+        1.0 - 2f64.ln()
+    );
     assert!((e - (1.0 - 2f64.ln())).abs() < 1e-4, "{e}");
     // A different parametrisation must agree: a brute-force sum over ωi on a uniform (μ, φ)
     // grid, with the textbook D (Walter et al. 2007) written out.
@@ -899,8 +905,9 @@ fn circle_of_confusion_grid_matches_spec_formula() {
         }
     }
     println!(
-        "CoC grid: {n} cameras, c_spec {min_c:.2}..{max_c:.1} px; worst per-sample offset error {worst_offset:.2e} px ({worst_offset_rel:.1e} of c), \
-         ray residual {worst_residual:.2e} px, outside the shape {worst_outside:.2e} (c/2); \
-         diameter / c_spec {min_diam:.4}..{max_diam:.4}, hull area / polygon area {min_area:.4}..{max_area:.4}"
+        "CoC grid: {n} cameras, c_spec {min_c:.2}..{max_c:.1} px; worst per-sample offset \
+         error {worst_offset:.2e} px ({worst_offset_rel:.1e} of c), ray residual \
+         {worst_residual:.2e} px, outside the shape {worst_outside:.2e} (c/2); diameter / c_spec \
+         {min_diam:.4}..{max_diam:.4}, hull area / polygon area {min_area:.4}..{max_area:.4}"
     );
 }
