@@ -382,21 +382,63 @@ fn world_origin(
     } else {
         DVec3::ZERO
     };
-    // What recentring cannot fix: a scene so large around its own centre that f32 positions
-    // at its edge are coarser than the details a scene in metres is likely to have.
+    // What recentring cannot fix: a scene so large around its own centre that f32 positions at
+    // its edge are coarse next to its smallest triangles.
     let reach = (hi - origin).abs().max((lo - origin).abs()).max_element();
     let spacing = reach * f64::from(f32::EPSILON);
-    if spacing > MAX_SPACING {
+    let detail = placed
+        .iter()
+        .filter_map(|(mesh, world, _)| {
+            let m = meshes.get(*mesh as usize)?;
+            let shrink = [
+                world.matrix3.x_axis,
+                world.matrix3.y_axis,
+                world.matrix3.z_axis,
+            ]
+            .map(|c| c.length())
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
+            Some(shortest_edge(m) * shrink)
+        })
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    if spacing * MIN_STEPS_PER_EDGE > detail {
         stats.warnings.push(format!(
             "the scene reaches {reach:.3e} units from its centre, where float32 positions are \
-             {spacing:.1e} apart: smaller details merge or crack (docs/accuracy.md, float32 limits)"
+             {spacing:.1e} apart, yet its shortest triangle edge is {detail:.1e}: such details \
+             are distorted or cracked (docs/accuracy.md, float32 limits)"
+        ));
+    }
+    if size > 0.0 && size < MIN_EXTENT {
+        stats.warnings.push(format!(
+            "the scene is only {size:.1e} units across: secondary rays start up to 1.5e-5 units \
+             off surfaces (aperture_accel::offset_ray_origin), which loses contact shadows at this \
+             size; model it in smaller units, e.g. millimetres (docs/accuracy.md, float32 limits)"
         ));
     }
     origin
 }
 
-/// Largest f32 spacing at the scene's edge accepted silently: 1 mm in metres (SPEC's unit).
-const MAX_SPACING: f64 = 1e-3;
+/// Smallest scene diagonal accepted silently: 256 times the fixed 1/65536-unit offset that
+/// `aperture_accel::offset_ray_origin` gives coordinates below 1/32. Measured (docs/accuracy.md):
+/// a scene 8.6e-3 across renders the image of its 1000× larger copy within noise; 8.6e-4 across
+/// it does not.
+const MIN_EXTENT: f64 = 1.0 / 256.0;
+
+/// A triangle edge shorter than this many f32 steps at the scene's edge is reported: vertices
+/// round by up to half a step, so such an edge may change length by more than 1/16.
+const MIN_STEPS_PER_EDGE: f64 = 16.0;
+
+/// The shortest non-zero edge of a mesh's triangles, in object space (infinity if none).
+fn shortest_edge(mesh: &crate::Mesh) -> f64 {
+    let p = |i: u32| mesh.positions.get(i as usize).map(|v| v.as_dvec3());
+    mesh.indices
+        .iter()
+        .flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)])
+        .filter_map(|(a, b)| Some(p(a)?.distance(p(b)?)))
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min)
+}
 
 /// World transforms of all nodes (not only the drawn scene's: `focus_object` may name any node).
 fn world_transforms(doc: &gltf::Document) -> Result<Vec<DAffine3>, Error> {
@@ -800,7 +842,7 @@ mod tests {
 
         // A scene whose own extent f32 cannot hold at millimetres is loaded with a warning.
         let s = load_json(&gltf(
-            json!([{"mesh": 0}, {"mesh": 0, "translation": [3e4, 0, 0]}]),
+            json!([{"mesh": 0}, {"mesh": 0, "translation": [3e4, 0, 0], "scale": [1e-3, 1e-3, 1e-3]}]),
             json!([0, 1]),
             json!({}),
         ))
