@@ -214,10 +214,22 @@ pub fn quat(axis: Vec3, angle: f32) -> [f32; 4] {
 /// sample was dropped as non-finite.
 pub fn render_checked(
     scene: &Scene,
+    size: (u32, u32),
+    spp: u32,
+    seed: u32,
+    max_bounces: u32,
+) -> Film {
+    render_camera(scene, size, spp, seed, max_bounces, 0)
+}
+
+/// [`render_checked`] through scene camera `camera`.
+pub fn render_camera(
+    scene: &Scene,
     (width, height): (u32, u32),
     spp: u32,
     seed: u32,
     max_bounces: u32,
+    camera: usize,
 ) -> Film {
     let accel = build_accel(scene, Default::default());
     let opts = RenderOptions {
@@ -226,6 +238,7 @@ pub fn render_checked(
         spp,
         seed,
         max_bounces,
+        camera,
         filter: FilterKind::Box,
         ..RenderOptions::default()
     };
