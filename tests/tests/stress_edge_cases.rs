@@ -110,7 +110,11 @@ fn cameras_inside_geometry_and_on_surfaces() {
 fn grazing_rays_and_grazing_light() {
     for (eye, dir, light) in [
         // The eye in the ground's plane, looking along it; the light above.
-        (Vec3::new(0.0, 0.0, 2.9), Vec3::NEG_Z, Vec3::new(0.0, 2.0, 0.0)),
+        (
+            Vec3::new(0.0, 0.0, 2.9),
+            Vec3::NEG_Z,
+            Vec3::new(0.0, 2.0, 0.0),
+        ),
         // Just above the plane, looking along it; the light in the plane.
         (
             Vec3::new(0.0, 1e-6, 2.9),
@@ -172,7 +176,14 @@ fn degenerate_triangles_and_zero_normals() {
     ];
     // Without NORMAL, the loader makes flat normals (of zero-area triangles too); with NORMAL,
     // some are zero-length and one points along the surface.
-    let zero_normals = [Vec3::ZERO, Vec3::Z, Vec3::ZERO, Vec3::ZERO, Vec3::X, Vec3::ZERO];
+    let zero_normals = [
+        Vec3::ZERO,
+        Vec3::Z,
+        Vec3::ZERO,
+        Vec3::ZERO,
+        Vec3::X,
+        Vec3::ZERO,
+    ];
     let flat = g.mesh(&p, None, None, &tris, m);
     let zeros = g.mesh(&p, Some(&zero_normals), None, &tris, m);
     let nodes = [
@@ -214,10 +225,22 @@ fn texture_image(w: u32, h: u32) -> Image {
 fn textures_of_one_texel_and_odd_sizes() {
     // (width, height, sampler): nearest + clamp, linear + mirrored repeat, default repeat.
     let cases = [
-        (1, 1, json!({"magFilter": 9728, "wrapS": 33071, "wrapT": 33071})),
-        (1, 1, json!({"magFilter": 9729, "wrapS": 33648, "wrapT": 10497})),
+        (
+            1,
+            1,
+            json!({"magFilter": 9728, "wrapS": 33071, "wrapT": 33071}),
+        ),
+        (
+            1,
+            1,
+            json!({"magFilter": 9729, "wrapS": 33648, "wrapT": 10497}),
+        ),
         (3, 5, json!({"magFilter": 9729})),
-        (7, 1, json!({"magFilter": 9728, "wrapS": 33648, "wrapT": 33071})),
+        (
+            7,
+            1,
+            json!({"magFilter": 9728, "wrapS": 33648, "wrapT": 33071}),
+        ),
         (1, 9, json!({})),
     ];
     for (w, h, sampler) in cases {
@@ -252,10 +275,7 @@ fn textures_of_one_texel_and_odd_sizes() {
             ),
         ];
         let scene = g.load(&nodes);
-        assert_eq!(
-            (scene.textures[0].width, scene.textures[0].height),
-            (w, h)
-        );
+        assert_eq!((scene.textures[0].width, scene.textures[0].height), (w, h));
         let m = render(&scene);
         assert!(m[0] > 0.0, "{w}x{h}: black");
     }

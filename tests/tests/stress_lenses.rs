@@ -40,8 +40,10 @@ fn scene(extras: serde_json::Value) -> Scene {
     let nodes = [
         g.node(json!({"mesh": ground})),
         g.node(json!({"mesh": ball, "translation": [0, 0.5, 0]})),
-        g.node(json!({"extensions": {"KHR_lights_punctual": {"light": light}},
-            "translation": [1.5, 3, 1.5]})),
+        g.node(
+            json!({"extensions": {"KHR_lights_punctual": {"light": light}},
+            "translation": [1.5, 3, 1.5]}),
+        ),
         g.node(json!({"camera": cam, "translation": [0, 1.5, 4.3],
             "rotation": quat(Vec3::X, -0.33)})),
     ];
@@ -129,5 +131,8 @@ fn a_tiny_lens_is_a_pinhole_within_noise() {
     let real = ratio_for(0.1);
     eprintln!("rmse / pinhole noise: radius 1e-9 {tiny:.3}, radius 0.1 {real:.3}");
     assert!(tiny < 0.05, "{tiny}");
-    assert!(real > 0.2, "{real}: the check cannot tell a lens from a pinhole");
+    assert!(
+        real > 0.2,
+        "{real}: the check cannot tell a lens from a pinhole"
+    );
 }
