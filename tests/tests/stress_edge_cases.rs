@@ -288,3 +288,30 @@ fn quat_helper_turns_the_right_way() {
     let q = Quat::from_array(quat(Vec3::X, std::f32::consts::FRAC_PI_2));
     assert!((q * Vec3::NEG_Z - Vec3::Y).length() < 1e-6);
 }
+
+/// Each node's values are finite f32, but composed (in f64) they overflow f32: an error naming
+/// the node, never an infinite instance, light or camera that would turn samples into NaN.
+#[test]
+fn a_hierarchy_that_overflows_float32_is_an_error_naming_the_node() {
+    for (what, child) in [
+        ("mesh", json!({"mesh": 0, "scale": [1e30, 1e30, 1e30]})),
+        (
+            "light",
+            json!({"extensions": {"KHR_lights_punctual": {"light": 0}},
+            "translation": [1e30, 0, 0]}),
+        ),
+        ("camera", json!({"camera": 0, "translation": [0, 0, 1e30]})),
+    ] {
+        let mut g = Gltf::new();
+        let m = matte(&mut g);
+        ground(&mut g, 1.0, m);
+        g.light(json!({"type": "point", "intensity": 1.0}));
+        g.camera(json!({"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.1}}));
+        let c = g.node(child);
+        let root = g.node(json!({"children": [c], "scale": [1e30, 1e30, 1e30]}));
+        let bytes = g.to_bytes(&[root]);
+        let e = aperture_scene::load_bytes(&bytes, std::path::Path::new("."), &Default::default())
+            .expect_err(what);
+        assert!(e.to_string().contains("nodes[0]"), "{what}: {e}");
+    }
+}

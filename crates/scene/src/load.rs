@@ -101,7 +101,7 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
     // Transforms stay in f64 until the world origin is known (see `world_origin`).
     let mut placed: Vec<(u32, DAffine3, u32)> = Vec::new();
     let mut mesh_offsets: Vec<DVec3> = Vec::new();
-    let mut light_positions: Vec<DVec3> = Vec::new();
+    let mut light_positions: Vec<(usize, DVec3)> = Vec::new();
     let all_nodes: Vec<gltf::Node<'_>> = doc.nodes().collect();
     for &ni in &order {
         let node = &all_nodes[ni];
@@ -150,7 +150,7 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
                     value: format!("{intensity:?}"),
                 });
             }
-            light_positions.push(world.translation);
+            light_positions.push((ni, world.translation));
             out.lights.push(Light {
                 name: light.name().map(str::to_owned),
                 kind,
@@ -173,14 +173,18 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
     };
     out.instances = placed
         .iter()
-        .map(|&(mesh, world, node)| Instance {
-            mesh,
-            world_from_object: to_f32(relative(world)),
-            node,
+        .map(|&(mesh, world, node)| {
+            Ok(Instance {
+                mesh,
+                world_from_object: finite_world(node as usize, to_f32(relative(world)))?,
+                node,
+            })
         })
-        .collect();
-    for (light, p) in out.lights.iter_mut().zip(&light_positions) {
-        light.position = (*p - origin).as_vec3();
+        .collect::<Result<_, Error>>()?;
+    for (light, &(node, p)) in out.lights.iter_mut().zip(&light_positions) {
+        let position = (p - origin).as_vec3();
+        finite_world(node, Affine3A::from_translation(position))?;
+        light.position = position;
     }
     let world_from_node: Vec<Affine3A> = world_from_node
         .iter()
@@ -202,8 +206,8 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
     for &ni in &order {
         let node = &all_nodes[ni];
         if let Some(cam) = node.camera() {
-            out.cameras
-                .push(camera(&cam, node, world_from_node[ni], &info, options)?);
+            let world = finite_world(ni, world_from_node[ni])?;
+            out.cameras.push(camera(&cam, node, world, &info, options)?);
         }
     }
 
@@ -303,6 +307,19 @@ fn local_transform(node: &gltf::Node<'_>) -> Result<DAffine3, Error> {
         }
     };
     Ok(DAffine3::from_mat4(m))
+}
+
+/// `m` if every entry is finite: each node's values are, but their composition may overflow
+/// f32 (a scale of 1e30 under another of 1e30).
+fn finite_world(node: usize, m: Affine3A) -> Result<Affine3A, Error> {
+    if m.is_finite() {
+        Ok(m)
+    } else {
+        Err(Error::NonFinite {
+            at: format!("nodes[{node}] (its world transform, composed with its parents')"),
+            value: "beyond the float32 range".into(),
+        })
+    }
 }
 
 /// An f64 transform rounded to f32 (call it on world-origin-relative transforms only).
