@@ -473,4 +473,131 @@ mod tests {
         };
         assert_eq!(default_height(&sc, 960), 480);
     }
+
+    mod properties {
+        //! Property-based checks over the whole parameter space the loader lets through.
+        use super::*;
+        use proptest::prelude::*;
+
+        /// Lens parameters: radius from 0 (pinhole) over twelve decades, focus from 1e-3 to 1e6,
+        /// round or 3 to 16 blades, any rotation, squeeze 0.1 to 10.
+        fn dof() -> impl Strategy<Value = Dof> {
+            (
+                prop_oneof![Just(None), (-9.0f32..2.0f32).prop_map(Some)],
+                -3.0f32..6.0f32,
+                prop_oneof![Just(0u32), 3u32..=16],
+                -10.0f32..10.0,
+                -1.0f32..1.0f32,
+            )
+                .prop_map(|(log_r, log_f, blades, rotation, log_ratio)| Dof {
+                    enabled: true,
+                    aperture_radius: log_r.map_or(0.0, |l| 10f32.powf(l)),
+                    focus_distance: 10f32.powf(log_f),
+                    blades,
+                    rotation,
+                    ratio: 10f32.powf(log_ratio),
+                    ..Dof::default()
+                })
+        }
+
+        fn camera(dof: Dof, ortho: bool, yfov: f32) -> Camera {
+            let mut sc = scene_camera(0.0, 0, 1.0);
+            sc.dof = dof;
+            if ortho {
+                sc.projection = Projection::Orthographic {
+                    xmag: 2.0,
+                    ymag: 1.5,
+                };
+            } else {
+                sc.projection = Projection::Perspective {
+                    yfov,
+                    aspect_ratio: None,
+                };
+            }
+            Camera::new(&sc, 64, 48)
+        }
+
+        /// Lens samples in `[0, 1)²`, edges included.
+        fn unit() -> impl Strategy<Value = f32> {
+            prop_oneof![Just(0.0f32), Just(1.0 - f32::EPSILON / 2.0), 0.0f32..1.0]
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(512))]
+
+            /// Every sample gives a finite unit ray from a point of the aperture (in the lens
+            /// plane, inside the squeezed disc or polygon), in camera and world space.
+            #[test]
+            fn rays_are_finite_unit_and_start_on_the_aperture(
+                dof in dof(),
+                ortho in any::<bool>(),
+                yfov in 0.01f32..3.1,
+                fx in 0.0f32..=64.0, fy in 0.0f32..=48.0,
+                lx in unit(), ly in unit(),
+            ) {
+                let cam = camera(dof.clone(), ortho, yfov);
+                let s = CameraSample { p_film: Vec2::new(fx, fy), p_lens: Vec2::new(lx, ly) };
+                let r = cam.generate_ray_camera_space(&s).expect("a ray");
+                prop_assert!(r.origin.is_finite() && r.dir.is_finite());
+                prop_assert!((r.dir.length() - 1.0).abs() < 1e-5);
+                prop_assert!(r.dir.z < 0.0, "{}", r.dir);
+                let w = cam.generate_ray(&s).expect("a world ray");
+                prop_assert!(w.origin.is_finite() && (w.dir.length() - 1.0).abs() < 1e-5);
+
+                // Position on the lens, with the screen offset of orthographic cameras removed.
+                let lens = if ortho {
+                    r.origin.truncate() - cam.screen_point(s.p_film)
+                } else {
+                    r.origin.truncate()
+                };
+                prop_assert_eq!(r.origin.z, 0.0);
+                let radius = dof.aperture_radius;
+                // Unsqueezed, the point is inside the radius-R circle (all polygons are too);
+                // tolerance: a few roundings of R, plus the orthographic screen offset's.
+                let tol = 1e-5 * radius + if ortho { 1e-5 * 3.0 } else { 0.0 };
+                let unsqueezed = Vec2::new(lens.x * dof.ratio, lens.y);
+                prop_assert!(unsqueezed.length() <= radius + tol, "{unsqueezed} vs {radius}");
+                if dof.blades >= 3 && radius > 0.0 {
+                    // Inside every edge's half-plane of the blade polygon.
+                    let n = dof.blades;
+                    for k in 0..n {
+                        let a = polygon_corner(k, n, dof.rotation) * radius;
+                        let b = polygon_corner((k + 1) % n, n, dof.rotation) * radius;
+                        let side = (b - a).perp_dot(unsqueezed - a) / (b - a).length();
+                        prop_assert!(side >= -tol, "outside edge {} by {}", k, -side);
+                    }
+                }
+            }
+
+            /// The thin-lens rule: all rays of one film point meet at the same point of the
+            /// focal plane, the one the pinhole ray through that film point reaches.
+            #[test]
+            fn the_focal_plane_point_does_not_depend_on_the_lens_sample(
+                dof in dof(),
+                ortho in any::<bool>(),
+                yfov in 0.01f32..3.1,
+                fx in 0.0f32..=64.0, fy in 0.0f32..=48.0,
+                lx in unit(), ly in unit(),
+            ) {
+                let cam = camera(dof.clone(), ortho, yfov);
+                let f = dof.focus_distance;
+                let p_film = Vec2::new(fx, fy);
+                let pin = Camera { aperture: Aperture::Pinhole, ..cam }
+                    .generate_ray_camera_space(&CameraSample { p_film, p_lens: Vec2::ZERO })
+                    .expect("a pinhole ray");
+                let target = pin.origin + pin.dir * (f / -pin.dir.z);
+                let r = cam
+                    .generate_ray_camera_space(&CameraSample { p_film, p_lens: Vec2::new(lx, ly) })
+                    .expect("a ray");
+                let hit = r.origin + r.dir * ((-f - r.origin.z) / r.dir.z);
+                // Rounding: relative 1e-5 of the distances involved (focal point and lens
+                // offset; direction normalisation and division each cost a few ulps).
+                let scale = target.length() + r.origin.length();
+                prop_assert!(
+                    hit.distance(target) <= 1e-5 * scale,
+                    "{} vs {} (scale {})", hit, target, scale
+                );
+            }
+        }
+    }
 }

@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use glam::{Affine3A, Mat3, Mat4, Quat, Vec3};
+use glam::{Affine3A, DAffine3, DMat4, DQuat, DVec3, Mat3, Vec3};
 use serde_json::Value;
 
 use crate::accessor::{read_vec, Buffers};
@@ -98,6 +98,10 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
     let mut out = Scene::default();
     let mut materials = Materials::default();
     let mut mesh_of: HashMap<usize, u32> = HashMap::new();
+    // Transforms stay in f64 until the world origin is known (see `world_origin`).
+    let mut placed: Vec<(u32, DAffine3, u32)> = Vec::new();
+    let mut mesh_offsets: Vec<DVec3> = Vec::new();
+    let mut light_positions: Vec<(usize, DVec3)> = Vec::new();
     let all_nodes: Vec<gltf::Node<'_>> = doc.nodes().collect();
     for &ni in &order {
         let node = &all_nodes[ni];
@@ -106,30 +110,24 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
             let mesh_index = match mesh_of.get(&m.index()) {
                 Some(&i) => i,
                 None => {
-                    let loaded = mesh::load_mesh(&m, &buffers, &mut stats, &mut |mi| {
+                    let mut loaded = mesh::load_mesh(&m, &buffers, &mut stats, &mut |mi| {
                         materials.get(&doc, mi)
                     })?;
+                    mesh_offsets.push(recentre(&mut loaded));
                     out.meshes.push(loaded);
                     let i = (out.meshes.len() - 1) as u32;
                     mesh_of.insert(m.index(), i);
                     i
                 }
             };
+            let offset = DAffine3::from_translation(mesh_offsets[mesh_index as usize]);
             match node.extension_value("EXT_mesh_gpu_instancing") {
                 Some(ext) => {
                     for local in gpu_instances(&doc, &buffers, ext, ni)? {
-                        out.instances.push(Instance {
-                            mesh: mesh_index,
-                            world_from_object: world * local,
-                            node: ni as u32,
-                        });
+                        placed.push((mesh_index, world * local * offset, ni as u32));
                     }
                 }
-                None => out.instances.push(Instance {
-                    mesh: mesh_index,
-                    world_from_object: world,
-                    node: ni as u32,
-                }),
+                None => placed.push((mesh_index, world * offset, ni as u32)),
             }
         }
         if let Some(light) = node.light() {
@@ -152,18 +150,46 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
                     value: format!("{intensity:?}"),
                 });
             }
+            light_positions.push((ni, world.translation));
             out.lights.push(Light {
                 name: light.name().map(str::to_owned),
                 kind,
-                position: world.translation.into(),
+                position: Vec3::ZERO,
                 direction: world
-                    .transform_vector3(Vec3::NEG_Z)
+                    .transform_vector3(DVec3::NEG_Z)
+                    .as_vec3()
                     .try_normalize()
                     .unwrap_or(Vec3::NEG_Z),
                 intensity,
             });
         }
     }
+
+    let origin = world_origin(&out.meshes, &placed, &mut stats);
+    out.world_origin = origin;
+    let relative = |m: DAffine3| DAffine3 {
+        matrix3: m.matrix3,
+        translation: m.translation - origin,
+    };
+    out.instances = placed
+        .iter()
+        .map(|&(mesh, world, node)| {
+            Ok(Instance {
+                mesh,
+                world_from_object: finite_world(node as usize, to_f32(relative(world)))?,
+                node,
+            })
+        })
+        .collect::<Result<_, Error>>()?;
+    for (light, &(node, p)) in out.lights.iter_mut().zip(&light_positions) {
+        let position = (p - origin).as_vec3();
+        finite_world(node, Affine3A::from_translation(position))?;
+        light.position = position;
+    }
+    let world_from_node: Vec<Affine3A> = world_from_node
+        .iter()
+        .map(|&m| to_f32(relative(m)))
+        .collect();
 
     let names: Vec<Option<String>> = all_nodes
         .iter()
@@ -180,8 +206,8 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
     for &ni in &order {
         let node = &all_nodes[ni];
         if let Some(cam) = node.camera() {
-            out.cameras
-                .push(camera(&cam, node, world_from_node[ni], &info, options)?);
+            let world = finite_world(ni, world_from_node[ni])?;
+            out.cameras.push(camera(&cam, node, world, &info, options)?);
         }
     }
 
@@ -245,14 +271,15 @@ fn finite(at: impl FnOnce() -> String, values: &[f32]) -> Result<(), Error> {
     }
 }
 
-/// A node's local transform, checked for NaN and infinity.
-fn local_transform(node: &gltf::Node<'_>) -> Result<Affine3A, Error> {
+/// A node's local transform, checked for NaN and infinity. The file's f32 values are widened to
+/// f64 so that composing a deep hierarchy rounds once, at the end, relative to the world origin.
+fn local_transform(node: &gltf::Node<'_>) -> Result<DAffine3, Error> {
     let i = node.index();
     let m = match node.transform() {
         gltf::scene::Transform::Matrix { matrix } => {
-            let m = Mat4::from_cols_array_2d(&matrix);
-            finite(|| format!("nodes[{i}].matrix"), &m.to_cols_array())?;
-            m
+            let flat = matrix.as_flattened();
+            finite(|| format!("nodes[{i}].matrix"), flat)?;
+            DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from)))
         }
         gltf::scene::Transform::Decomposed {
             translation,
@@ -263,7 +290,7 @@ fn local_transform(node: &gltf::Node<'_>) -> Result<Affine3A, Error> {
             finite(|| format!("nodes[{i}].rotation"), &rotation)?;
             finite(|| format!("nodes[{i}].scale"), &scale)?;
             // Exporters write slightly denormalised quaternions; zero cannot be normalised.
-            let q = Quat::from_array(rotation);
+            let q = DQuat::from_array(rotation.map(f64::from));
             let q = if q.length_squared() > 0.0 {
                 q.normalize()
             } else {
@@ -272,14 +299,166 @@ fn local_transform(node: &gltf::Node<'_>) -> Result<Affine3A, Error> {
                     value: "zero quaternion".into(),
                 });
             };
-            Mat4::from_scale_rotation_translation(scale.into(), q, translation.into())
+            DMat4::from_scale_rotation_translation(
+                DVec3::from_array(scale.map(f64::from)),
+                q,
+                DVec3::from_array(translation.map(f64::from)),
+            )
         }
     };
-    Ok(Affine3A::from_mat4(m))
+    Ok(DAffine3::from_mat4(m))
+}
+
+/// `m` if every entry is finite: each node's values are, but their composition may overflow
+/// f32 (a scale of 1e30 under another of 1e30).
+fn finite_world(node: usize, m: Affine3A) -> Result<Affine3A, Error> {
+    if m.is_finite() {
+        Ok(m)
+    } else {
+        Err(Error::NonFinite {
+            at: format!("nodes[{node}] (its world transform, composed with its parents')"),
+            value: "beyond the float32 range".into(),
+        })
+    }
+}
+
+/// An f64 transform rounded to f32 (call it on world-origin-relative transforms only).
+fn to_f32(m: DAffine3) -> Affine3A {
+    Affine3A::from_mat3_translation(m.matrix3.as_mat3(), m.translation.as_vec3())
+}
+
+/// Moves a mesh whose vertices sit far from its own origin (farther than its size) to be centred
+/// on its bounds, and returns the offset to add back in front of every instance transform.
+///
+/// Why: vertex coordinates near 1e6 have f32 spacing 0.0625 and every ray transformed into that
+/// object space inherits that error. The subtraction is done in f64 and the stored f32 values
+/// are exact multiples of their spacing, so the recentred vertices lose nothing that the file
+/// held.
+fn recentre(mesh: &mut crate::Mesh) -> DVec3 {
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    for p in &mesh.positions {
+        lo = lo.min(p.as_dvec3());
+        hi = hi.max(p.as_dvec3());
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        return DVec3::ZERO;
+    }
+    let centre = 0.5 * (lo + hi);
+    if centre.length() <= (hi - lo).length() {
+        return DVec3::ZERO;
+    }
+    for p in &mut mesh.positions {
+        *p = (p.as_dvec3() - centre).as_vec3();
+    }
+    centre
+}
+
+/// The world point the loaded scene is expressed relative to (see [`Scene::world_origin`]): the
+/// centre of the drawn geometry's bounds when that centre is farther from the file's origin than
+/// the geometry is large (a scene placed at geographic coordinates, say), else the file's
+/// origin, so scenes modelled around the origin keep the coordinates their files give.
+///
+/// The geometry's centre, rather than a camera's position, because a file has any number of
+/// cameras (or none) and the bounds are what every camera looks at.
+fn world_origin(
+    meshes: &[crate::Mesh],
+    placed: &[(u32, DAffine3, u32)],
+    stats: &mut SceneStats,
+) -> DVec3 {
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    for (mesh, world, _) in placed {
+        let Some(m) = meshes.get(*mesh as usize) else {
+            continue;
+        };
+        let (mut mlo, mut mhi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for p in &m.positions {
+            mlo = mlo.min(p.as_dvec3());
+            mhi = mhi.max(p.as_dvec3());
+        }
+        if !(mlo.is_finite() && mhi.is_finite()) {
+            continue;
+        }
+        for k in 0..8 {
+            let corner = DVec3::select(
+                glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
+                mhi,
+                mlo,
+            );
+            let w = world.transform_point3(corner);
+            lo = lo.min(w);
+            hi = hi.max(w);
+        }
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        return DVec3::ZERO;
+    }
+    let centre = 0.5 * (lo + hi);
+    let size = (hi - lo).length();
+    let origin = if centre.length() > size {
+        centre
+    } else {
+        DVec3::ZERO
+    };
+    // What recentring cannot fix: a scene so large around its own centre that f32 positions at
+    // its edge are coarse next to its smallest triangles.
+    let reach = (hi - origin).abs().max((lo - origin).abs()).max_element();
+    let spacing = reach * f64::from(f32::EPSILON);
+    let detail = placed
+        .iter()
+        .filter_map(|(mesh, world, _)| {
+            let m = meshes.get(*mesh as usize)?;
+            let shrink = [
+                world.matrix3.x_axis,
+                world.matrix3.y_axis,
+                world.matrix3.z_axis,
+            ]
+            .map(|c| c.length())
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
+            Some(shortest_edge(m) * shrink)
+        })
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    if spacing * MIN_STEPS_PER_EDGE > detail {
+        stats.warnings.push(format!(
+            "the scene reaches {reach:.3e} units from its centre, where float32 positions are \
+             {spacing:.1e} apart, yet its shortest triangle edge is {detail:.1e}: such details \
+             are distorted or cracked (docs/accuracy.md, float32 limits)"
+        ));
+    }
+    if size > 0.0 && size < MIN_EXTENT {
+        stats.warnings.push(format!(
+            "the scene is only {size:.1e} units across: secondary rays start up to 1.5e-5 units \
+             off surfaces (aperture_accel::offset_ray_origin), which loses contact shadows at this \
+             size; model it in smaller units, e.g. millimetres (docs/accuracy.md, float32 limits)"
+        ));
+    }
+    origin
+}
+
+/// Smallest scene diagonal accepted silently: 256 times the fixed 1/65536-unit offset that
+/// `aperture_accel::offset_ray_origin` gives coordinates below 1/32. Measured (docs/accuracy.md):
+/// a scene 8.6e-3 across renders the image of its 1000× larger copy within noise; 8.6e-4 across
+/// it does not.
+const MIN_EXTENT: f64 = 1.0 / 256.0;
+
+/// A triangle edge shorter than this many f32 steps at the scene's edge is reported: vertices
+/// round by up to half a step, so such an edge may change length by more than 1/16.
+const MIN_STEPS_PER_EDGE: f64 = 16.0;
+
+/// The shortest non-zero edge of a mesh's triangles, in object space (infinity if none).
+fn shortest_edge(mesh: &crate::Mesh) -> f64 {
+    let p = |i: u32| mesh.positions.get(i as usize).map(|v| v.as_dvec3());
+    mesh.indices
+        .iter()
+        .flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)])
+        .filter_map(|(a, b)| Some(p(a)?.distance(p(b)?)))
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// World transforms of all nodes (not only the drawn scene's: `focus_object` may name any node).
-fn world_transforms(doc: &gltf::Document) -> Result<Vec<Affine3A>, Error> {
+fn world_transforms(doc: &gltf::Document) -> Result<Vec<DAffine3>, Error> {
     let n = doc.nodes().len();
     let mut parent: Vec<Option<usize>> = vec![None; n];
     let mut local = Vec::with_capacity(n);
@@ -300,7 +479,7 @@ fn world_transforms(doc: &gltf::Document) -> Result<Vec<Affine3A>, Error> {
             }
         }
     }
-    let mut world: Vec<Option<Affine3A>> = vec![None; n];
+    let mut world: Vec<Option<DAffine3>> = vec![None; n];
     let children: Vec<Vec<usize>> = doc
         .nodes()
         .map(|nd| nd.children().map(|c| c.index()).collect())
@@ -310,7 +489,7 @@ fn world_transforms(doc: &gltf::Document) -> Result<Vec<Affine3A>, Error> {
         world[r] = Some(local[r]);
     }
     while let Some(i) = stack.pop() {
-        let w = world[i].unwrap_or(Affine3A::IDENTITY);
+        let w = world[i].unwrap_or(DAffine3::IDENTITY);
         for &c in &children[i] {
             world[c] = Some(w * local[c]);
             stack.push(c);
@@ -334,7 +513,7 @@ fn gpu_instances(
     buffers: &Buffers,
     ext: &Value,
     node: usize,
-) -> Result<Vec<Affine3A>, Error> {
+) -> Result<Vec<DAffine3>, Error> {
     let at = format!("nodes[{node}].extensions.EXT_mesh_gpu_instancing.attributes");
     let attrs = ext
         .get("attributes")
@@ -388,13 +567,15 @@ fn gpu_instances(
     }
     (0..count)
         .map(|k| {
-            let tr = t.as_ref().map_or(Vec3::ZERO, |v| Vec3::from(v[k]));
+            let wide = |v: [f32; 3]| DVec3::from_array(v.map(f64::from));
+            let tr = t.as_ref().map_or(DVec3::ZERO, |v| wide(v[k]));
             let q = r
                 .as_ref()
-                .map_or(Quat::IDENTITY, |v| Quat::from_array(v[k]));
-            let sc = s.as_ref().map_or(Vec3::ONE, |v| Vec3::from(v[k]));
-            let m = Affine3A::from_scale_rotation_translation(sc, q.normalize(), tr);
-            finite(|| format!("{at}[{k}]"), &Mat4::from(m).to_cols_array())?;
+                .map_or(DQuat::IDENTITY, |v| DQuat::from_array(v[k].map(f64::from)));
+            let sc = s.as_ref().map_or(DVec3::ONE, |v| wide(v[k]));
+            let m = DAffine3::from_scale_rotation_translation(sc, q.normalize(), tr);
+            let values = DMat4::from(m).to_cols_array().map(|x| x as f32);
+            finite(|| format!("{at}[{k}]"), &values)?;
             Ok(m)
         })
         .collect()
@@ -619,6 +800,75 @@ mod tests {
         assert!(s.meshes[0].normals.iter().all(|n| *n == Vec3::Z));
         // No material: the glTF default one.
         assert_eq!(s.materials, vec![crate::Material::default()]);
+    }
+
+    #[test]
+    fn far_scenes_are_recentred_in_f64() {
+        // A root at 1e6 (f32 spacing 0.0625 there) with children 0.3 apart: in f32 the
+        // composition would round 1e6 + 0.3 to 1e6 + 0.3125.
+        let s = load_json(&gltf(
+            json!([
+                {"translation": [1e6, 0, -1e6], "children": [1, 2, 3]},
+                {"mesh": 0, "translation": [0.3, 0, 0]},
+                {"mesh": 0, "translation": [-0.3, 0, 0]},
+                {"camera": 0, "translation": [0.3, 0, 2]}
+            ]),
+            json!([0]),
+            json!({"cameras": [{"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1}}]}),
+        ))
+        .unwrap();
+        // Geometry spans x in [-0.3, 1.3], y in [0, 1] around the root.
+        assert_eq!(s.world_origin, DVec3::new(1e6 + 0.5, 0.5, -1e6));
+        let o = |i: usize| {
+            s.instances[i]
+                .world_from_object
+                .transform_point3(Vec3::ZERO)
+        };
+        assert!(
+            (o(0) - Vec3::new(-0.2, -0.5, 0.0)).length() < 1e-6,
+            "{}",
+            o(0)
+        );
+        assert!(
+            (o(1) - Vec3::new(-0.8, -0.5, 0.0)).length() < 1e-6,
+            "{}",
+            o(1)
+        );
+        let eye = Vec3::from(s.cameras[0].world_from_camera.translation);
+        assert!((eye - Vec3::new(-0.2, -0.5, 2.0)).length() < 1e-6, "{eye}");
+        assert!(s.stats.warnings.is_empty(), "{:?}", s.stats.warnings);
+
+        // Vertices far from their own mesh origin move into the instance transform.
+        let mut b: Value =
+            serde_json::from_slice(&gltf(json!([{"mesh": 0}]), json!([0]), json!({}))).unwrap();
+        let far: Vec<u8> = [1e6f32, 0.0, 0.0, 1e6 + 1.0, 0.0, 0.0, 1e6, 1.0, 0.0]
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .chain(bin()[36..].iter().copied())
+            .collect();
+        b["buffers"][0]["uri"] = json!(format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&far)
+        ));
+        b["accessors"][0]["min"] = json!([1e6, 0, 0]);
+        b["accessors"][0]["max"] = json!([1e6 + 1.0, 1, 0]);
+        let s = load_json(&serde_json::to_vec(&b).unwrap()).unwrap();
+        assert_eq!(s.world_origin, DVec3::new(1e6 + 0.5, 0.5, 0.0));
+        assert_eq!(s.meshes[0].positions[1], Vec3::new(0.5, -0.5, 0.0));
+        assert_eq!(s.bounds().min, Vec3::new(-0.5, -0.5, 0.0));
+
+        // A scene whose own extent f32 cannot hold at millimetres is loaded with a warning.
+        let s = load_json(&gltf(
+            json!([{"mesh": 0}, {"mesh": 0, "translation": [3e4, 0, 0], "scale": [1e-3, 1e-3, 1e-3]}]),
+            json!([0, 1]),
+            json!({}),
+        ))
+        .unwrap();
+        assert!(
+            s.stats.warnings.iter().any(|w| w.contains("float32")),
+            "{:?}",
+            s.stats.warnings
+        );
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! The render-ready scene model. Everything here is plain data: the loader fills it, the renderer
 //! reads it, and tests may build it by hand.
 
-use glam::{Affine3A, Vec2, Vec3, Vec4};
+use glam::{Affine3A, DVec3, Vec2, Vec3, Vec4};
 
 /// A scene ready to render: unique meshes, the instances that draw them, and what shades them.
 #[derive(Debug, Clone, Default)]
@@ -21,6 +21,13 @@ pub struct Scene {
     pub cameras: Vec<Camera>,
     /// What the loader saw, skipped and warned about (for `aperture info`).
     pub stats: SceneStats,
+    /// Where the file's origin went: a position `p` of this scene is the point
+    /// `world_origin + p` of the glTF file's world. Zero unless the drawn geometry lies farther
+    /// from the file's origin than it is large; then the loader composes transforms in f64 and
+    /// subtracts the geometry's centre before rounding to f32, so a scene placed at 1e6 keeps
+    /// the precision it has at the origin. Directions and distances (hence depth of field) do
+    /// not change.
+    pub world_origin: DVec3,
 }
 
 /// Triangle geometry in object space: all primitives of one glTF mesh, merged.
