@@ -71,7 +71,17 @@ fn v3(v: glam::Vec3) -> Value {
     json!([f(v.x), f(v.y), f(v.z)])
 }
 
-fn camera_json(c: &Camera) -> Value {
+/// A point of the scene in the file's coordinates: the loader may have moved the origin
+/// (`Scene::world_origin`) to keep far-away scenes precise; users know the file's numbers.
+fn file_point(origin: glam::DVec3, p: glam::Vec3) -> Value {
+    if origin == glam::DVec3::ZERO {
+        return v3(p);
+    }
+    let q = origin + p.as_dvec3();
+    json!([q.x, q.y, q.z])
+}
+
+fn camera_json(c: &Camera, origin: glam::DVec3) -> Value {
     let (projection, yfov, aspect, xmag, ymag) = match c.projection {
         Projection::Perspective { yfov, aspect_ratio } => {
             ("perspective", Some(yfov), aspect_ratio, None, None)
@@ -89,7 +99,7 @@ fn camera_json(c: &Camera) -> Value {
         "aspect_ratio": aspect.map(f),
         "xmag": xmag.map(f),
         "ymag": ymag.map(f),
-        "position": v3(c.world_from_camera.translation.into()),
+        "position": file_point(origin, c.world_from_camera.translation.into()),
         "direction": v3((-c.world_from_camera.matrix3.z_axis).into()),
         "dof": {
             "enabled": d.enabled,
@@ -113,7 +123,10 @@ fn report(s: &Scene) -> Value {
     let bounds = if b.is_empty() {
         json!({"min": null, "max": null})
     } else {
-        json!({"min": v3(b.min), "max": v3(b.max)})
+        json!({
+            "min": file_point(s.world_origin, b.min),
+            "max": file_point(s.world_origin, b.max),
+        })
     };
     json!({
         "nodes": s.stats.nodes,
@@ -130,12 +143,17 @@ fn report(s: &Scene) -> Value {
         "textures": s.textures.len(),
         "lights": {"point": c.point, "spot": c.spot, "directional": c.directional},
         "bounds": bounds,
+        "world_origin": [s.world_origin.x, s.world_origin.y, s.world_origin.z],
         "skipped": {
             "primitives": s.stats.skipped_primitives,
             "features": s.stats.skipped_features,
         },
         "warnings": s.stats.warnings,
-        "cameras": s.cameras.iter().map(camera_json).collect::<Vec<_>>(),
+        "cameras": s
+            .cameras
+            .iter()
+            .map(|c| camera_json(c, s.world_origin))
+            .collect::<Vec<_>>(),
     })
 }
 
@@ -170,6 +188,12 @@ fn print_text(path: &std::path::Path, r: &Value) {
         "  bounds: min {} max {}",
         r["bounds"]["min"], r["bounds"]["max"]
     );
+    if r["world_origin"] != json!([0.0, 0.0, 0.0]) {
+        println!(
+            "  rendered relative to {} (far from the file's origin; kept precise in f64)",
+            r["world_origin"]
+        );
+    }
     let skipped = &r["skipped"];
     if n(&skipped["primitives"]) > 0 {
         println!(
@@ -329,6 +353,19 @@ mod tests {
         for key in ["lens_mm", "blades", "rotation", "ratio"] {
             assert!(d.get(key).is_some_and(|v| !v.is_null()), "{key}");
         }
+    }
+
+    /// A recentred scene reports bounds and cameras in the file's coordinates.
+    #[test]
+    fn recentred_scenes_report_file_coordinates() {
+        let mut s = scene();
+        s.world_origin = glam::DVec3::new(1e6, -2e6, 0.5);
+        let r = report(&s);
+        assert_eq!(r["world_origin"], json!([1e6, -2e6, 0.5]));
+        assert_eq!(r["bounds"]["min"], json!([1e6, -2e6, 0.5]));
+        assert_eq!(r["bounds"]["max"], json!([1e6 + 3.0, -2e6 + 1.0, 1.5]));
+        assert_eq!(r["cameras"][0]["position"], json!([1e6, -2e6, 0.5]));
+        assert_eq!(report(&scene())["world_origin"], json!([0.0, 0.0, 0.0]));
     }
 
     #[test]
