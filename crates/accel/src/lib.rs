@@ -269,9 +269,19 @@ impl SpawnPoint {
     /// Why not only `offset_ray_origin`: on instanced meshes the point's error comes from the
     /// transform's magnitudes (say a coordinate near 0 computed from terms near 1e4), which a
     /// few ulps of the point's own coordinates do not cover.
+    ///
+    /// Near zero (coordinates below 1/32) the last step is the error bound rather than
+    /// `offset_ray_origin`'s fixed 1/65536 units: the bound already covers the rounding that
+    /// fixed step guards against, and a fixed step is a large part of a scene measured in units
+    /// of 1e-4 (it lost contact shadows there). An `error` of 0 means "not known": then the
+    /// fixed step stays, exactly as `offset_ray_origin`.
     pub fn origin(&self, n: Vec3) -> Vec3 {
         let n = n.normalize_or_zero();
-        offset_ray_origin(self.p + n * (2.0 * self.error), n)
+        if self.error > 0.0 {
+            offset_ulps(self.p + n * (2.0 * self.error), n, self.error)
+        } else {
+            offset_ray_origin(self.p, n)
+        }
     }
 }
 
@@ -811,6 +821,23 @@ impl Accel {
         }
     }
 
+    /// A point `p` computed on a triangle of instance `instance` (say by interpolating its
+    /// vertices, as a light sample is), with a bound on its rounding error: where a ray towards
+    /// or from that point may start or end without meeting the triangle itself.
+    pub fn surface_point(&self, instance: u32, p: Vec3) -> SpawnPoint {
+        let transform_part = self
+            .instance_magnitude
+            .get(instance as usize)
+            .copied()
+            .unwrap_or(0.0);
+        // Interpolation (a few roundings of the vertex magnitudes) and the object-to-world
+        // transform (about 3 of the transform's).
+        SpawnPoint {
+            p,
+            error: 16.0 * f32::EPSILON * (p.abs().max_element() + transform_part),
+        }
+    }
+
     /// Build statistics.
     pub fn stats(&self) -> AccelStats {
         self.stats
@@ -1035,8 +1062,14 @@ impl Accel {
 /// compared with scenes of millimetre scale: harmless for self-intersection, but such scenes
 /// are better modelled in larger units.
 pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
+    offset_ulps(p, n, 1.0 / 65536.0)
+}
+
+/// Wächter and Binder's offset: 256 ulps along `n` for coordinates of at least 1/32, and
+/// `float_scale · n` for those below, whose ulps are too fine to cover a rounding error that
+/// comes from larger magnitudes elsewhere.
+fn offset_ulps(p: Vec3, n: Vec3, float_scale: f32) -> Vec3 {
     const ORIGIN: f32 = 1.0 / 32.0;
-    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
     const INT_SCALE: f32 = 256.0;
     let of_i = (INT_SCALE * n).to_array().map(|x| x as i32);
     let pa = p.to_array();
@@ -1053,7 +1086,7 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
         let moved = bits.wrapping_add(step);
         let p_i = f32::from_bits(moved as u32);
         out[k] = if pa[k].abs() < ORIGIN {
-            pa[k] + FLOAT_SCALE * n[k]
+            pa[k] + float_scale * n[k]
         } else {
             p_i
         };

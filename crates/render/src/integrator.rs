@@ -10,7 +10,7 @@ use crate::environment::EnvLight;
 use crate::lights::{punctual_incident, EmissiveLights};
 use crate::sampler::SampleStream;
 use crate::surface::{Geometry, Surface};
-use aperture_accel::{offset_ray_origin, Accel, Hit, Ray, SpawnPoint};
+use aperture_accel::{Accel, Hit, Ray, SpawnPoint};
 use glam::Vec3;
 
 /// Vertices before Russian roulette may end a path.
@@ -153,7 +153,8 @@ impl Integrator<'_> {
                 return 0.0;
             }
             let n = if s.ng.dot(dir) > 0.0 { s.ng } else { -s.ng };
-            let o = offset_ray_origin(s.p, n);
+            let error = self.accel.spawn_point(&ray, &hit).error;
+            let o = SpawnPoint { p: s.p, error }.origin(n);
             let travelled = (o - ray.origin).dot(dir);
             ray.origin = o;
             ray.tmax -= travelled;
@@ -289,7 +290,7 @@ impl Integrator<'_> {
                         beta * f * wi_l.z * le * (power_heuristic(light_pdf, bsdf_pdf) / light_pdf);
                     if c != Vec3::ZERO && c.is_finite() {
                         let qn = if q.ng.dot(wi) < 0.0 { q.ng } else { -q.ng };
-                        let target = offset_ray_origin(q.p, qn);
+                        let target = self.accel.surface_point(t.instance, q.p).origin(qn);
                         let to = target - p_out;
                         let len = to.length();
                         l +=

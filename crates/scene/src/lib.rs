@@ -25,7 +25,7 @@
 //! - Node transforms are composed in f64 and rounded to f32 once, relative to
 //!   [`Scene::world_origin`] (the drawn geometry's centre when the scene lies far from the file's
 //!   origin), so a scene placed at 1e6 renders as it does at the origin; scenes too large for
-//!   their details or too small for the ray offset get a warning (docs/accuracy.md, "float32
+//!   their details or too small for float32 (below 1e-8 across) get a warning (docs/accuracy.md, "float32
 //!   limits"), and a transform that overflows f32 is an error.
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
