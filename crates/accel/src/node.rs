@@ -45,21 +45,32 @@ impl BoxRay {
     /// `bounds`: the tree's bounding box (sizes the rounding slack).
     #[inline]
     pub fn new(origin: Vec3, dir: Vec3, tmin: f32, (lo, hi): (Vec3, Vec3)) -> Self {
-        let inv = dir.to_array().map(|d| {
-            let i = 1.0 / d;
-            if i.is_finite() {
-                i.clamp(-INV_LIMIT, INV_LIMIT)
-            } else if d.is_sign_negative() {
-                -INV_LIMIT
-            } else {
-                INV_LIMIT
+        // Lane-wise (one division, selects instead of a branch per axis): a finite reciprocal is
+        // clamped to `INV_LIMIT`, an infinite or NaN one becomes `INV_LIMIT` with the sign of `d`.
+        let d = Vec3A::from(dir);
+        let i = Vec3A::ONE / d;
+        let limit = Vec3A::splat(INV_LIMIT);
+        let inv = Vec3A::select(
+            i.abs().cmplt(Vec3A::INFINITY),
+            i.clamp(-limit, limit),
+            limit.copysign(d),
+        );
+        let neg_bits = inv.cmplt(Vec3A::ZERO).bitmask();
+        let neg = [neg_bits & 1 != 0, neg_bits & 2 != 0, neg_bits & 4 != 0];
+        // obvhs' key: 4 in each byte for +x, 2 for +y, 1 for +z.
+        const OCT: [u32; 8] = {
+            let mut t = [0u32; 8];
+            let mut b = 0;
+            while b < 8 {
+                let key = (if b & 1 == 0 { 4 } else { 0 })
+                    | (if b & 2 == 0 { 2 } else { 0 })
+                    | (if b & 4 == 0 { 1 } else { 0 });
+                t[b] = key * 0x0101_0101;
+                b += 1;
             }
-        });
-        let neg = inv.map(|i| i < 0.0);
-        let oct_inv4 = (if neg[0] { 0 } else { 0x0404_0404 })
-            | (if neg[1] { 0 } else { 0x0202_0202 })
-            | (if neg[2] { 0 } else { 0x0101_0101 });
-        let inv = Vec3A::from_array(inv);
+            t
+        };
+        let oct_inv4 = OCT[neg_bits as usize & 7];
         let m = (lo - origin).abs().max((hi - origin).abs()).max_element()
             + 3.0 * (hi - lo).max_element();
         Self {
@@ -70,6 +81,22 @@ impl BoxRay {
             tmin,
             slack: inv.abs() * (SLACK * m),
         }
+    }
+
+    /// The reciprocal exactly as the per-axis scalar code computed it before (the reference of
+    /// the lane-wise version in [`BoxRay::new`]).
+    #[cfg(test)]
+    fn inv_reference(dir: Vec3) -> Vec3A {
+        Vec3A::from_array(dir.to_array().map(|d| {
+            let i = 1.0 / d;
+            if i.is_finite() {
+                i.clamp(-INV_LIMIT, INV_LIMIT)
+            } else if d.is_sign_negative() {
+                -INV_LIMIT
+            } else {
+                INV_LIMIT
+            }
+        }))
     }
 }
 
@@ -421,6 +448,43 @@ mod tests {
             }
         }
         assert!(nonzero > 100);
+    }
+
+    #[test]
+    fn lane_wise_setup_matches_per_axis() {
+        let vals = [
+            0.0f32,
+            -0.0,
+            1e-30,
+            -1e-30,
+            1e-45,
+            0.5,
+            -3.0,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+        ];
+        for &x in &vals {
+            for &y in &vals {
+                for &z in &vals {
+                    let d = Vec3::new(x, y, z);
+                    let r = BoxRay::new(Vec3::ZERO, d, 0.0, (Vec3::ZERO, Vec3::ONE));
+                    let want = BoxRay::inv_reference(d);
+                    assert_eq!(
+                        r.inv.to_array().map(f32::to_bits),
+                        want.to_array().map(f32::to_bits),
+                        "{d}"
+                    );
+                    let neg = want.to_array().map(|i| i < 0.0);
+                    assert_eq!(r.neg, neg, "{d}");
+                    let oct = (if neg[0] { 0 } else { 0x0404_0404 })
+                        | (if neg[1] { 0 } else { 0x0202_0202 })
+                        | (if neg[2] { 0 } else { 0x0101_0101 });
+                    assert_eq!(r.oct_inv4, oct, "{d}");
+                }
+            }
+        }
     }
 
     #[test]
