@@ -147,10 +147,8 @@ pub(crate) fn intersect_node(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
     hitmask_from_children(node, r.oct_inv4, hit8)
 }
 
-/// [`intersect_node`] testing all eight children at once with AVX2.
-///
-/// A real call (not inlined into the traversal): the traversal's closures cannot inherit a
-/// target feature, so this function carries it and its intrinsics inline here.
+/// [`intersect_node`] testing all eight children at once with AVX2 and FMA. Inlined into the
+/// traversal of the AVX2 query functions, which enable the same features.
 ///
 /// # Safety
 /// The CPU must support AVX2.
@@ -159,9 +157,37 @@ pub(crate) fn intersect_node(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
 #[inline]
 pub(crate) unsafe fn intersect_node_avx2(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
     use std::arch::x86_64::*;
-    let f = frame(node, r);
-    // SAFETY: forwarded from the caller.
-    let hit = unsafe { child_hits_avx2_lanes(node, r, &f, tmax) };
+    // `frame` in registers: its three vectors are computed with the same operations (so the
+    // same values), then each lane is broadcast with one `vpermps` instead of the shuffle and
+    // broadcast pairs the compiler made from `Vec3A` lanes.
+    // SAFETY: AVX2 is guaranteed by the caller. The loads read 16 bytes from the start of the
+    // node (`p`, then `e` and `imask`) and the 4 bytes of `e` and `imask` (`repr(C)` layout);
+    // lane 3 of every vector is never broadcast.
+    let hit = unsafe {
+        let base = node as *const CwBvhNode as *const u8;
+        let p = _mm_loadu_ps(base as *const f32);
+        let e_bits = _mm_cvtsi32_si128(std::ptr::read_unaligned(
+            base.add(std::mem::offset_of!(CwBvhNode, e)) as *const i32,
+        ));
+        let e = _mm_castsi128_ps(_mm_slli_epi32::<23>(_mm_cvtepu8_epi32(e_bits)));
+        let inv: __m128 = r.inv.into();
+        let slack: __m128 = r.slack.into();
+        let scale = _mm_mul_ps(e, inv);
+        let off = _mm_mul_ps(_mm_sub_ps(p, r.origin.into()), inv);
+        let off_lo = _mm_sub_ps(off, slack);
+        let off_hi = _mm_add_ps(off, slack);
+        macro_rules! lanes {
+            ($v:expr) => {{
+                let v = _mm256_castps128_ps256($v);
+                [
+                    _mm256_permutevar8x32_ps(v, _mm256_set1_epi32(0)),
+                    _mm256_permutevar8x32_ps(v, _mm256_set1_epi32(1)),
+                    _mm256_permutevar8x32_ps(v, _mm256_set1_epi32(2)),
+                ]
+            }};
+        }
+        child_hits_avx2_wide(node, r, lanes!(scale), lanes!(off_lo), lanes!(off_hi), tmax)
+    };
     // `hitmask_from_children` without its data-dependent loop (one iteration per hit child, a
     // branch that mispredicts often): each lane shifts its child's bits to their index, lanes of
     // missed children are masked off, and the eight lanes are OR-ed together.
@@ -204,12 +230,37 @@ unsafe fn child_hits_avx2(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32
 }
 
 /// [`child_hits_avx2`] as a lane mask (all ones for a hit child).
-#[cfg(target_arch = "x86_64")]
+#[cfg(all(test, target_arch = "x86_64"))]
 #[inline(always)]
 unsafe fn child_hits_avx2_lanes(
     node: &CwBvhNode,
     r: &BoxRay,
     f: &NodeFrame,
+    tmax: f32,
+) -> std::arch::x86_64::__m256 {
+    use std::arch::x86_64::*;
+    // SAFETY: forwarded from the caller.
+    unsafe {
+        let b = |v: Vec3A| {
+            [
+                _mm256_set1_ps(v.x),
+                _mm256_set1_ps(v.y),
+                _mm256_set1_ps(v.z),
+            ]
+        };
+        child_hits_avx2_wide(node, r, b(f.scale), b(f.off_lo), b(f.off_hi), tmax)
+    }
+}
+
+/// [`child_hits_avx2_lanes`] with the frame's lanes already broadcast (`[x, y, z]` each).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn child_hits_avx2_wide(
+    node: &CwBvhNode,
+    r: &BoxRay,
+    scale: [std::arch::x86_64::__m256; 3],
+    off_lo: [std::arch::x86_64::__m256; 3],
+    off_hi: [std::arch::x86_64::__m256; 3],
     tmax: f32,
 ) -> std::arch::x86_64::__m256 {
     use std::arch::x86_64::*;
@@ -235,21 +286,28 @@ unsafe fn child_hits_avx2_lanes(
                 }
             };
         }
-        macro_rules! t {
-            ($q:expr, $s:expr, $o:expr) => {
-                _mm256_fmadd_ps($q, _mm256_set1_ps($s), _mm256_set1_ps($o))
-            };
-        }
         let (nx, fx) = pick!(r.neg[0], &node.child_min_x, &node.child_max_x);
         let (ny, fy) = pick!(r.neg[1], &node.child_min_y, &node.child_max_y);
         let (nz, fz) = pick!(r.neg[2], &node.child_min_z, &node.child_max_z);
         let enter = _mm256_max_ps(
-            _mm256_max_ps(_mm256_set1_ps(r.tmin), t!(nx, f.scale.x, f.off_lo.x)),
-            _mm256_max_ps(t!(ny, f.scale.y, f.off_lo.y), t!(nz, f.scale.z, f.off_lo.z)),
+            _mm256_max_ps(
+                _mm256_set1_ps(r.tmin),
+                _mm256_fmadd_ps(nx, scale[0], off_lo[0]),
+            ),
+            _mm256_max_ps(
+                _mm256_fmadd_ps(ny, scale[1], off_lo[1]),
+                _mm256_fmadd_ps(nz, scale[2], off_lo[2]),
+            ),
         );
         let exit = _mm256_min_ps(
-            _mm256_min_ps(_mm256_set1_ps(tmax), t!(fx, f.scale.x, f.off_hi.x)),
-            _mm256_min_ps(t!(fy, f.scale.y, f.off_hi.y), t!(fz, f.scale.z, f.off_hi.z)),
+            _mm256_min_ps(
+                _mm256_set1_ps(tmax),
+                _mm256_fmadd_ps(fx, scale[0], off_hi[0]),
+            ),
+            _mm256_min_ps(
+                _mm256_fmadd_ps(fy, scale[1], off_hi[1]),
+                _mm256_fmadd_ps(fz, scale[2], off_hi[2]),
+            ),
         );
         _mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)
     }
