@@ -157,9 +157,10 @@ pub(crate) fn intersect_node(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
 #[inline]
 pub(crate) unsafe fn intersect_node_avx2(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
     use std::arch::x86_64::*;
-    // `frame` in registers: its three vectors are computed with the same operations (so the
-    // same values), then each lane is broadcast with one `vpermps` instead of the shuffle and
-    // broadcast pairs the compiler made from `Vec3A` lanes.
+    // `frame` in registers: its three vectors come from one 16-byte load of `p`, `e` and
+    // `imask` with the same operations as `frame` (so the same values), then each lane is
+    // broadcast. (LLVM lowers the `vpermps` broadcasts back to shuffle + broadcast pairs; the
+    // instructions saved are in the loads and the exponent decode.)
     // SAFETY: AVX2 is guaranteed by the caller. The loads read 16 bytes from the start of the
     // node (`p`, then `e` and `imask`) and the 4 bytes of `e` and `imask` (`repr(C)` layout);
     // lane 3 of every vector is never broadcast.
