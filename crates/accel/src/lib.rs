@@ -245,8 +245,9 @@ pub struct Accel {
     /// Per input instance: a bound on the magnitudes met when moving its points between object
     /// and world space (`|T| + |M| max|p_obj|`), for [`Accel::spawn_point`].
     instance_magnitude: Vec<f32>,
-    /// Node tests take the 8-wide AVX2 path (detected at build time; the x86_64 baseline is
-    /// SSE2, 4 wide). Both give identical results.
+    /// Node tests take the 8-wide AVX2 + FMA path (detected at build time; the x86_64 baseline
+    /// is SSE2, 4 wide). Both are conservative and give identical hits; node masks may differ
+    /// where a fused slab distance rounds differently.
     avx2: bool,
     stats: AccelStats,
 }
@@ -292,68 +293,110 @@ type Group = (u32, u32);
 /// stack sized from the measured depth, so the stack can never overflow.
 const INLINE_STACK: usize = 48;
 
-/// Stack slots start uninitialised: zeroing 48 entries per query (a `memset` call) cost about 3 %
-/// of the instructions of a primary ray. [`traverse`] reads a slot only below its stack pointer,
-/// that is, only after writing it.
+/// An uninitialised inline stack.
+type InlineStack = [MaybeUninit<Group>; INLINE_STACK];
+
+/// The traversal stack for a tree of `depth` levels: `inline` when it fits, else `heap` sized to
+/// the depth. A plain function rather than a closure-taking one so that the query stays one
+/// function after inlining (closures were separate calls per ray).
+///
+/// Slots start uninitialised: zeroing 48 entries per query (a `memset` call) cost about 3 % of the
+/// instructions of a primary ray. [`traverse`] reads a slot only below its stack pointer, that
+/// is, only after writing it.
 #[inline(always)]
-fn with_stack<R>(depth: usize, f: impl FnOnce(&mut [MaybeUninit<Group>]) -> R) -> R {
+fn stack_for<'a>(
+    depth: usize,
+    inline: &'a mut InlineStack,
+    heap: &'a mut Vec<MaybeUninit<Group>>,
+) -> &'a mut [MaybeUninit<Group>] {
     if depth < INLINE_STACK {
-        let mut stack = [MaybeUninit::<Group>::uninit(); INLINE_STACK];
-        f(&mut stack)
+        inline
     } else {
-        let mut stack = vec![MaybeUninit::<Group>::uninit(); depth + 1];
-        f(&mut stack)
+        *heap = vec![MaybeUninit::<Group>::uninit(); depth + 1];
+        heap
     }
 }
 
-/// Walks a CWBVH (obvhs layout) front to back for `r`, calling `leaf(primitive, &mut tmax)` for
-/// every primitive in a hit leaf; `leaf` may shrink `tmax` and returns `true` to stop. Returns
-/// whether it was stopped.
+/// What [`traverse`] does with each primitive of a hit leaf. A trait with `#[inline(always)]`
+/// implementations rather than a closure: the compiler left the occlusion closure as a call per
+/// triangle once the traversal was inlined into the query.
+trait Leaf {
+    /// Visits `primitive`; may shrink `tmax`; returns `true` to stop the traversal.
+    fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool;
+}
+
+/// A closure as a [`Leaf`] (the top level, where each primitive is a whole bottom-level walk).
+struct FnLeaf<F>(F);
+
+impl<L: Leaf> Leaf for &mut L {
+    #[inline(always)]
+    fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
+        (**self).visit(primitive, tmax)
+    }
+}
+
+impl<F: FnMut(u32, &mut f32) -> bool> Leaf for FnLeaf<F> {
+    #[inline(always)]
+    fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
+        (self.0)(primitive, tmax)
+    }
+}
+
+/// Closest hit over a bottom-level BVH's triangles: `(triangle index, (t, u, v))`.
+struct ClosestLeaf<'a> {
+    tris: &'a [Tri],
+    ray: &'a TriRay,
+    tmin: f32,
+    best: Option<(usize, (f32, f32, f32))>,
+}
+
+impl Leaf for ClosestLeaf<'_> {
+    #[inline(always)]
+    fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
+        if let Some(tri) = self.tris.get(primitive as usize) {
+            if let Some(h) =
+                triangle::intersect(self.ray, tri.p[0], tri.p[1], tri.p[2], self.tmin, *tmax)
+            {
+                *tmax = h.0;
+                self.best = Some((primitive as usize, h));
+            }
+        }
+        false
+    }
+}
+
+/// Any hit over a bottom-level BVH's triangles: stops at the first.
+struct AnyLeaf<'a> {
+    tris: &'a [Tri],
+    ray: &'a TriRay,
+    tmin: f32,
+}
+
+impl Leaf for AnyLeaf<'_> {
+    #[inline(always)]
+    fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
+        self.tris.get(primitive as usize).is_some_and(|tri| {
+            triangle::intersect(self.ray, tri.p[0], tri.p[1], tri.p[2], self.tmin, *tmax).is_some()
+        })
+    }
+}
+
+/// Walks a CWBVH (obvhs layout) front to back for `r`, calling `leaf.visit(primitive, &mut tmax)`
+/// for every primitive in a hit leaf. Returns whether `leaf` stopped it.
 ///
 /// Each stack entry holds the unvisited siblings of one level of the current path, so `stack`
 /// needs one entry per tree level (the depth measured at build time).
+///
+/// With `AVX2` it must be inlined into a function compiled for AVX2 (`Accel::intersect_avx2`
+/// and its kin), so that the node test and `count_ones`/`leading_zeros` become inline vector and
+/// bit instructions.
 #[inline(always)]
 fn traverse<const AVX2: bool>(
     nodes: &[CwBvhNode],
     r: &BoxRay,
     tmax: &mut f32,
     stack: &mut [MaybeUninit<Group>],
-    leaf: impl FnMut(u32, &mut f32) -> bool,
-) -> bool {
-    #[cfg(target_arch = "x86_64")]
-    if AVX2 {
-        // SAFETY: `AVX2` is true only when `detect_avx2` found every feature it enables.
-        return unsafe { traverse_avx2(nodes, r, tmax, stack, leaf) };
-    }
-    traverse_impl::<AVX2>(nodes, r, tmax, stack, leaf)
-}
-
-/// The traversal loop compiled for AVX2 and the bit instructions every AVX2 CPU has: the node
-/// test inlines into the loop (otherwise a call per node, reloading and re-broadcasting the ray
-/// each time), as does the leaf closure, and `count_ones`/`leading_zeros` become single
-/// instructions.
-///
-/// # Safety
-/// The CPU must support every feature enabled here (checked by `detect_avx2`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,popcnt,lzcnt,bmi1,bmi2")]
-unsafe fn traverse_avx2(
-    nodes: &[CwBvhNode],
-    r: &BoxRay,
-    tmax: &mut f32,
-    stack: &mut [MaybeUninit<Group>],
-    leaf: impl FnMut(u32, &mut f32) -> bool,
-) -> bool {
-    traverse_impl::<true>(nodes, r, tmax, stack, leaf)
-}
-
-#[inline(always)]
-fn traverse_impl<const AVX2: bool>(
-    nodes: &[CwBvhNode],
-    r: &BoxRay,
-    tmax: &mut f32,
-    stack: &mut [MaybeUninit<Group>],
-    mut leaf: impl FnMut(u32, &mut f32) -> bool,
+    mut leaf: impl Leaf,
 ) -> bool {
     if nodes.is_empty() {
         return false;
@@ -366,7 +409,7 @@ fn traverse_impl<const AVX2: bool>(
         while prims.1 != 0 {
             let local = 31 - prims.1.leading_zeros();
             prims.1 &= !(1u32 << local);
-            if leaf(prims.0 + local, tmax) {
+            if leaf.visit(prims.0 + local, tmax) {
                 return true;
             }
         }
@@ -416,13 +459,14 @@ fn traverse_impl<const AVX2: bool>(
     }
 }
 
-/// Whether this CPU can take the AVX2 traversal. `APERTURE_NO_AVX2` forces the SSE2 path (to
+/// Whether this CPU can take the AVX2 (+ FMA) traversal. `APERTURE_NO_AVX2` forces the SSE2 path (to
 /// compare the two, or to rule the AVX2 path out when debugging).
 fn detect_avx2() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         std::env::var_os("APERTURE_NO_AVX2").is_none()
             && std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("fma")
             && std::arch::is_x86_feature_detected!("popcnt")
             && std::arch::is_x86_feature_detected!("lzcnt")
             && std::arch::is_x86_feature_detected!("bmi1")
@@ -462,15 +506,34 @@ fn build_params(quality: BvhQuality) -> BvhBuildParams {
     //   fast_build        3.3 - 3.5         63 - 75 ms    0.53 s
     //   medium_build      2.0 - 3.0         62 - 110 ms   0.60 s
     //   slow_build        2.3 - 2.7         110 - 160 ms  (not benched)
-    // so the default is fast_build. More PLOC search and reinsertion bought no traversal speed on
-    // this scene; High keeps medium_build for scenes with more overlap (unmeasured). Spatial
-    // pre-splits are never used: they clip triangle boxes with rounded planes, which would void
-    // the conservative box test.
+    // Then refined with callgrind instruction counts of closest-hit queries (deterministic, unlike
+    // timings on that machine; 10 k thin-lens rays x 3, same scene), from fast_build:
+    //   as is (search depth threshold 2, reinsertion 0.02)   35.44 M   build  87 - 118 ms
+    //   search depth threshold 0                             34.64 M           87 -  95 ms
+    //   threshold 0, reinsertion 0.1                         34.39 M           95 - 119 ms
+    //   threshold 0, reinsertion 0.3                         34.34 M          180 - 250 ms
+    //   threshold 0, reinsertion 1.0                         34.19 M          380 - 395 ms
+    //   reinsertion 0.3, search Minimum                      39.01 M
+    //   medium_build (search Medium)                         40.37 M
+    //   very_fast_build                                      42.17 M
+    // so Medium and High start from fast_build with the threshold off (the full Low search from
+    // the first PLOC pass: fewer nodes visited at no build cost here); Medium keeps the light
+    // reinsertion, High reinserts every node once (4x the build for 1.3 % fewer instructions).
+    // Fast stays very_fast_build, the quickest build. More PLOC search (medium_build, High's
+    // preset before) made worse trees for this traversal.
+    // Spatial pre-splits are never used: they clip triangle boxes with rounded planes, which
+    // would void the conservative box test.
     let mut p = match quality {
         BvhQuality::Fast => BvhBuildParams::very_fast_build(),
         BvhQuality::Medium => BvhBuildParams::fast_build(),
-        BvhQuality::High => BvhBuildParams::medium_build(),
+        BvhQuality::High => BvhBuildParams {
+            reinsertion_batch_ratio: 1.0,
+            ..BvhBuildParams::fast_build()
+        },
     };
+    if quality != BvhQuality::Fast {
+        p.search_depth_threshold = 0;
+    }
     p.pre_split = false;
     p.max_prims_per_leaf = 3;
     p
@@ -845,44 +908,77 @@ impl Accel {
 
     /// The closest hit in `[ray.tmin, ray.tmax]`, if any.
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        #[cfg(target_arch = "x86_64")]
         if self.avx2 {
-            self.intersect_impl::<true>(ray)
-        } else {
-            self.intersect_impl::<false>(ray)
+            // SAFETY: `avx2` is set only when `detect_avx2` found every feature it enables.
+            return unsafe { self.intersect_avx2(ray) };
         }
+        self.intersect_impl::<false>(ray)
     }
 
     /// True when anything lies in `[ray.tmin, ray.tmax]`.
     pub fn occluded(&self, ray: &Ray) -> bool {
+        #[cfg(target_arch = "x86_64")]
         if self.avx2 {
-            self.occluded_impl::<true>(ray)
-        } else {
-            self.occluded_impl::<false>(ray)
+            // SAFETY: as in `intersect`.
+            return unsafe { self.occluded_avx2(ray) };
         }
+        self.occluded_impl::<false>(ray)
+    }
+
+    /// The whole query compiled for AVX2: the per-ray setup (reciprocals, shear, stack) and the
+    /// traversal become one function, without a call boundary between them where the traversal
+    /// had to spill its ray constants (about 60 instructions per ray).
+    ///
+    /// # Safety
+    /// The CPU must support every feature enabled here (checked by `detect_avx2`).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
+    unsafe fn intersect_avx2(&self, ray: &Ray) -> Option<Hit> {
+        self.intersect_impl::<true>(ray)
+    }
+
+    /// [`Accel::intersect_avx2`] for occlusion.
+    ///
+    /// # Safety
+    /// As for [`Accel::intersect_avx2`].
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
+    unsafe fn occluded_avx2(&self, ray: &Ray) -> bool {
+        self.occluded_impl::<true>(ray)
     }
 
     #[inline(always)]
     fn intersect_impl<const AVX2: bool>(&self, ray: &Ray) -> Option<Hit> {
-        let mut best = None;
         let mut tmax = ray.tmax;
-        with_stack(self.max_blas_depth, |blas_stack| {
-            self.for_entries::<AVX2>(ray, &mut tmax, |entry, tmax| {
-                if let Some(hit) = self.intersect_entry::<AVX2>(entry, ray, tmax, blas_stack) {
-                    best = Some(hit);
-                }
-                false
-            });
+        let mut inline: InlineStack = [MaybeUninit::uninit(); INLINE_STACK];
+        let mut heap = Vec::new();
+        let blas_stack = stack_for(self.max_blas_depth, &mut inline, &mut heap);
+        if let [entry] = self.entries.as_slice() {
+            // One entry (a scene without shared meshes): no top-level walk.
+            return self.intersect_entry::<AVX2>(entry, ray, &mut tmax, blas_stack);
+        }
+        let mut best = None;
+        self.for_entries::<AVX2>(ray, &mut tmax, |entry, tmax| {
+            if let Some(hit) = self.intersect_entry::<AVX2>(entry, ray, tmax, blas_stack) {
+                best = Some(hit);
+            }
+            false
         });
         best
     }
 
     #[inline(always)]
     fn occluded_impl<const AVX2: bool>(&self, ray: &Ray) -> bool {
+        let mut inline: InlineStack = [MaybeUninit::uninit(); INLINE_STACK];
+        let mut heap = Vec::new();
+        let blas_stack = stack_for(self.max_blas_depth, &mut inline, &mut heap);
+        if let [entry] = self.entries.as_slice() {
+            return self.occluded_entry::<AVX2>(entry, ray, blas_stack);
+        }
         let mut tmax = ray.tmax;
-        with_stack(self.max_blas_depth, |blas_stack| {
-            self.for_entries::<AVX2>(ray, &mut tmax, |entry, _| {
-                self.occluded_entry::<AVX2>(entry, ray, blas_stack)
-            })
+        self.for_entries::<AVX2>(ray, &mut tmax, |entry, _| {
+            self.occluded_entry::<AVX2>(entry, ray, blas_stack)
         })
     }
 
@@ -916,14 +1012,14 @@ impl Accel {
             1 => f(&self.entries[0], tmax),
             _ => {
                 let r = BoxRay::new(ray.origin, ray.dir, ray.tmin, self.tlas_bounds);
-                with_stack(self.tlas_depth, |stack| {
-                    traverse::<AVX2>(&self.tlas, &r, tmax, stack, |i, tmax| {
-                        match self.entries.get(i as usize) {
-                            Some(e) => f(e, tmax),
-                            None => false,
-                        }
-                    })
-                })
+                let mut inline: InlineStack = [MaybeUninit::uninit(); INLINE_STACK];
+                let mut heap = Vec::new();
+                let stack = stack_for(self.tlas_depth, &mut inline, &mut heap);
+                let leaf = FnLeaf(|i, tmax: &mut f32| match self.entries.get(i as usize) {
+                    Some(e) => f(e, tmax),
+                    None => false,
+                });
+                traverse::<AVX2>(&self.tlas, &r, tmax, stack, leaf)
             }
         }
     }
@@ -968,19 +1064,14 @@ impl Accel {
         let (o, d) = Self::object_ray(entry, ray);
         let br = BoxRay::new(o, d, ray.tmin, blas.box_bounds);
         let tr = TriRay::new(o, d);
-        let mut best = None;
-        traverse::<AVX2>(&blas.nodes, &br, tmax, stack, |i, tmax| {
-            if let Some(tri) = blas.tris.get(i as usize) {
-                if let Some(h) =
-                    triangle::intersect(&tr, tri.p[0], tri.p[1], tri.p[2], ray.tmin, *tmax)
-                {
-                    *tmax = h.0;
-                    best = Some((i as usize, h));
-                }
-            }
-            false
-        });
-        best.map(|(i, h)| Self::make_hit(blas, entry, i, h))
+        let mut leaf = ClosestLeaf {
+            tris: &blas.tris,
+            ray: &tr,
+            tmin: ray.tmin,
+            best: None,
+        };
+        traverse::<AVX2>(&blas.nodes, &br, tmax, stack, &mut leaf);
+        leaf.best.map(|(i, h)| Self::make_hit(blas, entry, i, h))
     }
 
     #[inline(always)]
@@ -997,11 +1088,12 @@ impl Accel {
         let br = BoxRay::new(o, d, ray.tmin, blas.box_bounds);
         let tr = TriRay::new(o, d);
         let mut tmax = ray.tmax;
-        traverse::<AVX2>(&blas.nodes, &br, &mut tmax, stack, |i, tmax| {
-            blas.tris.get(i as usize).is_some_and(|tri| {
-                triangle::intersect(&tr, tri.p[0], tri.p[1], tri.p[2], ray.tmin, *tmax).is_some()
-            })
-        })
+        let leaf = AnyLeaf {
+            tris: &blas.tris,
+            ray: &tr,
+            tmin: ray.tmin,
+        };
+        traverse::<AVX2>(&blas.nodes, &br, &mut tmax, stack, leaf)
     }
 
     /// The closest hit by testing every triangle of every instance, with the same ray transform

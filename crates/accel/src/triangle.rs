@@ -50,15 +50,15 @@ impl TriRay {
         }
         let sz = 1.0 / d[kz];
         let (sx, sy) = (-d[kx] * sz, -d[ky] * sz);
-        let mut rows = [[0.0f32; 3]; 3];
-        rows[0][kx] = 1.0;
-        rows[0][kz] = sx;
-        rows[1][ky] = 1.0;
-        rows[1][kz] = sy;
-        rows[2][kz] = 1.0;
+        // Rows `e_kx + sx e_kz`, `e_ky + sy e_kz`, `e_kz`, built as columns: column `kx` is
+        // `(1, 0, 0)`, `ky` is `(0, 1, 0)`, `kz` is `(sx, sy, 1)`.
+        let mut cols = [Vec3A::ZERO; 3];
+        cols[kx] = Vec3A::X;
+        cols[ky] = Vec3A::Y;
+        cols[kz] = Vec3A::new(sx, sy, 1.0);
         Self {
             origin: origin.into(),
-            shear: Mat3A::from_cols_array_2d(&rows).transpose(),
+            shear: Mat3A::from_cols(cols[0], cols[1], cols[2]),
             sz,
         }
     }
@@ -151,6 +151,49 @@ pub fn intersect_triangle(ray: &crate::Ray, p: [Vec3; 3]) -> Option<(f32, f32, f
 mod tests {
     use super::*;
     use crate::Ray;
+
+    #[test]
+    fn shear_is_the_documented_matrix() {
+        for dir in [
+            Vec3::new(0.3, -0.2, -1.0),
+            Vec3::new(-2.0, 0.5, 0.1),
+            Vec3::new(0.1, 3.0, -0.4),
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(-0.0, -1.0, 0.0),
+        ] {
+            let r = TriRay::new(Vec3::ZERO, dir);
+            let a = dir.abs();
+            let kz = if a.x > a.y {
+                if a.x > a.z {
+                    0
+                } else {
+                    2
+                }
+            } else if a.y > a.z {
+                1
+            } else {
+                2
+            };
+            let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+            let d = dir.to_array();
+            if d[kz] < 0.0 {
+                std::mem::swap(&mut kx, &mut ky);
+            }
+            let sz = 1.0 / d[kz];
+            let mut rows = [[0.0f32; 3]; 3];
+            rows[0][kx] = 1.0;
+            rows[0][kz] = -d[kx] * sz;
+            rows[1][ky] = 1.0;
+            rows[1][kz] = -d[ky] * sz;
+            rows[2][kz] = 1.0;
+            let want = Mat3A::from_cols_array_2d(&rows).transpose();
+            assert_eq!(
+                r.shear.to_cols_array().map(f32::to_bits),
+                want.to_cols_array().map(f32::to_bits),
+                "{dir}"
+            );
+        }
+    }
 
     #[test]
     fn barycentrics_reconstruct_the_hit_point() {
