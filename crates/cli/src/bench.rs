@@ -91,6 +91,9 @@ pub struct BenchArgs {
     /// Worker threads [default: all cores].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub threads: Option<u32>,
+    /// Renders per configuration and budget; the time reported is their median.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
+    pub repeats: u32,
     /// Maximum bounces, as Blender Cycles counts them (0 = direct light only).
     #[arg(long, default_value_t = aperture_render::DEFAULT_MAX_BOUNCES,
           value_parser = clap::value_parser!(u32).range(0..=1024))]
@@ -254,9 +257,17 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                     }),
                     ..base.clone()
                 };
-                let t0 = Instant::now();
-                let film = aperture_render::render(&scene, &accel, &opts, &|_, _| {})?;
-                let seconds = t0.elapsed().as_secs_f64();
+                // Same seed each time, so the image (and its error) is the same: only the time,
+                // disturbed by whatever else the machine runs, varies.
+                let mut times = Vec::new();
+                let mut film = None;
+                for _ in 0..args.repeats {
+                    let t0 = Instant::now();
+                    film = Some(aperture_render::render(&scene, &accel, &opts, &|_, _| {})?);
+                    times.push(t0.elapsed().as_secs_f64());
+                }
+                let film = film.context("no render (--repeats 0)")?;
+                let seconds = median(&mut times);
                 let mut image = Image::new(width, height);
                 image.rgba = film.to_rgba();
                 let samples = film.total_samples();
@@ -322,6 +333,17 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         png.display()
     );
     Ok(())
+}
+
+/// Median of a non-empty list (the mean of the middle two for an even length).
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
 }
 
 fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
@@ -740,6 +762,8 @@ mod tests {
             "3",
             "--filter",
             "box",
+            "--repeats",
+            "3",
         ])
         .unwrap();
         let paths: Vec<_> = a.series.iter().map(|s| s.path.clone()).collect();
@@ -750,7 +774,15 @@ mod tests {
         let labels: Vec<_> = a.series.iter().map(|s| s.label.as_deref()).collect();
         assert_eq!(labels, [Some("Mitsuba 3"), None, None]);
         assert_eq!(a.target_rel_mse, vec![1e-2, 3e-3]);
-        assert_eq!((a.max_bounces, a.filter), (3, FilterArg::Box));
+        assert_eq!((a.max_bounces, a.filter, a.repeats), (3, FilterArg::Box, 3));
+        assert_eq!(parse(&["--repeats", "0"]).unwrap_err().exit_code(), 2);
+    }
+
+    #[test]
+    fn median_of_odd_and_even_lists() {
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert_eq!(median(&mut [7.0]), 7.0);
     }
 
     #[test]
