@@ -2,7 +2,7 @@
 """Error against time of Mitsuba 3 on aperture's DOF benchmark scene, as an `aperture bench` series.
 
 The scene is make_reference.py's ground and five boxes plus five finely tessellated UV spheres
-(about 46 k triangles in all), lit by both the area light of ``dof_area`` and the point light of
+(45 184 triangles in all), lit by both the area light of ``dof_area`` and the point light of
 ``dof_point``, seen through the same thin lens, at 320 x 240. From that one definition the
 script writes
 
