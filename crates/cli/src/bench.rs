@@ -2,14 +2,21 @@
 //!
 //! Renders a scene at each sample budget with each configuration, times the render (wall time of
 //! the render alone: the scene is loaded and the BVH built once, before any timing), measures the
-//! error against a reference (RMSE, relative MSE, mean absolute error) and writes
+//! error against a reference (RMSE, relative MSE, mean absolute error, LDR FLIP) and writes
 //! `DIR/results.csv`, a log-log plot of relative MSE against time (`DIR/error_vs_time.svg` and
 //! `.png`) and a table on stdout. Without `--reference` it first renders one at high spp, with
 //! another seed so its noise is independent of the runs', and saves it as `DIR/reference.exr`.
+//!
+//! `--series FILE.csv[:LABEL]` adds curves measured elsewhere (another renderer, an earlier run)
+//! to the plot, the table and the time-to-error comparison. Their format is `results.csv`'s: a
+//! header line, then one line per render; columns are found by name, `seconds` and `rel_mse`
+//! are required, `config`, `spp`, `mean_spp`, `rmse`, `mae` and `flip` are read when present
+//! (empty = unknown), any other column is ignored.
 
+use crate::render_cmd::FilterArg;
 use anyhow::{bail, Context as _};
 use aperture_imageio::{metrics, Image};
-use aperture_render::{AdaptiveOptions, RenderOptions, SamplerKind};
+use aperture_render::{AdaptiveOptions, FilterKind, RenderOptions, SamplerKind};
 use aperture_scene::LoadOptions;
 use clap::ValueEnum;
 use std::fmt::Write as _;
@@ -77,18 +84,67 @@ pub struct BenchArgs {
     /// on the demo scene among 0.25, 0.5, 2 and 8).
     #[arg(long, default_value_t = 2.0)]
     pub adaptive_scale: f32,
-    /// Relative MSE at which to compare the configurations' times (interpolated in log-log).
-    #[arg(long, default_value_t = 1e-3)]
-    pub target_rel_mse: f64,
+    /// Relative MSEs at which to compare the series' times (interpolated in log-log), comma
+    /// separated.
+    #[arg(long, value_delimiter = ',', default_value = "1e-3", value_parser = positive_f64)]
+    pub target_rel_mse: Vec<f64>,
     /// Worker threads [default: all cores].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub threads: Option<u32>,
+    /// Renders per configuration and budget; the time reported is their median.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
+    pub repeats: u32,
+    /// Maximum bounces, as Blender Cycles counts them (0 = direct light only).
+    #[arg(long, default_value_t = aperture_render::DEFAULT_MAX_BOUNCES,
+          value_parser = clap::value_parser!(u32).range(0..=1024))]
+    pub max_bounces: u32,
+    /// Pixel filter.
+    #[arg(long, value_enum, default_value_t = FilterArg::BlackmanHarris)]
+    pub filter: FilterArg,
+    /// An extra series to plot and compare, as FILE.csv or FILE.csv:LABEL (repeatable). The
+    /// file has `results.csv`'s columns; without LABEL its `config` column names the curves.
+    #[arg(long, value_parser = parse_series)]
+    pub series: Vec<SeriesArg>,
 }
 
-/// One measured render.
+/// One `--series` argument.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SeriesArg {
+    /// The CSV file.
+    pub path: PathBuf,
+    /// The curve's name; `None`: the file's `config` column (else the file's stem).
+    pub label: Option<String>,
+}
+
+/// `FILE.csv[:LABEL]`. A colon followed by a path separator is part of the path (`C:\x.csv`).
+fn parse_series(s: &str) -> Result<SeriesArg, String> {
+    let (path, label) = match s.rsplit_once(':') {
+        Some((p, l)) if !l.contains(['/', '\\']) => (p, Some(l)),
+        _ => (s, None),
+    };
+    if path.is_empty() {
+        return Err("empty file name".into());
+    }
+    if label.is_some_and(|l| l.trim().is_empty() || l.contains(',')) {
+        return Err(format!("bad label in {s:?}: empty or with a comma"));
+    }
+    Ok(SeriesArg {
+        path: PathBuf::from(path),
+        label: label.map(str::to_string),
+    })
+}
+
+fn positive_f64(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("{s:?} is not a positive number")),
+    }
+}
+
+/// One measured render (ours, or a line of a `--series` file, whose unknown values are NaN).
 #[derive(Debug, Clone)]
 struct Row {
-    config: Config,
+    label: String,
     spp: u32,
     seconds: f64,
     samples: u64,
@@ -96,6 +152,7 @@ struct Row {
     rmse: f64,
     rel_mse: f64,
     mae: f64,
+    flip: f64,
 }
 
 /// Runs `aperture bench`.
@@ -139,10 +196,21 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         b.build().context("starting worker threads")?
     };
     let threads = pool.current_num_threads();
+    // Read before rendering, so a bad file fails at once.
+    let mut extra = Vec::new();
+    for s in &args.series {
+        extra.extend(read_series(s)?);
+    }
     let base = RenderOptions {
         width,
         height,
         seed: args.seed,
+        max_bounces: args.max_bounces,
+        filter: match args.filter {
+            FilterArg::Box => FilterKind::Box,
+            FilterArg::Gaussian => FilterKind::Gaussian,
+            FilterArg::BlackmanHarris => FilterKind::BlackmanHarris,
+        },
         ..RenderOptions::default()
     };
     let rows = pool.install(|| -> anyhow::Result<Vec<Row>> {
@@ -189,14 +257,22 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                     }),
                     ..base.clone()
                 };
-                let t0 = Instant::now();
-                let film = aperture_render::render(&scene, &accel, &opts, &|_, _| {})?;
-                let seconds = t0.elapsed().as_secs_f64();
+                // Same seed each time, so the image (and its error) is the same: only the time,
+                // disturbed by whatever else the machine runs, varies.
+                let mut times = Vec::new();
+                let mut film = None;
+                for _ in 0..args.repeats {
+                    let t0 = Instant::now();
+                    film = Some(aperture_render::render(&scene, &accel, &opts, &|_, _| {})?);
+                    times.push(t0.elapsed().as_secs_f64());
+                }
+                let film = film.context("no render (--repeats 0)")?;
+                let seconds = median(&mut times);
                 let mut image = Image::new(width, height);
                 image.rgba = film.to_rgba();
                 let samples = film.total_samples();
                 let row = Row {
-                    config,
+                    label: config.name().to_string(),
                     spp,
                     seconds,
                     samples,
@@ -204,6 +280,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                     rmse: metrics::rmse(&image, &reference)?,
                     rel_mse: metrics::relative_mse(&image, &reference)?,
                     mae: metrics::mae(&image, &reference)?,
+                    flip: metrics::flip(&image, &reference)?,
                 };
                 eprintln!(
                     "{:>8} {:>6} spp: {:>8.3} s, relMSE {:.3e}",
@@ -229,34 +306,24 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     );
     let svg = args.output.join("error_vs_time.svg");
     let png = args.output.join("error_vs_time.png");
-    print!("{}", table(&rows));
-    plot_error_vs_time(&rows_to_series(&rows, &args.configs), &title, &svg, &png)?;
+    let all: Vec<Row> = rows.iter().chain(&extra).cloned().collect();
+    print!("{}", table(&all));
+    let series = rows_to_series(&all);
+    plot_error_vs_time(&series, &title, &svg, &png)?;
     println!();
-    let mut uniform = None;
-    for &config in &args.configs {
-        let t = time_to_reach(&rows, config, args.target_rel_mse);
-        match t {
-            Some(t) => println!(
-                "{:>8}: relative MSE {:.0e} reached in {:.3} s",
-                config.name(),
-                args.target_rel_mse,
-                t
-            ),
-            None => println!(
-                "{:>8}: relative MSE {:.0e} not reached within the budgets",
-                config.name(),
-                args.target_rel_mse
-            ),
-        }
-        if config == Config::Sobol {
-            uniform = t;
-        }
-    }
-    if let (Some(u), Some(a)) = (
-        uniform,
-        time_to_reach(&rows, Config::Adaptive, args.target_rel_mse),
-    ) {
-        println!("adaptive / uniform Sobol time to that error: {:.2}", a / u);
+    print!("{}", time_to_error_table(&series, &args.target_rel_mse));
+    let target = args.target_rel_mse[0];
+    let find = |name: &str| {
+        series
+            .iter()
+            .find(|(n, _)| n == name)
+            .and_then(|(_, p)| interpolate_time(p, target))
+    };
+    if let (Some(u), Some(a)) = (find("sobol"), find("adaptive")) {
+        println!(
+            "adaptive / uniform Sobol time to relative MSE {target:.0e}: {:.2}",
+            a / u
+        );
     }
     println!(
         "Wrote {}, {} and {}. Times are wall-clock on a machine that may be shared: compare \
@@ -268,78 +335,196 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Median of a non-empty list (the mean of the middle two for an even length).
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
 fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     let tmp = path.with_extension("tmp");
     std::fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
     std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
 }
 
+const CSV_HEADER: &str =
+    "config,spp,width,height,threads,seconds,samples,mean_spp,rmse,rel_mse,mae,flip";
+
 fn to_csv(rows: &[Row], width: u32, height: u32, threads: usize) -> String {
-    let mut s =
-        String::from("config,spp,width,height,threads,seconds,samples,mean_spp,rmse,rel_mse,mae\n");
+    let mut s = format!("{CSV_HEADER}\n");
     for r in rows {
         let _ = writeln!(
             s,
-            "{},{},{width},{height},{threads},{:.6},{},{:.3},{:.6e},{:.6e},{:.6e}",
-            r.config.name(),
-            r.spp,
-            r.seconds,
-            r.samples,
-            r.mean_spp,
-            r.rmse,
-            r.rel_mse,
-            r.mae
+            "{},{},{width},{height},{threads},{:.6},{},{:.3},{:.6e},{:.6e},{:.6e},{:.6e}",
+            r.label, r.spp, r.seconds, r.samples, r.mean_spp, r.rmse, r.rel_mse, r.mae, r.flip
         );
     }
     s
+}
+
+/// Reads a `--series` file (see the module documentation for the format).
+fn read_series(arg: &SeriesArg) -> anyhow::Result<Vec<Row>> {
+    let text = std::fs::read_to_string(&arg.path)
+        .with_context(|| format!("reading the series {}", arg.path.display()))?;
+    parse_series_csv(&text, arg.label.as_deref(), &arg.path)
+        .with_context(|| format!("in the series {}", arg.path.display()))
+}
+
+fn parse_series_csv(text: &str, label: Option<&str>, path: &Path) -> anyhow::Result<Vec<Row>> {
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
+    let Some((_, header)) = lines.next() else {
+        bail!("empty file");
+    };
+    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    let col = |name: &str| names.iter().position(|&n| n == name);
+    let (Some(seconds_col), Some(rel_mse_col)) = (col("seconds"), col("rel_mse")) else {
+        bail!("the header has no `seconds` or no `rel_mse` column: {header:?}");
+    };
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "series".into());
+    let mut rows = Vec::new();
+    for (i, line) in lines {
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        if fields.len() != names.len() {
+            bail!(
+                "line {}: {} fields, the header has {}",
+                i + 1,
+                fields.len(),
+                names.len()
+            );
+        }
+        let number = |c: Option<usize>| -> anyhow::Result<f64> {
+            match c.map(|c| fields[c]) {
+                None | Some("") => Ok(f64::NAN),
+                Some(f) => f
+                    .parse::<f64>()
+                    .with_context(|| format!("line {}: {f:?} is not a number", i + 1)),
+            }
+        };
+        let seconds = number(Some(seconds_col))?;
+        let rel_mse = number(Some(rel_mse_col))?;
+        if !(seconds.is_finite() && seconds > 0.0 && rel_mse.is_finite() && rel_mse >= 0.0) {
+            bail!(
+                "line {}: seconds must be positive and rel_mse a number ≥ 0",
+                i + 1
+            );
+        }
+        let spp = number(col("spp"))?;
+        let samples = number(col("samples"))?;
+        rows.push(Row {
+            label: match (label, col("config")) {
+                (Some(l), _) => l.to_string(),
+                (None, Some(c)) if !fields[c].is_empty() => fields[c].to_string(),
+                _ => stem.clone(),
+            },
+            spp: if spp.is_finite() { spp as u32 } else { 0 },
+            seconds,
+            samples: if samples.is_finite() {
+                samples as u64
+            } else {
+                0
+            },
+            mean_spp: number(col("mean_spp"))?,
+            rmse: number(col("rmse"))?,
+            rel_mse,
+            mae: number(col("mae"))?,
+            flip: number(col("flip"))?,
+        });
+    }
+    if rows.is_empty() {
+        bail!("no data lines");
+    }
+    Ok(rows)
+}
+
+/// `v` in the table's format, "-" when unknown (NaN: a value a series file did not give).
+fn cell(v: f64, fmt: impl Fn(f64) -> String) -> String {
+    if v.is_nan() {
+        "-".to_string()
+    } else {
+        fmt(v)
+    }
 }
 
 fn table(rows: &[Row]) -> String {
     let mut s = format!(
-        "{:<9} {:>6} {:>9} {:>9} {:>11} {:>11} {:>11}\n",
-        "config", "spp", "mean spp", "time (s)", "RMSE", "rel. MSE", "MAE"
+        "{:<12} {:>6} {:>9} {:>9} {:>11} {:>11} {:>11} {:>8}\n",
+        "config", "spp", "mean spp", "time (s)", "RMSE", "rel. MSE", "MAE", "FLIP"
     );
+    let e = |v: f64| cell(v, |v| format!("{v:.4e}"));
     for r in rows {
         let _ = writeln!(
             s,
-            "{:<9} {:>6} {:>9.1} {:>9.3} {:>11.4e} {:>11.4e} {:>11.4e}",
-            r.config.name(),
+            "{:<12} {:>6} {:>9} {:>9.3} {:>11} {:>11} {:>11} {:>8}",
+            r.label,
             r.spp,
-            r.mean_spp,
+            cell(r.mean_spp, |v| format!("{v:.1}")),
             r.seconds,
-            r.rmse,
-            r.rel_mse,
-            r.mae
+            e(r.rmse),
+            e(r.rel_mse),
+            e(r.mae),
+            cell(r.flip, |v| format!("{v:.4}"))
         );
     }
     s
 }
 
-fn rows_to_series(rows: &[Row], configs: &[Config]) -> Vec<(String, Vec<(f64, f64)>)> {
-    configs
-        .iter()
-        .map(|&c| {
-            let pts = rows
-                .iter()
-                .filter(|r| r.config == c)
-                .map(|r| (r.seconds, r.rel_mse))
-                .collect();
-            (c.name().to_string(), pts)
-        })
-        .collect()
+/// One curve per label, in order of first appearance, points in row order.
+fn rows_to_series(rows: &[Row]) -> Series {
+    let mut series: Series = Vec::new();
+    for r in rows {
+        let point = (r.seconds, r.rel_mse);
+        match series.iter_mut().find(|(n, _)| *n == r.label) {
+            Some((_, p)) => p.push(point),
+            None => series.push((r.label.clone(), vec![point])),
+        }
+    }
+    series
 }
 
-/// The time at which `config`'s relative MSE first falls to `target`, interpolated linearly in
-/// log(time)–log(error) between the two budgets around it.
-fn time_to_reach(rows: &[Row], config: Config, target: f64) -> Option<f64> {
-    let pts: Vec<(f64, f64)> = rows
+/// Time of each series to each target error, and its ratio to the first series' time.
+fn time_to_error_table(series: &Series, targets: &[f64]) -> String {
+    let mut s = format!("{:<12}", "time to");
+    for t in targets {
+        let _ = write!(s, " {:>20}", format!("rel. MSE {t:.0e}"));
+    }
+    s.push('\n');
+    let first: Vec<Option<f64>> = targets
         .iter()
-        .filter(|r| r.config == config)
-        .map(|r| (r.seconds, r.rel_mse))
+        .map(|&t| series.first().and_then(|(_, p)| interpolate_time(p, t)))
         .collect();
-    interpolate_time(&pts, target)
+    for (name, p) in series {
+        let _ = write!(s, "{name:<12}");
+        for (&t, f) in targets.iter().zip(&first) {
+            let text = match (interpolate_time(p, t), f) {
+                (Some(x), Some(f)) => format!("{x:.3} s ({:.2}x)", x / f),
+                (Some(x), None) => format!("{x:.3} s"),
+                (None, _) => "not reached".to_string(),
+            };
+            let _ = write!(s, " {text:>20}");
+        }
+        s.push('\n');
+    }
+    let _ = writeln!(
+        s,
+        "(interpolated in log-log between budgets; (Nx): time / {}'s time)",
+        series.first().map_or("-", |(n, _)| n.as_str())
+    );
+    s
 }
 
+/// The time at which a curve's relative MSE first falls to `target`, interpolated linearly in
+/// log(time)–log(error) between the two budgets around it.
 fn interpolate_time(pts: &[(f64, f64)], target: f64) -> Option<f64> {
     let first = pts.first()?;
     if first.1 <= target {
@@ -484,14 +669,22 @@ fn draw_plot<DB: plotters::prelude::DrawingBackend>(
         RGBColor(214, 39, 40),
         RGBColor(44, 160, 44),
         RGBColor(148, 103, 189),
+        RGBColor(255, 127, 14),
+        RGBColor(140, 86, 75),
+        RGBColor(23, 190, 207),
     ];
-    for (i, (name, p)) in series.iter().enumerate() {
-        // A configuration keeps its colour whichever others are plotted.
+    let mut extras = 0;
+    for (name, p) in series.iter() {
+        // A configuration keeps its colour whichever others are plotted; extra series take
+        // the others in turn.
         let slot = match name.as_str() {
             "sobol" => 0,
             "random" => 1,
             "adaptive" => 2,
-            _ => i,
+            _ => {
+                extras += 1;
+                2 + extras
+            }
         };
         let color = palette[slot % palette.len()];
         let p: Vec<(f64, f64)> = p
@@ -539,9 +732,120 @@ mod tests {
         let d = parse(&[]).unwrap();
         assert_eq!(d.configs.len(), 3);
         assert_eq!(d.spp.len(), 8);
-        for bad in [&["--spp", "1,0"][..], &["--configs", "halton"]] {
+        assert_eq!(d.series, vec![]);
+        assert_eq!(d.target_rel_mse, vec![1e-3]);
+        assert_eq!(d.max_bounces, aperture_render::DEFAULT_MAX_BOUNCES);
+        for bad in [
+            &["--spp", "1,0"][..],
+            &["--configs", "halton"],
+            &["--target-rel-mse", "1e-3,0"],
+            &["--series", ":label"],
+            &["--series", "m.csv: "],
+            &["--filter", "mitchell"],
+        ] {
             assert_eq!(parse(bad).unwrap_err().exit_code(), 2, "{bad:?}");
         }
+    }
+
+    #[test]
+    fn series_arguments_parse() {
+        let a = parse(&[
+            "--series",
+            "out/mitsuba.csv:Mitsuba 3",
+            "--series",
+            "old/results.csv",
+            "--series",
+            "C:\\bench\\m.csv",
+            "--target-rel-mse",
+            "1e-2,3e-3",
+            "--max-bounces",
+            "3",
+            "--filter",
+            "box",
+            "--repeats",
+            "3",
+        ])
+        .unwrap();
+        let paths: Vec<_> = a.series.iter().map(|s| s.path.clone()).collect();
+        assert_eq!(
+            paths,
+            ["out/mitsuba.csv", "old/results.csv", "C:\\bench\\m.csv"].map(PathBuf::from)
+        );
+        let labels: Vec<_> = a.series.iter().map(|s| s.label.as_deref()).collect();
+        assert_eq!(labels, [Some("Mitsuba 3"), None, None]);
+        assert_eq!(a.target_rel_mse, vec![1e-2, 3e-3]);
+        assert_eq!((a.max_bounces, a.filter, a.repeats), (3, FilterArg::Box, 3));
+        assert_eq!(parse(&["--repeats", "0"]).unwrap_err().exit_code(), 2);
+    }
+
+    #[test]
+    fn median_of_odd_and_even_lists() {
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert_eq!(median(&mut [7.0]), 7.0);
+    }
+
+    #[test]
+    fn series_files_read_by_column_name() {
+        // Columns in another order, an extra column, an unknown (empty) MAE.
+        let text = "spp,rel_mse,seconds,config,first_call_seconds,mae\n\
+                    1,0.5,0.1,mitsuba,0.9,\n\
+                    4,0.125,0.4,mitsuba,1.2,0.01\n";
+        let rows = parse_series_csv(text, None, Path::new("m.csv")).unwrap();
+        assert_eq!(rows.len(), 2);
+        assert_eq!(
+            (
+                rows[1].label.as_str(),
+                rows[1].spp,
+                rows[1].seconds,
+                rows[1].rel_mse
+            ),
+            ("mitsuba", 4, 0.4, 0.125)
+        );
+        assert!(rows[0].mae.is_nan() && rows[1].mae == 0.01 && rows[0].flip.is_nan());
+        // A label overrides the config column; without either, the file's stem names it.
+        let labelled = parse_series_csv(text, Some("M3"), Path::new("m.csv")).unwrap();
+        assert!(labelled.iter().all(|r| r.label == "M3"));
+        let bare = parse_series_csv("seconds,rel_mse\n1,0.1\n", None, Path::new("d/x.csv"));
+        assert_eq!(bare.unwrap()[0].label, "x");
+        // Our own output reads back as a series.
+        let ours = to_csv(&labelled, 16, 12, 2);
+        let back = parse_series_csv(&ours, None, Path::new("r.csv")).unwrap();
+        assert_eq!(back.len(), 2);
+        assert_eq!((back[0].label.as_str(), back[0].spp), ("M3", 1));
+        assert!((back[1].rel_mse - 0.125).abs() < 1e-12);
+        for bad in [
+            "",
+            "config,spp\nx,1\n",
+            "seconds,rel_mse\n",
+            "seconds,rel_mse\n1\n",
+            "seconds,rel_mse\nfast,0.1\n",
+            "seconds,rel_mse\n0,0.1\n",
+            "seconds,rel_mse\n1,-0.1\n",
+            "seconds,rel_mse\n1,\n",
+        ] {
+            assert!(
+                parse_series_csv(bad, None, Path::new("b.csv")).is_err(),
+                "{bad:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn time_to_error_table_gives_ratios_to_the_first_series() {
+        let series: Series = vec![
+            ("sobol".into(), vec![(1.0, 1e-2), (100.0, 1e-4)]),
+            ("mitsuba".into(), vec![(2.0, 1e-2), (200.0, 1e-4)]),
+            ("slow".into(), vec![(1.0, 1.0), (2.0, 0.5)]),
+        ];
+        let t = time_to_error_table(&series, &[1e-3]);
+        let lines: Vec<&str> = t.lines().collect();
+        assert!(
+            lines[1].starts_with("sobol") && lines[1].contains("10.000 s (1.00x)"),
+            "{t}"
+        );
+        assert!(lines[2].contains("20.000 s (2.00x)"), "{t}");
+        assert!(lines[3].contains("not reached"), "{t}");
     }
 
     #[test]
@@ -568,7 +872,13 @@ mod tests {
             return;
         };
         let dir = std::env::temp_dir().join(format!("aperture-bench-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let extra = dir.join("other.csv");
+        std::fs::write(&extra, "seconds,rel_mse\n0.001,0.5\n0.01,0.05\n").unwrap();
+        let series_arg = format!("{}:other renderer", extra.display());
         let mut args = parse(&[
+            "--series",
+            &series_arg,
             "--spp",
             "1,4",
             "--width",
@@ -585,7 +895,7 @@ mod tests {
         let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 1 + 3 * 2, "{csv}");
-        assert!(lines[0].starts_with("config,spp,"));
+        assert_eq!(lines[0], CSV_HEADER);
         assert!(lines[1].starts_with("sobol,1,16,12,"));
         assert!(lines[6].starts_with("adaptive,4,"));
         let reference = aperture_imageio::read_exr(&dir.join("reference.exr")).unwrap();
@@ -593,6 +903,7 @@ mod tests {
         if load_font() {
             let svg = std::fs::read_to_string(dir.join("error_vs_time.svg")).unwrap();
             assert!(svg.contains("relative MSE") && svg.contains("adaptive"));
+            assert!(svg.contains("other renderer"));
             assert!(dir.join("error_vs_time.png").is_file());
         }
         std::fs::remove_dir_all(&dir).unwrap();

@@ -38,8 +38,8 @@ fn checked(image: &Image) -> Result<(), Error> {
     image.validate_beauty()
 }
 
-/// Mean of `f(a, b)` over all pixels and the three colour channels.
-fn mean_over(a: &Image, b: &Image, f: impl Fn(f64, f64) -> f64) -> Result<f64, Error> {
+/// Both images are valid and of one size.
+fn comparable(a: &Image, b: &Image) -> Result<(), Error> {
     checked(a)?;
     checked(b)?;
     if (a.width, a.height) != (b.width, b.height) {
@@ -48,6 +48,12 @@ fn mean_over(a: &Image, b: &Image, f: impl Fn(f64, f64) -> f64) -> Result<f64, E
             right: (b.width, b.height),
         });
     }
+    Ok(())
+}
+
+/// Mean of `f(a, b)` over all pixels and the three colour channels.
+fn mean_over(a: &Image, b: &Image, f: impl Fn(f64, f64) -> f64) -> Result<f64, Error> {
+    comparable(a, b)?;
     let mut sum = 0.0;
     for (pa, pb) in a.rgba.iter().zip(&b.rgba) {
         for c in 0..3 {
@@ -78,6 +84,33 @@ pub fn relative_mse(a: &Image, reference: &Image) -> Result<f64, Error> {
 /// Mean absolute error: `mean(|a − b|)` over pixels and RGB.
 pub fn mae(a: &Image, b: &Image) -> Result<f64, Error> {
     mean_over(a, b, |x, y| (x - y).abs())
+}
+
+/// LDR FLIP of `a` against the reference: the mean of NVIDIA's FLIP error map (0 = no visible
+/// difference, 1 = the largest), computed on the 8-bit sRGB images of the `Standard` view
+/// (clip to [0, 1], sRGB OETF), i.e. on what the PNG output shows, at FLIP's default 67 pixels
+/// per degree (a 0.7 m viewing distance from a 24" 4K screen).
+///
+/// LDR because the bindings expose only LDR-FLIP; highlights above 1 count as clipped, so this
+/// complements the HDR metrics above rather than replacing them.
+pub fn flip(a: &Image, reference: &Image) -> Result<f64, Error> {
+    comparable(a, reference)?;
+    let has_nan = |im: &Image| im.rgba.iter().any(|p| p[..3].iter().any(|c| c.is_nan()));
+    if has_nan(a) || has_nan(reference) {
+        // The view maps NaN to black; keep the other metrics' rule that NaN fails loudly.
+        return Ok(f64::NAN);
+    }
+    let ldr = |im: &Image| -> nv_flip::FlipImageRgb8 {
+        let bytes: Vec<u8> = im
+            .rgba
+            .iter()
+            .flat_map(|p| crate::view::standard([p[0], p[1], p[2]]))
+            .map(|c| (c * 255.0 + 0.5) as u8)
+            .collect();
+        nv_flip::FlipImageRgb8::with_data(im.width, im.height, &bytes)
+    };
+    let map = nv_flip::flip(ldr(reference), ldr(a), nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    Ok(f64::from(nv_flip::FlipPool::from_image(&map).mean()))
 }
 
 /// Mean of each colour channel over all pixels.
@@ -183,5 +216,45 @@ mod tests {
         let a = image(&[[f32::NAN, 0.0, 0.0]], 1);
         let b = image(&[[0.0; 3]], 1);
         assert!(rmse(&a, &b).unwrap().is_nan());
+        assert!(flip(&a, &b).unwrap().is_nan());
+        assert!(flip(&b, &a).unwrap().is_nan());
+    }
+
+    /// A grey ramp, and copies of it with growing per-pixel noise.
+    fn ramp(noise: f32) -> Image {
+        let (w, h) = (32u32, 24u32);
+        let mut state = 12345u32;
+        let pixels: Vec<[f32; 3]> = (0..w * h)
+            .map(|i| {
+                // xorshift: deterministic noise in [-1, 1).
+                state ^= state << 13;
+                state ^= state >> 17;
+                state ^= state << 5;
+                let n = (state as f32 / u32::MAX as f32) * 2.0 - 1.0;
+                let v = 0.1 + 0.6 * (i % w) as f32 / w as f32;
+                [v + noise * n, v, v - noise * n]
+            })
+            .collect();
+        image(&pixels, w)
+    }
+
+    #[test]
+    fn flip_is_zero_for_equal_images_and_grows_with_noise() {
+        let reference = ramp(0.0);
+        assert_eq!(flip(&reference, &reference).unwrap(), 0.0);
+        let small = flip(&ramp(0.02), &reference).unwrap();
+        let large = flip(&ramp(0.2), &reference).unwrap();
+        assert!(
+            small > 0.0 && small < large && large < 1.0,
+            "{small} {large}"
+        );
+        // Black against white is the largest difference FLIP knows.
+        let black = image(&[[0.0; 3]; 64], 8);
+        let white = image(&[[1.0; 3]; 64], 8);
+        assert!(flip(&black, &white).unwrap() > 0.5);
+        assert!(matches!(
+            flip(&black, &reference),
+            Err(Error::SizeMismatch { .. })
+        ));
     }
 }
