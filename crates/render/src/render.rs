@@ -165,13 +165,14 @@ pub fn build_accel(scene: &Scene, quality: aperture_accel::BvhQuality) -> Accel 
 /// The BVH preset for a job of `samples` camera samples over `triangles` stored triangles, so a
 /// preview does not pay for a build it cannot win back.
 ///
-/// Measured on `BlenderIO-32bitIndices` (130 k triangles): `fast` builds in 33 ms against
-/// `medium`'s 46 ms (0.1 µs less per triangle), and its trees cost 18 % more instructions per
-/// closest-hit ray (1,630 against 1,377, callgrind), about 0.045 µs per ray at 4 Mrays/s. A
-/// path-traced sample casts about three rays, so `fast` wins while
-/// `samples < 0.1 / (3 · 0.045) · triangles ≈ 0.74 · triangles`; the rule keeps a margin and
-/// switches at one half. `high` is never chosen: its trees were no faster on any measured ray
-/// set (1,560 instructions per ray there).
+/// Measured with callgrind (instruction counts, repeatable on a loaded machine): building the
+/// 1.04 M-triangle `MetalRoughSpheresNoTextures` takes about 880 fewer instructions per triangle
+/// with `fast` than with `medium` (3.17 G against 4.09 G for the whole run), while `fast`'s tree
+/// costs 251 more per closest-hit thin-lens ray on `BlenderIO-32bitIndices` (1,406 against
+/// 1,155). A path-traced sample casts about three rays, so `fast` wins while
+/// `samples < 880 / (3 · 251) · triangles ≈ 1.2 · triangles`; the rule keeps a margin and
+/// switches at one half. `high` (1,140 per ray, about four times `medium`'s build) is never
+/// chosen: it pays off only for renders far longer than its build, which the user knows better.
 pub fn auto_bvh_quality(triangles: usize, samples: u64) -> aperture_accel::BvhQuality {
     if samples.saturating_mul(2) < triangles as u64 {
         aperture_accel::BvhQuality::Fast
