@@ -115,19 +115,7 @@ def triangle_count():
 
 def write_gltf(path):
     sdef = scene_def()
-    buf = bytearray()
-    views, accessors = [], []
-
-    def add(data, target, comp, count, typ, minmax=None):
-        while len(buf) % 4:
-            buf.append(0)
-        views.append({"buffer": 0, "byteOffset": len(buf), "byteLength": len(data), "target": target})
-        buf.extend(data)
-        acc = {"bufferView": len(views) - 1, "componentType": comp, "count": count, "type": typ}
-        if minmax:
-            acc["min"], acc["max"] = minmax
-        accessors.append(acc)
-        return len(accessors) - 1
+    buf, views, accessors, add = mr.gltf_buffers()
 
     def add_shape(pos, nrm, idx):
         mins = [min(p[k] for p in pos) for k in range(3)]

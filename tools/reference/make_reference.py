@@ -203,7 +203,10 @@ def pack_u16(vals):
     return struct.pack("<%dH" % len(vals), *vals)
 
 
-def write_gltf(name, sdef, path):
+def gltf_buffers():
+    """One glTF binary buffer with its views and accessors, and `add(data, target, comp, count,
+    typ, minmax=None)` that appends 4-byte-aligned data and returns the new accessor's index
+    (shared with bench_mitsuba.py)."""
     buf = bytearray()
     views, accessors = [], []
 
@@ -217,6 +220,12 @@ def write_gltf(name, sdef, path):
             acc["min"], acc["max"] = minmax
         accessors.append(acc)
         return len(accessors) - 1
+
+    return buf, views, accessors, add
+
+
+def write_gltf(name, sdef, path):
+    buf, views, accessors, add = gltf_buffers()
 
     def add_shape(pos, nrm, idx):
         flat_p = [c for p in pos for c in p]
