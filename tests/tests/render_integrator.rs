@@ -52,13 +52,8 @@ fn white_furnace_renders_one() {
 /// are combined by MIS, and Russian roulette must stay unbiased.
 #[test]
 fn integrating_sphere_renders_le_over_one_minus_albedo() {
-    let scene = integrating_sphere();
+    let (scene, o) = integrating_sphere();
     let accel = build_accel(&scene, Default::default());
-    let o = RenderOptions {
-        max_bounces: 64,
-        material_override: MaterialOverride::Diffuse,
-        ..opts(24, 16)
-    };
     let film = render(&scene, &accel, &o, &|_, _| {}).unwrap();
     assert_eq!(film.dropped_samples(), 0);
     let px = film.to_rgba();
@@ -79,20 +74,27 @@ fn integrating_sphere_renders_le_over_one_minus_albedo() {
 }
 
 /// A closed sphere of radius 3 whose walls emit Le = 1 and reflect diffusely with albedo 0.5,
-/// seen from its centre.
-fn integrating_sphere() -> Scene {
+/// seen from its centre, and the options its tests render it with (64 bounces: the series
+/// Σ aⁿ is then complete to 5e-20).
+fn integrating_sphere() -> (Scene, RenderOptions) {
     let cam =
         test_scenes::look_at_camera(Vec3::ZERO, Vec3::new(0.3, 0.1, -1.0), 1.2, Dof::default());
     let mut wall = test_scenes::matte(Vec3::splat(0.5));
     wall.emissive_factor = Vec3::ONE;
-    test_scenes::scene(
+    let scene = test_scenes::scene(
         vec![(
             test_scenes::icosphere(2, 0),
             Affine3A::from_scale(Vec3::splat(3.0)),
         )],
         vec![wall],
         cam,
-    )
+    );
+    let opts = RenderOptions {
+        max_bounces: 64,
+        material_override: MaterialOverride::Diffuse,
+        ..opts(24, 16)
+    };
+    (scene, opts)
 }
 
 /// Cycles' clamps in the integrating sphere: an indirect limit near 0 leaves only light that
@@ -100,13 +102,8 @@ fn integrating_sphere() -> Scene {
 /// changes no bit, and a direct limit caps what the walls show.
 #[test]
 fn clamping_cuts_only_the_light_it_is_meant_to() {
-    let scene = integrating_sphere();
+    let (scene, o) = integrating_sphere();
     let accel = build_accel(&scene, Default::default());
-    let o = RenderOptions {
-        max_bounces: 64,
-        material_override: MaterialOverride::Diffuse,
-        ..opts(24, 16)
-    };
     let mean = |o: &RenderOptions| {
         let film = render(&scene, &accel, o, &|_, _| {}).unwrap();
         assert_eq!(film.dropped_samples(), 0);
