@@ -299,7 +299,14 @@ impl Integrator<'_> {
                 }
             }
 
-            if let Some(es) = self.env.sample(stream.environment(vertex)) {
+            // Only an image is light-sampled; a constant colour is met by BSDF rays alone, so
+            // its pair of sample values (two scrambled Sobol dimensions) is not even drawn.
+            let env_sample = if self.env.is_sampled() {
+                self.env.sample(stream.environment(vertex))
+            } else {
+                None
+            };
+            if let Some(es) = env_sample {
                 let wi_l = frame.to_local(es.wi);
                 if es.wi.dot(ng) > 0.0 && es.radiance != Vec3::ZERO {
                     let (f, bsdf_pdf) = bsdf.eval(wo_l, wi_l);
