@@ -201,6 +201,13 @@ impl Bsdf {
     ) -> Self {
         let r = roughness.clamp(0.0, 1.0);
         let (f0, spec_weight) = dielectric.f0_and_weight();
+        let metallic = if metallic.is_nan() { 0.0 } else { metallic };
+        if metallic <= 0.0 && spec_weight == 0.0 {
+            // No specular layer at all (`KHR_materials_specular` factor 0 on a dielectric): the
+            // glTF BSDF is exactly Lambert. Saying so skips the GGX terms in every evaluation
+            // and stops the 10 % of samples the lobe mixture would send to a lobe of weight 0.
+            return Self::Lambert { albedo: base };
+        }
         Self::MetalRough {
             base,
             metallic: metallic.clamp(0.0, 1.0),
@@ -322,6 +329,49 @@ mod tests {
             sum += b.eval(wo, wi).0 * wi.z;
         }
         sum * TAU / (n * n) as f32
+    }
+
+    /// A dielectric without a specular layer is Lambert: the same values, and pure cosine
+    /// sampling.
+    #[test]
+    fn no_specular_layer_is_lambert() {
+        let base = Vec3::new(0.8, 0.5, 0.2);
+        let no_spec = Dielectric {
+            specular: 0.0,
+            ..Dielectric::default()
+        };
+        let b = Bsdf::metal_rough_dielectric(base, 0.0, 0.4, &no_spec);
+        assert!(
+            matches!(b, Bsdf::Lambert { albedo } if albedo == base),
+            "{b:?}"
+        );
+        // The general form with the same factors evaluates to the same value.
+        let general = Bsdf::MetalRough {
+            base,
+            metallic: 0.0,
+            alpha: 0.16,
+            f0: Vec3::splat(0.04),
+            spec_weight: 0.0,
+        };
+        let (wo, wi) = (
+            Vec3::new(0.3, 0.1, 0.9).normalize(),
+            Vec3::new(-0.5, 0.2, 0.6).normalize(),
+        );
+        assert!(
+            (b.eval(wo, wi).0 - general.eval(wo, wi).0)
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        // Any metal, or any specular weight, keeps the microfacet lobe.
+        assert!(matches!(
+            Bsdf::metal_rough_dielectric(base, 0.01, 0.4, &no_spec),
+            Bsdf::MetalRough { .. }
+        ));
+        assert!(matches!(
+            Bsdf::metal_rough(base, 0.0, 0.4),
+            Bsdf::MetalRough { .. }
+        ));
     }
 
     #[test]
