@@ -365,19 +365,24 @@ fn world_origin(
     placed: &[(u32, DAffine3, u32)],
     stats: &mut SceneStats,
 ) -> DVec3 {
+    // Per mesh, once (a mesh may be placed thousands of times): object-space bounds and the
+    // shortest edge.
+    let per_mesh: Vec<Option<(DVec3, DVec3, f64)>> = meshes
+        .iter()
+        .map(|m| {
+            let (mut mlo, mut mhi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+            for p in &m.positions {
+                mlo = mlo.min(p.as_dvec3());
+                mhi = mhi.max(p.as_dvec3());
+            }
+            (mlo.is_finite() && mhi.is_finite()).then(|| (mlo, mhi, shortest_edge(m)))
+        })
+        .collect();
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for (mesh, world, _) in placed {
-        let Some(m) = meshes.get(*mesh as usize) else {
+        let Some(&Some((mlo, mhi, _))) = per_mesh.get(*mesh as usize) else {
             continue;
         };
-        let (mut mlo, mut mhi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-        for p in &m.positions {
-            mlo = mlo.min(p.as_dvec3());
-            mhi = mhi.max(p.as_dvec3());
-        }
-        if !(mlo.is_finite() && mhi.is_finite()) {
-            continue;
-        }
         for k in 0..8 {
             let corner = DVec3::select(
                 glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
@@ -406,7 +411,7 @@ fn world_origin(
     let detail = placed
         .iter()
         .filter_map(|(mesh, world, _)| {
-            let m = meshes.get(*mesh as usize)?;
+            let (_, _, edge) = (*per_mesh.get(*mesh as usize)?)?;
             let shrink = [
                 world.matrix3.x_axis,
                 world.matrix3.y_axis,
@@ -415,7 +420,7 @@ fn world_origin(
             .map(|c| c.length())
             .into_iter()
             .fold(f64::INFINITY, f64::min);
-            Some(shortest_edge(m) * shrink)
+            Some(edge * shrink)
         })
         .filter(|d| *d > 0.0)
         .fold(f64::INFINITY, f64::min);
