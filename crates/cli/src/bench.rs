@@ -16,7 +16,7 @@
 use crate::render_cmd::FilterArg;
 use anyhow::{bail, Context as _};
 use aperture_imageio::{metrics, Image};
-use aperture_render::{AdaptiveOptions, FilterKind, RenderOptions, SamplerKind};
+use aperture_render::{AdaptiveOptions, RenderOptions, SamplerKind};
 use aperture_scene::LoadOptions;
 use clap::ValueEnum;
 use std::fmt::Write as _;
@@ -206,11 +206,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         height,
         seed: args.seed,
         max_bounces: args.max_bounces,
-        filter: match args.filter {
-            FilterArg::Box => FilterKind::Box,
-            FilterArg::Gaussian => FilterKind::Gaussian,
-            FilterArg::BlackmanHarris => FilterKind::BlackmanHarris,
-        },
+        filter: args.filter.into(),
         ..RenderOptions::default()
     };
     let rows = pool.install(|| -> anyhow::Result<Vec<Row>> {

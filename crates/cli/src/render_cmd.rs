@@ -23,6 +23,16 @@ pub enum FilterArg {
     BlackmanHarris,
 }
 
+impl From<FilterArg> for FilterKind {
+    fn from(f: FilterArg) -> Self {
+        match f {
+            FilterArg::Box => FilterKind::Box,
+            FilterArg::Gaussian => FilterKind::Gaussian,
+            FilterArg::BlackmanHarris => FilterKind::BlackmanHarris,
+        }
+    }
+}
+
 /// `--sampler`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum SamplerArg {
@@ -391,11 +401,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             direct: args.clamp_direct,
             indirect: args.clamp_indirect,
         },
-        filter: match args.filter {
-            FilterArg::Box => FilterKind::Box,
-            FilterArg::Gaussian => FilterKind::Gaussian,
-            FilterArg::BlackmanHarris => FilterKind::BlackmanHarris,
-        },
+        filter: args.filter.into(),
         sampler: match args.sampler {
             SamplerArg::Sobol => SamplerKind::Sobol,
             SamplerArg::Random => SamplerKind::Random,

@@ -50,14 +50,19 @@ impl Clamp {
 
     /// `c` scaled down (hue kept) so that its channel sum is at most the limit for light that
     /// scattered `scatterings` times before reaching the camera (Cycles' `kernel_accum_clamp`).
+    #[inline]
     fn apply(self, c: Vec3, scatterings: u32) -> Vec3 {
         let limit = if scatterings <= 1 {
             self.direct
         } else {
             self.indirect
         };
+        // Off (the default) costs one comparison per contribution on this hot path.
+        if limit <= 0.0 {
+            return c;
+        }
         let sum = c.x.abs() + c.y.abs() + c.z.abs();
-        if limit > 0.0 && sum > limit {
+        if sum > limit {
             c * (limit / sum)
         } else {
             c
