@@ -28,3 +28,15 @@ pub fn samples_dir() -> Option<PathBuf> {
     );
     None
 }
+
+/// Builds the scene's BVH, renders it and insists that no sample was dropped as non-finite
+/// (issue 6: every test render asserts that count is 0).
+pub fn render_checked(
+    scene: &aperture_scene::Scene,
+    opts: &aperture_render::RenderOptions,
+) -> aperture_render::Film {
+    let accel = aperture_render::build_accel(scene, Default::default());
+    let film = aperture_render::render(scene, &accel, opts, &|_, _| {}).expect("renders");
+    assert_eq!(film.dropped_samples(), 0, "non-finite samples were dropped");
+    film
+}

@@ -11,20 +11,14 @@
 //!   exactly through the `Camera` API (no rendering).
 
 use aperture_render::{
-    build_accel, render, test_scenes, Aperture, Camera, CameraModel, CameraSample, Environment,
-    Film, FilterKind, MaterialOverride, RenderOptions,
+    test_scenes, Aperture, Camera, CameraModel, CameraSample, Environment, FilterKind,
+    MaterialOverride, RenderOptions,
 };
 use aperture_scene::{Dof, Light, LightKind, Material, Scene};
 use glam::{Affine3A, DVec2, DVec3, Vec2, Vec3, Vec4};
 use std::f64::consts::PI;
 
-/// Renders and insists that no sample was dropped.
-fn render_checked(scene: &Scene, opts: &RenderOptions) -> Film {
-    let accel = build_accel(scene, Default::default());
-    let film = render(scene, &accel, opts, &|_, _| {}).expect("renders");
-    assert_eq!(film.dropped_samples(), 0, "dropped samples");
-    film
-}
+use aperture_tests::render_checked;
 
 fn opts(size: u32, spp: u32, max_bounces: u32) -> RenderOptions {
     RenderOptions {

@@ -1,9 +1,7 @@
 //! Alpha on shadow rays: a masked leaf casts a leaf-shaped shadow, a blended one a partial
 //! shadow in proportion to its coverage.
 
-use aperture_render::{
-    build_accel, render, test_scenes, FilterKind, MaterialOverride, RenderOptions,
-};
+use aperture_render::{test_scenes, FilterKind, MaterialOverride, RenderOptions};
 use aperture_scene::{
     AlphaMode, Camera, ColorSpace, Dof, Filter, Light, LightKind, Material, Projection, Sampler,
     Scene, Texels, Texture, TextureRef, Wrap,
@@ -84,14 +82,7 @@ fn halves(scene: &Scene) -> (f32, f32) {
         material_override: MaterialOverride::Diffuse,
         ..RenderOptions::default()
     };
-    let film = render(
-        scene,
-        &build_accel(scene, Default::default()),
-        &opts,
-        &|_, _| {},
-    )
-    .unwrap();
-    assert_eq!(film.dropped_samples(), 0);
+    let film = aperture_tests::render_checked(scene, &opts);
     let mean = |xs: std::ops::Range<u32>| {
         let mut sum = 0.0;
         let mut n = 0;

@@ -3,8 +3,8 @@
 //! on a high-dynamic-range map (a small sun over a dim sky), at equal samples per pixel.
 
 use aperture_render::{
-    build_accel, render, test_scenes, EnvImage, EnvSampling, Environment, Film, FilterKind,
-    MaterialOverride, RenderOptions,
+    test_scenes, EnvImage, EnvSampling, Environment, Film, FilterKind, MaterialOverride,
+    RenderOptions,
 };
 use glam::Vec3;
 use std::sync::Arc;
@@ -41,11 +41,7 @@ fn image(
 }
 
 fn render_furnace(o: &RenderOptions) -> Film {
-    let scene = test_scenes::furnace();
-    let accel = build_accel(&scene, Default::default());
-    let film = render(&scene, &accel, o, &|_, _| {}).unwrap();
-    assert_eq!(film.dropped_samples(), 0);
-    film
+    aperture_tests::render_checked(&test_scenes::furnace(), o)
 }
 
 #[test]

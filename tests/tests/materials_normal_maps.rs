@@ -95,14 +95,7 @@ fn opts() -> RenderOptions {
 
 /// Mean red of the centre 4 × 4 pixels.
 fn centre(scene: &Scene, opts: &RenderOptions) -> f32 {
-    let film = render(
-        scene,
-        &build_accel(scene, Default::default()),
-        opts,
-        &|_, _| {},
-    )
-    .unwrap();
-    assert_eq!(film.dropped_samples(), 0);
+    let film = aperture_tests::render_checked(scene, opts);
     let mut sum = 0.0;
     for y in 2..6 {
         for x in 2..6 {

@@ -1,7 +1,7 @@
 //! `KHR_materials_ior` and `KHR_materials_specular` end to end, textures included: they change
 //! only the dielectric Fresnel layer.
 
-use aperture_render::{build_accel, render, test_scenes, Environment, FilterKind, RenderOptions};
+use aperture_render::{test_scenes, Environment, FilterKind, RenderOptions};
 use aperture_scene::{
     Camera, ColorSpace, Dof, Filter, Material, Projection, Sampler, Scene, Texels, Texture,
     TextureRef, Wrap,
@@ -58,14 +58,7 @@ fn mean(scene: &Scene) -> Vec3 {
         env: Environment::Constant(Vec3::ONE),
         ..RenderOptions::default()
     };
-    let film = render(
-        scene,
-        &build_accel(scene, Default::default()),
-        &opts,
-        &|_, _| {},
-    )
-    .unwrap();
-    assert_eq!(film.dropped_samples(), 0);
+    let film = aperture_tests::render_checked(scene, &opts);
     film.to_rgba()
         .iter()
         .fold(Vec3::ZERO, |s, p| s + Vec3::new(p[0], p[1], p[2]))

@@ -1,9 +1,7 @@
 //! Thin-lens acceptance: bokeh size and shape against SPEC §2, the pinhole limit, and Sobol's
 //! advantage over independent samples on a depth-of-field scene.
 
-use aperture_render::{
-    build_accel, render, test_scenes, Camera, Film, FilterKind, RenderOptions, SamplerKind,
-};
+use aperture_render::{test_scenes, Camera, Film, FilterKind, RenderOptions, SamplerKind};
 use aperture_scene::{Dof, Scene};
 
 const SIZE: u32 = 64;
@@ -13,7 +11,6 @@ fn yfov() -> f32 {
 }
 
 fn render_scene(scene: &Scene, spp: u32, sampler: SamplerKind, seed: u32) -> Film {
-    let accel = build_accel(scene, Default::default());
     let opts = RenderOptions {
         width: SIZE,
         height: SIZE,
@@ -24,9 +21,7 @@ fn render_scene(scene: &Scene, spp: u32, sampler: SamplerKind, seed: u32) -> Fil
         sampler,
         ..RenderOptions::default()
     };
-    let film = render(scene, &accel, &opts, &|_, _| {}).expect("renders");
-    assert_eq!(film.dropped_samples(), 0);
-    film
+    aperture_tests::render_checked(scene, &opts)
 }
 
 /// Energy-weighted moments of the red channel about its centroid: (total, E[r²], the 6th

@@ -91,14 +91,7 @@ fn expected(quadrant: usize) -> Vec3 {
 #[test]
 fn unlit_shows_base_colour_times_vertex_colour_times_texture() {
     let scene = textured_quad(textured_material(true));
-    let film = render(
-        &scene,
-        &build_accel(&scene, Default::default()),
-        &opts(),
-        &|_, _| {},
-    )
-    .unwrap();
-    assert_eq!(film.dropped_samples(), 0);
+    let film = aperture_tests::render_checked(&scene, &opts());
     // Pixel centres of each quadrant, away from the edges: (x, y) with row 0 at the top.
     for (q, (x, y)) in [(0, (3, 3)), (1, (12, 3)), (2, (3, 12)), (3, (12, 12))] {
         let p = film.pixel(x, y);
@@ -156,14 +149,7 @@ fn alpha_mask_cuts_holes() {
     if let Texels::Rgba8(t) = &mut scene.textures[0].texels {
         t[1][3] = 0; // top-right texel transparent
     }
-    let film = render(
-        &scene,
-        &build_accel(&scene, Default::default()),
-        &opts(),
-        &|_, _| {},
-    )
-    .unwrap();
-    assert_eq!(film.dropped_samples(), 0);
+    let film = aperture_tests::render_checked(&scene, &opts());
     assert_eq!(film.pixel(12, 3)[3], 0.0, "cut out");
     assert_eq!(film.pixel(3, 3)[3], 1.0, "kept");
 }

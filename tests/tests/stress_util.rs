@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use aperture_imageio::{metrics, Image};
-use aperture_render::{build_accel, render, Film, FilterKind, RenderOptions};
+use aperture_render::{Film, FilterKind, RenderOptions};
 use aperture_scene::{load_bytes, LoadOptions, Scene};
 use glam::{Vec2, Vec3};
 use serde_json::{json, Value};
@@ -231,7 +231,6 @@ pub fn render_camera(
     max_bounces: u32,
     camera: usize,
 ) -> Film {
-    let accel = build_accel(scene, Default::default());
     let opts = RenderOptions {
         width,
         height,
@@ -242,8 +241,7 @@ pub fn render_camera(
         filter: FilterKind::Box,
         ..RenderOptions::default()
     };
-    let film = render(scene, &accel, &opts, &|_, _| {}).expect("renders");
-    assert_eq!(film.dropped_samples(), 0, "non-finite samples were dropped");
+    let film = aperture_tests::render_checked(scene, &opts);
     assert!(
         film.to_rgba().iter().flatten().all(|c| c.is_finite()),
         "non-finite pixel"
