@@ -26,9 +26,7 @@ Usage: ``python bench_mitsuba.py [--spp 1,2,4,...] [--reference-spp N] [--thread
 from __future__ import annotations
 
 import argparse
-import base64
 import csv
-import json
 import math
 import os
 import statistics
@@ -189,17 +187,9 @@ def write_gltf(path):
         "meshes": meshes,
         "materials": materials,
         "cameras": [cam],
-        "accessors": accessors,
-        "bufferViews": views,
-        "buffers": [{
-            "byteLength": len(buf),
-            "uri": "data:application/octet-stream;base64," + base64.b64encode(bytes(buf)).decode(),
-        }],
+        **mr.gltf_buffer_entries(buf, views, accessors),
     }
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    with open(path, "w") as f:
-        json.dump(doc, f, indent=1)
-        f.write("\n")
+    mr.write_json(path, doc)
 
 
 # --------------------------------------------------------------------------------------------

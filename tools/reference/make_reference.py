@@ -224,6 +224,26 @@ def gltf_buffers():
     return buf, views, accessors, add
 
 
+def gltf_buffer_entries(buf, views, accessors):
+    """The document's `accessors`, `bufferViews` and `buffers` (one embedded data: buffer)."""
+    return {
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{
+            "byteLength": len(buf),
+            "uri": "data:application/octet-stream;base64," + base64.b64encode(bytes(buf)).decode(),
+        }],
+    }
+
+
+def write_json(path, doc):
+    """Writes a glTF document as the committed files are written (indent 1, final newline)."""
+    os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
+    with open(path, "w") as f:
+        json.dump(doc, f, indent=1)
+        f.write("\n")
+
+
 def write_gltf(name, sdef, path):
     buf, views, accessors, add = gltf_buffers()
 
@@ -309,18 +329,11 @@ def write_gltf(name, sdef, path):
         "meshes": meshes,
         "materials": materials,
         "cameras": [cam],
-        "accessors": accessors,
-        "bufferViews": views,
-        "buffers": [{
-            "byteLength": len(buf),
-            "uri": "data:application/octet-stream;base64," + base64.b64encode(bytes(buf)).decode(),
-        }],
+        **gltf_buffer_entries(buf, views, accessors),
     }
     if extensions:
         doc["extensions"] = extensions
-    with open(path, "w") as f:
-        json.dump(doc, f, indent=1)
-        f.write("\n")
+    write_json(path, doc)
 
 
 # --------------------------------------------------------------------------------------------
