@@ -871,11 +871,7 @@ impl Accel {
     pub fn spawn_point(&self, ray: &Ray, hit: &Hit) -> SpawnPoint {
         let p = ray.origin + ray.dir * hit.t;
         let ray_part = ray.origin.abs().max_element() + (ray.dir * hit.t).abs().max_element();
-        let transform_part = self
-            .instance_magnitude
-            .get(hit.instance as usize)
-            .copied()
-            .unwrap_or(0.0);
+        let transform_part = self.magnitude_of(hit.instance);
         // A few roundings of each magnitude: o + t d (2), the triangle test's t (a few), and the
         // object/world transforms of the ray and of the vertices (about 3 each).
         SpawnPoint {
@@ -884,15 +880,19 @@ impl Accel {
         }
     }
 
+    /// The bound on magnitudes met moving points of `instance` between object and world space.
+    fn magnitude_of(&self, instance: u32) -> f32 {
+        self.instance_magnitude
+            .get(instance as usize)
+            .copied()
+            .unwrap_or(0.0)
+    }
+
     /// A point `p` computed on a triangle of instance `instance` (say by interpolating its
     /// vertices, as a light sample is), with a bound on its rounding error: where a ray towards
     /// or from that point may start or end without meeting the triangle itself.
     pub fn surface_point(&self, instance: u32, p: Vec3) -> SpawnPoint {
-        let transform_part = self
-            .instance_magnitude
-            .get(instance as usize)
-            .copied()
-            .unwrap_or(0.0);
+        let transform_part = self.magnitude_of(instance);
         // Interpolation (a few roundings of the vertex magnitudes) and the object-to-world
         // transform (about 3 of the transform's).
         SpawnPoint {
