@@ -80,9 +80,9 @@ pub struct BenchArgs {
     /// Seed of the timed renders (the reference uses another).
     #[arg(long, default_value_t = 0)]
     pub seed: u32,
-    /// The adaptive configuration's noise threshold at budget N is this / √N (2 measured best
-    /// on the demo scene among 0.25, 0.5, 2 and 8).
-    #[arg(long, default_value_t = 2.0)]
+    /// The adaptive configuration's noise threshold at budget N is this / √N (on the demo
+    /// scene 4 and 6 gave the lowest error-against-time curves, 2 a slower one).
+    #[arg(long, default_value_t = 4.0)]
     pub adaptive_scale: f32,
     /// Relative MSEs at which to compare the series' times (interpolated in log-log), comma
     /// separated.
@@ -101,6 +101,13 @@ pub struct BenchArgs {
     /// Pixel filter.
     #[arg(long, value_enum, default_value_t = FilterArg::BlackmanHarris)]
     pub filter: FilterArg,
+    /// Cycles' "Clamp Direct" for every render, the generated reference included (as `render
+    /// --clamp-direct`; 0 = off). A given --reference must be rendered with the same clamps.
+    #[arg(long, default_value_t = 0.0, value_parser = crate::render_cmd::non_negative_f32)]
+    pub clamp_direct: f32,
+    /// Cycles' "Clamp Indirect" for every render, as --clamp-direct.
+    #[arg(long, default_value_t = 0.0, value_parser = crate::render_cmd::non_negative_f32)]
+    pub clamp_indirect: f32,
     /// An extra series to plot and compare, as FILE.csv or FILE.csv:LABEL (repeatable). The
     /// file has `results.csv`'s columns; without LABEL its `config` column names the curves.
     #[arg(long, value_parser = parse_series)]
@@ -196,6 +203,13 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         b.build().context("starting worker threads")?
     };
     let threads = pool.current_num_threads();
+    if args.clamp_direct > 0.0 || args.clamp_indirect > 0.0 {
+        println!(
+            "Clamping samples (direct {}, indirect {}; 0 = off): errors are against the clamped \
+             estimator, so a --reference must use the same clamps.",
+            args.clamp_direct, args.clamp_indirect
+        );
+    }
     // Read before rendering, so a bad file fails at once.
     let mut extra = Vec::new();
     for s in &args.series {
@@ -207,6 +221,10 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         seed: args.seed,
         max_bounces: args.max_bounces,
         filter: args.filter.into(),
+        clamp: aperture_render::Clamp {
+            direct: args.clamp_direct,
+            indirect: args.clamp_indirect,
+        },
         ..RenderOptions::default()
     };
     let rows = pool.install(|| -> anyhow::Result<Vec<Row>> {

@@ -81,7 +81,7 @@ fn positive_f32(s: &str) -> Result<f32, String> {
     }
 }
 
-fn non_negative_f32(s: &str) -> Result<f32, String> {
+pub(crate) fn non_negative_f32(s: &str) -> Result<f32, String> {
     let v: f32 = s.parse().map_err(|e| format!("{e}"))?;
     if v.is_finite() && v >= 0.0 {
         Ok(v)
@@ -269,12 +269,14 @@ pub struct RenderArgs {
     /// partial coverage (bokeh against the sky) stays visible. EXR always stores coverage.
     #[arg(long)]
     pub transparent: bool,
-    /// Adaptive sampling (as Blender Cycles'): a pixel stops once its estimated relative noise
-    /// is below this (0.01 is Cycles' default; smaller is cleaner and slower). `--spp` becomes
-    /// the most samples a pixel takes.
+    /// Adaptive sampling (after Blender Cycles'): a pixel stops once the estimated relative
+    /// error of its mean (standard error over mean, from the samples' variance) is below this;
+    /// smaller is cleaner and slower. Unlike Cycles' threshold (0.01 by default), which is
+    /// relative to the square root of the brightness, dark pixels are held to the same relative
+    /// error as bright ones. `--spp` becomes the most samples a pixel takes.
     #[arg(long, value_parser = positive_f32, allow_hyphen_values = true)]
     pub noise_threshold: Option<f32>,
-    /// With --noise-threshold: samples every pixel takes before it may stop [default: √spp
+    /// With --noise-threshold: samples every pixel takes before it may stop [default: 2√spp
     /// rounded up to a power of two, at least 4].
     #[arg(long, requires = "noise_threshold", value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub min_spp: Option<u32>,

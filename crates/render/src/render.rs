@@ -310,8 +310,8 @@ impl Job<'_> {
 #[derive(Clone, Copy, Default)]
 struct AdaptivePixel {
     sum: PixelSum,
-    /// Sum of the odd-indexed samples, for the error estimate.
-    odd: [f64; 3],
+    /// Per channel, the sum of squared samples, for the error estimate.
+    sq: [f64; 3],
     taken: u32,
     dropped: u64,
 }
@@ -345,10 +345,8 @@ fn render_adaptive(
                         for i in p.taken..target {
                             match job.sample(x, y, i) {
                                 Some((l, hit)) if p.sum.add(l, hit) => {
-                                    if i % 2 == 1 {
-                                        p.odd[0] += l.x as f64;
-                                        p.odd[1] += l.y as f64;
-                                        p.odd[2] += l.z as f64;
+                                    for (s, v) in p.sq.iter_mut().zip(l.to_array()) {
+                                        *s += f64::from(v) * f64::from(v);
                                     }
                                 }
                                 _ => p.dropped += 1,
@@ -370,7 +368,7 @@ fn render_adaptive(
         }
         let converged: Vec<bool> = state
             .iter()
-            .map(|p| adaptive::pixel_error(&p.sum, &p.odd) < f64::from(a.threshold))
+            .map(|p| adaptive::pixel_error(&p.sum, &p.sq) < f64::from(a.threshold))
             .collect();
         let budget: Vec<bool> = state.iter().map(|p| p.taken < job.opts.spp).collect();
         active = adaptive::dilate(&converged, &budget, w);
