@@ -311,13 +311,17 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
 
     let csv = args.output.join("results.csv");
     write_atomic(&csv, to_csv(&rows, width, height, threads).as_bytes())?;
-    let title = format!(
+    let mut title = format!(
         "{} at {width}x{height}, {threads} threads",
         args.scene
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default()
     );
+    // A clamped run measures another (biased) estimator; the picture must say so.
+    if args.clamp_direct > 0.0 || args.clamp_indirect > 0.0 {
+        title += &format!(", clamp {}/{}", args.clamp_direct, args.clamp_indirect);
+    }
     let svg = args.output.join("error_vs_time.svg");
     let png = args.output.join("error_vs_time.png");
     let all: Vec<Row> = rows.iter().chain(&extra).cloned().collect();
@@ -749,8 +753,13 @@ mod tests {
         assert_eq!(d.series, vec![]);
         assert_eq!(d.target_rel_mse, vec![1e-3]);
         assert_eq!(d.max_bounces, aperture_render::DEFAULT_MAX_BOUNCES);
+        assert_eq!((d.clamp_direct, d.clamp_indirect), (0.0, 0.0));
+        let c = parse(&["--clamp-direct", "100", "--clamp-indirect", "10"]).unwrap();
+        assert_eq!((c.clamp_direct, c.clamp_indirect), (100.0, 10.0));
         for bad in [
             &["--spp", "1,0"][..],
+            &["--clamp-direct", "-1"],
+            &["--clamp-indirect", "nan"],
             &["--configs", "halton"],
             &["--target-rel-mse", "1e-3,0"],
             &["--series", ":label"],

@@ -133,7 +133,8 @@ mod tests {
         let mut sq = [0.0; 3];
         for &v in samples {
             assert!(sum.add(Vec3::splat(v), true));
-            sq.iter_mut().for_each(|s| *s += f64::from(v) * f64::from(v));
+            sq.iter_mut()
+                .for_each(|s| *s += f64::from(v) * f64::from(v));
         }
         (sum, sq)
     }
@@ -148,14 +149,19 @@ mod tests {
         let expected = (1.0f64 / 7.0).sqrt() / (1.0 + RELATIVE_ERROR_EPSILON).sqrt();
         assert!((pixel_error(&noisy, &sq) - expected).abs() < 1e-12);
         assert_eq!(pixel_error(&PixelSum::default(), &[0.0; 3]), f64::INFINITY);
-        assert_eq!(pixel_error(&pixel(&[3.0]).0, &pixel(&[3.0]).1), f64::INFINITY);
+        assert_eq!(
+            pixel_error(&pixel(&[3.0]).0, &pixel(&[3.0]).1),
+            f64::INFINITY
+        );
     }
 
     #[test]
     fn dark_and_bright_pixels_with_equal_relative_noise_score_alike() {
         // The point of dividing by μ rather than Cycles' √μ: a pixel 25× darker with the same
         // relative noise is not let off with a 5× smaller error.
-        let bright: Vec<f32> = (0..64).map(|i| if i % 4 == 0 { 4.0 } else { 0.0 }).collect();
+        let bright: Vec<f32> = (0..64)
+            .map(|i| if i % 4 == 0 { 4.0 } else { 0.0 })
+            .collect();
         let dark: Vec<f32> = bright.iter().map(|v| v / 25.0).collect();
         let (b, bq) = pixel(&bright);
         let (d, dq) = pixel(&dark);
