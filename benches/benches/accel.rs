@@ -1,5 +1,6 @@
 //! Ray-query benchmarks: BVH build time (1 M synthetic triangles, `BlenderIO-32bitIndices` once the
-//! glTF loader works) and closest-hit / occlusion throughput on thin-lens primary rays and diffuse
+//! glTF loader works) and closest-hit / occlusion throughput on thin-lens primary rays (in random
+//! pixel order, as the Embree anchor traces them, and in the renderer's tile order) and diffuse
 //! bounce rays, on 1 and 2 threads, over `BlenderIO-32bitIndices` (130 k triangles, the Embree
 //! anchor's scene; all presets) and a synthetic ~300 k-triangle scene with instancing. Throughput is in rays
 //! ("elements") per second; criterion's median is in `target/criterion/**/new/estimates.json`.
@@ -161,6 +162,46 @@ fn thin_lens_rays((lo, hi): (Vec3, Vec3), n: usize, rng: &mut Rng) -> Vec<Ray> {
 
 /// Cosine-distributed bounce rays from the hits of `primary`, leaving on the side the primary
 /// ray came from, with origins from `Accel::spawn_point`.
+/// The same camera's thin-lens primary rays in the order a renderer traces them: one sample per
+/// pixel of a 4:3 image, in 32-pixel tiles (as `aperture_render` renders), each pixel's film
+/// and lens position jittered. Neighbouring rays share most of their nodes, which the random
+/// order of [`thin_lens_rays`] (the Embree anchor's) never lets them do.
+fn thin_lens_rays_tiled((lo, hi): (Vec3, Vec3), n: usize, rng: &mut Rng) -> Vec<Ray> {
+    let c = (lo + hi) * 0.5;
+    let ext = (hi - lo).length();
+    let eye = c + Vec3::new(0.3, 0.2, 1.0).normalize() * ext * 0.9;
+    let fwd = (c - eye).normalize();
+    let right = fwd.cross(Vec3::Y).normalize();
+    let up = right.cross(fwd);
+    let f = (c - eye).length();
+    let r_lens = 0.02 * ext;
+    let th = 20f32.to_radians().tan();
+    // A 4:3 image with about n pixels.
+    let w = ((n as f32 * 4.0 / 3.0).sqrt().round() as usize).max(1);
+    let h = n.div_ceil(w);
+    const TILE: usize = 32;
+    let mut rays = Vec::with_capacity(n);
+    'tiles: for ty in (0..h).step_by(TILE) {
+        for tx in (0..w).step_by(TILE) {
+            for y in ty..(ty + TILE).min(h) {
+                for x in tx..(tx + TILE).min(w) {
+                    if rays.len() == n {
+                        break 'tiles;
+                    }
+                    let px = ((x as f32 + rng.f32()) / w as f32) * 2.0 - 1.0;
+                    let py = (((y as f32 + rng.f32()) / h as f32) * 2.0 - 1.0) * 0.75;
+                    let r = rng.f32().sqrt() * r_lens;
+                    let phi = rng.f32() * std::f32::consts::TAU;
+                    let focus = eye + f * (fwd + px * th * right - py * th * up);
+                    let o = eye + r * phi.cos() * right + r * phi.sin() * up;
+                    rays.push(Ray::new(o, (focus - o).normalize()));
+                }
+            }
+        }
+    }
+    rays
+}
+
 fn diffuse_rays(scene: &OwnedScene, accel: &Accel, primary: &[Ray], rng: &mut Rng) -> Vec<Ray> {
     primary
         .iter()
@@ -254,6 +295,8 @@ fn throughput(c: &mut Criterion) {
     for (k, (label, scene)) in scenes.iter().enumerate() {
         let mut rng = Rng(7);
         let primary = thin_lens_rays(scene.bounds(), n, &mut rng);
+        // Its own stream, so the other sets stay the rays earlier runs measured.
+        let tiled = thin_lens_rays_tiled(scene.bounds(), n, &mut Rng(11));
         // All presets on the first scene only (that is where they are compared).
         let qualities: &[BvhQuality] = if k == 0 {
             &BvhQuality::ALL
@@ -272,9 +315,13 @@ fn throughput(c: &mut Criterion) {
                 let mut occl = vec![false; n];
                 // Every quality on primary closest hit (to choose the presets); the rest at default.
                 let sets: &[(&str, &[Ray])] = if q == BvhQuality::default() {
-                    &[("primary", &primary), ("diffuse", &bounce)]
+                    &[
+                        ("primary", &primary),
+                        ("primary_tiled", &tiled),
+                        ("diffuse", &bounce),
+                    ]
                 } else {
-                    &[("primary", &primary)]
+                    &[("primary", &primary), ("primary_tiled", &tiled)]
                 };
                 for (name, rays) in sets {
                     g.throughput(Throughput::Elements(rays.len() as u64));
