@@ -135,47 +135,68 @@ fn scene_300k() -> OwnedScene {
     OwnedScene { meshes, instances }
 }
 
-/// Thin-lens primary rays as the Embree anchor makes them: camera on (0.3, 0.2, 1) from the
-/// centre at 0.9 of the diagonal, 40° field of view, focus at the centre, lens radius 2 %.
-fn thin_lens_rays((lo, hi): (Vec3, Vec3), n: usize, rng: &mut Rng) -> Vec<Ray> {
-    let c = (lo + hi) * 0.5;
-    let ext = (hi - lo).length();
-    let eye = c + Vec3::new(0.3, 0.2, 1.0).normalize() * ext * 0.9;
-    let fwd = (c - eye).normalize();
-    let right = fwd.cross(Vec3::Y).normalize();
-    let up = right.cross(fwd);
-    let f = (c - eye).length();
-    let r_lens = 0.02 * ext;
-    let th = 20f32.to_radians().tan();
+/// The Embree anchor's thin-lens camera: on (0.3, 0.2, 1) from the centre at 0.9 of the
+/// diagonal, 40° field of view, focus at the centre, lens radius 2 %.
+struct ThinLens {
+    eye: Vec3,
+    fwd: Vec3,
+    right: Vec3,
+    up: Vec3,
+    focus_distance: f32,
+    lens_radius: f32,
+    tan_half_fov: f32,
+}
+
+impl ThinLens {
+    fn new((lo, hi): (Vec3, Vec3)) -> Self {
+        let c = (lo + hi) * 0.5;
+        let ext = (hi - lo).length();
+        let eye = c + Vec3::new(0.3, 0.2, 1.0).normalize() * ext * 0.9;
+        let fwd = (c - eye).normalize();
+        let right = fwd.cross(Vec3::Y).normalize();
+        Self {
+            eye,
+            fwd,
+            right,
+            up: right.cross(fwd),
+            focus_distance: (c - eye).length(),
+            lens_radius: 0.02 * ext,
+            tan_half_fov: 20f32.to_radians().tan(),
+        }
+    }
+
+    /// The ray through film point `(px, py)` (−1..1 across, ±0.75 up) and the lens point drawn
+    /// from `rng` (radius, then angle).
+    fn ray(&self, px: f32, py: f32, rng: &mut Rng) -> Ray {
+        let r = rng.f32().sqrt() * self.lens_radius;
+        let phi = rng.f32() * std::f32::consts::TAU;
+        let th = self.tan_half_fov;
+        let focus =
+            self.eye + self.focus_distance * (self.fwd + px * th * self.right + py * th * self.up);
+        let o = self.eye + r * phi.cos() * self.right + r * phi.sin() * self.up;
+        Ray::new(o, (focus - o).normalize())
+    }
+}
+
+/// Thin-lens primary rays as the Embree anchor makes them: random film and lens points, one
+/// after another.
+fn thin_lens_rays(bounds: (Vec3, Vec3), n: usize, rng: &mut Rng) -> Vec<Ray> {
+    let cam = ThinLens::new(bounds);
     (0..n)
         .map(|_| {
             let px = rng.f32() * 2.0 - 1.0;
             let py = (rng.f32() * 2.0 - 1.0) * 0.75;
-            let r = rng.f32().sqrt() * r_lens;
-            let phi = rng.f32() * std::f32::consts::TAU;
-            let focus = eye + f * (fwd + px * th * right + py * th * up);
-            let o = eye + r * phi.cos() * right + r * phi.sin() * up;
-            Ray::new(o, (focus - o).normalize())
+            cam.ray(px, py, rng)
         })
         .collect()
 }
 
-/// Cosine-distributed bounce rays from the hits of `primary`, leaving on the side the primary
-/// ray came from, with origins from `Accel::spawn_point`.
 /// The same camera's thin-lens primary rays in the order a renderer traces them: one sample per
 /// pixel of a 4:3 image, in 32-pixel tiles (as `aperture_render` renders), each pixel's film
 /// and lens position jittered. Neighbouring rays share most of their nodes, which the random
 /// order of [`thin_lens_rays`] (the Embree anchor's) never lets them do.
-fn thin_lens_rays_tiled((lo, hi): (Vec3, Vec3), n: usize, rng: &mut Rng) -> Vec<Ray> {
-    let c = (lo + hi) * 0.5;
-    let ext = (hi - lo).length();
-    let eye = c + Vec3::new(0.3, 0.2, 1.0).normalize() * ext * 0.9;
-    let fwd = (c - eye).normalize();
-    let right = fwd.cross(Vec3::Y).normalize();
-    let up = right.cross(fwd);
-    let f = (c - eye).length();
-    let r_lens = 0.02 * ext;
-    let th = 20f32.to_radians().tan();
+fn thin_lens_rays_tiled(bounds: (Vec3, Vec3), n: usize, rng: &mut Rng) -> Vec<Ray> {
+    let cam = ThinLens::new(bounds);
     // A 4:3 image with about n pixels.
     let w = ((n as f32 * 4.0 / 3.0).sqrt().round() as usize).max(1);
     let h = n.div_ceil(w);
@@ -189,12 +210,9 @@ fn thin_lens_rays_tiled((lo, hi): (Vec3, Vec3), n: usize, rng: &mut Rng) -> Vec<
                         break 'tiles;
                     }
                     let px = ((x as f32 + rng.f32()) / w as f32) * 2.0 - 1.0;
-                    let py = (((y as f32 + rng.f32()) / h as f32) * 2.0 - 1.0) * 0.75;
-                    let r = rng.f32().sqrt() * r_lens;
-                    let phi = rng.f32() * std::f32::consts::TAU;
-                    let focus = eye + f * (fwd + px * th * right - py * th * up);
-                    let o = eye + r * phi.cos() * right + r * phi.sin() * up;
-                    rays.push(Ray::new(o, (focus - o).normalize()));
+                    // Rows run down the image.
+                    let py = (1.0 - ((y as f32 + rng.f32()) / h as f32) * 2.0) * 0.75;
+                    rays.push(cam.ray(px, py, rng));
                 }
             }
         }
