@@ -619,6 +619,20 @@ mod tests {
         assert_eq!((c.clamp_direct, c.clamp_indirect), (100.0, 10.0));
     }
 
+    /// Runs `aperture render SCENE -o <temp>/NAME.exr ARGS` and returns the EXR read back (the
+    /// file is removed).
+    fn render_exr(scene: &std::path::Path, name: &str, argv: &[&str]) -> aperture_imageio::Image {
+        let out =
+            std::env::temp_dir().join(format!("aperture-cli-{}-{name}.exr", std::process::id()));
+        let mut args = parse(argv).unwrap();
+        args.scene = scene.to_path_buf();
+        args.output = out.clone();
+        run(args).unwrap();
+        let image = aperture_imageio::read_exr(&out).unwrap();
+        std::fs::remove_file(&out).unwrap();
+        image
+    }
+
     /// The whole command on a real sample: EXR out, read back; `--threads 1` and `--threads 2`
     /// give the same pixels.
     #[test]
@@ -626,55 +640,49 @@ mod tests {
         let Some(box_glb) = crate::box_textured_sample() else {
             return;
         };
-        let dir = std::env::temp_dir();
-        let mut images = Vec::new();
-        for threads in ["1", "2"] {
-            let out = dir.join(format!("aperture-cli-{}-{threads}.exr", std::process::id()));
-            let mut args = parse(&[
+        let images: Vec<_> = ["1", "2"]
+            .map(|threads| {
+                render_exr(
+                    &box_glb,
+                    threads,
+                    &[
+                        "--width",
+                        "24",
+                        "--height",
+                        "16",
+                        "--spp",
+                        "2",
+                        "--threads",
+                        threads,
+                        "--env",
+                        "1,1,1",
+                        "--quiet",
+                    ],
+                )
+            })
+            .into();
+        assert_eq!(images[0].rgba, images[1].rgba);
+        // Adaptive sampling with the samples pass: the layer holds each pixel's count.
+        let adaptive = render_exr(
+            &box_glb,
+            "adaptive",
+            &[
                 "--width",
                 "24",
                 "--height",
                 "16",
                 "--spp",
-                "2",
-                "--threads",
-                threads,
+                "16",
+                "--noise-threshold",
+                "0.05",
+                "--min-spp",
+                "4",
+                "--samples-pass",
                 "--env",
                 "1,1,1",
                 "--quiet",
-            ])
-            .unwrap();
-            args.scene = box_glb.clone();
-            args.output = out.clone();
-            run(args).unwrap();
-            images.push(aperture_imageio::read_exr(&out).unwrap());
-            std::fs::remove_file(&out).unwrap();
-        }
-        assert_eq!(images[0].rgba, images[1].rgba);
-        // Adaptive sampling with the samples pass: the layer holds each pixel's count.
-        let out = dir.join(format!("aperture-cli-{}-adaptive.exr", std::process::id()));
-        let mut args = parse(&[
-            "--width",
-            "24",
-            "--height",
-            "16",
-            "--spp",
-            "16",
-            "--noise-threshold",
-            "0.05",
-            "--min-spp",
-            "4",
-            "--samples-pass",
-            "--env",
-            "1,1,1",
-            "--quiet",
-        ])
-        .unwrap();
-        args.scene = box_glb.clone();
-        args.output = out.clone();
-        run(args).unwrap();
-        let adaptive = aperture_imageio::read_exr(&out).unwrap();
-        std::fs::remove_file(&out).unwrap();
+            ],
+        );
         let counts = &adaptive.layer("samples").expect("samples layer").data;
         assert_eq!(counts.len(), 24 * 16);
         assert!(counts.iter().all(|&n| (4.0..=16.0).contains(&n)));
@@ -710,15 +718,9 @@ mod tests {
         im.rgba = vec![[c[0], c[1], c[2], 1.0]; 16 * 8];
         aperture_imageio::write_exr(&exr, &im).unwrap();
         let mean = |env: &[&str]| {
-            let out = dir.join(format!("aperture-env-out-{id}.exr"));
             let mut argv = vec!["--width", "24", "--height", "16", "--spp", "16", "--quiet"];
             argv.extend_from_slice(env);
-            let mut args = parse(&argv).unwrap();
-            args.scene = box_glb.clone();
-            args.output = out.clone();
-            run(args).unwrap();
-            let img = aperture_imageio::read_exr(&out).unwrap();
-            std::fs::remove_file(&out).unwrap();
+            let img = render_exr(&box_glb, "env-out", &argv);
             let n = img.rgba.len() as f32;
             img.rgba
                 .iter()
