@@ -1,11 +1,13 @@
 //! The BVH answers exactly as brute force over every triangle (same ray transform, same triangle
 //! test), for flattened and instanced scenes, closest hit and occlusion; and every reported hit
 //! lies on the triangle it names (checked against the input meshes, independently of the BVH).
+//! The batch queries (interleaved walks) answer exactly as the one-ray queries, so brute force
+//! checks them too.
 
 #[path = "accel_util.rs"]
 mod util;
 
-use aperture_accel::{Accel, BvhQuality, InstanceInput, Ray};
+use aperture_accel::{Accel, BvhQuality, Hit, InstanceInput, Ray};
 use glam::{Affine3A, Vec3};
 use util::{icosphere, random_rays, random_transform, soup, Rng, Scene};
 
@@ -50,7 +52,50 @@ fn check(scene: &Scene, accel: &Accel, rays: &[Ray]) -> usize {
             "occlusion of ray {k} {ray:?}"
         );
     }
+    check_batches(accel, rays);
     hits
+}
+
+/// The batch and many-ray queries give, ray by ray, exactly the one-ray answers: over the whole
+/// set and over short batches (fewer rays than lanes, and lanes refilled mid-batch).
+fn check_batches(accel: &Accel, rays: &[Ray]) {
+    let single: Vec<Option<Hit>> = rays.iter().map(|r| accel.intersect(r)).collect();
+    let single_occ: Vec<bool> = rays.iter().map(|r| accel.occluded(r)).collect();
+    let mut hits = vec![None; rays.len()];
+    let mut occ = vec![false; rays.len()];
+    accel.intersect_many(rays, &mut hits);
+    accel.occluded_many(rays, &mut occ);
+    assert_eq!(hits, single, "intersect_many");
+    assert_eq!(occ, single_occ, "occluded_many");
+    for len in [1, 2, 3, 5, 9, 31] {
+        for (k, chunk) in rays.chunks(len).enumerate() {
+            let (at, end) = (k * len, k * len + chunk.len());
+            // The batch's slots and a few past it, set to what the answers are not.
+            let window = at..(end + 3).min(rays.len());
+            hits[window.clone()].fill(Some(Hit {
+                t: -1.0,
+                instance: u32::MAX,
+                triangle: u32::MAX,
+                u: 0.0,
+                v: 0.0,
+            }));
+            for (o, s) in occ[window.clone()].iter_mut().zip(&single_occ[window.clone()]) {
+                *o = !s;
+            }
+            accel.intersect_batch(chunk, &mut hits[at..]);
+            accel.occluded_batch(chunk, &mut occ[at..]);
+            assert_eq!(&hits[at..end], &single[at..end], "batch of {len} at {at}");
+            assert_eq!(&occ[at..end], &single_occ[at..end], "batch of {len} at {at}");
+            // Slots past the batch are left alone.
+            assert!(hits[end..window.end].iter().all(|h| h.is_some_and(|h| h.t == -1.0)));
+            for (o, s) in occ[end..window.end].iter().zip(&single_occ[end..window.end]) {
+                assert_ne!(o, s, "slot past a batch of {len} at {at} written");
+            }
+        }
+    }
+    // An empty batch writes nothing.
+    accel.intersect_batch(&[], &mut hits);
+    accel.occluded_batch(&[], &mut occ);
 }
 
 fn assert_mixed(hits: usize, n: usize) {

@@ -6,7 +6,7 @@
 //! ```text
 //! cargo run --release -p aperture-accel --example accel_measure -- \
 //!     SCENE.gltf|SCENE.tris [--quality fast|medium|high] [--rays FILE]... [--build-only]
-//!     [--repeats N]
+//!     [--repeats N] [--batch]
 //! ```
 //! `.tris` files are raw world-space triangles (little-endian f32, 9 per triangle), e.g. written
 //! from the Embree anchor's `gltf_io.py`; anything else goes through `aperture_scene::load`.
@@ -50,6 +50,7 @@ fn main() {
     let mut quality = BvhQuality::default();
     let mut ray_files = Vec::new();
     let mut build_only = false;
+    let mut batch = false;
     let mut repeats = 3;
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -63,6 +64,7 @@ fn main() {
             }
             "--rays" => ray_files.push(it.next().expect("--rays FILE").clone()),
             "--build-only" => build_only = true,
+            "--batch" => batch = true,
             "--repeats" => repeats = it.next().expect("--repeats N").parse().expect("repeats"),
             _ => scene_path = Some(a.clone()),
         }
@@ -133,21 +135,34 @@ fn main() {
             .map(|r| Ray::new(Vec3::from_slice(&r[0..3]), Vec3::from_slice(&r[3..6])))
             .collect();
         let n = rays.len() as f64;
-        // One thread, one query at a time (as Embree's rtcIntersect1 loop is measured).
+        // One thread, one query at a time (as Embree's rtcIntersect1 loop is measured), or with
+        // `--batch` the whole file through the interleaved batch queries.
         let mut closest = Vec::new();
         let mut occluded = Vec::new();
         let mut closest_cpu = Vec::new();
         let mut occluded_cpu = Vec::new();
         let mut hits = 0;
+        let mut batch_hits = vec![None; rays.len()];
+        let mut batch_occ = vec![false; rays.len()];
         for _ in 0..repeats {
             let (t, c) = (Instant::now(), thread_cpu_ns());
-            hits = rays.iter().filter(|r| accel.intersect(r).is_some()).count();
+            hits = if batch {
+                accel.intersect_batch(&rays, &mut batch_hits);
+                batch_hits.iter().filter(|h| h.is_some()).count()
+            } else {
+                rays.iter().filter(|r| accel.intersect(r).is_some()).count()
+            };
             closest.push(n / t.elapsed().as_secs_f64() / 1e6);
             if let (Some(c0), Some(c1)) = (c, thread_cpu_ns()) {
                 closest_cpu.push(n / ((c1 - c0) as f64 * 1e-9) / 1e6);
             }
             let (t, c) = (Instant::now(), thread_cpu_ns());
-            let occ = rays.iter().filter(|r| accel.occluded(r)).count();
+            let occ = if batch {
+                accel.occluded_batch(&rays, &mut batch_occ);
+                batch_occ.iter().filter(|&&o| o).count()
+            } else {
+                rays.iter().filter(|r| accel.occluded(r)).count()
+            };
             occluded.push(n / t.elapsed().as_secs_f64() / 1e6);
             if let (Some(c0), Some(c1)) = (c, thread_cpu_ns()) {
                 occluded_cpu.push(n / ((c1 - c0) as f64 * 1e-9) / 1e6);
