@@ -79,16 +79,28 @@ fn check_batches(accel: &Accel, rays: &[Ray]) {
                 u: 0.0,
                 v: 0.0,
             }));
-            for (o, s) in occ[window.clone()].iter_mut().zip(&single_occ[window.clone()]) {
+            for (o, s) in occ[window.clone()]
+                .iter_mut()
+                .zip(&single_occ[window.clone()])
+            {
                 *o = !s;
             }
             accel.intersect_batch(chunk, &mut hits[at..]);
             accel.occluded_batch(chunk, &mut occ[at..]);
             assert_eq!(&hits[at..end], &single[at..end], "batch of {len} at {at}");
-            assert_eq!(&occ[at..end], &single_occ[at..end], "batch of {len} at {at}");
+            assert_eq!(
+                &occ[at..end],
+                &single_occ[at..end],
+                "batch of {len} at {at}"
+            );
             // Slots past the batch are left alone.
-            assert!(hits[end..window.end].iter().all(|h| h.is_some_and(|h| h.t == -1.0)));
-            for (o, s) in occ[end..window.end].iter().zip(&single_occ[end..window.end]) {
+            assert!(hits[end..window.end]
+                .iter()
+                .all(|h| h.is_some_and(|h| h.t == -1.0)));
+            for (o, s) in occ[end..window.end]
+                .iter()
+                .zip(&single_occ[end..window.end])
+            {
                 assert_ne!(o, s, "slot past a batch of {len} at {at} written");
             }
         }

@@ -100,16 +100,21 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 impl Integrator<'_> {
     /// The closest opaque hit along `ray`, passing through alpha-cut or blended surfaces, with
     /// the rounding-error bound of the hit point (from the ray segment that found it).
+    /// `first`, when given, is `accel.intersect(ray)` already found (by a batch query).
     fn trace(
         &self,
         ray: &Ray,
         stream: &SampleStream,
         vertex: u32,
         u_alpha: f32,
+        mut first: Option<Option<Hit>>,
     ) -> Option<(Hit, Surface, f32)> {
         let mut r = *ray;
         for pass in 0..MAX_ALPHA_PASSES {
-            let hit = self.accel.intersect(&r)?;
+            let hit = match first.take() {
+                Some(hit) => hit?,
+                None => self.accel.intersect(&r)?,
+            };
             let s = self.geom.surface(hit.instance, hit.triangle, hit.u, hit.v);
             let error = self.accel.spawn_point(&r, &hit).error;
             if !self.geom.has_alpha {
@@ -170,8 +175,34 @@ impl Integrator<'_> {
         0.0
     }
 
-    /// Radiance along a primary ray (unit direction), and whether it hit geometry.
+    /// Radiance along a primary ray (unit direction), and whether it hit geometry. (The render
+    /// loop traces primary rays in batches and calls [`Integrator::li_with_first_hit`].)
+    #[cfg(test)]
     pub fn li(&self, origin: Vec3, dir: Vec3, stream: &SampleStream) -> (Vec3, bool) {
+        self.li_from(origin, dir, stream, None)
+    }
+
+    /// [`Integrator::li`] with the primary ray's closest hit already found:
+    /// `first = accel.intersect(&Ray::new(origin, dir))` (from a batch query; the result is the
+    /// same as `li`'s).
+    pub fn li_with_first_hit(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        stream: &SampleStream,
+        first: Option<Hit>,
+    ) -> (Vec3, bool) {
+        self.li_from(origin, dir, stream, Some(first))
+    }
+
+    #[inline]
+    fn li_from(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        stream: &SampleStream,
+        mut first: Option<Option<Hit>>,
+    ) -> (Vec3, bool) {
         let mut l = Vec3::ZERO;
         let mut beta = Vec3::ONE;
         let mut ray = Ray::new(origin, dir);
@@ -181,7 +212,8 @@ impl Integrator<'_> {
         let mut vertex = 0u32;
         loop {
             let bs = stream.bounce(vertex);
-            let Some((hit, s, error)) = self.trace(&ray, stream, vertex, bs.alpha) else {
+            let Some((hit, s, error)) = self.trace(&ray, stream, vertex, bs.alpha, first.take())
+            else {
                 // A constant environment is found by BSDF sampling alone (weight 1); an image is
                 // also light-sampled, so escaping BSDF rays share it by MIS.
                 if vertex == 0 {
