@@ -422,6 +422,62 @@ impl Leaf for AnyLeaf<'_> {
     }
 }
 
+/// A bottom-level leaf the batch queries run ([`Accel::batch_impl`]): how a ray's leaf starts
+/// and what its answer is.
+trait BatchLeaf<'a>: Leaf + Copy {
+    /// One ray's answer.
+    type Answer;
+    /// The leaf of a ray with triangle-test constants `ray`, before any visit.
+    fn start(tris: &'a [Tri], ray: TriRay, tmin: f32) -> Self;
+    /// The answer once the walk has ended (`stopped`: the leaf stopped it).
+    fn answer(&self, blas: &Blas, entry: &Entry, stopped: bool) -> Self::Answer;
+    /// The one-ray query, for scenes that interleaving does not cover.
+    fn one<const AVX2: bool>(accel: &Accel, ray: &Ray) -> Self::Answer;
+}
+
+impl<'a> BatchLeaf<'a> for ClosestLeaf<'a> {
+    type Answer = Option<Hit>;
+
+    #[inline(always)]
+    fn start(tris: &'a [Tri], ray: TriRay, tmin: f32) -> Self {
+        Self {
+            tris,
+            ray,
+            tmin,
+            best: None,
+        }
+    }
+
+    #[inline(always)]
+    fn answer(&self, blas: &Blas, entry: &Entry, _: bool) -> Option<Hit> {
+        self.best.map(|(i, h)| Accel::make_hit(blas, entry, i, h))
+    }
+
+    #[inline(always)]
+    fn one<const AVX2: bool>(accel: &Accel, ray: &Ray) -> Option<Hit> {
+        accel.intersect_impl::<AVX2>(ray)
+    }
+}
+
+impl<'a> BatchLeaf<'a> for AnyLeaf<'a> {
+    type Answer = bool;
+
+    #[inline(always)]
+    fn start(tris: &'a [Tri], ray: TriRay, tmin: f32) -> Self {
+        Self { tris, ray, tmin }
+    }
+
+    #[inline(always)]
+    fn answer(&self, _: &Blas, _: &Entry, stopped: bool) -> bool {
+        stopped
+    }
+
+    #[inline(always)]
+    fn one<const AVX2: bool>(accel: &Accel, ray: &Ray) -> bool {
+        accel.occluded_impl::<AVX2>(ray)
+    }
+}
+
 /// A walk of a CWBVH (obvhs layout) in progress, front to back: the traversal of one ray as a
 /// state that advances one step at a time, so that several rays' walks can be interleaved on
 /// one thread (see [`Accel::intersect_batch`]). [`traverse`] runs one walk to its end.
@@ -1157,7 +1213,7 @@ impl Accel {
             // SAFETY: `avx2` is set only when `detect_avx2` found every feature it enables.
             return unsafe { self.intersect_batch_avx2(rays, out) };
         }
-        self.intersect_batch_impl::<false>(rays, out)
+        self.batch_impl::<false, ClosestLeaf>(rays, out)
     }
 
     /// [`Accel::occluded`] for each of `rays` on the calling thread, interleaved as
@@ -1168,7 +1224,7 @@ impl Accel {
             // SAFETY: as in `intersect_batch`.
             return unsafe { self.occluded_batch_avx2(rays, out) };
         }
-        self.occluded_batch_impl::<false>(rays, out)
+        self.batch_impl::<false, AnyLeaf>(rays, out)
     }
 
     /// [`Accel::intersect_batch`] compiled for AVX2.
@@ -1178,7 +1234,7 @@ impl Accel {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
     unsafe fn intersect_batch_avx2(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
-        self.intersect_batch_impl::<true>(rays, out)
+        self.batch_impl::<true, ClosestLeaf>(rays, out)
     }
 
     /// [`Accel::occluded_batch`] compiled for AVX2.
@@ -1188,7 +1244,7 @@ impl Accel {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
     unsafe fn occluded_batch_avx2(&self, rays: &[Ray], out: &mut [bool]) {
-        self.occluded_batch_impl::<true>(rays, out)
+        self.batch_impl::<true, AnyLeaf>(rays, out)
     }
 
     /// The one bottom-level tree every ray walks, when interleaving applies: a scene of one
@@ -1205,58 +1261,32 @@ impl Accel {
         }
     }
 
+    /// The batch queries: [`interleave`]d walks of `rays` with leaves of type `L`, one answer per
+    /// ray into `out`; ray by ray (`L::one`) where interleaving does not apply.
     #[inline(always)]
-    fn intersect_batch_impl<const AVX2: bool>(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+    fn batch_impl<'s, const AVX2: bool, L: BatchLeaf<'s>>(
+        &'s self,
+        rays: &[Ray],
+        out: &mut [L::Answer],
+    ) {
         let n = rays.len().min(out.len());
         let (rays, out) = (&rays[..n], &mut out[..n]);
         let Some((entry, blas)) = self.single_entry() else {
             for (r, o) in rays.iter().zip(out.iter_mut()) {
-                *o = self.intersect_impl::<AVX2>(r);
+                *o = L::one::<AVX2>(self, r);
             }
             return;
         };
-        interleave::<AVX2, _>(
+        interleave::<AVX2, L>(
             &blas.nodes,
             n,
             |i| {
                 let ray = &rays[i];
                 let (o, d) = Self::object_ray(entry, ray);
-                let leaf = ClosestLeaf {
-                    tris: &blas.tris,
-                    ray: TriRay::new(o, d),
-                    tmin: ray.tmin,
-                    best: None,
-                };
+                let leaf = L::start(&blas.tris, TriRay::new(o, d), ray.tmin);
                 (BoxRay::new(o, d, ray.tmin, blas.box_bounds), ray.tmax, leaf)
             },
-            |i, leaf, _| out[i] = leaf.best.map(|(t, h)| Self::make_hit(blas, entry, t, h)),
-        );
-    }
-
-    #[inline(always)]
-    fn occluded_batch_impl<const AVX2: bool>(&self, rays: &[Ray], out: &mut [bool]) {
-        let n = rays.len().min(out.len());
-        let (rays, out) = (&rays[..n], &mut out[..n]);
-        let Some((entry, blas)) = self.single_entry() else {
-            for (r, o) in rays.iter().zip(out.iter_mut()) {
-                *o = self.occluded_impl::<AVX2>(r);
-            }
-            return;
-        };
-        interleave::<AVX2, _>(
-            &blas.nodes,
-            n,
-            |i| {
-                let ray = &rays[i];
-                let (o, d) = Self::object_ray(entry, ray);
-                let leaf = AnyLeaf {
-                    tris: &blas.tris,
-                    ray: TriRay::new(o, d),
-                    tmin: ray.tmin,
-                };
-                (BoxRay::new(o, d, ray.tmin, blas.box_bounds), ray.tmax, leaf)
-            },
-            |i, _, stopped| out[i] = stopped,
+            |i, leaf, stopped| out[i] = leaf.answer(blas, entry, stopped),
         );
     }
 
