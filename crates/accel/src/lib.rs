@@ -350,10 +350,10 @@ impl<const AVX2: bool> Leaf for EntriesClosest<'_, AVX2> {
     #[inline(always)]
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
         if let Some(entry) = self.accel.entries.get(primitive as usize) {
-            if let Some(hit) = self
+            let hit = self
                 .accel
-                .intersect_entry::<AVX2>(entry, self.ray, tmax, self.stack)
-            {
+                .walk_entry::<AVX2, ClosestLeaf>(entry, self.ray, tmax, self.stack);
+            if let Some(Some(hit)) = hit {
                 self.best = Some(hit);
             }
         }
@@ -371,13 +371,16 @@ struct EntriesAny<'a, const AVX2: bool> {
 
 impl<const AVX2: bool> Leaf for EntriesAny<'_, AVX2> {
     #[inline(always)]
-    fn visit(&mut self, primitive: u32, _tmax: &mut f32) -> bool {
-        match self.accel.entries.get(primitive as usize) {
-            Some(entry) => self
-                .accel
-                .occluded_entry::<AVX2>(entry, self.ray, self.stack),
-            None => false,
-        }
+    fn visit(&mut self, primitive: u32, _: &mut f32) -> bool {
+        let mut tmax = self.ray.tmax;
+        self.accel
+            .entries
+            .get(primitive as usize)
+            .is_some_and(|entry| {
+                self.accel
+                    .walk_entry::<AVX2, AnyLeaf>(entry, self.ray, &mut tmax, self.stack)
+                    == Some(true)
+            })
     }
 }
 
@@ -422,9 +425,9 @@ impl Leaf for AnyLeaf<'_> {
     }
 }
 
-/// A bottom-level leaf the batch queries run ([`Accel::batch_impl`]): how a ray's leaf starts
-/// and what its answer is.
-trait BatchLeaf<'a>: Leaf + Copy {
+/// A bottom-level leaf (closest or any hit): how a ray's leaf starts and what its answer is,
+/// for the one-ray walks ([`Accel::walk_entry`]) and the batches ([`Accel::batch_impl`]).
+trait BlasLeaf<'a>: Leaf + Copy {
     /// One ray's answer.
     type Answer;
     /// The leaf of a ray with triangle-test constants `ray`, before any visit.
@@ -435,7 +438,7 @@ trait BatchLeaf<'a>: Leaf + Copy {
     fn one<const AVX2: bool>(accel: &Accel, ray: &Ray) -> Self::Answer;
 }
 
-impl<'a> BatchLeaf<'a> for ClosestLeaf<'a> {
+impl<'a> BlasLeaf<'a> for ClosestLeaf<'a> {
     type Answer = Option<Hit>;
 
     #[inline(always)]
@@ -459,7 +462,7 @@ impl<'a> BatchLeaf<'a> for ClosestLeaf<'a> {
     }
 }
 
-impl<'a> BatchLeaf<'a> for AnyLeaf<'a> {
+impl<'a> BlasLeaf<'a> for AnyLeaf<'a> {
     type Answer = bool;
 
     #[inline(always)]
@@ -1172,10 +1175,6 @@ impl Accel {
         let mut inline: InlineStack = [MaybeUninit::uninit(); INLINE_STACK];
         let mut heap = Vec::new();
         let blas_stack = stack_for(self.max_blas_depth, &mut inline, &mut heap);
-        if let [entry] = self.entries.as_slice() {
-            // One entry (a scene without shared meshes): no top-level walk.
-            return self.intersect_entry::<AVX2>(entry, ray, &mut tmax, blas_stack);
-        }
         let mut leaf = EntriesClosest::<AVX2> {
             accel: self,
             ray,
@@ -1191,9 +1190,6 @@ impl Accel {
         let mut inline: InlineStack = [MaybeUninit::uninit(); INLINE_STACK];
         let mut heap = Vec::new();
         let blas_stack = stack_for(self.max_blas_depth, &mut inline, &mut heap);
-        if let [entry] = self.entries.as_slice() {
-            return self.occluded_entry::<AVX2>(entry, ray, blas_stack);
-        }
         let mut tmax = ray.tmax;
         let leaf = EntriesAny::<AVX2> {
             accel: self,
@@ -1264,7 +1260,7 @@ impl Accel {
     /// The batch queries: [`interleave`]d walks of `rays` with leaves of type `L`, one answer per
     /// ray into `out`; ray by ray (`L::one`) where interleaving does not apply.
     #[inline(always)]
-    fn batch_impl<'s, const AVX2: bool, L: BatchLeaf<'s>>(
+    fn batch_impl<'s, const AVX2: bool, L: BlasLeaf<'s>>(
         &'s self,
         rays: &[Ray],
         out: &mut [L::Answer],
@@ -1282,9 +1278,8 @@ impl Accel {
             n,
             |i| {
                 let ray = &rays[i];
-                let (o, d) = Self::object_ray(entry, ray);
-                let leaf = L::start(&blas.tris, TriRay::new(o, d), ray.tmin);
-                (BoxRay::new(o, d, ray.tmin, blas.box_bounds), ray.tmax, leaf)
+                let (br, leaf) = Self::walk_start::<L>(entry, blas, ray);
+                (br, ray.tmax, leaf)
             },
             |i, leaf, stopped| out[i] = leaf.answer(blas, entry, stopped),
         );
@@ -1318,6 +1313,7 @@ impl Accel {
     ) -> bool {
         match self.entries.len() {
             0 => false,
+            // One entry (a scene without shared meshes): no top-level walk.
             1 => leaf.visit(0, tmax),
             _ => {
                 let r = BoxRay::new(ray.origin, ray.dir, ray.tmin, self.tlas_bounds);
@@ -1357,46 +1353,31 @@ impl Accel {
         }
     }
 
+    /// Walks the bottom-level tree of `entry` for `ray` (moved into its space) with a leaf of
+    /// type `L`: `L`'s answer, or `None` for an entry without a tree.
     #[inline(always)]
-    fn intersect_entry<const AVX2: bool>(
-        &self,
+    fn walk_entry<'s, const AVX2: bool, L: BlasLeaf<'s>>(
+        &'s self,
         entry: &Entry,
         ray: &Ray,
         tmax: &mut f32,
         stack: &mut [MaybeUninit<Group>],
-    ) -> Option<Hit> {
+    ) -> Option<L::Answer> {
         let blas = self.blases.get(entry.blas as usize)?;
-        let (o, d) = Self::object_ray(entry, ray);
-        let br = BoxRay::new(o, d, ray.tmin, blas.box_bounds);
-        let mut leaf = ClosestLeaf {
-            tris: &blas.tris,
-            ray: TriRay::new(o, d),
-            tmin: ray.tmin,
-            best: None,
-        };
-        traverse::<AVX2>(&blas.nodes, &br, tmax, stack, &mut leaf);
-        leaf.best.map(|(i, h)| Self::make_hit(blas, entry, i, h))
+        let (br, mut leaf) = Self::walk_start::<L>(entry, blas, ray);
+        let stopped = traverse::<AVX2>(&blas.nodes, &br, tmax, stack, &mut leaf);
+        Some(leaf.answer(blas, entry, stopped))
     }
 
+    /// What a walk of `blas` (drawn by `entry`) for `ray` starts from: the ray in the tree's
+    /// space prepared for box tests, and a fresh leaf with its triangle-test constants.
     #[inline(always)]
-    fn occluded_entry<const AVX2: bool>(
-        &self,
-        entry: &Entry,
-        ray: &Ray,
-        stack: &mut [MaybeUninit<Group>],
-    ) -> bool {
-        let Some(blas) = self.blases.get(entry.blas as usize) else {
-            return false;
-        };
+    fn walk_start<'s, L: BlasLeaf<'s>>(entry: &Entry, blas: &'s Blas, ray: &Ray) -> (BoxRay, L) {
         let (o, d) = Self::object_ray(entry, ray);
-        let br = BoxRay::new(o, d, ray.tmin, blas.box_bounds);
-        let mut tmax = ray.tmax;
-        let leaf = AnyLeaf {
-            tris: &blas.tris,
-            ray: TriRay::new(o, d),
-            tmin: ray.tmin,
-        };
-        traverse::<AVX2>(&blas.nodes, &br, &mut tmax, stack, leaf)
+        (
+            BoxRay::new(o, d, ray.tmin, blas.box_bounds),
+            L::start(&blas.tris, TriRay::new(o, d), ray.tmin),
+        )
     }
 
     /// The closest hit by testing every triangle of every instance, with the same ray transform
