@@ -30,24 +30,8 @@ impl TriRay {
     /// Precomputes the shear for a ray.
     #[inline]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
-        let a = dir.abs();
-        let kz = if a.x > a.y {
-            if a.x > a.z {
-                0
-            } else {
-                2
-            }
-        } else if a.y > a.z {
-            1
-        } else {
-            2
-        };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
+        let (kx, ky, kz) = axes(dir);
         let d = dir.to_array();
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
         let sz = 1.0 / d[kz];
         let (sx, sy) = (-d[kx] * sz, -d[ky] * sz);
         // Rows `e_kx + sx e_kz`, `e_ky + sy e_kz`, `e_kz`, built as columns: column `kx` is
@@ -61,6 +45,30 @@ impl TriRay {
             shear: Mat3A::from_cols(cols[0], cols[1], cols[2]),
             sz,
         }
+    }
+}
+
+/// The test's axes for a direction: `kz` the axis of the largest component, `kx`, `ky` the
+/// others, swapped when `dir[kz] < 0` to keep the winding.
+#[inline(always)]
+fn axes(dir: Vec3) -> (usize, usize, usize) {
+    let a = dir.abs();
+    let kz = if a.x > a.y {
+        if a.x > a.z {
+            0
+        } else {
+            2
+        }
+    } else if a.y > a.z {
+        1
+    } else {
+        2
+    };
+    let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    if dir[kz] < 0.0 {
+        (ky, kx, kz)
+    } else {
+        (kx, ky, kz)
     }
 }
 
@@ -162,23 +170,8 @@ mod tests {
             Vec3::new(-0.0, -1.0, 0.0),
         ] {
             let r = TriRay::new(Vec3::ZERO, dir);
-            let a = dir.abs();
-            let kz = if a.x > a.y {
-                if a.x > a.z {
-                    0
-                } else {
-                    2
-                }
-            } else if a.y > a.z {
-                1
-            } else {
-                2
-            };
-            let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+            let (kx, ky, kz) = axes(dir);
             let d = dir.to_array();
-            if d[kz] < 0.0 {
-                std::mem::swap(&mut kx, &mut ky);
-            }
             let sz = 1.0 / d[kz];
             let mut rows = [[0.0f32; 3]; 3];
             rows[0][kx] = 1.0;
