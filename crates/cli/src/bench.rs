@@ -13,7 +13,7 @@
 //! are required, `config`, `spp`, `mean_spp`, `rmse`, `mae` and `flip` are read when present
 //! (empty = unknown), any other column is ignored.
 
-use crate::render_cmd::FilterArg;
+use crate::render_cmd::{FilterArg, TracingArgs};
 use anyhow::{bail, Context as _};
 use aperture_imageio::{metrics, Image};
 use aperture_render::{AdaptiveOptions, RenderOptions, SamplerKind};
@@ -94,20 +94,10 @@ pub struct BenchArgs {
     /// Renders per configuration and budget; the time reported is their median.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
     pub repeats: u32,
-    /// Maximum bounces, as Blender Cycles counts them (0 = direct light only).
-    #[arg(long, default_value_t = aperture_render::DEFAULT_MAX_BOUNCES,
-          value_parser = clap::value_parser!(u32).range(0..=1024))]
-    pub max_bounces: u32,
-    /// Pixel filter.
-    #[arg(long, value_enum, default_value_t = FilterArg::BlackmanHarris)]
-    pub filter: FilterArg,
-    /// Cycles' "Clamp Direct" for every render, the generated reference included (as `render
-    /// --clamp-direct`; 0 = off). A given --reference must be rendered with the same clamps.
-    #[arg(long, default_value_t = 0.0, value_parser = crate::render_cmd::non_negative_f32)]
-    pub clamp_direct: f32,
-    /// Cycles' "Clamp Indirect" for every render, as --clamp-direct.
-    #[arg(long, default_value_t = 0.0, value_parser = crate::render_cmd::non_negative_f32)]
-    pub clamp_indirect: f32,
+    /// Bounces, clamps and pixel filter, as `aperture render` takes them, for every render
+    /// (the generated reference included: a given --reference must use the same clamps).
+    #[command(flatten)]
+    pub tracing: TracingArgs,
     /// An extra series to plot and compare, as FILE.csv or FILE.csv:LABEL (repeatable). The
     /// file has `results.csv`'s columns; without LABEL its `config` column names the curves.
     #[arg(long, value_parser = parse_series)]
@@ -203,11 +193,13 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         b.build().context("starting worker threads")?
     };
     let threads = pool.current_num_threads();
-    if args.clamp_direct > 0.0 || args.clamp_indirect > 0.0 {
+    let clamp = args.tracing.clamp();
+    let clamped = clamp != aperture_render::Clamp::OFF;
+    if clamped {
         println!(
             "Clamping samples (direct {}, indirect {}; 0 = off): errors are against the clamped \
              estimator, so a --reference must use the same clamps.",
-            args.clamp_direct, args.clamp_indirect
+            clamp.direct, clamp.indirect
         );
     }
     // Read before rendering, so a bad file fails at once.
@@ -219,12 +211,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         width,
         height,
         seed: args.seed,
-        max_bounces: args.max_bounces,
-        filter: args.filter.into(),
-        clamp: aperture_render::Clamp {
-            direct: args.clamp_direct,
-            indirect: args.clamp_indirect,
-        },
+        max_bounces: args.tracing.max_bounces,
+        filter: args.tracing.filter.into(),
+        clamp,
         ..RenderOptions::default()
     };
     let rows = pool.install(|| -> anyhow::Result<Vec<Row>> {
@@ -319,8 +308,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             .unwrap_or_default()
     );
     // A clamped run measures another (biased) estimator; the picture must say so.
-    if args.clamp_direct > 0.0 || args.clamp_indirect > 0.0 {
-        title += &format!(", clamp {}/{}", args.clamp_direct, args.clamp_indirect);
+    if clamped {
+        title += &format!(", clamp {}/{}", clamp.direct, clamp.indirect);
     }
     let svg = args.output.join("error_vs_time.svg");
     let png = args.output.join("error_vs_time.png");
@@ -752,10 +741,13 @@ mod tests {
         assert_eq!(d.spp.len(), 8);
         assert_eq!(d.series, vec![]);
         assert_eq!(d.target_rel_mse, vec![1e-3]);
-        assert_eq!(d.max_bounces, aperture_render::DEFAULT_MAX_BOUNCES);
-        assert_eq!((d.clamp_direct, d.clamp_indirect), (0.0, 0.0));
+        assert_eq!(d.tracing.max_bounces, aperture_render::DEFAULT_MAX_BOUNCES);
+        assert_eq!(d.tracing.clamp(), aperture_render::Clamp::OFF);
         let c = parse(&["--clamp-direct", "100", "--clamp-indirect", "10"]).unwrap();
-        assert_eq!((c.clamp_direct, c.clamp_indirect), (100.0, 10.0));
+        assert_eq!(
+            (c.tracing.clamp_direct, c.tracing.clamp_indirect),
+            (100.0, 10.0)
+        );
         for bad in [
             &["--spp", "1,0"][..],
             &["--clamp-direct", "-1"],
@@ -797,7 +789,10 @@ mod tests {
         let labels: Vec<_> = a.series.iter().map(|s| s.label.as_deref()).collect();
         assert_eq!(labels, [Some("Mitsuba 3"), None, None]);
         assert_eq!(a.target_rel_mse, vec![1e-2, 3e-3]);
-        assert_eq!((a.max_bounces, a.filter, a.repeats), (3, FilterArg::Box, 3));
+        assert_eq!(
+            (a.tracing.max_bounces, a.tracing.filter, a.repeats),
+            (3, FilterArg::Box, 3)
+        );
         assert_eq!(parse(&["--repeats", "0"]).unwrap_err().exit_code(), 2);
     }
 

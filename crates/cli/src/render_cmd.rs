@@ -81,7 +81,7 @@ fn positive_f32(s: &str) -> Result<f32, String> {
     }
 }
 
-pub(crate) fn non_negative_f32(s: &str) -> Result<f32, String> {
+fn non_negative_f32(s: &str) -> Result<f32, String> {
     let v: f32 = s.parse().map_err(|e| format!("{e}"))?;
     if v.is_finite() && v >= 0.0 {
         Ok(v)
@@ -180,6 +180,36 @@ fn load_env_image(path: &std::path::Path) -> anyhow::Result<(u32, u32, Vec<Vec3>
     Ok((w, h, texels))
 }
 
+/// How every render of `aperture render` and `aperture bench` is traced: bounces, clamps and
+/// pixel filter (one definition, so both commands take the same options the same way).
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct TracingArgs {
+    /// Maximum bounces, as Blender Cycles counts them (0 = direct light only).
+    #[arg(long, default_value_t = aperture_render::DEFAULT_MAX_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=1024))]
+    pub max_bounces: u32,
+    /// Cycles' "Clamp Direct": the most one sample may add (sum of R, G, B) for light seen
+    /// directly or after one scattering; 0 = off. Biased: removes fireflies, darkens highlights.
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative_f32)]
+    pub clamp_direct: f32,
+    /// Cycles' "Clamp Indirect" (Blender's default for new scenes is 10): the most one sample
+    /// may add for light that scattered more than once; 0 = off (the default here: unbiased).
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative_f32)]
+    pub clamp_indirect: f32,
+    /// Pixel filter.
+    #[arg(long, value_enum, default_value_t = FilterArg::BlackmanHarris)]
+    pub filter: FilterArg,
+}
+
+impl TracingArgs {
+    /// The clamps as the renderer takes them.
+    pub fn clamp(&self) -> aperture_render::Clamp {
+        aperture_render::Clamp {
+            direct: self.clamp_direct,
+            indirect: self.clamp_indirect,
+        }
+    }
+}
+
 /// Arguments of `aperture render`.
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
@@ -224,20 +254,9 @@ pub struct RenderArgs {
     /// Pinhole camera whatever the file says.
     #[arg(long)]
     pub no_dof: bool,
-    /// Maximum bounces, as Blender Cycles counts them (0 = direct light only).
-    #[arg(long, default_value_t = aperture_render::DEFAULT_MAX_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=1024))]
-    pub max_bounces: u32,
-    /// Cycles' "Clamp Direct": the most one sample may add (sum of R, G, B) for light seen
-    /// directly or after one scattering; 0 = off. Biased: removes fireflies, darkens highlights.
-    #[arg(long, default_value_t = 0.0, value_parser = non_negative_f32)]
-    pub clamp_direct: f32,
-    /// Cycles' "Clamp Indirect" (Blender's default for new scenes is 10): the most one sample
-    /// may add for light that scattered more than once; 0 = off (the default here: unbiased).
-    #[arg(long, default_value_t = 0.0, value_parser = non_negative_f32)]
-    pub clamp_indirect: f32,
-    /// Pixel filter.
-    #[arg(long, value_enum, default_value_t = FilterArg::BlackmanHarris)]
-    pub filter: FilterArg,
+    /// Bounces, clamps and pixel filter.
+    #[command(flatten)]
+    pub tracing: TracingArgs,
     /// Sample sequence.
     #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
     pub sampler: SamplerArg,
@@ -398,12 +417,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         spp: args.spp,
         seed: args.seed,
         camera: camera_index,
-        max_bounces: args.max_bounces,
-        clamp: aperture_render::Clamp {
-            direct: args.clamp_direct,
-            indirect: args.clamp_indirect,
-        },
-        filter: args.filter.into(),
+        max_bounces: args.tracing.max_bounces,
+        clamp: args.tracing.clamp(),
+        filter: args.tracing.filter.into(),
         sampler: match args.sampler {
             SamplerArg::Sobol => SamplerKind::Sobol,
             SamplerArg::Random => SamplerKind::Random,
@@ -543,8 +559,8 @@ mod tests {
     #[test]
     fn defaults_follow_the_issue() {
         let a = parse(&[]).unwrap();
-        assert_eq!(a.max_bounces, 12);
-        assert_eq!(a.filter, FilterArg::BlackmanHarris);
+        assert_eq!(a.tracing.max_bounces, 12);
+        assert_eq!(a.tracing.filter, FilterArg::BlackmanHarris);
         assert_eq!(a.sampler, SamplerArg::Sobol);
         assert_eq!(a.env, None);
         assert_eq!(a.width, None);
@@ -614,9 +630,12 @@ mod tests {
         assert_eq!(a.view, ViewArg::Agx);
         assert_eq!(a.scene_index, Some(1));
         assert_eq!(a.aperture_radius, Some(0.0));
-        assert_eq!((a.clamp_direct, a.clamp_indirect), (0.0, 0.0));
+        assert_eq!(a.tracing.clamp(), aperture_render::Clamp::OFF);
         let c = parse(&["--clamp-indirect", "10", "--clamp-direct", "100"]).unwrap();
-        assert_eq!((c.clamp_direct, c.clamp_indirect), (100.0, 10.0));
+        assert_eq!(
+            (c.tracing.clamp_direct, c.tracing.clamp_indirect),
+            (100.0, 10.0)
+        );
     }
 
     /// Runs `aperture render SCENE -o <temp>/NAME.exr ARGS` and returns the EXR read back (the
