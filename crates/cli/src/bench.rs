@@ -13,7 +13,7 @@
 //! are required, `config`, `spp`, `mean_spp`, `rmse`, `mae` and `flip` are read when present
 //! (empty = unknown), any other column is ignored.
 
-use crate::render_cmd::{FilterArg, TracingArgs};
+use crate::render_cmd::TracingArgs;
 use anyhow::{bail, Context as _};
 use aperture_imageio::{metrics, Image};
 use aperture_render::{AdaptiveOptions, RenderOptions, SamplerKind};
@@ -720,6 +720,7 @@ fn draw_plot<DB: plotters::prelude::DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render_cmd::FilterArg;
     use clap::Parser as _;
 
     fn parse(args: &[&str]) -> Result<BenchArgs, clap::Error> {
