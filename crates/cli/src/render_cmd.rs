@@ -3,7 +3,8 @@
 use crate::progress::Progress;
 use anyhow::Context as _;
 use aperture_render::{
-    EnvImage, EnvSampling, Environment, FilterKind, MaterialOverride, RenderOptions, SamplerKind,
+    EnvImage, EnvSampling, Environment, FilterKind, MaterialOverride, Pass, PassSet, RenderOptions,
+    SamplerKind,
 };
 use aperture_scene::{DofOverrides, LoadOptions};
 use clap::error::ErrorKind;
@@ -299,7 +300,18 @@ pub struct RenderArgs {
     /// rounded up to a power of two, at least 4].
     #[arg(long, requires = "noise_threshold", value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub min_spp: Option<u32>,
-    /// Add a `samples` layer to EXR output: the samples each pixel took.
+    /// EXR passes beside the beauty, with Blender's names: `default` (Depth, Normal, Denoising
+    /// Albedo, Denoising Normal, CryptoObject, CryptoMaterial), `all` (adds the light passes
+    /// and Position), `none`, or a comma-separated list such as `Depth,Normal,Emission`
+    /// (`default,Position` adds to the default). PNG output has the beauty only.
+    #[arg(long, default_value = "default", value_parser = PassSet::parse)]
+    pub passes: PassSet,
+    /// Colour passes (the beauty, light passes, denoising albedo) as half floats in EXR, clamped
+    /// to ±65504 with a warning; data passes (depth, normals, IDs) stay float32.
+    #[arg(long)]
+    pub half: bool,
+    /// Add the `Debug Sample Count` pass (the samples each pixel took); adaptive renders
+    /// always have it. Same as adding `Debug Sample Count` to --passes.
     #[arg(long)]
     pub samples_pass: bool,
     /// No progress bar and no summary.
@@ -444,6 +456,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             Some(OverrideArg::Diffuse) => MaterialOverride::Diffuse,
             None => MaterialOverride::None,
         },
+        passes: if args.samples_pass {
+            args.passes.with(Pass::SampleCount)
+        } else {
+            args.passes
+        },
     };
 
     let pool = {
@@ -453,62 +470,6 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         b.build().context("starting worker threads")?
     };
-    let (accel, film, load_secs, render_secs) = pool.install(|| -> anyhow::Result<_> {
-        let accel = aperture_render::build_accel(&scene, quality);
-        let load_secs = t_load.elapsed().as_secs_f64();
-        let progress = Progress::new(args.quiet);
-        let t0 = Instant::now();
-        let film = aperture_render::render(&scene, &accel, &opts, &|done, total| {
-            progress.update(done, total)
-        })?;
-        progress.finish();
-        Ok((accel, film, load_secs, t0.elapsed().as_secs_f64()))
-    })?;
-    drop(accel);
-
-    let mut image = crate::progress::film_to_image(&film, cam, &opts, render_secs);
-    if let Some(a) = opts.adaptive {
-        let mean = film.total_samples() as f64 / (width as f64 * height as f64);
-        image.metadata.extend([
-            (
-                "aperture:noiseThreshold".to_string(),
-                aperture_imageio::MetaValue::Float(a.threshold),
-            ),
-            (
-                "aperture:minSpp".to_string(),
-                aperture_imageio::MetaValue::Int(a.min_spp as i32),
-            ),
-            (
-                "aperture:meanSpp".to_string(),
-                aperture_imageio::MetaValue::Float(mean as f32),
-            ),
-        ]);
-    }
-    // A clamped image is biased; the header says so, so a compositor can tell.
-    for (key, v) in [
-        ("aperture:clampDirect", opts.clamp.direct),
-        ("aperture:clampIndirect", opts.clamp.indirect),
-    ] {
-        if v > 0.0 {
-            image
-                .metadata
-                .push((key.to_string(), aperture_imageio::MetaValue::Float(v)));
-        }
-    }
-    if args.samples_pass {
-        image.layers.push(aperture_imageio::Layer {
-            name: "samples".into(),
-            channels: vec!["N".into()],
-            data: film.samples_per_pixel().iter().map(|&n| n as f32).collect(),
-        });
-    }
-    if ext.as_deref() == Some("png") && !args.transparent {
-        // RGB is already the radiance over the environment (associated alpha), so an opaque
-        // pixel is the same RGB with A = 1.
-        for p in &mut image.rgba {
-            p[3] = 1.0;
-        }
-    }
     let png = aperture_imageio::PngOptions {
         exposure: args.exposure,
         view: match args.view {
@@ -517,11 +478,43 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         },
         ..Default::default()
     };
-    aperture_imageio::write_image(&args.output, &image, &png)
-        .with_context(|| format!("writing {}", args.output.display()))?;
+    let exr = aperture_render::output::ExrOptions {
+        half: args.half,
+        ..Default::default()
+    };
+    let (summary, load_secs) = pool.install(|| -> anyhow::Result<_> {
+        let accel = aperture_render::build_accel(&scene, quality);
+        let load_secs = t_load.elapsed().as_secs_f64();
+        let progress = Progress::new(args.quiet);
+        let report = |done, total| progress.update(done, total);
+        let summary = if ext.as_deref() == Some("png") {
+            aperture_render::output::render_png(
+                &scene,
+                &accel,
+                &opts,
+                &args.output,
+                &png,
+                args.transparent,
+                &report,
+            )
+        } else {
+            aperture_render::output::render_exr(&scene, &accel, &opts, &args.output, &exr, &report)
+        };
+        progress.finish();
+        Ok((
+            summary.with_context(|| format!("writing {}", args.output.display()))?,
+            load_secs,
+        ))
+    })?;
 
-    let samples = film.total_samples() as f64;
-    let dropped = film.dropped_samples();
+    if summary.half_clamped > 0 {
+        eprintln!(
+            "warning: {}: {} colour values beyond ±65504 were clamped to fit half floats (--half)",
+            args.output.display(),
+            summary.half_clamped
+        );
+    }
+    let dropped = summary.dropped;
     if !args.quiet || dropped > 0 {
         let spp = match opts.adaptive {
             None => format!("{} spp", opts.spp),
@@ -529,14 +522,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                 "adaptive {}..{} spp (mean {:.1}, threshold {})",
                 a.min_spp,
                 opts.spp,
-                samples / (width as f64 * height as f64),
+                summary.mean_spp(),
                 a.threshold
             ),
         };
+        let render_secs = summary.render_secs;
         eprintln!(
             "{}: {width}x{height}, {spp}, {render_secs:.2} s ({load_secs:.2} s loading, BVH {quality}), {:.2} Msamples/s, {dropped} dropped samples (NaN/Inf)",
             args.output.display(),
-            samples / render_secs.max(1e-9) / 1e6,
+            summary.samples as f64 / render_secs.max(1e-9) / 1e6,
         );
     }
     Ok(())
@@ -702,7 +696,10 @@ mod tests {
                 "--quiet",
             ],
         );
-        let counts = &adaptive.layer("samples").expect("samples layer").data;
+        let counts = &adaptive
+            .layer("Debug Sample Count")
+            .expect("sample count layer")
+            .data;
         assert_eq!(counts.len(), 24 * 16);
         assert!(counts.iter().all(|&n| (4.0..=16.0).contains(&n)));
         // The uniform environment converges at the minimum; the box's edges do not.

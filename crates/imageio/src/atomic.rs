@@ -24,6 +24,19 @@ fn io_error(path: &Path, doing: &str, error: io::Error) -> Error {
 /// Writes `bytes` to `path` atomically. On any error the temporary file is removed and the
 /// target is left as it was.
 pub(crate) fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), Error> {
+    write_atomically_with(path, |file| {
+        file.write_all(bytes)
+            .map_err(|e| io_error(path, "writing", e))
+    })
+}
+
+/// Creates a temporary file beside `path`, lets `write` fill it, then syncs it and renames it
+/// into place. On any error (from `write` or the file system) the temporary file is removed
+/// and the target is left as it was.
+pub(crate) fn write_atomically_with<E: From<Error>>(
+    path: &Path,
+    write: impl FnOnce(&mut File) -> Result<(), E>,
+) -> Result<(), E> {
     let file_name = path
         .file_name()
         .ok_or_else(|| Error::Io {
@@ -37,18 +50,21 @@ pub(crate) fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), Error> {
         _ => PathBuf::from("."),
     };
 
-    let (temp_path, file) = create_temp(&dir, &file_name, path)?;
-    let result = write_and_sync(file, bytes)
-        .map_err(|e| io_error(path, &format!("writing {}", temp_path.display()), e))
-        .and_then(|()| {
-            fs::rename(&temp_path, path).map_err(|e| {
-                io_error(
-                    path,
-                    &format!("renaming {} into place", temp_path.display()),
-                    e,
-                )
-            })
-        });
+    let (temp_path, mut file) = create_temp(&dir, &file_name, path)?;
+    let result = write(&mut file).and_then(|()| {
+        // Without the sync a crash soon after the rename can leave an empty file under the
+        // final name on some file systems; the cost is one flush per image.
+        file.sync_all()
+            .map_err(|e| io_error(path, &format!("writing {}", temp_path.display()), e))?;
+        drop(file);
+        fs::rename(&temp_path, path).map_err(|e| {
+            E::from(io_error(
+                path,
+                &format!("renaming {} into place", temp_path.display()),
+                e,
+            ))
+        })
+    });
     if result.is_err() {
         // Best effort: the original error is the one worth reporting.
         let _ = fs::remove_file(&temp_path);
@@ -63,7 +79,9 @@ fn create_temp(dir: &Path, file_name: &str, target: &Path) -> Result<(PathBuf, F
         // Hidden and clearly temporary, so a crash leaves a recognisable leftover.
         let temp_path = dir.join(format!(".{file_name}.{pid}.{n}.tmp"));
         // create_new: never clobber a file we did not create (another writer's temp file).
+        // Readable too: a streamed EXR's header is sorted in place after writing.
         match OpenOptions::new()
+            .read(true)
             .write(true)
             .create_new(true)
             .open(&temp_path)
@@ -79,13 +97,6 @@ fn create_temp(dir: &Path, file_name: &str, target: &Path) -> Result<(PathBuf, F
             }
         }
     }
-}
-
-fn write_and_sync(mut file: File, bytes: &[u8]) -> io::Result<()> {
-    file.write_all(bytes)?;
-    // Without the sync a crash soon after the rename can leave an empty file under the
-    // final name on some file systems; the cost is one flush per image.
-    file.sync_all()
 }
 
 #[cfg(test)]

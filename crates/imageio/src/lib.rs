@@ -5,11 +5,7 @@
 //! use aperture_imageio::{read_exr, write_image, Image, Layer, MetaValue, PngOptions};
 //! let mut image = Image::new(2, 2);
 //! image.rgba[0] = [1.0, 0.5, 0.25, 1.0];
-//! image.layers.push(Layer {
-//!     name: "depth".into(),
-//!     channels: vec!["Z".into()],
-//!     data: vec![1.5; 4],
-//! });
+//! image.layers.push(Layer::new("depth", &["Z"], vec![1.5; 4]));
 //! image.metadata.push(("aperture:radius".into(), MetaValue::Float(0.05)));
 //!
 //! let dir = std::env::temp_dir();
@@ -34,7 +30,10 @@ pub mod metrics;
 mod png;
 pub mod view;
 
-pub use crate::exr::{encode_exr, read_exr, write_exr};
+pub use crate::exr::{
+    encode_exr, read_exr, write_exr, write_exr_streamed, ChannelSpec, ExrLayout, LateValues,
+    RowWriter,
+};
 pub use crate::png::{encode_png, write_png};
 
 /// A plain float image: beauty RGBA plus optional named passes and header metadata.
@@ -50,6 +49,8 @@ pub struct Image {
     pub height: u32,
     /// Beauty pass, scene-referred linear Rec.709, `width * height` pixels; A = coverage.
     pub rgba: Vec<[f32; 4]>,
+    /// How EXR stores the beauty (half with `--half`; the values here are f32 either way).
+    pub beauty_type: SampleType,
     /// Extra passes, written to EXR as layers (`depth.Z`, `normal.X`, ...); PNG ignores them.
     pub layers: Vec<Layer>,
     /// Header metadata (camera, aperture, focus, samples, seed, render time, ...).
@@ -62,6 +63,34 @@ pub struct Image {
     /// `dataWindow`, `name`, ...) are refused. Prefer namespaced keys such as
     /// `aperture:radius` for renderer values whose meaning differs from the standard one.
     pub metadata: Vec<(String, MetaValue)>,
+    /// Where these pixels sit in a larger image (a tile of a render split across machines);
+    /// `None` when they are the whole image. EXR stores it as the data window inside the
+    /// display window.
+    pub placement: Option<Placement>,
+}
+
+/// How an EXR channel stores its samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SampleType {
+    /// 32-bit float (the default; always for data such as depth, normals, IDs).
+    #[default]
+    F32,
+    /// 16-bit half float (colour passes with `--half`): 11 bits of precision, at most 65504.
+    F16,
+}
+
+/// A part of an image inside the whole: the pixels start at `(x, y)` of a
+/// `full_width × full_height` image (x right, y down).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Placement {
+    /// Column of the first pixel.
+    pub x: u32,
+    /// Row of the first pixel.
+    pub y: u32,
+    /// Width of the whole image.
+    pub full_width: u32,
+    /// Height of the whole image.
+    pub full_height: u32,
 }
 
 impl Image {
@@ -71,8 +100,10 @@ impl Image {
             width,
             height,
             rgba: vec![[0.0; 4]; width as usize * height as usize],
+            beauty_type: SampleType::F32,
             layers: Vec::new(),
             metadata: Vec::new(),
+            placement: None,
         }
     }
 
@@ -130,19 +161,17 @@ impl Image {
                 });
             }
         }
-        let mut keys: Vec<&str> = Vec::with_capacity(self.metadata.len());
-        for (key, _) in &self.metadata {
-            if key.is_empty() || key.len() > 255 || key.contains('\0') {
-                return Err(invalid_name(
-                    NameKind::Metadata,
-                    key,
-                    "must be 1 to 255 bytes, without NUL",
-                ));
+        validate_metadata(&self.metadata)?;
+        if let Some(p) = &self.placement {
+            let fits = u64::from(p.x) + u64::from(self.width) <= u64::from(p.full_width)
+                && u64::from(p.y) + u64::from(self.height) <= u64::from(p.full_height);
+            if !fits {
+                return Err(Error::InvalidOption {
+                    option: "placement",
+                    value: format!("{p:?}"),
+                    reason: "the pixels must lie inside the whole image",
+                });
             }
-            if keys.contains(&key.as_str()) {
-                return Err(invalid_name(NameKind::Metadata, key, "appears twice"));
-            }
-            keys.push(key);
         }
         Ok(())
     }
@@ -180,6 +209,25 @@ impl Image {
     }
 }
 
+/// Metadata keys: 1 to 255 bytes, no NUL, each used once.
+pub(crate) fn validate_metadata(metadata: &[(String, MetaValue)]) -> Result<(), Error> {
+    let mut keys: Vec<&str> = Vec::with_capacity(metadata.len());
+    for (key, _) in metadata {
+        if key.is_empty() || key.len() > 255 || key.contains('\0') {
+            return Err(invalid_name(
+                NameKind::Metadata,
+                key,
+                "must be 1 to 255 bytes, without NUL",
+            ));
+        }
+        if keys.contains(&key.as_str()) {
+            return Err(invalid_name(NameKind::Metadata, key, "appears twice"));
+        }
+        keys.push(key);
+    }
+    Ok(())
+}
+
 fn invalid_name(kind: NameKind, name: &str, reason: &'static str) -> Error {
     Error::InvalidName {
         kind,
@@ -200,9 +248,21 @@ pub struct Layer {
     pub channels: Vec<String>,
     /// `width * height * channels.len()` values.
     pub data: Vec<f32>,
+    /// How EXR stores the samples.
+    pub sample_type: SampleType,
 }
 
 impl Layer {
+    /// A float32 layer.
+    pub fn new(name: &str, channels: &[&str], data: Vec<f32>) -> Self {
+        Self {
+            name: name.to_owned(),
+            channels: channels.iter().map(|c| c.to_string()).collect(),
+            data,
+            sample_type: SampleType::F32,
+        }
+    }
+
     /// The channel's name in an EXR file: `layer.channel`, or `channel` for the unnamed layer.
     pub fn full_channel_name(&self, channel: &str) -> String {
         if self.name.is_empty() {
@@ -222,6 +282,13 @@ pub enum MetaValue {
     Float(f32),
     /// An integer.
     Int(i32),
+    /// A 4×4 matrix (`m44f`), the 16 values in file order: row-major, for Imath's convention
+    /// of row vectors (a point transforms as `p · M`, the translation in the last row).
+    /// `worldToCamera` and `worldToNDC` must have this type.
+    Matrix([f32; 16]),
+    /// CIE xy chromaticities of red, green, blue and white, in that order; only as
+    /// `chromaticities`.
+    Chromaticities([f32; 8]),
 }
 
 /// The display transform applied before quantising to PNG.
@@ -462,11 +529,8 @@ mod tests {
             Err(Error::EmptyImage { .. })
         ));
 
-        let layer = |name: &str, channels: &[&str], n: usize| Layer {
-            name: name.into(),
-            channels: channels.iter().map(|c| c.to_string()).collect(),
-            data: vec![0.0; n],
-        };
+        let layer =
+            |name: &str, channels: &[&str], n: usize| Layer::new(name, channels, vec![0.0; n]);
         let cases = [
             (layer("depth", &["Z"], 3), "data size"),
             (layer("depth", &["a.b"], 2), "dot in channel"),

@@ -291,6 +291,128 @@ impl Bsdf {
     }
 }
 
+/// Per-channel fractions of a BSDF value that belong to each lobe (they sum to 1 where the
+/// value is not zero): how light passes split a contribution, as Cycles splits its
+/// Diffuse/Glossy/Transmission passes by closure.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct LobeSplit {
+    /// Diffuse fraction.
+    pub diffuse: Vec3,
+    /// Glossy (specular reflection) fraction.
+    pub glossy: Vec3,
+    /// Transmission fraction.
+    pub transmission: Vec3,
+}
+
+impl LobeSplit {
+    /// Everything diffuse.
+    pub const DIFFUSE: LobeSplit = LobeSplit {
+        diffuse: Vec3::ONE,
+        glossy: Vec3::ZERO,
+        transmission: Vec3::ZERO,
+    };
+}
+
+/// Directional albedos of a BSDF's lobes for one view direction (the "Color" passes and the
+/// denoising albedo).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct Albedos {
+    /// Diffuse lobe.
+    pub diffuse: Vec3,
+    /// Specular reflection lobe, Fresnel included.
+    pub glossy: Vec3,
+    /// Transmission lobe.
+    pub transmission: Vec3,
+}
+
+/// Directional albedo of a GGX lobe with reflectance `f0` at view cosine `nv`, from Karis'
+/// analytic fit of the split-sum integral (perceptual roughness `r`): the colour a pass shows,
+/// not a term of the estimator.
+fn env_brdf(f0: Vec3, r: f32, nv: f32) -> Vec3 {
+    let (c0, c1) = ([-1.0, -0.0275, -0.572, 0.022], [1.0, 0.0425, 1.04, -0.04]);
+    let v: [f32; 4] = std::array::from_fn(|i| r * c0[i] + c1[i]);
+    let a004 = (v[0] * v[0]).min((-9.28 * nv).exp2()) * v[0] + v[1];
+    let (a, b) = (-1.04 * a004 + v[2], 1.04 * a004 + v[3]);
+    f0 * a + Vec3::splat(b)
+}
+
+/// Cycles' line between specular and rough lobes for its denoising features: α above 0.075.
+const ROUGH_ALPHA: f32 = 0.075;
+
+impl Bsdf {
+    /// How the value at (`wo`, `wi`) splits between the lobes.
+    pub(crate) fn lobe_split(&self, wo: Vec3, wi: Vec3) -> LobeSplit {
+        match *self {
+            Self::Lambert { .. } => LobeSplit::DIFFUSE,
+            Self::MetalRough {
+                base,
+                metallic,
+                spec_weight,
+                f0,
+                ..
+            } => {
+                let f = self.eval(wo, wi).0;
+                let h = (wo + wi).normalize();
+                let w = schlick_weight(wo.dot(h).max(0.0));
+                let f_dielectric = f0 + (Vec3::ONE - f0) * w;
+                let d = (1.0 - metallic)
+                    * (1.0 - spec_weight * f_dielectric.max_element())
+                    * base
+                    * FRAC_1_PI;
+                let frac = |d: f32, f: f32| {
+                    if f > 0.0 {
+                        (d / f).clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    }
+                };
+                let diffuse = Vec3::new(frac(d.x, f.x), frac(d.y, f.y), frac(d.z, f.z));
+                LobeSplit {
+                    diffuse,
+                    glossy: Vec3::ONE - diffuse,
+                    transmission: Vec3::ZERO,
+                }
+            }
+        }
+    }
+
+    /// Each lobe's directional albedo seen from `wo` (local, `wo.z > 0`).
+    pub(crate) fn albedos(&self, wo: Vec3) -> Albedos {
+        match *self {
+            Self::Lambert { albedo } => Albedos {
+                diffuse: albedo,
+                ..Albedos::default()
+            },
+            Self::MetalRough {
+                base,
+                metallic,
+                alpha,
+                f0,
+                spec_weight,
+            } => {
+                let nv = wo.z.clamp(0.0, 1.0);
+                let fd = spec_weight * (f0 + (Vec3::ONE - f0) * schlick_weight(nv)).max_element();
+                let r = alpha.sqrt();
+                Albedos {
+                    diffuse: (1.0 - metallic) * (1.0 - fd) * base,
+                    glossy: metallic * env_brdf(base, r, nv)
+                        + (1.0 - metallic) * spec_weight * env_brdf(f0, r, nv),
+                    transmission: Vec3::ZERO,
+                }
+            }
+        }
+    }
+
+    /// True when the specular lobe is rough enough to count as a surface for denoising
+    /// features (Cycles: α > 0.075); a sharper one is followed to what it reflects.
+    pub(crate) fn glossy_is_rough(&self) -> bool {
+        match *self {
+            Self::Lambert { .. } => true,
+            Self::MetalRough { alpha, .. } => alpha > ROUGH_ALPHA,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -467,6 +589,39 @@ mod tests {
         let metal = Bsdf::metal_rough(base, 1.0, 0.3);
         let metal2 = Bsdf::metal_rough_dielectric(base, 1.0, 0.3, &d(2.5, 0.2, Vec3::X));
         assert_eq!(metal.eval(wo, wi).0, metal2.eval(wo, wi).0);
+    }
+
+    /// The lobe split sums to one and agrees with the pure cases; albedos stay in [0, 1] and
+    /// follow the material (a white metal's glossy albedo near 1 when smooth).
+    #[test]
+    fn lobes_split_and_albedos_are_sane() {
+        let wo = Vec3::new(0.3, 0.1, 0.9).normalize();
+        let wi = Vec3::new(-0.4, 0.3, 0.8).normalize();
+        let lambert = Bsdf::Lambert {
+            albedo: Vec3::splat(0.5),
+        };
+        assert_eq!(lambert.lobe_split(wo, wi), LobeSplit::DIFFUSE);
+        let metal = Bsdf::metal_rough(Vec3::ONE, 1.0, 0.05);
+        let s = metal.lobe_split(wo, wi);
+        assert_eq!(s.diffuse, Vec3::ZERO);
+        assert!(metal.albedos(wo).glossy.min_element() > 0.9);
+        assert!(!metal.glossy_is_rough());
+        for b in [
+            Bsdf::metal_rough(Vec3::new(0.8, 0.4, 0.1), 0.0, 0.5),
+            Bsdf::metal_rough(Vec3::new(0.8, 0.4, 0.1), 0.4, 0.9),
+        ] {
+            let s = b.lobe_split(wo, wi);
+            let sum = s.diffuse + s.glossy + s.transmission;
+            assert!((sum - Vec3::ONE).abs().max_element() < 1e-6, "{s:?}");
+            assert!(s.diffuse.min_element() > 0.0 && s.glossy.min_element() > 0.0);
+            let a = b.albedos(wo);
+            let total = a.diffuse + a.glossy;
+            assert!(
+                total.max_element() <= 1.0 && total.min_element() > 0.0,
+                "{a:?}"
+            );
+            assert!(b.glossy_is_rough());
+        }
     }
 
     #[test]

@@ -252,6 +252,24 @@ impl Camera {
         })
     }
 
+    /// The ray through raster position `p_film` and the lens centre, in world space: a pinhole
+    /// camera's ray, the one the Depth and Position passes trace.
+    pub fn centre_ray(&self, p_film: Vec2) -> Option<CameraRay> {
+        let ps = self.screen_point(p_film);
+        let (origin, dir) = match self.model {
+            CameraModel::ThinLens { .. } => (Vec3::ZERO, Vec3::new(ps.x, ps.y, -1.0)),
+            CameraModel::Orthographic { .. } => (ps.extend(0.0), Vec3::NEG_Z),
+        };
+        let dir = self
+            .world_from_camera
+            .transform_vector3(dir.normalize())
+            .normalize();
+        dir.is_finite().then(|| CameraRay {
+            origin: self.world_from_camera.transform_point3(origin),
+            dir,
+        })
+    }
+
     /// Circle-of-confusion diameter in pixels of a point at depth `z` (SPEC §2), perspective only.
     pub fn coc_pixels(&self, z: f32) -> f32 {
         match self.model {

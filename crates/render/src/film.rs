@@ -1,8 +1,13 @@
-//! The film: per-pixel sums in f64, resolved to RGBA f32 (A = coverage).
+//! The film: per-pixel sums in f64 of a window of the image, for the beauty and for whatever
+//! the requested passes need; resolved to means at output.
 //!
 //! Samples are weighted 1 and land in their own pixel (filter importance sampling), so the film
-//! only sums. A sample whose radiance is NaN or infinite is dropped and counted, never summed.
+//! only sums, and every averaged pass goes through the same filter as the beauty. A sample
+//! whose radiance is NaN or infinite is dropped and counted, never summed, in every pass.
 
+use crate::aov::{self, SampleAov};
+use crate::cryptomatte::CryptoPixel;
+use crate::passes::{Pass, PassSet};
 use glam::Vec3;
 
 /// Sums of one pixel.
@@ -45,37 +50,256 @@ impl PixelSum {
     }
 }
 
-/// A rendered image before output: sums per pixel plus counters.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Film {
-    width: u32,
-    height: u32,
-    pixels: Vec<PixelSum>,
-    /// Samples each pixel took, dropped ones included (all `spp` unless sampling was adaptive).
-    taken: Vec<u32>,
-    dropped: u64,
+/// A rectangle of pixels of the image: `x0 ≤ x < x0 + width`, `y0 ≤ y < y0 + height` (x right,
+/// y down).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Window {
+    /// First column.
+    pub x0: u32,
+    /// First row.
+    pub y0: u32,
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
 }
 
-impl Film {
-    /// An empty film.
-    pub fn new(width: u32, height: u32) -> Self {
+impl Window {
+    /// The whole `width × height` image.
+    pub fn whole(width: u32, height: u32) -> Self {
         Self {
+            x0: 0,
+            y0: 0,
             width,
             height,
-            pixels: vec![PixelSum::default(); width as usize * height as usize],
-            taken: vec![0; width as usize * height as usize],
-            dropped: 0,
         }
     }
 
-    /// Width in pixels.
-    pub fn width(&self) -> u32 {
-        self.width
+    /// Pixels in the window.
+    pub fn pixels(&self) -> usize {
+        self.width as usize * self.height as usize
     }
 
-    /// Height in pixels.
+    /// The window grown by `by` pixels on every side, kept inside a `w × h` image.
+    pub fn grown(&self, by: u32, w: u32, h: u32) -> Self {
+        let x0 = self.x0.saturating_sub(by);
+        let y0 = self.y0.saturating_sub(by);
+        let x1 = (self.x0 + self.width).saturating_add(by).min(w);
+        let y1 = (self.y0 + self.height).saturating_add(by).min(h);
+        Self {
+            x0,
+            y0,
+            width: x1 - x0,
+            height: y1 - y0,
+        }
+    }
+
+    /// True when the window lies inside a `w × h` image and holds a pixel.
+    pub fn fits(&self, w: u32, h: u32) -> bool {
+        self.width > 0
+            && self.height > 0
+            && u64::from(self.x0) + u64::from(self.width) <= u64::from(w)
+            && u64::from(self.y0) + u64::from(self.height) <= u64::from(h)
+    }
+}
+
+/// Which averaged quantities are summed per sample, and where in a pixel's `f64` sums.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) struct AovLayout {
+    /// Offset of the normal sum, if summed.
+    pub normal: Option<usize>,
+    /// Offset of the denoising albedo.
+    pub albedo: Option<usize>,
+    /// Offset of the denoising normal (world space).
+    pub denoising_normal: Option<usize>,
+    /// Offset of the eleven light passes (three values each), if any is asked for.
+    pub light: Option<usize>,
+    /// Values per pixel.
+    pub stride: usize,
+    /// Cryptomatte of objects.
+    pub crypto_object: bool,
+    /// Cryptomatte of materials.
+    pub crypto_material: bool,
+}
+
+impl AovLayout {
+    /// The sums `passes` need.
+    pub fn new(passes: PassSet) -> Self {
+        let mut stride = 0;
+        let mut take = |on: bool, n: usize| {
+            on.then(|| {
+                stride += n;
+                stride - n
+            })
+        };
+        let normal = take(passes.contains(Pass::Normal), 3);
+        let albedo = take(passes.contains(Pass::DenoisingAlbedo), 3);
+        let denoising_normal = take(passes.contains(Pass::DenoisingNormal), 3);
+        let light = take(passes.has_light_passes(), 33);
+        Self {
+            normal,
+            albedo,
+            denoising_normal,
+            light,
+            stride,
+            crypto_object: passes.contains(Pass::CryptoObject),
+            crypto_material: passes.contains(Pass::CryptoMaterial),
+        }
+    }
+
+    /// True when samples must record more than their radiance.
+    pub fn records(&self) -> bool {
+        self.stride > 0 || self.crypto_object || self.crypto_material
+    }
+}
+
+/// Cryptomatte IDs (float bits) of each instance's node and of each material.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct CryptoIds {
+    pub object: Vec<u32>,
+    pub material: Vec<u32>,
+}
+
+/// Per-pixel accumulators of a set of pixels: the beauty and whatever the passes need.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub(crate) struct Accum {
+    pub layout: AovLayout,
+    pub sums: Vec<PixelSum>,
+    pub aov: Vec<f64>,
+    pub crypto_object: Vec<CryptoPixel>,
+    pub crypto_material: Vec<CryptoPixel>,
+}
+
+impl Accum {
+    /// Empty accumulators for `n` pixels.
+    pub fn new(n: usize, layout: AovLayout) -> Self {
+        Self {
+            layout,
+            sums: vec![PixelSum::default(); n],
+            aov: vec![0.0; n * layout.stride],
+            crypto_object: vec![CryptoPixel::default(); if layout.crypto_object { n } else { 0 }],
+            crypto_material: vec![
+                CryptoPixel::default();
+                if layout.crypto_material { n } else { 0 }
+            ],
+        }
+    }
+
+    /// Adds sample radiance `l` (coverage `hit`) and its pass record to pixel `k`. Returns
+    /// false, adding nothing anywhere, when the radiance is not finite (a dropped sample).
+    #[inline]
+    pub fn add(&mut self, k: usize, l: Vec3, hit: bool, rec: &SampleAov, ids: &CryptoIds) -> bool {
+        if !self.sums[k].add(l, hit) {
+            return false;
+        }
+        let lay = self.layout;
+        if lay.stride > 0 {
+            let sums = &mut self.aov[k * lay.stride..(k + 1) * lay.stride];
+            let mut put = |at: Option<usize>, v: Vec3| {
+                if let Some(o) = at {
+                    sums[o] += f64::from(v.x);
+                    sums[o + 1] += f64::from(v.y);
+                    sums[o + 2] += f64::from(v.z);
+                }
+            };
+            put(lay.normal, rec.normal);
+            put(lay.albedo, rec.albedo);
+            put(lay.denoising_normal, rec.denoising_normal);
+            if let Some(o) = lay.light {
+                for (i, v) in rec.light.iter().enumerate() {
+                    put(Some(o + 3 * i), *v);
+                }
+            }
+        }
+        if lay.crypto_object && rec.instance != aov::NONE {
+            if let Some(&id) = ids.object.get(rec.instance as usize) {
+                self.crypto_object[k].add(id);
+            }
+        }
+        if lay.crypto_material && rec.material != aov::NONE {
+            if let Some(&id) = ids.material.get(rec.material as usize) {
+                self.crypto_material[k].add(id);
+            }
+        }
+        true
+    }
+
+    /// Copies pixel `from` of `other` into pixel `to`.
+    pub fn copy_pixel(&mut self, to: usize, other: &Accum, from: usize) {
+        self.sums[to] = other.sums[from];
+        let s = self.layout.stride;
+        self.aov[to * s..(to + 1) * s].copy_from_slice(&other.aov[from * s..(from + 1) * s]);
+        if self.layout.crypto_object {
+            self.crypto_object[to] = other.crypto_object[from];
+        }
+        if self.layout.crypto_material {
+            self.crypto_material[to] = other.crypto_material[from];
+        }
+    }
+}
+
+/// A rendered window of an image before output: sums per pixel plus counters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Film {
+    window: Window,
+    image_width: u32,
+    image_height: u32,
+    passes: PassSet,
+    pub(crate) accum: Accum,
+    /// Samples each pixel took, dropped ones included (all `spp` unless sampling was adaptive).
+    taken: Vec<u32>,
+    dropped: u64,
+    /// Depth along the view axis of the centre ray's hit (`Depth` pass), or empty.
+    pub(crate) depth: Vec<f32>,
+    /// World position of that hit (`Position` pass), or empty.
+    pub(crate) position: Vec<Vec3>,
+}
+
+impl Film {
+    /// An empty film of the whole `width × height` image, beauty only.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self::for_window(Window::whole(width, height), width, height, PassSet::NONE)
+    }
+
+    /// An empty film of `window` of a `width × height` image, with room for `passes`.
+    pub(crate) fn for_window(window: Window, width: u32, height: u32, passes: PassSet) -> Self {
+        let n = window.pixels();
+        Self {
+            window,
+            image_width: width,
+            image_height: height,
+            passes,
+            accum: Accum::new(n, AovLayout::new(passes)),
+            taken: vec![0; n],
+            dropped: 0,
+            depth: Vec::new(),
+            position: Vec::new(),
+        }
+    }
+
+    /// Width of the film (its window) in pixels.
+    pub fn width(&self) -> u32 {
+        self.window.width
+    }
+
+    /// Height of the film (its window) in pixels.
     pub fn height(&self) -> u32 {
-        self.height
+        self.window.height
+    }
+
+    /// Which pixels of the image the film holds.
+    pub fn window(&self) -> Window {
+        self.window
+    }
+
+    /// Size of the whole image the window belongs to.
+    pub fn image_size(&self) -> (u32, u32) {
+        (self.image_width, self.image_height)
+    }
+
+    /// The passes the film was rendered with.
+    pub fn passes(&self) -> PassSet {
+        self.passes
     }
 
     /// Samples dropped because their radiance was NaN or infinite.
@@ -83,23 +307,27 @@ impl Film {
         self.dropped
     }
 
-    /// The sums of pixel `(x, y)` (row 0 at the top).
+    fn index(&self, x: u32, y: u32) -> usize {
+        y as usize * self.window.width as usize + x as usize
+    }
+
+    /// The sums of pixel `(x, y)` of the window (row 0 at the top).
     pub fn pixel_sum(&self, x: u32, y: u32) -> &PixelSum {
-        &self.pixels[y as usize * self.width as usize + x as usize]
+        &self.accum.sums[self.index(x, y)]
     }
 
     /// Samples pixel `(x, y)` took, dropped ones included: the render's `spp`, or fewer where
     /// adaptive sampling stopped it early.
     pub fn samples_taken(&self, x: u32, y: u32) -> u32 {
-        self.taken[y as usize * self.width as usize + x as usize]
+        self.taken[self.index(x, y)]
     }
 
-    /// Samples taken per pixel, rows top to bottom (the `samples` pass).
+    /// Samples taken per pixel, rows top to bottom (the `Debug Sample Count` pass).
     pub fn samples_per_pixel(&self) -> &[u32] {
         &self.taken
     }
 
-    /// Samples taken over the whole image, dropped ones included.
+    /// Samples taken over the whole window, dropped ones included.
     pub fn total_samples(&self) -> u64 {
         self.taken.iter().map(|&n| u64::from(n)).sum()
     }
@@ -111,31 +339,46 @@ impl Film {
 
     /// Every pixel resolved, rows top to bottom.
     pub fn to_rgba(&self) -> Vec<[f32; 4]> {
-        self.pixels.iter().map(PixelSum::resolve).collect()
+        self.accum.sums.iter().map(PixelSum::resolve).collect()
     }
 
-    /// Copies a finished tile in. Tiles own disjoint pixels, so the order of calls does not
-    /// change the result; the renderer still merges in a fixed order.
+    /// The mean of an averaged pass (Normal, Denoising Albedo or Normal, a light pass before
+    /// its division by the Color pass) at pixel index `i`, or `None` when not rendered.
+    pub(crate) fn mean3(&self, i: usize, at: Option<usize>) -> Option<Vec3> {
+        let o = at?;
+        let s = &self.accum.aov[i * self.accum.layout.stride + o..][..3];
+        let n = self.accum.sums[i].count;
+        Some(if n > 0.0 {
+            Vec3::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)
+        } else {
+            Vec3::ZERO
+        })
+    }
+
+    /// Copies a finished tile in (`x0`, `y0` relative to the window). Tiles own disjoint
+    /// pixels, so the order of calls does not change the result; the renderer still merges in
+    /// a fixed order.
     pub(crate) fn merge_tile(
         &mut self,
         x0: u32,
         y0: u32,
         w: u32,
-        sums: &[PixelSum],
+        tile: &Accum,
         taken: u32,
         dropped: u64,
     ) {
-        for (row, chunk) in sums.chunks(w as usize).enumerate() {
-            let start = (y0 as usize + row) * self.width as usize + x0 as usize;
-            self.pixels[start..start + chunk.len()].copy_from_slice(chunk);
-            self.taken[start..start + chunk.len()].fill(taken);
+        for k in 0..tile.sums.len() {
+            let (tx, ty) = (k as u32 % w, k as u32 / w);
+            let i = self.index(x0 + tx, y0 + ty);
+            self.accum.copy_pixel(i, tile, k);
+            self.taken[i] = taken;
         }
         self.dropped += dropped;
     }
 
-    /// Mutable sums and sample counts of every pixel, for the adaptive renderer's rounds.
-    pub(crate) fn state_mut(&mut self) -> (&mut [PixelSum], &mut [u32], &mut u64) {
-        (&mut self.pixels, &mut self.taken, &mut self.dropped)
+    /// Sample counts of every pixel and the dropped count, for the adaptive renderer.
+    pub(crate) fn counts_mut(&mut self) -> (&mut [u32], &mut u64) {
+        (&mut self.taken, &mut self.dropped)
     }
 }
 
@@ -156,16 +399,10 @@ mod tests {
     #[test]
     fn tiles_land_where_they_belong() {
         let mut f = Film::new(4, 3);
-        let mut s = PixelSum::default();
-        s.add(Vec3::ONE, true);
-        f.merge_tile(
-            2,
-            1,
-            2,
-            &[s, PixelSum::default(), PixelSum::default(), s],
-            7,
-            5,
-        );
+        let mut tile = Accum::new(4, AovLayout::default());
+        tile.sums[0].add(Vec3::ONE, true);
+        tile.sums[3].add(Vec3::ONE, true);
+        f.merge_tile(2, 1, 2, &tile, 7, 5);
         assert_eq!(f.pixel(2, 1), [1.0; 4]);
         assert_eq!(f.pixel(3, 2), [1.0; 4]);
         assert_eq!(f.pixel(3, 1), [0.0; 4]);
@@ -174,5 +411,52 @@ mod tests {
         assert_eq!(f.samples_taken(3, 2), 7);
         assert_eq!(f.samples_taken(0, 0), 0);
         assert_eq!(f.total_samples(), 4 * 7);
+    }
+
+    #[test]
+    fn pass_records_are_summed_and_dropped_with_the_beauty() {
+        let passes = PassSet::parse("Normal,Emission,CryptoObject").unwrap();
+        let layout = AovLayout::new(passes);
+        assert_eq!(
+            (layout.normal, layout.light, layout.stride),
+            (Some(0), Some(3), 36)
+        );
+        let ids = CryptoIds {
+            object: vec![11, 22],
+            material: vec![],
+        };
+        let mut acc = Accum::new(1, layout);
+        let mut rec = SampleAov {
+            normal: Vec3::Z,
+            instance: 1,
+            ..SampleAov::default()
+        };
+        rec.light[aov::slot::EMISSION] = Vec3::splat(2.0);
+        assert!(acc.add(0, Vec3::splat(2.0), true, &rec, &ids));
+        assert!(!acc.add(0, Vec3::NAN, true, &rec, &ids));
+        assert!(acc.add(0, Vec3::ZERO, false, &SampleAov::default(), &ids));
+        assert_eq!(&acc.aov[..3], &[0.0, 0.0, 1.0]);
+        assert_eq!(acc.aov[3 + 3 * aov::slot::EMISSION], 2.0);
+        assert_eq!(acc.crypto_object[0].ranked(2.0)[0], (22, 0.5));
+    }
+
+    #[test]
+    fn windows_grow_inside_the_image() {
+        let w = Window {
+            x0: 3,
+            y0: 0,
+            width: 4,
+            height: 2,
+        };
+        assert_eq!(
+            w.grown(5, 10, 4),
+            Window {
+                x0: 0,
+                y0: 0,
+                width: 10,
+                height: 4
+            }
+        );
+        assert!(w.fits(7, 2) && !w.fits(6, 2));
     }
 }

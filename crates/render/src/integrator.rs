@@ -5,10 +5,11 @@
 //! `max_bounces` has Blender Cycles' meaning: 0 is direct light only (the camera ray's hit is lit
 //! by light sampling and by one BSDF-sampled ray that may find an emitter or the environment).
 
-use crate::bsdf::Frame;
+use crate::aov::{Features, SampleAov, Seen};
+use crate::bsdf::{Bsdf, Frame, LobeSplit};
 use crate::environment::EnvLight;
 use crate::lights::{punctual_incident, EmissiveLights};
-use crate::sampler::SampleStream;
+use crate::sampler::{BounceSample, SampleStream};
 use crate::surface::{Geometry, Surface};
 use aperture_accel::{Accel, Hit, Ray, SpawnPoint};
 use glam::Vec3;
@@ -135,6 +136,24 @@ impl Integrator<'_> {
         None
     }
 
+    /// The first surface along a ray (unit direction) that is opaque at coverage ½: what the
+    /// Depth and Position passes show. Deterministic, unlike a sample: alpha-blended surfaces
+    /// count as solid where their alpha is at least ½.
+    pub fn first_surface(&self, origin: Vec3, dir: Vec3) -> Option<Vec3> {
+        let mut r = Ray::new(origin, dir);
+        for _ in 0..MAX_ALPHA_PASSES {
+            let hit = self.accel.intersect(&r)?;
+            let s = self.geom.surface(hit.instance, hit.triangle, hit.u, hit.v);
+            if !self.geom.has_alpha || self.geom.is_opaque(&s, 0.5) {
+                return Some(s.p);
+            }
+            let error = self.accel.spawn_point(&r, &hit).error;
+            let n = if s.ng.dot(r.dir) > 0.0 { s.ng } else { -s.ng };
+            r = Ray::new(SpawnPoint { p: s.p, error }.origin(n), r.dir);
+        }
+        None
+    }
+
     /// Fraction of light arriving along a shadow ray from `origin` in unit direction `dir` over
     /// `dist`.
     fn visibility(&self, origin: Vec3, dir: Vec3, dist: f32) -> f32 {
@@ -179,31 +198,39 @@ impl Integrator<'_> {
     /// loop traces primary rays in batches and calls [`Integrator::li_with_first_hit`].)
     #[cfg(test)]
     pub fn li(&self, origin: Vec3, dir: Vec3, stream: &SampleStream) -> (Vec3, bool) {
-        self.li_from(origin, dir, stream, None)
+        self.li_from::<false>(origin, dir, stream, None, &mut SampleAov::default())
     }
 
     /// [`Integrator::li`] with the primary ray's closest hit already found:
     /// `first = accel.intersect(&Ray::new(origin, dir))` (from a batch query; the result is the
-    /// same as `li`'s).
-    pub fn li_with_first_hit(
+    /// same as `li`'s). With `AOV`, the sample's pass values are recorded into `aov` (which
+    /// must start as [`SampleAov::default`]); the radiance is the same bit for bit either way.
+    pub fn li_with_first_hit<const AOV: bool>(
         &self,
         origin: Vec3,
         dir: Vec3,
         stream: &SampleStream,
         first: Option<Hit>,
+        aov: &mut SampleAov,
     ) -> (Vec3, bool) {
-        self.li_from(origin, dir, stream, Some(first))
+        self.li_from::<AOV>(origin, dir, stream, Some(first), aov)
     }
 
     #[inline]
-    fn li_from(
+    fn li_from<const AOV: bool>(
         &self,
         origin: Vec3,
         dir: Vec3,
         stream: &SampleStream,
         mut first: Option<Option<Hit>>,
+        aov: &mut SampleAov,
     ) -> (Vec3, bool) {
-        let mut l = Vec3::ZERO;
+        let mut path = PathState::<AOV> {
+            l: Vec3::ZERO,
+            aov,
+            first_split: LobeSplit::DIFFUSE,
+            features: Features::default(),
+        };
         let mut beta = Vec3::ONE;
         let mut ray = Ray::new(origin, dir);
         let mut prev_p = origin;
@@ -214,20 +241,7 @@ impl Integrator<'_> {
             let bs = stream.bounce(vertex);
             let Some((hit, s, error)) = self.trace(&ray, stream, vertex, bs.alpha, first.take())
             else {
-                // A constant environment is found by BSDF sampling alone (weight 1); an image is
-                // also light-sampled, so escaping BSDF rays share it by MIS.
-                if vertex == 0 {
-                    l += self.clamp.apply(beta * self.env.radiance_seen(ray.dir), 0);
-                } else {
-                    let w = if self.env.is_sampled() {
-                        power_heuristic(prev_pdf, self.env.pdf(ray.dir))
-                    } else {
-                        1.0
-                    };
-                    l += self
-                        .clamp
-                        .apply(beta * self.env.radiance(ray.dir) * w, vertex);
-                }
+                self.escape(&mut path, beta, ray.dir, vertex, prev_pdf);
                 break;
             };
             if vertex == 0 {
@@ -244,8 +258,16 @@ impl Integrator<'_> {
                 shading.normal
             };
             let ns = bend_towards(ns, wo);
+            if AOV && vertex == 0 {
+                path.aov.normal = ns;
+                path.aov.instance = hit.instance;
+                path.aov.material = s.material;
+            }
             if let Some(c) = shading.unlit {
-                l += self.clamp.apply(beta * c, vertex);
+                path.add(self.clamp.apply(beta * c, vertex), vertex, Seen::Surface);
+                if AOV {
+                    path.features.at_colour(path.aov, c, ns);
+                }
                 break;
             }
             if shading.emission != Vec3::ZERO {
@@ -268,7 +290,8 @@ impl Integrator<'_> {
                     }
                 };
                 // An emitter found from vertex v has scattered v times on the way to the camera.
-                l += self.clamp.apply(beta * shading.emission * w, vertex);
+                let c = self.clamp.apply(beta * shading.emission * w, vertex);
+                path.add(c, vertex, Seen::Surface);
             }
             if vertex > self.max_bounces {
                 break;
@@ -282,82 +305,29 @@ impl Integrator<'_> {
                 frame = Frame::from_normal(ng);
                 wo_l = frame.to_local(wo);
             }
-            // Our point is interpolated from the vertices; the accel's bound covers the rounding
-            // of instanced transforms, which a few ulps of the point alone would not.
-            let p_out = SpawnPoint { p: s.p, error }.origin(ng);
-
-            for light in &self.geom.scene.lights {
-                let Some((wi, dist, e)) = punctual_incident(light, s.p) else {
-                    continue;
-                };
-                if wi.dot(ng) <= 0.0 || e == Vec3::ZERO {
-                    continue;
+            if AOV {
+                let albedos = bsdf.albedos(wo_l);
+                if vertex == 0 {
+                    path.aov.set_colours(&albedos);
                 }
-                let wi_l = frame.to_local(wi);
-                let (f, _) = bsdf.eval(wo_l, wi_l);
-                let c = beta * f * wi_l.z * e;
-                if c != Vec3::ZERO {
-                    let dist = if dist.is_finite() {
-                        (light.position - p_out).length()
-                    } else {
-                        dist
-                    };
-                    l += self.clamp.apply(c, vertex + 1) * self.visibility(p_out, wi, dist);
-                }
+                let rough = bsdf.glossy_is_rough();
+                path.features.at_surface(path.aov, &albedos, rough, ns);
             }
-
-            if let Some(em) = &self.emissive {
-                let i = em.table.sample(bs.light_pick);
-                let t = em.triangles[i];
-                let (a, b) = (bs.light[0].sqrt(), bs.light[1]);
-                let q = self
-                    .geom
-                    .surface(t.instance, t.triangle, a * (1.0 - b), a * b);
-                let d = q.p - s.p;
-                let d2 = d.length_squared();
-                let dist = d2.sqrt();
-                let wi = d / dist;
-                let cos_l = q.ng.dot(wi).abs();
-                if d2 > 0.0 && cos_l > 0.0 && wi.dot(ng) > 0.0 && q.area > 0.0 {
-                    let light_pdf = em.table.pmf(i) / q.area * d2 / cos_l;
-                    let wi_l = frame.to_local(wi);
-                    let (f, bsdf_pdf) = bsdf.eval(wo_l, wi_l);
-                    let le = self.geom.emission(&q);
-                    let c =
-                        beta * f * wi_l.z * le * (power_heuristic(light_pdf, bsdf_pdf) / light_pdf);
-                    if c != Vec3::ZERO && c.is_finite() {
-                        let qn = if q.ng.dot(wi) < 0.0 { q.ng } else { -q.ng };
-                        let target = self.accel.surface_point(t.instance, q.p).origin(qn);
-                        let to = target - p_out;
-                        let len = to.length();
-                        l +=
-                            self.clamp.apply(c, vertex + 1) * self.visibility(p_out, to / len, len);
-                    }
-                }
-            }
-
-            // Only an image is light-sampled; a constant colour is met by BSDF rays alone, so
-            // its pair of sample values (two scrambled Sobol dimensions) is not even drawn.
-            let env_sample = if self.env.is_sampled() {
-                self.env.sample(stream.environment(vertex))
-            } else {
-                None
+            let v = Vertex {
+                bsdf: &bsdf,
+                frame,
+                wo_l,
+                ng,
+                p: s.p,
+                // Our point is interpolated from the vertices; the accel's bound covers the
+                // rounding of instanced transforms, which a few ulps of the point alone would
+                // not.
+                p_out: SpawnPoint { p: s.p, error }.origin(ng),
+                vertex,
             };
-            if let Some(es) = env_sample {
-                let wi_l = frame.to_local(es.wi);
-                if es.wi.dot(ng) > 0.0 && es.radiance != Vec3::ZERO {
-                    let (f, bsdf_pdf) = bsdf.eval(wo_l, wi_l);
-                    let c = beta
-                        * f
-                        * wi_l.z
-                        * es.radiance
-                        * (power_heuristic(es.pdf, bsdf_pdf) / es.pdf);
-                    if c != Vec3::ZERO && c.is_finite() {
-                        l += self.clamp.apply(c, vertex + 1)
-                            * self.visibility(p_out, es.wi, f32::INFINITY);
-                    }
-                }
-            }
+            self.direct_punctual(&v, beta, &mut path);
+            self.direct_emissive(&v, beta, &bs, &mut path);
+            self.direct_environment(&v, beta, stream, &mut path);
 
             let Some(sample) = bsdf.sample(wo_l, bs.lobe, bs.bsdf) else {
                 break;
@@ -365,6 +335,9 @@ impl Integrator<'_> {
             let wi = frame.to_world(sample.wi);
             if wi.dot(ng) <= 0.0 {
                 break;
+            }
+            if AOV && vertex == 0 {
+                path.first_split = bsdf.lobe_split(wo_l, sample.wi);
             }
             beta *= sample.f * (sample.wi.z / sample.pdf);
             prev_pdf = sample.pdf;
@@ -380,10 +353,200 @@ impl Integrator<'_> {
                 break;
             }
             prev_p = s.p;
-            ray = Ray::new(p_out, wi);
+            ray = Ray::new(v.p_out, wi);
             vertex += 1;
         }
-        (l, covered)
+        (path.l, covered)
+    }
+
+    /// A ray leaving the scene after `vertex` scatterings: the environment it sees. A
+    /// constant environment is found by BSDF sampling alone (weight 1); an image is also
+    /// light-sampled, so escaping BSDF rays share it by MIS.
+    fn escape<const AOV: bool>(
+        &self,
+        path: &mut PathState<'_, AOV>,
+        beta: Vec3,
+        dir: Vec3,
+        vertex: u32,
+        prev_pdf: f32,
+    ) {
+        if vertex == 0 {
+            let seen = self.env.radiance_seen(dir);
+            path.add(self.clamp.apply(beta * seen, 0), 0, Seen::Environment);
+            if AOV {
+                path.features.at_colour(path.aov, seen, Vec3::ZERO);
+            }
+            return;
+        }
+        let w = if self.env.is_sampled() {
+            power_heuristic(prev_pdf, self.env.pdf(dir))
+        } else {
+            1.0
+        };
+        let radiance = self.env.radiance(dir);
+        path.add(
+            self.clamp.apply(beta * radiance * w, vertex),
+            vertex,
+            Seen::Environment,
+        );
+        if AOV {
+            path.features.at_colour(path.aov, radiance, Vec3::ZERO);
+        }
+    }
+
+    /// Next-event estimation towards every punctual light (deltas: light sampling only).
+    fn direct_punctual<const AOV: bool>(
+        &self,
+        v: &Vertex<'_>,
+        beta: Vec3,
+        path: &mut PathState<'_, AOV>,
+    ) {
+        for light in &self.geom.scene.lights {
+            let Some((wi, dist, e)) = punctual_incident(light, v.p) else {
+                continue;
+            };
+            if wi.dot(v.ng) <= 0.0 || e == Vec3::ZERO {
+                continue;
+            }
+            let wi_l = v.frame.to_local(wi);
+            let (f, _) = v.bsdf.eval(v.wo_l, wi_l);
+            let c = beta * f * wi_l.z * e;
+            if c != Vec3::ZERO {
+                let dist = if dist.is_finite() {
+                    (light.position - v.p_out).length()
+                } else {
+                    dist
+                };
+                self.add_direct(v, path, c, wi_l, wi, dist);
+            }
+        }
+    }
+
+    /// Next-event estimation towards one emissive triangle picked by power, weighted against
+    /// BSDF sampling by MIS.
+    fn direct_emissive<const AOV: bool>(
+        &self,
+        v: &Vertex<'_>,
+        beta: Vec3,
+        bs: &BounceSample,
+        path: &mut PathState<'_, AOV>,
+    ) {
+        let Some(em) = &self.emissive else { return };
+        let i = em.table.sample(bs.light_pick);
+        let t = em.triangles[i];
+        let (a, b) = (bs.light[0].sqrt(), bs.light[1]);
+        let q = self
+            .geom
+            .surface(t.instance, t.triangle, a * (1.0 - b), a * b);
+        let d = q.p - v.p;
+        let d2 = d.length_squared();
+        let dist = d2.sqrt();
+        let wi = d / dist;
+        let cos_l = q.ng.dot(wi).abs();
+        if d2 > 0.0 && cos_l > 0.0 && wi.dot(v.ng) > 0.0 && q.area > 0.0 {
+            let light_pdf = em.table.pmf(i) / q.area * d2 / cos_l;
+            let wi_l = v.frame.to_local(wi);
+            let (f, bsdf_pdf) = v.bsdf.eval(v.wo_l, wi_l);
+            let le = self.geom.emission(&q);
+            let c = beta * f * wi_l.z * le * (power_heuristic(light_pdf, bsdf_pdf) / light_pdf);
+            if c != Vec3::ZERO && c.is_finite() {
+                let qn = if q.ng.dot(wi) < 0.0 { q.ng } else { -q.ng };
+                let target = self.accel.surface_point(t.instance, q.p).origin(qn);
+                let to = target - v.p_out;
+                let len = to.length();
+                self.add_direct(v, path, c, wi_l, to / len, len);
+            }
+        }
+    }
+
+    /// Next-event estimation towards an environment image, weighted against BSDF sampling by
+    /// MIS. Only an image is light-sampled; a constant colour is met by BSDF rays alone, so
+    /// its pair of sample values (two scrambled Sobol dimensions) is not even drawn.
+    fn direct_environment<const AOV: bool>(
+        &self,
+        v: &Vertex<'_>,
+        beta: Vec3,
+        stream: &SampleStream,
+        path: &mut PathState<'_, AOV>,
+    ) {
+        if !self.env.is_sampled() {
+            return;
+        }
+        let Some(es) = self.env.sample(stream.environment(v.vertex)) else {
+            return;
+        };
+        let wi_l = v.frame.to_local(es.wi);
+        if es.wi.dot(v.ng) > 0.0 && es.radiance != Vec3::ZERO {
+            let (f, bsdf_pdf) = v.bsdf.eval(v.wo_l, wi_l);
+            let c = beta * f * wi_l.z * es.radiance * (power_heuristic(es.pdf, bsdf_pdf) / es.pdf);
+            if c != Vec3::ZERO && c.is_finite() {
+                self.add_direct(v, path, c, wi_l, es.wi, f32::INFINITY);
+            }
+        }
+    }
+
+    /// The contribution every light sample shares: `c` (light over its density, through the
+    /// BSDF) clamped as light after one more scattering, times the shadow ray's visibility
+    /// from the vertex along `dir` over `dist`; `wi_l` is the local light direction, which
+    /// splits the contribution among the lobes at the first vertex.
+    #[inline]
+    fn add_direct<const AOV: bool>(
+        &self,
+        v: &Vertex<'_>,
+        path: &mut PathState<'_, AOV>,
+        c: Vec3,
+        wi_l: Vec3,
+        dir: Vec3,
+        dist: f32,
+    ) {
+        let lit = self.clamp.apply(c, v.vertex + 1) * self.visibility(v.p_out, dir, dist);
+        path.l += lit;
+        if AOV {
+            let split = if v.vertex == 0 {
+                v.bsdf.lobe_split(v.wo_l, wi_l)
+            } else {
+                path.first_split
+            };
+            path.aov.add_light(lit, v.vertex + 1, &split, Seen::Surface);
+        }
+    }
+}
+
+/// A scattering vertex, as the light-sampling routines see it.
+struct Vertex<'b> {
+    bsdf: &'b Bsdf,
+    frame: Frame,
+    /// The view direction, local.
+    wo_l: Vec3,
+    /// Geometric normal on the viewer's side.
+    ng: Vec3,
+    /// The surface point.
+    p: Vec3,
+    /// Where rays leave the surface.
+    p_out: Vec3,
+    /// Scatterings before this vertex.
+    vertex: u32,
+}
+
+/// One path's running sums.
+struct PathState<'a, const AOV: bool> {
+    /// Radiance so far.
+    l: Vec3,
+    /// The sample's pass values (untouched unless `AOV`).
+    aov: &'a mut SampleAov,
+    /// How the first vertex's sampled direction split among the lobes.
+    first_split: LobeSplit,
+    features: Features,
+}
+
+impl<const AOV: bool> PathState<'_, AOV> {
+    /// Adds light that reached the camera after `scatterings` scatterings.
+    #[inline]
+    fn add(&mut self, c: Vec3, scatterings: u32, seen: Seen) {
+        self.l += c;
+        if AOV {
+            self.aov.add_light(c, scatterings, &self.first_split, seen);
+        }
     }
 }
 

@@ -18,13 +18,17 @@
 //! seed), the path tracer turns rays into radiance and the [`Film`] sums it.
 
 pub mod adaptive;
+mod aov;
 mod bsdf;
 pub mod camera;
+pub mod cryptomatte;
 mod environment;
 mod film;
 mod filter;
 mod integrator;
 mod lights;
+pub mod output;
+pub mod passes;
 mod render;
 pub mod sampler;
 mod surface;
@@ -35,12 +39,13 @@ pub use adaptive::AdaptiveOptions;
 pub use bsdf::{Bsdf, BsdfSample, Dielectric, Frame};
 pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, CameraSample};
 pub use environment::{EnvImage, EnvSampling, Environment};
-pub use film::{Film, PixelSum};
+pub use film::{Film, PixelSum, Window};
 pub use filter::{Filter, FilterKind};
 pub use integrator::Clamp;
+pub use passes::{Pass, PassSet};
 pub use render::{
-    auto_bvh_quality, build_accel, render, render_with_camera, RenderError, RenderOptions,
-    DEFAULT_MAX_BOUNCES, TILE,
+    auto_bvh_quality, build_accel, material_name, render, render_window, render_with_camera,
+    scene_camera, RenderError, RenderOptions, DEFAULT_MAX_BOUNCES, DEPTH_BACKGROUND, TILE,
 };
 pub use sampler::{SampleStream, SamplerKind, MAX_SPP};
 pub use surface::MaterialOverride;

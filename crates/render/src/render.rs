@@ -3,12 +3,15 @@
 //! by one tile, so the image is bit-identical for any thread count and any run.
 
 use crate::adaptive::{self, AdaptiveOptions};
+use crate::aov::SampleAov;
 use crate::camera::{Camera, CameraRay, CameraSample};
+use crate::cryptomatte;
 use crate::environment::{EnvLight, Environment};
-use crate::film::{Film, PixelSum};
+use crate::film::{Accum, AovLayout, CryptoIds, Film, Window};
 use crate::filter::{Filter, FilterKind};
 use crate::integrator::{Clamp, Integrator};
 use crate::lights::EmissiveLights;
+use crate::passes::{Pass, PassSet};
 use crate::sampler::{SampleStream, SamplerKind, MAX_SPP};
 use crate::surface::{Geometry, MaterialOverride};
 use aperture_accel::{Accel, Ray};
@@ -53,6 +56,9 @@ pub struct RenderOptions {
     pub adaptive: Option<AdaptiveOptions>,
     /// Cycles' sample clamping ([`Clamp::OFF`] by default: unbiased).
     pub clamp: Clamp,
+    /// Passes to render beside the beauty (none by default; the CLI asks for
+    /// [`PassSet::compositing`]).
+    pub passes: PassSet,
 }
 
 impl Default for RenderOptions {
@@ -70,6 +76,7 @@ impl Default for RenderOptions {
             material_override: MaterialOverride::None,
             adaptive: None,
             clamp: Clamp::OFF,
+            passes: PassSet::NONE,
         }
     }
 }
@@ -192,6 +199,12 @@ pub fn render(
     opts: &RenderOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Film, RenderError> {
+    let camera = scene_camera(scene, opts)?;
+    render_with_camera(scene, accel, &camera, opts, progress)
+}
+
+/// The camera `opts.camera` of the scene, for the options' image size.
+pub fn scene_camera(scene: &Scene, opts: &RenderOptions) -> Result<Camera, RenderError> {
     let cam = scene
         .cameras
         .get(opts.camera)
@@ -199,8 +212,7 @@ pub fn render(
             index: opts.camera,
             count: scene.cameras.len(),
         })?;
-    let camera = Camera::new(cam, opts.width, opts.height);
-    render_with_camera(scene, accel, &camera, opts, progress)
+    Ok(Camera::new(cam, opts.width, opts.height))
 }
 
 /// Renders through an explicit camera (its width and height must match the options').
@@ -211,7 +223,33 @@ pub fn render_with_camera(
     opts: &RenderOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Film, RenderError> {
+    let whole = Window::whole(opts.width, opts.height);
+    render_window(scene, accel, camera, opts, whole, progress)
+}
+
+/// Renders the pixels of `window` only. Each is bit-identical to the same pixel of a whole
+/// render: every sample is a pure function of (pixel, index, dimension, seed), and adaptive
+/// sampling, whose stopping rule looks at neighbours, renders the apron of pixels around the
+/// window that its decisions can reach and then drops it.
+pub fn render_window(
+    scene: &Scene,
+    accel: &Accel,
+    camera: &Camera,
+    opts: &RenderOptions,
+    window: Window,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Film, RenderError> {
     check(opts)?;
+    if !window.fits(opts.width, opts.height) {
+        return Err(RenderError::InvalidOption {
+            name: "region",
+            value: format!(
+                "{}x{} at ({}, {})",
+                window.width, window.height, window.x0, window.y0
+            ),
+            why: "must hold a pixel and lie inside the image",
+        });
+    }
     let integrator = integrator(scene, accel, opts);
     let filter = Filter::new(opts.filter);
     let job = Job {
@@ -220,35 +258,134 @@ pub fn render_with_camera(
         filter: &filter,
         opts,
         pinhole: camera.aperture == crate::camera::Aperture::Pinhole,
+        layout: AovLayout::new(opts.passes),
+        ids: crypto_ids(scene, opts.passes),
     };
-    let (w, h) = (opts.width, opts.height);
-    let tiles: Vec<(u32, u32, u32, u32)> = (0..h.div_ceil(TILE))
+    let mut film = match opts.adaptive {
+        Some(a) => render_adaptive(&job, &a, window, progress),
+        None => render_uniform(&job, window, progress),
+    };
+    if opts.passes.contains(Pass::Depth) || opts.passes.contains(Pass::Position) {
+        centre_rays(&job, &mut film);
+    }
+    Ok(film)
+}
+
+/// Units of work [`render_window`] reports progress in for `window`: tiles, times rounds for
+/// adaptive sampling (which may finish early, skipping the rest).
+pub(crate) fn progress_units(opts: &RenderOptions, window: Window) -> usize {
+    match opts.adaptive {
+        Some(a) => {
+            let rounds = a.rounds(opts.spp);
+            let region = window.grown(rounds.len() as u32, opts.width, opts.height);
+            tiles_of(region).len() * rounds.len()
+        }
+        None => tiles_of(window).len(),
+    }
+}
+
+/// Tiles of at most [`TILE`]² pixels covering `w`, relative to its corner.
+fn tiles_of(w: Window) -> Vec<(u32, u32, u32, u32)> {
+    (0..w.height.div_ceil(TILE))
         .flat_map(|ty| {
-            (0..w.div_ceil(TILE)).map(move |tx| {
+            (0..w.width.div_ceil(TILE)).map(move |tx| {
                 let (x0, y0) = (tx * TILE, ty * TILE);
-                (x0, y0, TILE.min(w - x0), TILE.min(h - y0))
+                (x0, y0, TILE.min(w.width - x0), TILE.min(w.height - y0))
             })
         })
-        .collect();
-    if let Some(a) = opts.adaptive {
-        return Ok(render_adaptive(&job, &a, &tiles, progress));
-    }
+        .collect()
+}
+
+/// Every pixel of `window` at `spp` samples.
+fn render_uniform(job: &Job<'_>, window: Window, progress: &(dyn Fn(usize, usize) + Sync)) -> Film {
+    let opts = job.opts;
+    let tiles = tiles_of(window);
     let total = tiles.len();
     let done = AtomicUsize::new(0);
-    let results: Vec<(Vec<PixelSum>, u64)> = tiles
+    let results: Vec<(Accum, u64)> = tiles
         .par_iter()
         .map(|&(x0, y0, tw, th)| {
-            let r = job.render_tile(x0, y0, tw, th);
+            let r = if job.layout.records() {
+                job.render_tile::<true>(window.x0 + x0, window.y0 + y0, tw, th)
+            } else {
+                job.render_tile::<false>(window.x0 + x0, window.y0 + y0, tw, th)
+            };
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
             r
         })
         .collect();
-    let mut film = Film::new(w, h);
-    for (&(x0, y0, tw, _), (sums, dropped)) in tiles.iter().zip(&results) {
-        film.merge_tile(x0, y0, tw, sums, opts.spp, *dropped);
+    let mut film = Film::for_window(window, opts.width, opts.height, opts.passes);
+    for (&(x0, y0, tw, _), (tile, dropped)) in tiles.iter().zip(&results) {
+        film.merge_tile(x0, y0, tw, tile, opts.spp, *dropped);
     }
-    Ok(film)
+    film
 }
+
+/// Cryptomatte IDs of every instance's node and every material, when the passes need them.
+fn crypto_ids(scene: &Scene, passes: PassSet) -> CryptoIds {
+    let id = |name: &str| cryptomatte::id_bits(cryptomatte::murmur3_32(name.as_bytes()));
+    CryptoIds {
+        object: if passes.contains(Pass::CryptoObject) {
+            scene
+                .instances
+                .iter()
+                .map(|i| id(&scene.node_name(i.node)))
+                .collect()
+        } else {
+            Vec::new()
+        },
+        material: if passes.contains(Pass::CryptoMaterial) {
+            (0..scene.materials.len())
+                .map(|m| id(&material_name(scene, m)))
+                .collect()
+        } else {
+            Vec::new()
+        },
+    }
+}
+
+/// A material's name for compositors: its glTF name, else `materials[N]`.
+pub fn material_name(scene: &Scene, index: usize) -> String {
+    match scene.materials.get(index).and_then(|m| m.name.as_deref()) {
+        Some(name) => name.to_owned(),
+        None => format!("materials[{index}]"),
+    }
+}
+
+/// The Depth and Position passes: the surface seen through each pixel's centre and the lens
+/// centre, one ray per pixel, traced once (sharp and deterministic, not a sample).
+fn centre_rays(job: &Job<'_>, film: &mut Film) {
+    let w = film.window();
+    let cam = job.camera;
+    let forward = cam.world_from_camera.transform_vector3(Vec3::NEG_Z);
+    let hits: Vec<Option<Vec3>> = (0..w.pixels())
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (w.x0 + (i as u32 % w.width), w.y0 + (i as u32 / w.width));
+            let p_film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let ray = cam.centre_ray(p_film)?;
+            job.integrator.first_surface(ray.origin, ray.dir)
+        })
+        .collect();
+    let origin = Vec3::from(cam.world_from_camera.translation);
+    let ortho = matches!(cam.model, crate::camera::CameraModel::Orthographic { .. });
+    if job.opts.passes.contains(Pass::Depth) {
+        film.depth = hits
+            .iter()
+            .map(|h| match h {
+                // Distance along the view axis (from the camera's plane for orthographic).
+                Some(p) if ortho || (*p - origin).dot(forward) > 0.0 => (*p - origin).dot(forward),
+                _ => DEPTH_BACKGROUND,
+            })
+            .collect();
+    }
+    if job.opts.passes.contains(Pass::Position) {
+        film.position = hits.iter().map(|h| h.unwrap_or(Vec3::ZERO)).collect();
+    }
+}
+
+/// Depth where the centre ray meets nothing: Cycles' value.
+pub const DEPTH_BACKGROUND: f32 = 1e10;
 
 /// The path tracer of one render.
 fn integrator<'a>(scene: &'a Scene, accel: &'a Accel, opts: &RenderOptions) -> Integrator<'a> {
@@ -271,6 +408,8 @@ struct Job<'a> {
     filter: &'a Filter,
     opts: &'a RenderOptions,
     pinhole: bool,
+    layout: AovLayout,
+    ids: CryptoIds,
 }
 
 impl Job<'_> {
@@ -303,18 +442,18 @@ impl Job<'_> {
         Some(self.integrator.li(ray.origin, ray.dir, &stream))
     }
 
-    /// Calls `f(key, result)` for every `(key, x, y, i)` of `items`, in order, where `result`
-    /// is the radiance and coverage of sample `i` of pixel `(x, y)` (`None` when the camera
-    /// makes no ray for it).
+    /// Calls `f(key, result, record)` for every `(key, x, y, i)` of `items`, in order, where
+    /// `result` is the radiance and coverage of sample `i` of pixel `(x, y)` (`None` when the
+    /// camera makes no ray for it) and `record` its pass values (default unless `AOV`).
     ///
     /// Why in runs: the primary rays of [`PRIMARY_BATCH`] samples go through one
     /// [`Accel::intersect_batch`], which walks several rays at once (about 1.2–1.4× the rays
     /// per second of one-ray queries, `BENCHMARKS.md`); the rest of each path is traced as
     /// before. The results are exactly those of tracing each sample alone.
-    fn samples<K: Copy>(
+    fn samples<K: Copy, const AOV: bool>(
         &self,
         items: impl IntoIterator<Item = (K, u32, u32, u32)>,
-        mut f: impl FnMut(K, Option<(Vec3, bool)>),
+        mut f: impl FnMut(K, Option<(Vec3, bool)>, &SampleAov),
     ) {
         let mut items = items.into_iter();
         let mut run = Vec::with_capacity(PRIMARY_BATCH);
@@ -336,19 +475,25 @@ impl Job<'_> {
             self.integrator.accel.intersect_batch(&rays, &mut hits);
             let mut first = hits.iter();
             for (key, stream, ray) in &run {
+                let mut record = SampleAov::default();
                 let result = ray.as_ref().map(|r| {
                     let hit = first.next().copied().flatten();
-                    self.integrator
-                        .li_with_first_hit(r.origin, r.dir, stream, hit)
+                    self.integrator.li_with_first_hit::<AOV>(
+                        r.origin,
+                        r.dir,
+                        stream,
+                        hit,
+                        &mut record,
+                    )
                 });
-                f(*key, result);
+                f(*key, result, &record);
             }
         }
     }
 
     /// Every pixel of a tile at `spp` samples: the sums and the dropped-sample count.
-    fn render_tile(&self, x0: u32, y0: u32, tw: u32, th: u32) -> (Vec<PixelSum>, u64) {
-        let mut sums = vec![PixelSum::default(); (tw * th) as usize];
+    fn render_tile<const AOV: bool>(&self, x0: u32, y0: u32, tw: u32, th: u32) -> (Accum, u64) {
+        let mut acc = Accum::new((tw * th) as usize, self.layout);
         let mut dropped = 0u64;
         let spp = self.opts.spp;
         let items = (y0..y0 + th).flat_map(|y| {
@@ -357,101 +502,128 @@ impl Job<'_> {
                 (0..spp).map(move |i| (k, x, y, i))
             })
         });
-        self.samples(items, |k, result| match result {
-            Some((l, hit)) if sums[k].add(l, hit) => {}
+        self.samples::<_, AOV>(items, |k, result, rec| match result {
+            Some((l, hit)) if acc.add(k, l, hit, rec, &self.ids) => {}
             _ => dropped += 1,
         });
-        (sums, dropped)
+        (acc, dropped)
     }
-}
-
-/// One pixel's running state in an adaptive render.
-#[derive(Clone, Copy, Default)]
-struct AdaptivePixel {
-    sum: PixelSum,
-    /// Per channel, the sum of squared samples, for the error estimate.
-    sq: [f64; 3],
-    taken: u32,
-    dropped: u64,
 }
 
 /// Rounds of doubling sample counts over the active pixels; between rounds, pixels whose error
 /// is below the threshold (and whose neighbours are too) stop. See [`crate::adaptive`].
+///
+/// The rounds run over `window` grown by the apron its decisions can reach: a pixel's
+/// decision after round r depends on pixels up to r away, so with as many apron pixels as
+/// decisions, the window's pixels come out as in a whole-image render.
 fn render_adaptive(
     job: &Job<'_>,
     a: &AdaptiveOptions,
-    tiles: &[(u32, u32, u32, u32)],
+    window: Window,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Film {
-    let (w, h) = (job.opts.width as usize, job.opts.height as usize);
-    let rounds = a.rounds(job.opts.spp);
-    let mut state = vec![AdaptivePixel::default(); w * h];
-    let mut active = vec![true; w * h];
+    let opts = job.opts;
+    let rounds = a.rounds(opts.spp);
+    let region = window.grown(rounds.len() as u32, opts.width, opts.height);
+    let (w, n) = (region.width as usize, region.pixels());
+    let tiles = tiles_of(region);
+    let mut state = Accum::new(n, job.layout);
+    let mut sq = vec![[0.0f64; 3]; n];
+    let mut taken = vec![0u32; n];
+    let mut dropped = vec![0u64; n];
+    let mut active = vec![true; n];
     let total = tiles.len() * rounds.len();
     let done = AtomicUsize::new(0);
     for (r, &target) in rounds.iter().enumerate() {
-        let updates: Vec<Vec<(usize, AdaptivePixel)>> = tiles
+        let updates: Vec<AdaptiveTile> = tiles
             .par_iter()
             .map(|&(x0, y0, tw, th)| {
-                let mut out = Vec::new();
-                for y in y0..y0 + th {
-                    for x in x0..x0 + tw {
-                        let idx = y as usize * w + x as usize;
-                        if active[idx] {
-                            out.push((idx, state[idx]));
-                        }
-                    }
-                }
-                let pixels: Vec<(u32, u32, u32)> = out
-                    .iter()
-                    .map(|&(idx, p)| ((idx % w) as u32, (idx / w) as u32, p.taken))
+                let pixels: Vec<usize> = (y0..y0 + th)
+                    .flat_map(|y| (x0..x0 + tw).map(move |x| y as usize * w + x as usize))
+                    .filter(|&i| active[i])
                     .collect();
-                let items = pixels
+                let mut t = AdaptiveTile {
+                    acc: Accum::new(pixels.len(), job.layout),
+                    sq: pixels.iter().map(|&i| sq[i]).collect(),
+                    dropped: vec![0; pixels.len()],
+                    pixels,
+                };
+                for (k, &i) in t.pixels.iter().enumerate() {
+                    t.acc.copy_pixel(k, &state, i);
+                }
+                let items: Vec<(usize, u32, u32, u32)> = t
+                    .pixels
                     .iter()
                     .enumerate()
-                    .flat_map(|(k, &(x, y, taken))| (taken..target).map(move |i| (k, x, y, i)));
-                job.samples(items, |k, result| {
-                    let p = &mut out[k].1;
-                    match result {
-                        Some((l, hit)) if p.sum.add(l, hit) => {
-                            for (s, v) in p.sq.iter_mut().zip(l.to_array()) {
-                                *s += f64::from(v) * f64::from(v);
-                            }
+                    .flat_map(|(k, &i)| {
+                        let (x, y) = (region.x0 + (i % w) as u32, region.y0 + (i / w) as u32);
+                        (taken[i]..target).map(move |s| (k, x, y, s))
+                    })
+                    .collect();
+                let mut add = |k: usize, result: Option<(Vec3, bool)>, rec: &SampleAov| match result
+                {
+                    Some((l, hit)) if t.acc.add(k, l, hit, rec, &job.ids) => {
+                        for (s, v) in t.sq[k].iter_mut().zip(l.to_array()) {
+                            *s += f64::from(v) * f64::from(v);
                         }
-                        _ => p.dropped += 1,
                     }
-                });
-                for (_, p) in &mut out {
-                    p.taken = target;
+                    _ => t.dropped[k] += 1,
+                };
+                if job.layout.records() {
+                    job.samples::<_, true>(items, &mut add);
+                } else {
+                    job.samples::<_, false>(items, &mut add);
                 }
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
-                out
+                t
             })
             .collect();
-        for (idx, p) in updates.into_iter().flatten() {
-            state[idx] = p;
+        for t in updates {
+            for (k, &i) in t.pixels.iter().enumerate() {
+                state.copy_pixel(i, &t.acc, k);
+                sq[i] = t.sq[k];
+                dropped[i] += t.dropped[k];
+                taken[i] = target;
+            }
         }
         if r + 1 == rounds.len() {
             break;
         }
-        let converged: Vec<bool> = state
-            .iter()
-            .map(|p| adaptive::pixel_error(&p.sum, &p.sq) < f64::from(a.threshold))
+        let converged: Vec<bool> = (0..n)
+            .map(|i| adaptive::pixel_error(&state.sums[i], &sq[i]) < f64::from(a.threshold))
             .collect();
-        let budget: Vec<bool> = state.iter().map(|p| p.taken < job.opts.spp).collect();
+        let budget: Vec<bool> = taken.iter().map(|&t| t < opts.spp).collect();
         active = adaptive::dilate(&converged, &budget, w);
         if !active.iter().any(|&b| b) {
             break;
         }
     }
-    let mut film = Film::new(w as u32, h as u32);
-    let (sums, taken, dropped) = film.state_mut();
-    for (i, p) in state.iter().enumerate() {
-        sums[i] = p.sum;
-        taken[i] = p.taken;
-        *dropped += p.dropped;
+    // Keep the window, drop the apron.
+    let mut film = Film::for_window(window, opts.width, opts.height, opts.passes);
+    let (dx, dy) = (
+        (window.x0 - region.x0) as usize,
+        (window.y0 - region.y0) as usize,
+    );
+    for y in 0..window.height as usize {
+        for x in 0..window.width as usize {
+            let (i, k) = ((y + dy) * w + x + dx, y * window.width as usize + x);
+            film.accum.copy_pixel(k, &state, i);
+            let (t, d) = film.counts_mut();
+            t[k] = taken[i];
+            *d += dropped[i];
+        }
     }
     film
+}
+
+/// The active pixels of one tile during an adaptive round, with their running sums.
+struct AdaptiveTile {
+    /// Indices into the region.
+    pixels: Vec<usize>,
+    acc: Accum,
+    /// Per channel, the sums of squared samples, for the error estimate.
+    sq: Vec<[f64; 3]>,
+    dropped: Vec<u64>,
 }
 
 #[cfg(test)]
@@ -524,6 +696,8 @@ mod tests {
             filter: &filter,
             opts: &opts,
             pinhole: false,
+            layout: AovLayout::default(),
+            ids: CryptoIds::default(),
         };
         // More items than one batch, in an order that jumps between pixels and samples.
         let items: Vec<(usize, u32, u32, u32)> = (0..opts.height)
@@ -536,7 +710,7 @@ mod tests {
         assert!(items.len() > 2 * PRIMARY_BATCH);
         let mut seen = 0;
         let (mut hits, mut misses) = (0, 0);
-        job.samples(items.iter().copied(), |k, result| {
+        job.samples::<_, false>(items.iter().copied(), |k, result, _| {
             assert_eq!(k, seen, "results arrive in order");
             seen += 1;
             let (_, x, y, i) = items[k];

@@ -43,7 +43,7 @@ mod uri;
 
 pub use dof::{lens_from_yfov, DEFAULT_ASPECT};
 pub use error::Error;
-pub use load::{load, load_bytes};
+pub use load::{content_hash, load, load_bytes};
 pub use prepass::SUPPORTED_EXTENSIONS;
 pub use tangents::generate_missing_tangents;
 pub use types::*;

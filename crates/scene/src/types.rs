@@ -28,6 +28,13 @@ pub struct Scene {
     /// the precision it has at the origin. Directions and distances (hence depth of field) do
     /// not change.
     pub world_origin: DVec3,
+    /// The glTF nodes' names, by node index (`Instance::node` indexes it); empty for scenes
+    /// built by hand. Compositors identify objects by them (Cryptomatte).
+    pub node_names: Vec<Option<String>>,
+    /// A hash of the file's bytes (the `.gltf` or `.glb` read, not its external resources),
+    /// so parts of a render split across machines can be checked to come from the same
+    /// scene; 0 for scenes built by hand.
+    pub source_hash: u64,
 }
 
 /// Triangle geometry in object space: all primitives of one glTF mesh, merged.
@@ -531,6 +538,14 @@ pub struct SceneStats {
 }
 
 impl Scene {
+    /// The name of node `node`: its glTF name, else `nodes[N]`.
+    pub fn node_name(&self, node: u32) -> String {
+        match self.node_names.get(node as usize) {
+            Some(Some(name)) => name.clone(),
+            _ => format!("nodes[{node}]"),
+        }
+    }
+
     /// Triangles stored (each unique mesh counted once).
     pub fn unique_triangle_count(&self) -> usize {
         self.meshes.iter().map(|m| m.indices.len()).sum()

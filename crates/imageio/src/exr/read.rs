@@ -1,0 +1,300 @@
+//! EXR reading: any file OpenEXR writes, into a plain [`Image`].
+
+use std::collections::BTreeMap;
+use std::io::Cursor;
+use std::path::Path;
+
+use ::exr::image::FlatSamples;
+use ::exr::meta::MetaData;
+use ::exr::prelude::traits::{ReadChannels, ReadLayers};
+
+use super::attrs::{chromaticities, get_attributes, meta_value, string};
+use super::guard;
+use crate::{Error, Image, Layer, Placement, SampleType};
+
+/// Reads an EXR file: the beauty, the other channels as layers, and the metadata.
+///
+/// - Beauty: the unnamed `R`,`G`,`B`,`A`; `A` = 1 when absent. A luminance-only file (`Y`)
+///   gives grey. Failing both, the first layer holding `R`,`G`,`B` (preferring one named
+///   `...Combined`, as in Blender's multilayer files) is the beauty and is not repeated
+///   among the layers.
+/// - Half and uint samples are converted to f32 (half exactly; uint above 2^24 rounds).
+/// - Layers come back sorted by name, channels within one in the order `R G B A X Y Z W U V`
+///   then alphabetical; channels outside any layer form the layer named `""`.
+/// - Metadata: text, f32 and i32 header attributes (custom ones, and the standard ones
+///   [`Image::metadata`] lists), sorted by key; attributes of other types are skipped. Of a
+///   multi-part file only the part holding the beauty gives metadata.
+/// - The image is the data window; all parts must share it.
+///
+/// All codecs of exr 1.74 are read; for DWAA/DWAB only scan-line parts (tiled or deep DWA
+/// is refused, as its blocks are not checked; see below).
+///
+/// A damaged or hostile file gives an error, never a panic. As a guard against files that
+/// claim a huge image in a few bytes, the decoded samples may take at most 1 GiB or 4096
+/// times the file size, whichever is larger; the size counters of DWA blocks are checked
+/// before decoding, as the decoder trusts them for allocations.
+pub fn read_exr(path: &Path) -> Result<Image, Error> {
+    let bytes = std::fs::read(path).map_err(|e| Error::Io {
+        path: path.to_path_buf(),
+        message: format!("reading: {e}"),
+    })?;
+    decode_exr(&bytes, path)
+}
+
+/// Decodes EXR bytes; see [`read_exr`]. `path` only names the file in errors.
+pub(crate) fn decode_exr(bytes: &[u8], path: &Path) -> Result<Image, Error> {
+    // The `exr` decoder can panic on some damaged data (seen: an integer overflow in its B44
+    // decompressor), so a panic is turned into an error: a damaged file must not bring down
+    // the caller. Nothing shared is mutated inside, so unwinding leaves no broken state.
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        decode_exr_inner(bytes, path)
+    }))
+    .unwrap_or_else(|panic| {
+        let message = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Err(Error::Exr {
+            path: path.to_path_buf(),
+            message: format!("the decoder panicked on damaged data: {message}"),
+        })
+    })
+}
+
+fn decode_exr_inner(bytes: &[u8], path: &Path) -> Result<Image, Error> {
+    let exr_error = |e: ::exr::error::Error| Error::Exr {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    let unsupported = |what: String| Error::UnsupportedExr {
+        path: path.to_path_buf(),
+        what,
+    };
+
+    let meta = MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(exr_error)?;
+    match guard::check_dwa_blocks(bytes, &meta) {
+        Ok(()) => {}
+        Err(guard::DwaProblem::Unsupported(what)) => return Err(unsupported(what)),
+        Err(guard::DwaProblem::Damaged(message)) => {
+            return Err(Error::Exr {
+                path: path.to_path_buf(),
+                message,
+            })
+        }
+    }
+    let limit = (1u64 << 30).max(4096 * bytes.len() as u64);
+    let mut decoded = 0u64;
+    for header in &meta.headers {
+        let samples = (header.layer_size.width() as u64)
+            .saturating_mul(header.layer_size.height() as u64)
+            .saturating_mul(header.channels.list.len() as u64);
+        decoded = decoded.saturating_add(samples.saturating_mul(4));
+    }
+    if decoded > limit {
+        return Err(unsupported(format!(
+            "{decoded} bytes of samples from a {}-byte file",
+            bytes.len()
+        )));
+    }
+
+    // Sequential decoding: reading is not the renderer's hot path, and it keeps a damaged
+    // file's error on this thread.
+    let image = ::exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .non_parallel()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(exr_error)?;
+
+    let first = image
+        .layer_data
+        .first()
+        .ok_or_else(|| unsupported("no parts".into()))?;
+    let (size, position) = (first.size, first.attributes.layer_position);
+    let pixels = size.area();
+
+    // Every channel of every part, by full name.
+    let mut channels: BTreeMap<String, (usize, Vec<f32>, SampleType)> = BTreeMap::new();
+    for (part_index, part) in image.layer_data.iter().enumerate() {
+        if part.size != size || part.attributes.layer_position != position {
+            return Err(unsupported("parts with different data windows".into()));
+        }
+        let prefix = match &part.attributes.layer_name {
+            Some(name) if !name.as_slice().is_empty() => format!("{}.", string(name.as_slice())),
+            _ => String::new(),
+        };
+        for channel in &part.channel_data.list {
+            let full = format!("{prefix}{}", string(channel.name.as_slice()));
+            let (samples, kind): (Vec<f32>, _) = match &channel.sample_data {
+                FlatSamples::F16(v) => (v.iter().map(|h| h.to_f32()).collect(), SampleType::F16),
+                FlatSamples::F32(v) => (v.clone(), SampleType::F32),
+                FlatSamples::U32(v) => (v.iter().map(|&u| u as f32).collect(), SampleType::F32),
+            };
+            if samples.len() != pixels {
+                return Err(unsupported(format!("subsampled channel `{full}`")));
+            }
+            channels.insert(full, (part_index, samples, kind));
+        }
+    }
+
+    let has = |name: &str| channels.contains_key(name);
+    let beauty_prefix = if has("R") && has("G") && has("B") {
+        Some(String::new())
+    } else if has("Y") {
+        None
+    } else {
+        let prefixes: Vec<String> = channels
+            .keys()
+            .filter_map(|k| k.strip_suffix(".R").map(|p| format!("{p}.")))
+            .filter(|p| has(&format!("{p}G")) && has(&format!("{p}B")))
+            .collect();
+        let chosen = prefixes
+            .iter()
+            .find(|p| p.ends_with("Combined."))
+            .or(prefixes.first());
+        match chosen {
+            Some(p) => Some(p.clone()),
+            None => {
+                return Err(Error::NoBeauty {
+                    path: path.to_path_buf(),
+                    channels: channels.keys().cloned().collect::<Vec<_>>().join(", "),
+                })
+            }
+        }
+    };
+
+    let mut take = |name: &str| channels.remove(name);
+    let (rgb, alpha, beauty_part, beauty_type) = match &beauty_prefix {
+        Some(p) => {
+            let r = take(&format!("{p}R")).expect("checked above");
+            let g = take(&format!("{p}G")).expect("checked above");
+            let b = take(&format!("{p}B")).expect("checked above");
+            let (part, kind) = (r.0, r.2);
+            (
+                [r.1, g.1, b.1],
+                take(&format!("{p}A")).map(|a| a.1),
+                part,
+                kind,
+            )
+        }
+        None => {
+            let (part, y, kind) = take("Y").expect("checked above");
+            (
+                [y.clone(), y.clone(), y],
+                take("A").map(|a| a.1),
+                part,
+                kind,
+            )
+        }
+    };
+    let rgba = (0..pixels)
+        .map(|p| {
+            let a = alpha.as_ref().map_or(1.0, |a| a[p]);
+            [rgb[0][p], rgb[1][p], rgb[2][p], a]
+        })
+        .collect();
+
+    let mut grouped: BTreeMap<String, Vec<(String, Vec<f32>, SampleType)>> = BTreeMap::new();
+    for (full, (_, samples, kind)) in channels {
+        let (layer, channel) = match full.rfind('.') {
+            Some(dot) => (full[..dot].to_owned(), full[dot + 1..].to_owned()),
+            None => (String::new(), full),
+        };
+        grouped
+            .entry(layer)
+            .or_default()
+            .push((channel, samples, kind));
+    }
+    let layers = grouped
+        .into_iter()
+        .map(|(name, mut list)| {
+            list.sort_by(|a, b| {
+                channel_rank(&a.0)
+                    .cmp(&channel_rank(&b.0))
+                    .then(a.0.cmp(&b.0))
+            });
+            let stride = list.len();
+            let mut data = vec![0.0; pixels * stride];
+            // A layer is half when all its channels are.
+            let sample_type = if list.iter().all(|c| c.2 == SampleType::F16) {
+                SampleType::F16
+            } else {
+                SampleType::F32
+            };
+            for (index, (_, samples, _)) in list.iter().enumerate() {
+                for (p, &value) in samples.iter().enumerate() {
+                    data[p * stride + index] = value;
+                }
+            }
+            Layer {
+                name,
+                channels: list.into_iter().map(|(channel, ..)| channel).collect(),
+                data,
+                sample_type,
+            }
+        })
+        .collect();
+
+    let mut metadata = get_attributes(&image.layer_data[beauty_part].attributes);
+    for (name, value) in &image.attributes.other {
+        if let Some(value) = meta_value(value) {
+            metadata.push((string(name.as_slice()), value));
+        }
+    }
+    metadata.extend(chromaticities(&image.attributes));
+    metadata.sort_by(|a, b| a.0.cmp(&b.0));
+
+    let too_big = || unsupported("image larger than u32".into());
+    let (width, height) = (
+        u32::try_from(size.width()).map_err(|_| too_big())?,
+        u32::try_from(size.height()).map_err(|_| too_big())?,
+    );
+    let display = image.attributes.display_window;
+    let placement = placement(display, position, width, height);
+    Ok(Image {
+        width,
+        height,
+        rgba,
+        beauty_type,
+        layers,
+        metadata,
+        placement,
+    })
+}
+
+/// Conventional channel order within a layer, so `R,G,B` does not come back as `B,G,R`.
+fn channel_rank(channel: &str) -> usize {
+    ["R", "G", "B", "A", "X", "Y", "Z", "W", "U", "V"]
+        .iter()
+        .position(|c| *c == channel)
+        .unwrap_or(usize::MAX)
+}
+
+/// Where the data window sits in the display window; `None` when they are the same, or when
+/// the data window is not inside the display window (overscan), which [`Image`] cannot
+/// describe: then the data window is the image.
+fn placement(
+    display: ::exr::meta::attribute::IntegerBounds,
+    position: ::exr::math::Vec2<i32>,
+    width: u32,
+    height: u32,
+) -> Option<Placement> {
+    let (dx, dy) = (display.position.x(), display.position.y());
+    let x = u32::try_from(i64::from(position.x()) - i64::from(dx)).ok()?;
+    let y = u32::try_from(i64::from(position.y()) - i64::from(dy)).ok()?;
+    let full_width = u32::try_from(display.size.width()).ok()?;
+    let full_height = u32::try_from(display.size.height()).ok()?;
+    let same = x == 0 && y == 0 && full_width == width && full_height == height;
+    let inside = u64::from(x) + u64::from(width) <= u64::from(full_width)
+        && u64::from(y) + u64::from(height) <= u64::from(full_height);
+    (!same && inside).then_some(Placement {
+        x,
+        y,
+        full_width,
+        full_height,
+    })
+}

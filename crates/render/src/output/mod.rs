@@ -1,0 +1,361 @@
+//! A render written out: the film turned into the plain multi-channel image of SPEC §6 and
+//! handed to `aperture_imageio`, as pbrt's film writes its own image.
+//!
+//! EXR output is streamed: the image is rendered in bands of whole rows, each band resolved
+//! and written before the next is rendered, so memory holds one band's sums, not the whole
+//! image's (a 4K render with every pass would otherwise need several GB). Bands do not change
+//! a pixel: every sample is a pure function of (pixel, index, dimension, seed), and adaptive
+//! sampling renders the apron its decisions reach (see [`crate::render_window`]).
+
+pub mod channels;
+pub mod header;
+
+use crate::film::{AovLayout, Film, Window};
+use crate::passes::{Pass, PassSet};
+use crate::render::{render_window, scene_camera, RenderError, RenderOptions, TILE};
+use aperture_accel::Accel;
+use aperture_imageio::{ExrLayout, Image, Layer, MetaValue, Placement, PngOptions};
+use aperture_scene::Scene;
+use channels::PixelResolver;
+use glam::Mat3;
+use std::path::Path;
+use std::time::Instant;
+
+/// Most bytes the sums of one band may take (the band height follows from it).
+pub const BAND_BYTES: usize = 512 << 20;
+
+/// Why a render could not be written.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum OutputError {
+    /// The render could not start.
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    /// The image could not be written.
+    #[error(transparent)]
+    Image(#[from] aperture_imageio::Error),
+}
+
+/// How an EXR render is written.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExrOptions {
+    /// Colour passes (the beauty, light passes, denoising albedo) as half floats, clamped to
+    /// ±65504; data passes stay float32.
+    pub half: bool,
+    /// Render only this part of the image (a tile); the file's data window is the part and its
+    /// display window the whole image.
+    pub region: Option<Window>,
+    /// Most bytes the sums of one band of rows may take ([`BAND_BYTES`] by default): lower
+    /// it to render in more, smaller bands with less memory. The pixels do not change.
+    pub band_bytes: usize,
+}
+
+impl Default for ExrOptions {
+    fn default() -> Self {
+        Self {
+            half: false,
+            region: None,
+            band_bytes: BAND_BYTES,
+        }
+    }
+}
+
+/// What a written render took.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RenderSummary {
+    /// The pixels rendered.
+    pub window: Window,
+    /// Samples taken, dropped ones included.
+    pub samples: u64,
+    /// Samples dropped as NaN or infinite.
+    pub dropped: u64,
+    /// Seconds spent rendering (not writing).
+    pub render_secs: f64,
+    /// Colour values clamped to the half-float range (`--half`).
+    pub half_clamped: u64,
+}
+
+impl RenderSummary {
+    /// Mean samples per pixel.
+    pub fn mean_spp(&self) -> f64 {
+        self.samples as f64 / self.window.pixels().max(1) as f64
+    }
+}
+
+/// Bytes the sums of one pixel take while rendering with `passes`, and while writing it
+/// (`channels` values of its row): what decides a band's height.
+pub fn film_bytes_per_pixel(passes: PassSet, adaptive: bool, channels: usize) -> usize {
+    let layout = AovLayout::new(passes);
+    let crypto = usize::from(layout.crypto_object) + usize::from(layout.crypto_material);
+    let accum = std::mem::size_of::<crate::film::PixelSum>() + 8 * layout.stride + 128 * crypto;
+    let film = accum
+        + 4
+        + 4 * usize::from(passes.contains(Pass::Depth))
+        + 12 * usize::from(passes.contains(Pass::Position));
+    // Adaptive rounds keep their own state (sums, squares, counts, flags) beside the film.
+    let rounds = if adaptive { accum + 24 + 8 + 4 + 3 } else { 0 };
+    film + rounds + 4 * channels
+}
+
+/// Renders `opts` and writes it to `path` as EXR (SPEC §6): the beauty, the passes of
+/// `opts.passes` (plus the sample count where [`channels::file_passes`] adds it) and the
+/// header of [`header::metadata`], band by band.
+pub fn render_exr(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &RenderOptions,
+    path: &Path,
+    exr: &ExrOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<RenderSummary, OutputError> {
+    let camera = scene_camera(scene, opts)?;
+    let whole = Window::whole(opts.width, opts.height);
+    let window = exr.region.unwrap_or(whole);
+    let passes = channels::file_passes(opts.passes, opts.adaptive.is_some() || window != whole);
+    let opts = RenderOptions {
+        passes,
+        ..opts.clone()
+    };
+    let channels = channels::channels(passes, exr.half);
+    let layout = ExrLayout {
+        width: window.width,
+        height: window.height,
+        placement: placement(window, whole),
+        metadata: header::metadata(scene, &camera, &opts, passes),
+        channels,
+    };
+    let bpp = film_bytes_per_pixel(passes, opts.adaptive.is_some(), layout.channels.len());
+    let bands = bands(
+        window,
+        exr.band_bytes / (bpp * window.width as usize).max(1),
+    );
+    let units: Vec<usize> = bands
+        .iter()
+        .map(|b| crate::render::progress_units(&opts, *b))
+        .collect();
+    let total_units: usize = units.iter().sum();
+    let world_from_camera = Mat3::from(camera.world_from_camera.matrix3);
+    let world_origin = scene.world_origin.as_vec3();
+    let mut summary = RenderSummary {
+        window,
+        samples: 0,
+        dropped: 0,
+        render_secs: 0.0,
+        half_clamped: 0,
+    };
+    aperture_imageio::write_exr_streamed::<OutputError>(path, &layout, |rows| {
+        let mut offset = 0;
+        for (band, n) in bands.iter().zip(&units) {
+            let t0 = Instant::now();
+            let report = |done: usize, _: usize| progress(offset + done, total_units);
+            let film = render_window(scene, accel, &camera, &opts, *band, &report)?;
+            summary.render_secs += t0.elapsed().as_secs_f64();
+            offset += n;
+            let mut resolver =
+                PixelResolver::new(&film, passes, exr.half, world_from_camera, world_origin);
+            let mut values = Vec::with_capacity(band.pixels() * layout.channels.len());
+            for i in 0..band.pixels() {
+                resolver.pixel(i, &mut values);
+            }
+            rows.push_rows(&values)?;
+            summary.samples += film.total_samples();
+            summary.dropped += film.dropped_samples();
+            summary.half_clamped += resolver.clamped;
+        }
+        Ok(late_values(&summary, &opts))
+    })?;
+    Ok(summary)
+}
+
+/// The header values known only after rendering.
+fn late_values(summary: &RenderSummary, opts: &RenderOptions) -> Vec<(String, MetaValue)> {
+    let mut late = vec![
+        (
+            header::late::RENDER_TIME.to_string(),
+            MetaValue::Float(summary.render_secs as f32),
+        ),
+        (
+            header::late::DROPPED.to_string(),
+            MetaValue::Int(summary.dropped.min(i32::MAX as u64) as i32),
+        ),
+    ];
+    if opts.adaptive.is_some() {
+        late.push((
+            header::late::MEAN_SPP.to_string(),
+            MetaValue::Float(summary.mean_spp() as f32),
+        ));
+    }
+    late
+}
+
+/// Where `window` sits in the whole image, `None` when it is the whole image.
+fn placement(window: Window, whole: Window) -> Option<Placement> {
+    (window != whole).then_some(Placement {
+        x: window.x0,
+        y: window.y0,
+        full_width: whole.width,
+        full_height: whole.height,
+    })
+}
+
+/// `window` cut into bands of whole rows, each at most `max_pixels` pixels (but at least one
+/// tile row high), top to bottom.
+fn bands(window: Window, max_pixels: usize) -> Vec<Window> {
+    let rows = (max_pixels / window.width as usize) as u32;
+    let rows = (rows / TILE * TILE).max(TILE).min(window.height);
+    (0..window.height.div_ceil(rows))
+        .map(|k| {
+            let y0 = window.y0 + k * rows;
+            Window {
+                y0,
+                height: rows.min(window.y0 + window.height - y0),
+                ..window
+            }
+        })
+        .collect()
+}
+
+/// Renders `opts` (beauty only) and writes it to `path` as PNG: exposure and view transform
+/// from `png`; opaque unless `transparent` (RGB is already the radiance over the environment,
+/// associated alpha, so an opaque pixel is the same RGB with A = 1).
+pub fn render_png(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &RenderOptions,
+    path: &Path,
+    png: &PngOptions,
+    transparent: bool,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<RenderSummary, OutputError> {
+    let opts = RenderOptions {
+        passes: PassSet::NONE,
+        ..opts.clone()
+    };
+    let t0 = Instant::now();
+    let film = crate::render(scene, accel, &opts, progress)?;
+    let render_secs = t0.elapsed().as_secs_f64();
+    let mut image = Image::new(film.width(), film.height());
+    image.rgba = film.to_rgba();
+    if !transparent {
+        for p in &mut image.rgba {
+            p[3] = 1.0;
+        }
+    }
+    aperture_imageio::write_png(path, &image, png)?;
+    Ok(RenderSummary {
+        window: film.window(),
+        samples: film.total_samples(),
+        dropped: film.dropped_samples(),
+        render_secs,
+        half_clamped: 0,
+    })
+}
+
+/// A rendered film as a plain image with the channels and header of [`render_exr`]
+/// (`render_secs` into the header's render time): the same file, for a film already in
+/// memory.
+pub fn film_to_image(
+    film: &Film,
+    scene: &Scene,
+    opts: &RenderOptions,
+    half: bool,
+    render_secs: f64,
+) -> Result<Image, OutputError> {
+    let camera = scene_camera(scene, opts)?;
+    let whole = Window::whole(opts.width, opts.height);
+    let passes = channels::file_passes(
+        film.passes(),
+        opts.adaptive.is_some() || film.window() != whole,
+    );
+    let specs = channels::channels(passes, half);
+    let mut resolver = PixelResolver::new(
+        film,
+        passes,
+        half,
+        Mat3::from(camera.world_from_camera.matrix3),
+        scene.world_origin.as_vec3(),
+    );
+    let n = film.window().pixels();
+    let mut values = Vec::with_capacity(n * specs.len());
+    for i in 0..n {
+        resolver.pixel(i, &mut values);
+    }
+    let mut image = Image::new(film.width(), film.height());
+    image.beauty_type = specs[0].sample_type;
+    image.placement = placement(film.window(), whole);
+    let stride = specs.len();
+    for (p, px) in image.rgba.iter_mut().enumerate() {
+        px.copy_from_slice(&values[p * stride..p * stride + 4]);
+    }
+    // Channels `Layer.c` of one layer are adjacent: group them.
+    let mut c = 4;
+    while c < stride {
+        let (layer, _) = specs[c].name.rsplit_once('.').expect("dotted pass channel");
+        let count = specs[c..]
+            .iter()
+            .take_while(|s| s.name.rsplit_once('.').map(|x| x.0) == Some(layer))
+            .count();
+        let names: Vec<&str> = specs[c..c + count]
+            .iter()
+            .map(|s| s.name.rsplit_once('.').expect("dotted").1)
+            .collect();
+        let data = (0..n)
+            .flat_map(|p| {
+                values[p * stride + c..p * stride + c + count]
+                    .iter()
+                    .copied()
+            })
+            .collect();
+        let mut l = Layer::new(layer, &names, data);
+        l.sample_type = specs[c].sample_type;
+        image.layers.push(l);
+        c += count;
+    }
+    image.metadata = header::metadata(scene, &camera, opts, passes);
+    let summary = RenderSummary {
+        window: film.window(),
+        samples: film.total_samples(),
+        dropped: film.dropped_samples(),
+        render_secs,
+        half_clamped: resolver.clamped,
+    };
+    for (key, value) in late_values(&summary, opts) {
+        if let Some(slot) = image.metadata.iter_mut().find(|(k, _)| *k == key) {
+            slot.1 = value;
+        }
+    }
+    Ok(image)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bands_cover_the_window_in_tile_rows() {
+        let w = Window {
+            x0: 3,
+            y0: 10,
+            width: 100,
+            height: 150,
+        };
+        let b = bands(w, 100 * 70);
+        assert_eq!(b.iter().map(|b| b.height).collect::<Vec<_>>(), [64, 64, 22]);
+        assert_eq!(b[1].y0, 74);
+        assert!(b.iter().all(|b| b.x0 == 3 && b.width == 100));
+        // Tiny budgets still make progress a tile row at a time; huge ones take it all.
+        assert_eq!(bands(w, 1)[0].height, TILE);
+        assert_eq!(bands(w, usize::MAX).len(), 1);
+    }
+
+    #[test]
+    fn bytes_per_pixel_grow_with_passes() {
+        let beauty = film_bytes_per_pixel(PassSet::NONE, false, 4);
+        let default = film_bytes_per_pixel(PassSet::compositing(), false, 40);
+        let all = film_bytes_per_pixel(PassSet::all(), true, 80);
+        assert!(
+            beauty < default && default < all,
+            "{beauty} {default} {all}"
+        );
+    }
+}
