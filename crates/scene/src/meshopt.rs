@@ -242,6 +242,45 @@ fn decode_view(
     Ok(bytes)
 }
 
+/// ` (read by meshes[0].primitives[1].attributes.POSITION, …)`: the primitives whose data a view
+/// holds, so an error names them.
+fn users(root: &Value, view: usize) -> String {
+    let accessors: Vec<usize> = root
+        .get("accessors")
+        .and_then(Value::as_array)
+        .into_iter()
+        .flatten()
+        .enumerate()
+        .filter(|(_, a)| a.get("bufferView").and_then(Value::as_u64) == Some(view as u64))
+        .map(|(i, _)| i)
+        .collect();
+    let mut uses = Vec::new();
+    let meshes = root.get("meshes").and_then(Value::as_array);
+    for (m, mesh) in meshes.into_iter().flatten().enumerate() {
+        let prims = mesh.get("primitives").and_then(Value::as_array);
+        for (p, prim) in prims.into_iter().flatten().enumerate() {
+            let uses_view = |v: Option<&Value>| {
+                v.and_then(Value::as_u64)
+                    .is_some_and(|a| accessors.contains(&(a as usize)))
+            };
+            if uses_view(prim.get("indices")) {
+                uses.push(format!("meshes[{m}].primitives[{p}].indices"));
+            }
+            let attributes = prim.get("attributes").and_then(Value::as_object);
+            for (name, a) in attributes.into_iter().flatten() {
+                if uses_view(Some(a)) {
+                    uses.push(format!("meshes[{m}].primitives[{p}].attributes.{name}"));
+                }
+            }
+        }
+    }
+    if uses.is_empty() {
+        String::new()
+    } else {
+        format!(" (read by {})", uses.join(", "))
+    }
+}
+
 /// Decodes every compressed buffer view of `root` into `buffers.decoded`.
 pub(crate) fn decode_views(root: &Value, buffers: &mut Buffers) -> Result<(), Error> {
     let views = root.get("bufferViews").and_then(Value::as_array);
@@ -252,7 +291,10 @@ pub(crate) fn decode_views(root: &Value, buffers: &mut Buffers) -> Result<(), Er
         else {
             continue;
         };
-        let at = format!("bufferViews[{i}].extensions.EXT_meshopt_compression");
+        let at = format!(
+            "bufferViews[{i}].extensions.EXT_meshopt_compression{}",
+            users(root, i)
+        );
         let length = view.get("byteLength").and_then(Value::as_u64).unwrap_or(0);
         let bytes = decode_view(ext, length, buffers, &at)?;
         buffers.decoded.insert(i, bytes);
