@@ -638,8 +638,8 @@ fn damaged_compressed_buffers_are_errors_naming_the_primitive() {
     let dir = folder().join("compressed");
     std::fs::create_dir_all(&dir).unwrap();
     let mut report = Vec::new();
-    let mut check = |name: &str, json: &Value, bin: &[u8], must_fail: bool| {
-        match load_pair(&dir, json, bin) {
+    let mut check =
+        |name: &str, json: &Value, bin: &[u8], must_fail: bool| match load_pair(&dir, json, bin) {
             None => report.push(format!("{name}: PANIC")),
             Some(Err(e)) => {
                 let msg = e.to_string();
@@ -649,24 +649,31 @@ fn damaged_compressed_buffers_are_errors_naming_the_primitive() {
             }
             Some(Ok(_)) if must_fail => report.push(format!("{name}: loaded without error")),
             Some(Ok(_)) => {}
-        }
-    };
+        };
 
     // Draco: the Box-Draco sample's stream, cut short and with bits flipped.
     let path = samples.join("unsupported/Box-Draco/Box.gltf");
     let json: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
-    let bin = std::fs::read(path.with_file_name(json["buffers"][0]["uri"].as_str().unwrap())).unwrap();
+    let bin =
+        std::fs::read(path.with_file_name(json["buffers"][0]["uri"].as_str().unwrap())).unwrap();
     let view = json["meshes"][0]["primitives"][0]["extensions"]["KHR_draco_mesh_compression"]
         ["bufferView"]
         .as_u64()
         .unwrap() as usize;
-    let offset = json["bufferViews"][view]["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let offset = json["bufferViews"][view]["byteOffset"]
+        .as_u64()
+        .unwrap_or(0) as usize;
     let length = json["bufferViews"][view]["byteLength"].as_u64().unwrap() as usize;
     check("draco intact", &json, &bin, false);
     for keep in [0, 1, 4, length / 4, length / 2, length - 8, length - 1] {
         let mut j = json.clone();
         j["bufferViews"][view]["byteLength"] = json!(keep);
-        check(&format!("draco cut to {keep} of {length} bytes"), &j, &bin, true);
+        check(
+            &format!("draco cut to {keep} of {length} bytes"),
+            &j,
+            &bin,
+            true,
+        );
     }
     let mut flips = 0;
     for at in (0..length).step_by(3) {
@@ -704,13 +711,24 @@ fn damaged_compressed_buffers_are_errors_naming_the_primitive() {
         );
         for keep in [0, 1, length / 2, length - 1] {
             let mut j = json.clone();
-            j["bufferViews"][v]["extensions"]["EXT_meshopt_compression"]["byteLength"] = json!(keep);
-            check(&format!("meshopt view {v} cut to {keep} of {length}"), &j, &bin, true);
+            j["bufferViews"][v]["extensions"]["EXT_meshopt_compression"]["byteLength"] =
+                json!(keep);
+            check(
+                &format!("meshopt view {v} cut to {keep} of {length}"),
+                &j,
+                &bin,
+                true,
+            );
         }
         for at in (0..length).step_by(2) {
             let mut b = bin.clone();
             b[offset + at] ^= 0x10;
-            check(&format!("meshopt view {v} byte {at} ^ 0x10"), &json, &b, false);
+            check(
+                &format!("meshopt view {v} byte {at} ^ 0x10"),
+                &json,
+                &b,
+                false,
+            );
             flips += 1;
         }
         // A count the compressed bytes cannot hold.

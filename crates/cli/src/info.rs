@@ -120,6 +120,33 @@ fn camera_json(c: &Camera, origin: glam::DVec3) -> Value {
     })
 }
 
+/// World-space bounds of each drawing node's geometry (every instance it places), by node index.
+fn node_bounds(s: &Scene) -> Vec<Value> {
+    let mut by_node: std::collections::BTreeMap<u32, aperture_scene::Bounds> = Default::default();
+    for inst in &s.instances {
+        let Some(mesh) = s.meshes.get(inst.mesh as usize) else {
+            continue;
+        };
+        let b = by_node
+            .entry(inst.node)
+            .or_insert(aperture_scene::Bounds::EMPTY);
+        for p in &mesh.positions {
+            b.include(inst.world_from_object.transform_point3(*p));
+        }
+    }
+    by_node
+        .into_iter()
+        .filter(|(_, b)| !b.is_empty())
+        .map(|(node, b)| {
+            json!({
+                "node": node,
+                "min": file_point(s.world_origin, b.min),
+                "max": file_point(s.world_origin, b.max),
+            })
+        })
+        .collect()
+}
+
 fn report(s: &Scene) -> Value {
     let c = counts(s);
     let b = s.bounds();
@@ -146,6 +173,7 @@ fn report(s: &Scene) -> Value {
         "textures": s.textures.len(),
         "lights": {"point": c.point, "spot": c.spot, "directional": c.directional},
         "bounds": bounds,
+        "node_bounds": node_bounds(s),
         "world_origin": [s.world_origin.x, s.world_origin.y, s.world_origin.z],
         "skipped": {
             "primitives": s.stats.skipped_primitives,
