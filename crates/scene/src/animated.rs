@@ -89,6 +89,10 @@ pub struct Animated {
     draws_nothing: bool,
 }
 
+/// What makes a static deformed mesh unique: the glTF mesh, the skin posing it and the bits of
+/// its morph weights.
+type StaticKey = (usize, Option<usize>, Vec<u32>);
+
 /// Node transforms and morph weights at one time, plus the pointer values.
 struct Pose {
     world: Vec<DAffine3>,
@@ -272,8 +276,7 @@ impl Animated {
             self.moves[i] = moved[i] || parent_moves;
         }
         let rest = self.pose(None);
-        let mut cache: HashMap<(usize, Option<usize>, Vec<u32>), (u32, DVec3, bool)> =
-            HashMap::new();
+        let mut cache: HashMap<StaticKey, (u32, DVec3, bool)> = HashMap::new();
         for &ni in &self.order.clone() {
             let node = &self.graph.nodes[ni];
             let Some(mi) = node.mesh else { continue };
@@ -546,16 +549,14 @@ impl Animated {
                 continue;
             };
             let world = finite_world(ni, world_from_node[ni])?;
-            out.cameras.push(camera::camera(
-                data,
-                ci,
-                ni,
-                self.graph.names[ni].as_deref(),
-                node.extras.as_ref(),
-                world,
-                &info,
-                &self.options,
-            )?);
+            let at = camera::CameraNode {
+                camera: ci,
+                node: ni,
+                name: self.graph.names[ni].as_deref(),
+                extras: node.extras.as_ref(),
+            };
+            out.cameras
+                .push(camera::camera(data, &at, world, &info, &self.options)?);
         }
         out.materials = materials;
         if out.cameras.is_empty() {

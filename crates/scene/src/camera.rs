@@ -85,13 +85,22 @@ pub(crate) fn check_yfov(yfov: f32, at: &str) -> Result<(), Error> {
     }
 }
 
-/// The camera of node `node` (carrying camera `index`) placed at `world`.
+/// The node carrying a camera.
+pub(crate) struct CameraNode<'a> {
+    /// Index of the glTF camera.
+    pub camera: usize,
+    /// Index of the node.
+    pub node: usize,
+    /// The node's name.
+    pub name: Option<&'a str>,
+    /// The node's `extras`.
+    pub extras: Option<&'a Value>,
+}
+
+/// The camera `data` of node `at` placed at `world`.
 pub(crate) fn camera(
     data: &CameraData,
-    index: usize,
-    node: usize,
-    node_name: Option<&str>,
-    node_extras: Option<&Value>,
+    at: &CameraNode<'_>,
     world: Affine3A,
     info: &NodeInfo<'_>,
     options: &LoadOptions,
@@ -99,9 +108,10 @@ pub(crate) fn camera(
     let name = data
         .name
         .as_deref()
-        .or(node_name)
+        .or(at.name)
         .map(str::to_owned)
-        .unwrap_or_else(|| format!("camera {index}"));
+        .unwrap_or_else(|| format!("camera {}", at.camera));
+    let node = at.node;
     let world_from_camera = orthonormal(world).ok_or_else(|| Error::NodeGraph {
         node,
         reason: "the camera's transform has no rotation (zero scale)".into(),
@@ -113,7 +123,7 @@ pub(crate) fn camera(
             world_from_camera,
             physical: data.physical.as_ref(),
             camera_extras: data.extras.as_ref(),
-            node_extras,
+            node_extras: at.extras,
         },
         &options.dof_overrides,
         info,

@@ -9,6 +9,9 @@ use crate::morph::MorphTarget;
 use crate::skin::{self, Influences};
 use crate::{Error, Mesh, SceneStats};
 
+/// One `JOINTS_n`/`WEIGHTS_n` pair: 4 joints and 4 weights per vertex.
+type SkinSet = (Vec<f32>, Vec<f32>);
+
 /// One primitive's triangles and attributes before merging.
 struct Part {
     positions: Vec<Vec3>,
@@ -23,7 +26,7 @@ struct Part {
     material: u32,
     targets: Vec<MorphTarget>,
     /// `JOINTS_n`/`WEIGHTS_n` sets, 4 values per vertex each.
-    skin_sets: Vec<(Vec<f32>, Vec<f32>)>,
+    skin_sets: Vec<SkinSet>,
 }
 
 /// A merged glTF mesh with what deforms it: morph targets and joint influences, aligned with
@@ -104,7 +107,7 @@ impl Source<'_, '_> {
 fn triangulate(mode: Mode, idx: &[u32], at: &str) -> Result<Vec<[u32; 3]>, Error> {
     Ok(match mode {
         Mode::Triangles => {
-            if idx.len() % 3 != 0 {
+            if !idx.len().is_multiple_of(3) {
                 return Err(Error::IndexCount {
                     at: at.into(),
                     count: idx.len(),
@@ -203,11 +206,7 @@ fn read_targets(src: &Source<'_, '_>, n: usize, at: &str) -> Result<Vec<MorphTar
 }
 
 /// Every `JOINTS_n`/`WEIGHTS_n` pair of a primitive.
-fn read_skin_sets(
-    src: &Source<'_, '_>,
-    n: usize,
-    at: &str,
-) -> Result<Vec<(Vec<f32>, Vec<f32>)>, Error> {
+fn read_skin_sets(src: &Source<'_, '_>, n: usize, at: &str) -> Result<Vec<SkinSet>, Error> {
     let mut sets = Vec::new();
     for set in 0u32.. {
         let joints = src.flat(&Semantic::Joints(set), n, at)?;
@@ -432,7 +431,7 @@ fn merge_influences(parts: &[Part]) -> Option<Influences> {
     if sets == 0 {
         return None;
     }
-    let mut merged: Vec<(Vec<f32>, Vec<f32>)> = vec![(Vec::new(), Vec::new()); sets];
+    let mut merged: Vec<SkinSet> = vec![(Vec::new(), Vec::new()); sets];
     for p in parts {
         let n = p.positions.len();
         for (s, (j, w)) in merged.iter_mut().enumerate() {

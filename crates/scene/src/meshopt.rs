@@ -166,7 +166,7 @@ fn decode_view(
             format!("buffer {buffer} does not exist"),
         )
     })?;
-    let end = offset.checked_add(length).unwrap_or(u64::MAX);
+    let end = offset.saturating_add(length);
     if end > data.len() as u64 {
         return Err(Error::OutOfBounds {
             at: at.into(),
@@ -175,7 +175,7 @@ fn decode_view(
         });
     }
     let source = &data[offset as usize..end as usize];
-    let decoded = count.checked_mul(stride).unwrap_or(u64::MAX);
+    let decoded = count.saturating_mul(stride);
     if decoded != view_length {
         return Err(compressed(
             at,

@@ -15,6 +15,9 @@ pub struct Doc {
 
 pub type M4 = [f64; 16];
 
+/// An accessor's elements, each as its components.
+pub type Rows = Vec<Vec<f64>>;
+
 pub fn identity() -> M4 {
     let mut m = [0.0; 16];
     for i in 0..4 {
@@ -286,8 +289,8 @@ pub fn worlds(doc: &Doc, local: &[M4]) -> Vec<M4> {
             is_child[c.as_u64().unwrap() as usize] = true;
         }
     }
-    for i in 0..nodes.len() {
-        if !is_child[i] {
+    for (i, child) in is_child.iter().enumerate() {
+        if !child {
             visit(&doc.json, i, identity(), local, &mut world);
         }
     }
@@ -359,7 +362,7 @@ pub fn bounds(doc: &Doc, t: Option<f64>) -> ([f64; 3], [f64; 3]) {
                     }
                 }
             }
-            let sets: Vec<(Vec<Vec<f64>>, Vec<Vec<f64>>)> = (0..)
+            let sets: Vec<(Rows, Rows)> = (0..)
                 .map_while(|s| {
                     Some((
                         doc.accessor(a[format!("JOINTS_{s}")].as_u64()?),
