@@ -42,5 +42,10 @@ fi
 echo "== tools/blender/test_export.py"
 status=0
 "$venv/bin/python" tools/blender/test_export.py --aperture "$bin" "$@" || status=$?
+# SPEC §7: --frame N is Blender's frame N, and a focus pull follows SPEC §2 (about 20 s).
+echo "== tools/blender/test_animation.py"
+anim_args=()
+for a in "$@"; do [ "$a" = "--require-all" ] && anim_args+=(--require-all); done
+"$venv/bin/python" tools/blender/test_animation.py --aperture "$bin" "${anim_args[@]}" || status=$?
 echo "== blender test: exit $status after $(($(date +%s) - start)) s"
 exit $status

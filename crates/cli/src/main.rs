@@ -4,6 +4,7 @@ mod bench;
 mod info;
 mod progress;
 mod render_cmd;
+mod time_args;
 
 use clap::{Parser, Subcommand};
 
