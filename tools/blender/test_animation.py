@@ -164,15 +164,11 @@ def focus_scene():
 def blob_diameter(path, expected):
     """Disc diameter from the blob's second moment: mean r² = a²/2 for a uniform disc of radius a,
     plus the emitter's own image (b²/2) and the 1-pixel box filter (1/6)."""
-    import bpy
     import numpy as np
+    from exr_beauty import read_beauty
 
-    img = bpy.data.images.load(path, check_existing=False)
-    w, h = img.size
-    px = np.empty(w * h * 4, dtype=np.float32)
-    img.pixels.foreach_get(px)
-    bpy.data.images.remove(img)
-    lum = px.reshape(h, w, 4)[:, :, :3].mean(axis=2).astype(np.float64)
+    lum = read_beauty(path, bottom_up=True).mean(axis=2)
+    h, w = lum.shape
     ys, xs = np.mgrid[0:h, 0:w]
     cx, cy = w / 2.0, h / 2.0
     r2 = (xs + 0.5 - cx) ** 2 + (ys + 0.5 - cy) ** 2

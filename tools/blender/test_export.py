@@ -507,14 +507,9 @@ def render_cycles(path, spp, seed):
 
 
 def load_exr(path):
-    import numpy as np
+    from exr_beauty import read_beauty
 
-    img = bpy.data.images.load(path, check_existing=False)
-    w, h = img.size
-    px = np.empty(w * h * 4, dtype=np.float32)
-    img.pixels.foreach_get(px)
-    bpy.data.images.remove(img)
-    return px.reshape(h, w, 4)[:, :, :3].astype(np.float64)  # rows bottom to top
+    return read_beauty(path, bottom_up=True)  # rows bottom to top, as Blender's pixels
 
 
 def rmse(a, b):
