@@ -557,6 +557,21 @@ mod tests {
     }
 
     #[test]
+    fn passes_and_half_parse() {
+        let a = parse(&[]).unwrap();
+        assert_eq!(a.passes, PassSet::compositing());
+        assert!(!a.half);
+        let b = parse(&["--passes", "all,Debug Sample Count", "--half"]).unwrap();
+        assert!(
+            b.half && b.passes.contains(Pass::Position) && b.passes.contains(Pass::SampleCount)
+        );
+        assert_eq!(parse(&["--passes", "none"]).unwrap().passes, PassSet::NONE);
+        let e = parse(&["--passes", "Depth,Albedo"]).expect_err("unknown pass");
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("Albedo"), "{e}");
+    }
+
+    #[test]
     fn defaults_follow_the_issue() {
         let a = parse(&[]).unwrap();
         assert_eq!(a.tracing.max_bounces, 12);
