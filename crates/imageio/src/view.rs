@@ -22,15 +22,14 @@ fn srgb_oetf_f64(v: f64) -> f64 {
     }
 }
 
-/// The inverse of [`srgb_oetf`] (decoding sRGB-encoded values to linear).
+/// The inverse of [`srgb_oetf`] (decoding sRGB-encoded values to linear), in f32: the one
+/// implementation of the project, which the renderer's texture lookups use too.
 pub fn srgb_eotf(encoded: f32) -> f32 {
-    let v = f64::from(encoded);
-    let linear = if v <= 0.040_45 {
-        v / 12.92
+    if encoded <= 0.04045 {
+        encoded / 12.92
     } else {
-        ((v + 0.055) / 1.055).powf(2.4)
-    };
-    linear as f32
+        ((encoded + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 /// NaN to 0, infinities to the largest finite value, so later arithmetic stays finite.
