@@ -10,6 +10,8 @@
 use std::collections::HashMap;
 use std::path::Path;
 
+use serde_json::Value;
+
 use glam::{Affine3A, DAffine3, DQuat, DVec3, Vec3};
 
 use crate::animation::{self, AnimationInfo, Animations, NodeProperty, Target};
@@ -103,6 +105,49 @@ struct Pose {
     pointers: Vec<(Pointer, Vec<f64>)>,
 }
 
+/// The names of the file's `KHR_materials_variants` (`variants[i]` when unnamed).
+fn variant_names(root: &Value) -> Vec<String> {
+    let list = root
+        .get("extensions")
+        .and_then(|e| e.get("KHR_materials_variants"))
+        .and_then(|v| v.get("variants"))
+        .and_then(Value::as_array);
+    list.into_iter()
+        .flatten()
+        .enumerate()
+        .map(|(i, v)| {
+            v.get("name")
+                .and_then(Value::as_str)
+                .map_or_else(|| format!("variants[{i}]"), str::to_owned)
+        })
+        .collect()
+}
+
+/// The index of the variant `--variant` names (a name, else an index written as digits).
+fn resolve_variant(names: &[String], wanted: Option<&str>) -> Result<Option<usize>, Error> {
+    let Some(wanted) = wanted else {
+        return Ok(None);
+    };
+    if let Some(i) = names.iter().position(|n| n == wanted) {
+        return Ok(Some(i));
+    }
+    match wanted.parse::<usize>() {
+        Ok(i) if i < names.len() => Ok(Some(i)),
+        _ => Err(Error::NoSuchVariant {
+            wanted: format!("{wanted:?}"),
+            available: if names.is_empty() {
+                "none".into()
+            } else {
+                names
+                    .iter()
+                    .map(|n| format!("{n:?}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            },
+        }),
+    }
+}
+
 impl Animated {
     /// Loads and decodes a `.gltf` or `.glb` file once.
     pub fn load(path: &Path, options: &LoadOptions) -> Result<Self, Error> {
@@ -144,6 +189,10 @@ impl Animated {
                 .collect(),
             ..SceneStats::default()
         };
+        stats.generator = doc.as_json().asset.generator.clone();
+        stats.variants = variant_names(&root);
+        let variant = resolve_variant(&stats.variants, options.variant.as_deref())?;
+        stats.variant = variant.map(|v| stats.variants[v].clone());
         let mut buffers = load_buffers(&doc, &root, bin, base_dir)?;
         crate::meshopt::decode_views(&root, &mut buffers)?;
         let graph = node_graph(&doc, &buffers)?;
@@ -169,7 +218,7 @@ impl Animated {
             if meshes.contains_key(&m.index()) {
                 continue;
             }
-            let loaded = mesh::load_mesh(&doc, &m, &buffers, &mut stats, &mut |mi| {
+            let loaded = mesh::load_mesh(&doc, &m, &buffers, &mut stats, variant, &mut |mi| {
                 materials.get(&doc, mi)
             })?;
             meshes.insert(m.index(), loaded);

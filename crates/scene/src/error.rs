@@ -174,6 +174,14 @@ pub enum Error {
         /// The file's animations, `index "name"`.
         available: String,
     },
+    /// `--variant` names a `KHR_materials_variants` variant the file does not have.
+    #[error("no material variant {wanted} in the file (it has: {available})")]
+    NoSuchVariant {
+        /// The index or name asked for.
+        wanted: String,
+        /// The file's variants, `"name"`, or "none".
+        available: String,
+    },
     /// An image could not be decoded.
     #[error("images[{image}]: {source}")]
     Image {

@@ -35,27 +35,9 @@ pub(crate) struct Materials {
 
 /// Material extensions the renderer cannot show exactly yet, with what it renders instead. Each
 /// degrades to the metallic-roughness base underneath it, which is what the extension's own
-/// fallback rule asks of a viewer that ignores it.
-const DEGRADED: &[(&str, &str)] = &[
-    ("KHR_materials_clearcoat", "without the clear coat layer"),
-    ("KHR_materials_sheen", "without the sheen layer"),
-    (
-        "KHR_materials_transmission",
-        "as an opaque surface (no transmission)",
-    ),
-    (
-        "KHR_materials_diffuse_transmission",
-        "as an opaque surface (no diffuse transmission)",
-    ),
-    ("KHR_materials_volume", "without volume absorption"),
-    ("KHR_materials_iridescence", "without iridescence"),
-    ("KHR_materials_anisotropy", "with isotropic roughness"),
-    ("KHR_materials_dispersion", "without dispersion"),
-    (
-        "KHR_materials_pbrSpecularGlossiness",
-        "from its metallic-roughness fallback",
-    ),
-];
+/// fallback rule asks of a viewer that ignores it. Empty since issue 14: every material
+/// extension Blender's exporter writes (and the Khronos ones beside them) is rendered.
+const DEGRADED: &[(&str, &str)] = &[];
 
 /// Warnings for the extensions of `m` that degrade (see [`DEGRADED`]), naming the material.
 fn degrade_warnings(m: &gltf::Material<'_>) -> Vec<String> {
@@ -133,6 +115,17 @@ impl Materials {
         tex_coord: u32,
         ext: Option<&Value>,
     ) -> TextureRef {
+        self.linear_or_srgb(tex, tex_coord, ext, false)
+    }
+
+    /// A texture reference from its parts, `ext` being its `KHR_texture_transform` JSON.
+    pub(crate) fn linear_or_srgb(
+        &mut self,
+        tex: gltf::Texture<'_>,
+        tex_coord: u32,
+        ext: Option<&Value>,
+        srgb: bool,
+    ) -> TextureRef {
         let mut tex_coord = tex_coord;
         let transform = ext.map(|v| {
             let (t, tc) = transform_from_json(v);
@@ -142,7 +135,7 @@ impl Materials {
             t
         });
         TextureRef {
-            texture: self.texture(&tex, false),
+            texture: self.texture(&tex, srgb),
             tex_coord,
             transform,
         }
@@ -162,7 +155,7 @@ impl Materials {
             return i;
         }
         let m = match index.and_then(|i| doc.materials().nth(i)) {
-            Some(m) => self.build(&m),
+            Some(m) => self.build(doc, &m),
             None => Material::default(),
         };
         self.materials.push(m);
@@ -171,7 +164,7 @@ impl Materials {
         i
     }
 
-    fn build(&mut self, m: &gltf::Material<'_>) -> Material {
+    fn build(&mut self, doc: &gltf::Document, m: &gltf::Material<'_>) -> Material {
         self.warnings.extend(degrade_warnings(m));
         let pbr = m.pbr_metallic_roughness();
         let base_color_texture = self.info(pbr.base_color_texture(), true);
@@ -202,7 +195,7 @@ impl Materials {
         let specular_color_texture = specular
             .as_ref()
             .and_then(|s| self.info(s.specular_color_texture(), true));
-        Material {
+        let mut out = Material {
             name: m.name().map(str::to_owned),
             base_color_factor: Vec4::from(pbr.base_color_factor()),
             base_color_texture,
@@ -232,7 +225,10 @@ impl Materials {
                 .map_or(Vec3::ONE, |s| Vec3::from(s.specular_color_factor())),
             specular_texture,
             specular_color_texture,
-        }
+            ..Material::default()
+        };
+        self.read_extensions(doc, m, &mut out);
+        out
     }
 
     /// Decodes the referenced images (each once, in parallel) and builds the textures.

@@ -12,6 +12,9 @@ use crate::{Error, Mesh, SceneStats};
 /// One `JOINTS_n`/`WEIGHTS_n` pair: 4 joints and 4 weights per vertex.
 type SkinSet = (Vec<f32>, Vec<f32>);
 
+/// Texture coordinate sets read (`TEXCOORD_0` … `TEXCOORD_7`).
+const MAX_UV_SETS: u32 = 8;
+
 /// One primitive's triangles and attributes before merging.
 struct Part {
     positions: Vec<Vec3>,
@@ -21,6 +24,8 @@ struct Part {
     tangents: Option<Vec<Vec4>>,
     uv0: Option<Vec<Vec2>>,
     uv1: Option<Vec<Vec2>>,
+    /// `TEXCOORD_2` … `TEXCOORD_7` (set k + 2 at k).
+    uv_more: Vec<Option<Vec<Vec2>>>,
     colors: Option<Vec<Vec4>>,
     triangles: Vec<[u32; 3]>,
     material: u32,
@@ -278,6 +283,13 @@ fn read_part(
     let tangents = src.attribute::<4>(Semantic::Tangents, n, at)?;
     let uv0 = src.attribute::<2>(Semantic::TexCoords(0), n, at)?;
     let uv1 = src.attribute::<2>(Semantic::TexCoords(1), n, at)?;
+    let mut uv_more = Vec::new();
+    for set in 2..MAX_UV_SETS {
+        uv_more.push(src.attribute::<2>(Semantic::TexCoords(set), n, at)?);
+    }
+    while uv_more.last().is_some_and(Option::is_none) {
+        uv_more.pop();
+    }
     let colors: Option<Vec<Vec4>> = match src.flat(&Semantic::Colors(0), n, at)? {
         Some((flat, dims)) => Some(match dims {
             3 => flat
@@ -338,6 +350,7 @@ fn read_part(
         tangents: tangents.map(|t| gather(&t, &remap).into_iter().map(Vec4::from).collect()),
         uv0: uv0.map(v2),
         uv1: uv1.map(v2),
+        uv_more: uv_more.into_iter().map(|u| u.map(v2)).collect(),
         colors: colors.map(|c| gather(&c, &remap)),
         triangles,
         material,
@@ -451,13 +464,33 @@ fn merge_influences(parts: &[Part]) -> Option<Influences> {
     Some(skin::influences(merged, vertices))
 }
 
+/// The material `KHR_materials_variants` maps to variant `variant` on this primitive, if any.
+fn variant_material(prim: &gltf::Primitive<'_>, variant: usize) -> Option<usize> {
+    let mappings = prim
+        .extension_value("KHR_materials_variants")?
+        .get("mappings")?
+        .as_array()?;
+    mappings.iter().find_map(|m| {
+        let listed = m
+            .get("variants")?
+            .as_array()?
+            .iter()
+            .any(|v| v.as_u64() == Some(variant as u64));
+        let material = usize::try_from(m.get("material")?.as_u64()?).ok()?;
+        listed.then_some(material)
+    })
+}
+
 /// Reads a glTF mesh: triangle primitives merged, points and lines skipped with a warning.
-/// `material_of` maps a primitive's material index (None = the default material) to ours.
+/// `material_of` maps a primitive's material index (None = the default material) to ours;
+/// `variant` selects `KHR_materials_variants` mappings (the default material where a primitive
+/// maps none for it).
 pub(crate) fn load_mesh(
     doc: &gltf::Document,
     mesh: &gltf::Mesh<'_>,
     buffers: &Buffers,
     stats: &mut SceneStats,
+    variant: Option<usize>,
     material_of: &mut dyn FnMut(Option<usize>) -> u32,
 ) -> Result<LoadedMesh, Error> {
     let mut parts = Vec::new();
@@ -474,7 +507,11 @@ pub(crate) fn load_mesh(
             ));
             continue;
         }
-        let material = material_of(prim.material().index());
+        let material = material_of(
+            variant
+                .and_then(|v| variant_material(&prim, v))
+                .or(prim.material().index()),
+        );
         parts.push(read_part(doc, &prim, buffers, &at, material)?);
         stats.primitives += 1;
     }
@@ -493,6 +530,14 @@ pub(crate) fn load_mesh(
         any(|p| p.uv1.is_some()),
         any(|p| p.colors.is_some()),
     );
+    let more_sets = parts.iter().map(|p| p.uv_more.len()).max().unwrap_or(0);
+    let has_more: Vec<bool> = (0..more_sets)
+        .map(|k| {
+            parts
+                .iter()
+                .any(|p| p.uv_more.get(k).is_some_and(Option::is_some))
+        })
+        .collect();
     let targets = merge_targets(&parts);
     let influences = merge_influences(&parts);
     let mut m = Mesh {
@@ -501,6 +546,7 @@ pub(crate) fn load_mesh(
         normals: Vec::with_capacity(vertices),
         indices: Vec::with_capacity(triangles),
         material_ids: Vec::with_capacity(triangles),
+        uv_more: vec![Vec::new(); more_sets],
         ..Mesh::default()
     };
     let mut flat = Vec::new();
@@ -515,6 +561,11 @@ pub(crate) fn load_mesh(
         fill(&mut m.tangents, has_t, p.tangents, count, Vec4::ZERO);
         fill(&mut m.uv0, has_uv0, p.uv0, count, Vec2::ZERO);
         fill(&mut m.uv1, has_uv1, p.uv1, count, Vec2::ZERO);
+        let mut more = p.uv_more;
+        more.resize(more_sets, None);
+        for ((dst, has), src) in m.uv_more.iter_mut().zip(&has_more).zip(more) {
+            fill(dst, *has, src, count, Vec2::ZERO);
+        }
         fill(&mut m.colors, has_c, p.colors, count, Vec4::ONE);
         m.indices
             .extend(p.triangles.iter().map(|t| t.map(|i| i + base)));

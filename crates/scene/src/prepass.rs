@@ -24,6 +24,17 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_draco_mesh_compression",
     "EXT_meshopt_compression",
     "KHR_animation_pointer",
+    "KHR_materials_transmission",
+    "KHR_materials_volume",
+    "KHR_materials_clearcoat",
+    "KHR_materials_sheen",
+    "KHR_materials_anisotropy",
+    "KHR_materials_iridescence",
+    "KHR_materials_dispersion",
+    "KHR_materials_diffuse_transmission",
+    "KHR_materials_variants",
+    "KHR_materials_pbrSpecularGlossiness",
+    "EXT_texture_webp",
 ];
 
 /// The validated document plus what the pre-pass removed.
@@ -130,6 +141,24 @@ fn check_shapes_the_typed_api_assumes(root: &mut Value) -> Result<(), Error> {
     Ok(())
 }
 
+/// `EXT_texture_webp`: a texture's WebP image replaces its core `source` (which is a fallback
+/// for viewers without WebP, and absent when the file requires the extension, as Blender writes
+/// it). Both show the same picture; we decode WebP.
+fn use_webp_sources(root: &mut Value) {
+    let textures = root.get_mut("textures").and_then(Value::as_array_mut);
+    for tex in textures.into_iter().flatten() {
+        let webp = tex
+            .get("extensions")
+            .and_then(|e| e.get("EXT_texture_webp"))
+            .and_then(|w| w.get("source"))
+            .filter(|s| s.is_u64())
+            .cloned();
+        if let (Some(source), Some(obj)) = (webp, tex.as_object_mut()) {
+            obj.insert("source".into(), source);
+        }
+    }
+}
+
 /// The `gltf` crate's validation, less its one rule stricter than glTF 2.0: an accessor may have
 /// no `bufferView` (§3.6.2.4: zeros, or the data of a compression extension such as
 /// `KHR_draco_mesh_compression`), where the crate asks for one unless the accessor is sparse.
@@ -189,6 +218,7 @@ pub(crate) fn prepare(json: &[u8]) -> Result<Prepared, Error> {
 
     check_position_indices(&root)?;
     check_shapes_the_typed_api_assumes(&mut root)?;
+    use_webp_sources(&mut root);
     let json_root: gltf::json::Root =
         serde_json::from_value(root).map_err(|source| Error::Json { source })?;
     let document = validate(json_root)?;
@@ -232,6 +262,20 @@ mod tests {
             p.root["animations"][0]["channels"][0]["target"]["path"],
             "pointer"
         );
+    }
+
+    #[test]
+    fn webp_sources_replace_the_fallback() {
+        let p = prepare(
+            br#"{"asset":{"version":"2.0"},"extensionsRequired":["EXT_texture_webp"],
+            "images":[{"uri":"a.png"},{"uri":"b.webp"}],
+            "textures":[{"extensions":{"EXT_texture_webp":{"source":1}}},
+                        {"source":0,"extensions":{"EXT_texture_webp":{"source":1}}},
+                        {"source":0}]}"#,
+        )
+        .unwrap();
+        let sources: Vec<usize> = p.document.textures().map(|t| t.source().index()).collect();
+        assert_eq!(sources, [1, 1, 0]);
     }
 
     #[test]

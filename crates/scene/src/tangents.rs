@@ -54,7 +54,20 @@ impl mikktspace::Geometry for Faces<'_> {
     }
 }
 
-/// Gives every normal-mapped triangle of `scene` tangents: vertices with `TANGENT` keep theirs,
+/// The UV set whose directions the material's tangent frame follows, if it needs one: its
+/// normal map's, else its clear coat normal map's, else (`KHR_materials_anisotropy`, whose
+/// direction is given in tangent space) its anisotropy texture's, or set 0.
+fn tangent_uv_set(m: &crate::Material) -> Option<u32> {
+    if let Some(t) = m.normal_texture {
+        return Some(t.tex_coord);
+    }
+    if let Some(t) = m.clearcoat.and_then(|c| c.normal_texture) {
+        return Some(t.tex_coord);
+    }
+    m.anisotropy.map(|a| a.texture.map_or(0, |t| t.tex_coord))
+}
+
+/// Gives every normal-mapped (or anisotropic) triangle of `scene` tangents: vertices with `TANGENT` keep theirs,
 /// the others get MikkTSpace tangents. Meshes without normal maps are left untouched (their
 /// `tangents` stay empty).
 pub fn generate_missing_tangents(scene: &mut Scene) {
@@ -63,7 +76,7 @@ pub fn generate_missing_tangents(scene: &mut Scene) {
         // Triangles that need tangents, grouped by the UV set their normal map reads.
         let mut by_set: [Vec<usize>; 2] = [Vec::new(), Vec::new()];
         for (t, &mid) in mesh.material_ids.iter().enumerate() {
-            let Some(nt) = materials.get(mid as usize).and_then(|m| m.normal_texture) else {
+            let Some(set) = materials.get(mid as usize).and_then(tangent_uv_set) else {
                 continue;
             };
             let Some(tri) = mesh.indices.get(t) else {
@@ -75,7 +88,7 @@ pub fn generate_missing_tangents(scene: &mut Scene) {
                     .is_some_and(|t| t.truncate() != glam::Vec3::ZERO)
             };
             if !tri.iter().all(|&v| has(v)) {
-                by_set[(nt.tex_coord as usize).min(1)].push(t);
+                by_set[(set as usize).min(1)].push(t);
             }
         }
         for (set, faces) in by_set.into_iter().enumerate() {
@@ -144,6 +157,9 @@ fn split_vertex(mesh: &mut Mesh, v: usize) -> usize {
     dup(&mut mesh.tangents, v);
     dup(&mut mesh.uv0, v);
     dup(&mut mesh.uv1, v);
+    for set in &mut mesh.uv_more {
+        dup(set, v);
+    }
     dup(&mut mesh.colors, v);
     mesh.positions.len() - 1
 }

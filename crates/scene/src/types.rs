@@ -57,6 +57,9 @@ pub struct Mesh {
     pub uv0: Vec<Vec2>,
     /// `TEXCOORD_1`; empty when no primitive has it.
     pub uv1: Vec<Vec2>,
+    /// `TEXCOORD_2`, `TEXCOORD_3` …: set k + 2 at index k, each empty or as long as
+    /// `positions` (zeros where a primitive lacks it).
+    pub uv_more: Vec<Vec<Vec2>>,
     /// `COLOR_0` as linear RGBA; empty when no primitive has it (white fills the rest).
     pub colors: Vec<Vec4>,
     /// Triangles as vertex indices, counter-clockwise when seen from the front.
@@ -154,7 +157,7 @@ impl Default for TextureTransform {
 pub struct TextureRef {
     /// Index into `Scene::textures`.
     pub texture: u32,
-    /// Which UV set (0 or 1), after `KHR_texture_transform`'s own `texCoord` override.
+    /// Which UV set (`TEXCOORD_n`), after `KHR_texture_transform`'s own `texCoord` override.
     pub tex_coord: u32,
     /// `KHR_texture_transform`, if present.
     pub transform: Option<TextureTransform>,
@@ -206,6 +209,25 @@ pub struct Material {
     pub specular_texture: Option<TextureRef>,
     /// `KHR_materials_specular` colour texture (sRGB-encoded): multiplies the colour factor.
     pub specular_color_texture: Option<TextureRef>,
+    /// `KHR_materials_transmission`.
+    pub transmission: Option<crate::Transmission>,
+    /// `KHR_materials_volume`.
+    pub volume: Option<crate::Volume>,
+    /// `KHR_materials_clearcoat`.
+    pub clearcoat: Option<crate::Clearcoat>,
+    /// `KHR_materials_sheen`.
+    pub sheen: Option<crate::Sheen>,
+    /// `KHR_materials_anisotropy`.
+    pub anisotropy: Option<crate::Anisotropy>,
+    /// `KHR_materials_iridescence`.
+    pub iridescence: Option<crate::Iridescence>,
+    /// `KHR_materials_dispersion`: `20 / V` for Abbe number `V` (0 when absent: no dispersion).
+    pub dispersion: f32,
+    /// `KHR_materials_diffuse_transmission`.
+    pub diffuse_transmission: Option<crate::DiffuseTransmission>,
+    /// `KHR_materials_pbrSpecularGlossiness`: when present it replaces the metallic-roughness
+    /// parameters.
+    pub specular_glossiness: Option<crate::SpecularGlossiness>,
 }
 
 impl Default for Material {
@@ -233,6 +255,15 @@ impl Default for Material {
             specular_color_factor: Vec3::ONE,
             specular_texture: None,
             specular_color_texture: None,
+            transmission: None,
+            volume: None,
+            clearcoat: None,
+            sheen: None,
+            anisotropy: None,
+            iridescence: None,
+            dispersion: 0.0,
+            diffuse_transmission: None,
+            specular_glossiness: None,
         }
     }
 }
@@ -241,6 +272,30 @@ impl Material {
     /// True when the material can emit light (a non-zero emissive factor and strength).
     pub fn is_emissive(&self) -> bool {
         self.emissive_strength > 0.0 && self.emissive_factor.max_element() > 0.0
+    }
+
+    /// True when light may pass through the surface by specular transmission
+    /// (`KHR_materials_transmission` with a factor above 0).
+    pub fn is_transmissive(&self) -> bool {
+        self.transmission.is_some_and(|t| t.factor > 0.0)
+    }
+
+    /// True when the material uses any lobe beyond glTF's core metallic-roughness (and the
+    /// IOR and specular extensions): transmission, volume, clear coat, sheen, anisotropy,
+    /// iridescence, dispersion, diffuse transmission or specular-glossiness. Materials without
+    /// them are shaded exactly as before those extensions existed.
+    pub fn has_extended_lobes(&self) -> bool {
+        self.is_transmissive()
+            || self.clearcoat.is_some_and(|c| c.factor > 0.0)
+            || self
+                .sheen
+                .is_some_and(|s| s.color_factor.max_element() > 0.0)
+            || self
+                .anisotropy
+                .is_some_and(|a| a.strength != 0.0 || a.texture.is_some())
+            || self.iridescence.is_some_and(|i| i.factor > 0.0)
+            || self.diffuse_transmission.is_some_and(|d| d.factor > 0.0)
+            || self.specular_glossiness.is_some()
     }
 }
 
@@ -479,6 +534,9 @@ pub struct LoadOptions {
     pub time: Option<f32>,
     /// Which animations a time evaluates (`--animation`); default all together.
     pub animation: crate::AnimationSelection,
+    /// `KHR_materials_variants`: the variant whose materials to draw (`--variant`), by name
+    /// or index written as digits; `None` draws the default materials.
+    pub variant: Option<String>,
 }
 
 /// An axis-aligned box.
@@ -544,6 +602,12 @@ pub struct SceneStats {
     pub animations: Vec<crate::AnimationInfo>,
     /// The time the scene is posed at (`None`: the stored pose).
     pub time: Option<f32>,
+    /// `asset.generator`: the tool that wrote the file (decides `--transmission auto`).
+    pub generator: Option<String>,
+    /// `KHR_materials_variants` names, in the file's order.
+    pub variants: Vec<String>,
+    /// The variant the materials were chosen for (`None`: the default materials).
+    pub variant: Option<String>,
 }
 
 impl Scene {
