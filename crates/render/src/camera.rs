@@ -4,9 +4,9 @@
 //! by similar triangles; the primary ray runs from a point on the aperture to that point. A
 //! pinhole (`R = 0`) ignores the lens numbers entirely.
 
+pub use crate::warp::{concentric_disc, polygon_corner, uniform_polygon};
 use aperture_scene::Projection;
 use glam::{Affine3A, Vec2, Vec3};
-use std::f32::consts::{FRAC_PI_4, PI, TAU};
 
 /// The numbers one primary sample gives the camera.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -98,42 +98,6 @@ impl Aperture {
             Self::Disc { radius, .. } | Self::Polygon { radius, .. } => radius,
         }
     }
-}
-
-/// Shirley–Chiu concentric mapping of the unit square onto the unit disc: continuous and
-/// area-preserving, so strata of the square stay compact strata of the disc.
-pub fn concentric_disc(u: Vec2) -> Vec2 {
-    let o = 2.0 * u - Vec2::ONE;
-    if o.x == 0.0 && o.y == 0.0 {
-        return Vec2::ZERO;
-    }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, FRAC_PI_4 * (o.y / o.x))
-    } else {
-        (o.y, 2.0 * FRAC_PI_4 - FRAC_PI_4 * (o.x / o.y))
-    };
-    r * Vec2::new(theta.cos(), theta.sin())
-}
-
-/// The `k`-th corner of a regular `n`-gon inscribed in the unit circle, placed as Cycles places
-/// blades: at angle `rotation + π/n + 2πk/n`.
-pub fn polygon_corner(k: u32, n: u32, rotation: f32) -> Vec2 {
-    let a = rotation + PI / n as f32 + TAU * k as f32 / n as f32;
-    Vec2::new(a.cos(), a.sin())
-}
-
-/// Uniform point in the regular `n`-gon inscribed in the unit circle: `u.x` picks one of the `n`
-/// equal-area wedges of the fan around the centre (its fractional part is reused), then a
-/// uniform point in that triangle.
-pub fn uniform_polygon(u: Vec2, n: u32, rotation: f32) -> Vec2 {
-    let scaled = u.x * n as f32;
-    let k = (scaled as u32).min(n - 1);
-    let a = scaled - k as f32;
-    let c0 = polygon_corner(k, n, rotation);
-    let c1 = polygon_corner((k + 1) % n, n, rotation);
-    // Uniform in the triangle (0, c0, c1): sqrt(a) spreads along the wedge's depth.
-    let s = a.sqrt();
-    s * ((1.0 - u.y) * c0 + u.y * c1)
 }
 
 /// A camera ready to generate rays for an image of a given size.
@@ -416,38 +380,6 @@ mod tests {
                 assert!((b - a).perp_dot(o - a) >= -1e-6, "{o} outside edge {k}");
             }
         }
-    }
-
-    #[test]
-    fn polygon_sampling_is_uniform_over_the_polygon() {
-        // Mean of |p|² over a regular hexagon of circumradius 1 is 5/12. A centred grid whose
-        // columns split evenly among the 6 wedges.
-        let n = 192;
-        let mut sum = 0.0;
-        let mut centroid = Vec2::ZERO;
-        for i in 0..n * n {
-            let u = Vec2::new(
-                ((i % n) as f32 + 0.5) / n as f32,
-                ((i / n) as f32 + 0.5) / n as f32,
-            );
-            let p = uniform_polygon(u, 6, 0.0);
-            sum += p.length_squared();
-            centroid += p;
-        }
-        let mean = sum / (n * n) as f32;
-        assert!((mean - 5.0 / 12.0).abs() < 1e-3, "{mean}");
-        assert!(centroid.length() / ((n * n) as f32) < 1e-3);
-    }
-
-    #[test]
-    fn concentric_disc_is_uniform() {
-        // Mean of r² over the unit disc is 1/2.
-        let n = 128;
-        let mean: f32 = grid(n)
-            .map(|u| concentric_disc(u).length_squared())
-            .sum::<f32>()
-            / (n * n) as f32;
-        assert!((mean - 0.5).abs() < 1e-3, "{mean}");
     }
 
     #[test]

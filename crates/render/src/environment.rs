@@ -8,7 +8,8 @@
 //! density the sampler draws from, so a texel is never sampled with the wrong weight; camera
 //! rays that see the environment directly get a bilinear lookup.
 
-use crate::lights::{luminance, AliasTable};
+use crate::color::luminance;
+use crate::warp::AliasTable;
 use glam::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 use std::sync::Arc;

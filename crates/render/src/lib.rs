@@ -21,23 +21,33 @@ pub mod adaptive;
 mod aov;
 mod bsdf;
 pub mod camera;
+mod color;
 pub mod cryptomatte;
 mod environment;
 mod film;
 mod filter;
 mod integrator;
 mod lights;
+mod media;
 pub mod output;
 pub mod passes;
 mod render;
 pub mod sampler;
+mod shade_extended;
+mod spectrum;
 mod surface;
 pub mod test_scenes;
 mod texture;
+mod transmission;
+mod warp;
 
 pub use adaptive::AdaptiveOptions;
-pub use bsdf::{Bsdf, BsdfSample, Dielectric, Frame};
+pub use bsdf::{
+    Albedos, Bsdf, BsdfSample, CoatLayer, Compensation, DeltaSample, Dielectric, Frame, Interface,
+    Lobe, LobeSplit, MetalRough, Principled, SheenLayer, ThinFilm,
+};
 pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, CameraSample};
+pub use color::srgb_to_linear;
 pub use environment::{EnvImage, EnvSampling, Environment};
 pub use film::{Film, PixelSum, Window};
 pub use filter::{Filter, FilterKind};
@@ -49,4 +59,7 @@ pub use render::{
 };
 pub use sampler::{SampleStream, SamplerKind, MAX_SPP};
 pub use surface::MaterialOverride;
-pub use texture::{srgb_to_linear, transform_uv};
+pub use texture::transform_uv;
+pub use transmission::{
+    transmissive_meshes, ParseTransmissionError, TransmissionMode, TransmissionModel,
+};

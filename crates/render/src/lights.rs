@@ -2,81 +2,11 @@
 //! triangles, chosen in proportion to their power through an alias table. The triangle
 //! structures exist only when the scene has emissive triangles.
 
+use crate::color::luminance;
 use crate::surface::Geometry;
+use crate::warp::AliasTable;
 use aperture_scene::{Light, LightKind};
 use glam::Vec3;
-
-/// The largest f32 below 1.
-const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
-
-/// Walker/Vose alias table: O(1) sampling of a discrete distribution.
-#[derive(Debug, Clone)]
-pub(crate) struct AliasTable {
-    /// Probability of keeping bin `i` (else take `alias[i]`).
-    prob: Vec<f32>,
-    alias: Vec<u32>,
-    /// Normalised probability of each outcome.
-    pmf: Vec<f32>,
-}
-
-impl AliasTable {
-    /// A table for non-negative weights with a positive sum.
-    pub fn new(weights: &[f64]) -> Self {
-        let n = weights.len();
-        let total: f64 = weights.iter().sum();
-        let pmf: Vec<f32> = weights.iter().map(|w| (w / total) as f32).collect();
-        let mut scaled: Vec<f64> = weights.iter().map(|w| w / total * n as f64).collect();
-        let mut prob = vec![1.0f32; n];
-        let mut alias: Vec<u32> = (0..n as u32).collect();
-        let (mut small, mut large): (Vec<usize>, Vec<usize>) =
-            (0..n).partition(|&i| scaled[i] < 1.0);
-        while let (Some(s), Some(&l)) = (small.pop(), large.last()) {
-            prob[s] = scaled[s] as f32;
-            alias[s] = l as u32;
-            scaled[l] -= 1.0 - scaled[s];
-            if scaled[l] < 1.0 {
-                large.pop();
-                small.push(l);
-            }
-        }
-        // Leftovers (rounding) keep themselves with probability 1.
-        Self { prob, alias, pmf }
-    }
-
-    /// Picks an outcome for `u ∈ [0, 1)`.
-    pub fn sample(&self, u: f32) -> usize {
-        let n = self.prob.len();
-        let x = u * n as f32;
-        let i = (x as usize).min(n - 1);
-        let frac = x - i as f32;
-        if frac < self.prob[i] {
-            i
-        } else {
-            self.alias[i] as usize
-        }
-    }
-
-    /// Picks an outcome for `u ∈ [0, 1)` and returns with it a fresh uniform number in
-    /// `[0, 1)` recovered from the part of `u` the choice did not use.
-    pub fn sample_remap(&self, u: f32) -> (usize, f32) {
-        let n = self.prob.len();
-        let x = u * n as f32;
-        let i = (x as usize).min(n - 1);
-        let frac = (x - i as f32).clamp(0.0, 1.0);
-        let p = self.prob[i];
-        if frac < p {
-            (i, (frac / p).min(ONE_MINUS_EPSILON))
-        } else {
-            let rest = ((frac - p) / (1.0 - p)).clamp(0.0, ONE_MINUS_EPSILON);
-            (self.alias[i] as usize, rest)
-        }
-    }
-
-    /// Probability of outcome `i`.
-    pub fn pmf(&self, i: usize) -> f32 {
-        self.pmf[i]
-    }
-}
 
 /// One emissive triangle.
 #[derive(Debug, Clone, Copy)]
@@ -182,11 +112,6 @@ fn triangle_power(geom: &Geometry<'_>, instance: u32, triangle: u32) -> f64 {
     sum / probes.len() as f64 * area as f64
 }
 
-/// Rec.709 luminance.
-pub(crate) fn luminance(c: Vec3) -> f32 {
-    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
-}
-
 /// Incident light from a punctual light at `p`: direction towards the light, distance (∞ for
 /// directional) and the radiance-times-solid-angle it delivers (irradiance at normal incidence).
 pub(crate) fn punctual_incident(light: &Light, p: Vec3) -> Option<(Vec3, f32, Vec3)> {
@@ -221,34 +146,6 @@ pub(crate) fn punctual_incident(light: &Light, p: Vec3) -> Option<(Vec3, f32, Ve
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn alias_table_reproduces_the_weights() {
-        let w = [1.0, 0.0, 3.0, 0.5, 2.5];
-        let t = AliasTable::new(&w);
-        let n = 70000;
-        let mut counts = [0usize; 5];
-        for i in 0..n {
-            counts[t.sample((i as f32 + 0.5) / n as f32)] += 1;
-        }
-        for i in 0..5 {
-            let want = w[i] / 7.0;
-            assert!((t.pmf(i) as f64 - want).abs() < 1e-6);
-            let got = counts[i] as f64 / n as f64;
-            assert!((got - want).abs() < 2e-3, "{i}: {got} vs {want}");
-        }
-        // The remapped number is uniform within each outcome: its mean is 1/2.
-        let mut sums = [0.0f64; 5];
-        for i in 0..n {
-            let (k, r) = t.sample_remap((i as f32 + 0.5) / n as f32);
-            assert!((0.0..1.0).contains(&r));
-            sums[k] += r as f64;
-        }
-        for i in [0, 2, 3, 4] {
-            let mean = sums[i] / (t.pmf(i) as f64 * n as f64);
-            assert!((mean - 0.5).abs() < 0.01, "{i}: {mean}");
-        }
-    }
 
     #[test]
     fn emissive_structures_exist_only_with_emitters() {

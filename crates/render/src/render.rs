@@ -14,6 +14,7 @@ use crate::lights::EmissiveLights;
 use crate::passes::{Pass, PassSet};
 use crate::sampler::{SampleStream, SamplerKind, MAX_SPP};
 use crate::surface::{Geometry, MaterialOverride};
+use crate::transmission::TransmissionMode;
 use aperture_accel::{Accel, Ray};
 use aperture_scene::Scene;
 use glam::{Vec2, Vec3};
@@ -59,6 +60,11 @@ pub struct RenderOptions {
     /// Passes to render beside the beauty (none by default; the CLI asks for
     /// [`PassSet::compositing`]).
     pub passes: PassSet,
+    /// What transmissive surfaces are (`--transmission`): thin-walled or refractive.
+    pub transmission: TransmissionMode,
+    /// Give microfacet lobes back the energy single scattering loses, and layer materials by
+    /// albedo scaling (on by default; off renders glTF Appendix B's formulas literally).
+    pub energy_compensation: bool,
 }
 
 impl Default for RenderOptions {
@@ -77,6 +83,8 @@ impl Default for RenderOptions {
             adaptive: None,
             clamp: Clamp::OFF,
             passes: PassSet::NONE,
+            transmission: TransmissionMode::Auto,
+            energy_compensation: true,
         }
     }
 }
@@ -389,7 +397,8 @@ pub const DEPTH_BACKGROUND: f32 = 1e10;
 
 /// The path tracer of one render.
 fn integrator<'a>(scene: &'a Scene, accel: &'a Accel, opts: &RenderOptions) -> Integrator<'a> {
-    let geom = Geometry::new(scene, opts.material_override);
+    let (model, _) = opts.transmission.resolve(scene);
+    let geom = Geometry::with_transmission(scene, opts.material_override, model);
     let emissive = EmissiveLights::build(&geom);
     Integrator {
         geom,
@@ -399,6 +408,7 @@ fn integrator<'a>(scene: &'a Scene, accel: &'a Accel, opts: &RenderOptions) -> I
         max_bounces: opts.max_bounces,
         clamp: opts.clamp,
         light_passes: opts.passes.has_light_passes(),
+        energy_compensation: opts.energy_compensation,
     }
 }
 

@@ -183,6 +183,13 @@ impl SampleStream {
             .sample_2d(self.pixel_seed, self.index, (1 << 20) + k)
     }
 
+    /// The value choosing a path's wavelength at path vertex `k` (dispersion): dimension set
+    /// `2^21 + k`, far above every other set.
+    pub fn wavelength(&self, k: u32) -> f32 {
+        self.kind
+            .sample_2d(self.pixel_seed, self.index, (1 << 21) + k)[0]
+    }
+
     /// An extra value for the `n`-th repeated decision at vertex `k` (alpha pass-through after
     /// the first), hashed so it stays a pure function of the sample.
     pub fn extra(&self, k: u32, n: u32) -> f32 {

@@ -2,13 +2,15 @@
 //! coordinates, vertex colour, tangent frame, and the material evaluated there.
 //!
 //! Every texture a glTF material references is used — base colour with alpha, metallic (B) and
-//! roughness (G), normal map, emissive — each through its own `texCoord` set (0 or 1) and
+//! roughness (G), normal map, emissive — each through its own `texCoord` set (any `TEXCOORD_n`) and
 //! `KHR_texture_transform` — except the occlusion map. Ambient occlusion is a raster
 //! approximation of the shadowing that path tracing computes anyway; applying it too would
 //! darken creases twice, so occlusion maps are deliberately ignored.
 
-use crate::bsdf::{Bsdf, Dielectric};
+use crate::bsdf::{bend_towards, Bsdf, Dielectric, Frame};
+use crate::media::Medium;
 use crate::texture;
+use crate::transmission::TransmissionModel;
 use aperture_scene::{AlphaMode, Material, Scene, TextureRef};
 use glam::{Mat3, Vec2, Vec3, Vec4, Vec4Swizzles};
 
@@ -37,6 +39,9 @@ pub(crate) struct Surface {
     pub tangent: Vec4,
     /// Texture coordinate sets 0 and 1.
     pub uv: [Vec2; 2],
+    /// The mesh, its triangle's vertices and their barycentric weights: what the further
+    /// coordinate sets (`TEXCOORD_2` …) are interpolated from, when a texture asks for one.
+    pub corners: (u32, [u32; 3], Vec3),
     /// Vertex colour (white when absent).
     pub color: Vec4,
     /// Material index.
@@ -46,7 +51,7 @@ pub(crate) struct Surface {
 }
 
 /// The material evaluated at a surface point.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub(crate) struct Shading {
     /// How the point scatters; `None` for unlit surfaces.
     pub bsdf: Option<Bsdf>,
@@ -56,6 +61,70 @@ pub(crate) struct Shading {
     pub unlit: Option<Vec3>,
     /// Unit shading normal after normal mapping, on the side of `Surface::ns`.
     pub normal: Vec3,
+    /// The direction the shading frame's x axis must follow (an anisotropic lobe's), world.
+    pub tangent: Option<Vec3>,
+}
+
+/// The shading normal at `s` seen from `wo` (world, unit): the mapped normal turned to the
+/// viewer's side with the vertex normal (both sides are shaded) and bent just above the view.
+pub(crate) fn view_normal(s: &Surface, shading: &Shading, wo: Vec3) -> Vec3 {
+    let ng = if s.ng.dot(wo) < 0.0 { -s.ng } else { s.ng };
+    let ns = if s.ns.dot(ng) < 0.0 {
+        -shading.normal
+    } else {
+        shading.normal
+    };
+    bend_towards(ns, wo)
+}
+
+/// The shading frame around `ns` (from [`view_normal`]) with its x axis along `tangent` when
+/// given, and the view `wo` in it. `bend_towards` keeps the view above the shading hemisphere;
+/// if rounding still says otherwise, the geometric normal `ng` (on the viewer's side) gives
+/// the frame rather than return black.
+pub(crate) fn shading_frame(ns: Vec3, ng: Vec3, tangent: Option<Vec3>, wo: Vec3) -> (Frame, Vec3) {
+    let mut frame = match tangent {
+        Some(t) => Frame::from_normal_tangent(ns, t),
+        None => Frame::from_normal(ns),
+    };
+    let mut wo_l = frame.to_local(wo);
+    if wo_l.z <= 0.0 {
+        frame = Frame::from_normal(ng);
+        wo_l = frame.to_local(wo);
+    }
+    (frame, wo_l)
+}
+
+/// What the specular transmission of a material is at a surface.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum SurfaceKind {
+    /// No specular transmission.
+    Opaque,
+    /// Thin-walled transmission.
+    Thin,
+    /// The boundary of a refractive volume.
+    Refractive,
+}
+
+/// How a material transmits, before the mesh is known.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Transmits {
+    No,
+    Thin,
+    Refractive,
+    /// Refractive where the mesh is closed (`--transmission blender`).
+    IfClosed,
+}
+
+/// What the hit shader needs to know of a material beyond its parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct MaterialInfo {
+    /// Shaded by the extended BSDF (it has lobes beyond metallic-roughness).
+    extended: bool,
+    transmits: Transmits,
+    /// The medium inside, for refractive boundaries.
+    pub medium: Medium,
+    /// `KHR_materials_dispersion` (20 / Abbe number).
+    pub dispersion: f32,
 }
 
 /// Per-instance data the hit shader needs, computed once per render.
@@ -68,10 +137,29 @@ pub(crate) struct Geometry<'a> {
     pub material_override: MaterialOverride,
     /// True when some material cuts or blends by alpha (then rays may pass through surfaces).
     pub has_alpha: bool,
+    /// Per material (and one more for the default material).
+    info: Vec<MaterialInfo>,
+    /// Per mesh: closed (computed for meshes with `IfClosed` materials only).
+    closed: Vec<bool>,
+    /// True when some surface may be a refractive boundary.
+    pub has_refractive: bool,
+    /// True when some surface may be thin-walled transmissive (shadow rays may pass it).
+    pub has_thin: bool,
 }
 
 impl<'a> Geometry<'a> {
+    /// Hit shading for `scene` with glTF's meaning of transmission.
+    #[cfg(test)]
     pub fn new(scene: &'a Scene, material_override: MaterialOverride) -> Self {
+        Self::with_transmission(scene, material_override, TransmissionModel::Gltf)
+    }
+
+    /// Hit shading for `scene`, transmissive surfaces interpreted by `model`.
+    pub fn with_transmission(
+        scene: &'a Scene,
+        material_override: MaterialOverride,
+        model: TransmissionModel,
+    ) -> Self {
         let normal_from_object = scene
             .instances
             .iter()
@@ -86,13 +174,66 @@ impl<'a> Geometry<'a> {
             .materials
             .iter()
             .any(|m| m.alpha_mode != AlphaMode::Opaque);
+        let default_material = Material::default();
+        let info: Vec<MaterialInfo> = scene
+            .materials
+            .iter()
+            .chain(std::iter::once(&default_material))
+            .enumerate()
+            .map(|(i, m)| material_info(i as u32, m, material_override, model))
+            .collect();
+        let closed: Vec<bool> = scene
+            .meshes
+            .iter()
+            .map(|mesh| {
+                let needs = mesh.material_ids.iter().any(|&id| {
+                    info.get(id as usize)
+                        .is_some_and(|i| i.transmits == Transmits::IfClosed)
+                });
+                needs && mesh.is_closed()
+            })
+            .collect();
+        let has_refractive = info
+            .iter()
+            .any(|i| matches!(i.transmits, Transmits::Refractive))
+            || closed.iter().any(|&c| c);
+        let has_thin = info
+            .iter()
+            .any(|i| matches!(i.transmits, Transmits::Thin | Transmits::IfClosed));
         Self {
             scene,
             normal_from_object,
             mirrored,
-            default_material: Material::default(),
+            default_material,
             material_override,
             has_alpha,
+            info,
+            closed,
+            has_refractive,
+            has_thin,
+        }
+    }
+
+    /// What the hit shader knows of material `id`.
+    pub fn info(&self, id: u32) -> &MaterialInfo {
+        let last = self.info.len() - 1;
+        &self.info[(id as usize).min(last)]
+    }
+
+    /// What the material's specular transmission is on this instance's mesh.
+    pub fn kind(&self, instance: u32, material: u32) -> SurfaceKind {
+        match self.info(material).transmits {
+            Transmits::No => SurfaceKind::Opaque,
+            Transmits::Thin => SurfaceKind::Thin,
+            Transmits::Refractive => SurfaceKind::Refractive,
+            Transmits::IfClosed => {
+                let mesh = self.scene.instances[instance as usize].mesh;
+                if self.closed.get(mesh as usize).copied().unwrap_or(false) {
+                    SurfaceKind::Refractive
+                } else {
+                    SurfaceKind::Thin
+                }
+            }
         }
     }
 
@@ -160,6 +301,11 @@ impl<'a> Geometry<'a> {
             ns,
             tangent,
             uv: [lerp2(&mesh.uv0), lerp2(&mesh.uv1)],
+            corners: (
+                inst.mesh,
+                [i0, i1, i2].map(|i| i as u32),
+                Vec3::new(b0, b1, b2),
+            ),
             color,
             material: mesh
                 .material_ids
@@ -177,17 +323,36 @@ impl<'a> Geometry<'a> {
             .unwrap_or(&self.default_material)
     }
 
-    fn lookup(&self, r: &Option<TextureRef>, s: &Surface) -> Vec4 {
+    pub(crate) fn lookup(&self, r: &Option<TextureRef>, s: &Surface) -> Vec4 {
         let Some(r) = r else { return Vec4::ONE };
         let Some(tex) = self.scene.textures.get(r.texture as usize) else {
             return Vec4::ONE;
         };
-        let uv = s.uv[(r.tex_coord as usize).min(1)];
+        let uv = match r.tex_coord {
+            0 | 1 => s.uv[r.tex_coord as usize],
+            set => self.uv_set(s, set),
+        };
         let uv = match &r.transform {
             Some(t) => texture::transform_uv(t, uv),
             None => uv,
         };
         texture::sample(tex, uv)
+    }
+
+    /// Texture coordinate set `set` (2 or more) at `s`; zero where the mesh has no such set.
+    fn uv_set(&self, s: &Surface, set: u32) -> Vec2 {
+        let (mesh, [i0, i1, i2], b) = s.corners;
+        let uv = self
+            .scene
+            .meshes
+            .get(mesh as usize)
+            .and_then(|m| m.uv_more.get(set as usize - 2));
+        match uv {
+            Some(v) if !v.is_empty() => {
+                b.x * v[i0 as usize] + b.y * v[i1 as usize] + b.z * v[i2 as usize]
+            }
+            _ => Vec2::ZERO,
+        }
     }
 
     /// Base colour with alpha: factor × vertex colour × texture.
@@ -236,11 +401,16 @@ impl<'a> Geometry<'a> {
     /// back to the interpolated normal when there is no map, no tangent frame, or the result
     /// is degenerate, so a bad texel never yields NaN.
     pub fn shading_normal(&self, m: &Material, s: &Surface) -> Vec3 {
-        if m.normal_texture.is_none() || s.tangent.xyz() == Vec3::ZERO {
+        self.mapped_normal(&m.normal_texture, m.normal_scale, s)
+    }
+
+    /// The interpolated normal perturbed by a tangent-space normal map `map` with `scale`.
+    pub fn mapped_normal(&self, map: &Option<TextureRef>, scale: f32, s: &Surface) -> Vec3 {
+        if map.is_none() || s.tangent.xyz() == Vec3::ZERO {
             return s.ns;
         }
-        let tex = self.lookup(&m.normal_texture, s).xyz() * 2.0 - Vec3::ONE;
-        let local = Vec3::new(tex.x * m.normal_scale, tex.y * m.normal_scale, tex.z);
+        let tex = self.lookup(map, s).xyz() * 2.0 - Vec3::ONE;
+        let local = Vec3::new(tex.x * scale, tex.y * scale, tex.z);
         let n = s.ns;
         // Gram-Schmidt: interpolated tangents drift off the interpolated normal.
         let Some(t) = (s.tangent.xyz() - n * n.dot(s.tangent.xyz())).try_normalize() else {
@@ -264,6 +434,7 @@ impl<'a> Geometry<'a> {
                 emission: Vec3::ZERO,
                 unlit: Some(base),
                 normal: s.ns,
+                tangent: None,
             };
         }
         let normal = self.shading_normal(m, s);
@@ -275,7 +446,11 @@ impl<'a> Geometry<'a> {
                 emission,
                 unlit: None,
                 normal,
+                tangent: None,
             };
+        }
+        if self.info(s.material).extended {
+            return self.shade_extended(m, s, base, emission, normal);
         }
         let mr = self.lookup(&m.metallic_roughness_texture, s);
         Shading {
@@ -293,6 +468,47 @@ impl<'a> Geometry<'a> {
             emission,
             unlit: None,
             normal,
+            tangent: None,
         }
+    }
+}
+
+/// How material `index` is shaded and transmits.
+fn material_info(
+    index: u32,
+    m: &Material,
+    material_override: MaterialOverride,
+    model: TransmissionModel,
+) -> MaterialInfo {
+    let clay = material_override == MaterialOverride::Diffuse;
+    let transmits = if clay || m.unlit || !m.is_transmissive() {
+        Transmits::No
+    } else {
+        match model {
+            TransmissionModel::Gltf if m.volume.is_some_and(|v| v.is_volume()) => {
+                Transmits::Refractive
+            }
+            TransmissionModel::Gltf => Transmits::Thin,
+            TransmissionModel::Blender => Transmits::IfClosed,
+        }
+    };
+    let ior = if m.ior.is_finite() && m.ior >= 1.0 {
+        m.ior
+    } else {
+        1.5
+    };
+    MaterialInfo {
+        extended: !clay && m.has_extended_lobes(),
+        transmits,
+        medium: Medium {
+            material: index,
+            ior,
+            sigma_a: m.volume.map_or(Vec3::ZERO, |v| v.sigma_a()),
+        },
+        dispersion: if m.dispersion.is_finite() {
+            m.dispersion.max(0.0)
+        } else {
+            0.0
+        },
     }
 }

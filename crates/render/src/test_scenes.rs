@@ -64,6 +64,32 @@ pub fn quad(size: f32, material: u32) -> Mesh {
     m
 }
 
+/// A closed box centred on the origin with half extents `half`: six faces of two triangles,
+/// outward flat normals, counter-clockwise seen from outside.
+pub fn cuboid(half: Vec3, material: u32) -> Mesh {
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    let mut indices = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let mut n = Vec3::ZERO;
+            n[axis] = sign;
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            let base = positions.len() as u32;
+            for (su, sv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                let mut p = Vec3::ZERO;
+                p[axis] = sign * half[axis];
+                p[u] = su * sign * half[u];
+                p[v] = sv * half[v];
+                positions.push(p);
+                normals.push(n);
+            }
+            indices.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
+        }
+    }
+    mesh(positions, indices, normals, material)
+}
+
 /// A unit icosphere: an icosahedron subdivided `levels` times (20·4^levels triangles), with
 /// smooth normals.
 pub fn icosphere(levels: u32, material: u32) -> Mesh {
@@ -225,4 +251,20 @@ pub fn bokeh(size: f32, z: f32, yfov: f32, dof: Dof, radiance: f32) -> Scene {
         vec![emitter(Vec3::splat(radiance))],
         cam,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cuboid_is_closed_and_faces_out() {
+        let m = cuboid(Vec3::new(1.0, 2.0, 3.0), 0);
+        assert!(m.is_closed());
+        for t in &m.indices {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            let n = (b - a).cross(c - a);
+            assert!(n.dot(a) > 0.0, "inward face {t:?}");
+        }
+    }
 }

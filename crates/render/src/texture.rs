@@ -5,14 +5,7 @@ use aperture_scene::{ColorSpace, Filter, Texels, Texture, TextureTransform, Wrap
 use glam::{Vec2, Vec4};
 use std::sync::OnceLock;
 
-/// The sRGB transfer function's inverse: encoded value to linear.
-pub fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
+use crate::color::srgb_to_linear;
 
 fn srgb_table() -> &'static [f32; 256] {
     static TABLE: OnceLock<[f32; 256]> = OnceLock::new();

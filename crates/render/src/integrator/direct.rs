@@ -1,0 +1,244 @@
+//! Next-event estimation: one routine per light kind sharing one contribution helper, and the
+//! shadow ray's transmittance.
+
+use super::{Integrator, PathState, MAX_ALPHA_PASSES};
+use crate::aov::Seen;
+use crate::bsdf::{Bsdf, Frame};
+use crate::lights::punctual_incident;
+use crate::sampler::{BounceSample, SampleStream};
+use crate::surface::SurfaceKind;
+use crate::warp::power_heuristic;
+use aperture_accel::{Ray, SpawnPoint};
+use glam::Vec3;
+
+/// A scattering vertex, as the light-sampling routines see it.
+pub(super) struct Vertex<'b> {
+    pub bsdf: &'b Bsdf,
+    pub frame: Frame,
+    /// The view direction, local.
+    pub wo_l: Vec3,
+    /// Geometric normal on the viewer's side.
+    pub ng: Vec3,
+    /// The surface point.
+    pub p: Vec3,
+    /// Where rays leave the surface on the viewer's side.
+    pub p_out: Vec3,
+    /// The point with its error bound, for rays leaving on the far side.
+    pub spawn: SpawnPoint,
+    /// True when lights on the far side count (thin-walled or diffuse transmission).
+    pub two_sided: bool,
+    /// Scatterings before this vertex.
+    pub scatter: u32,
+    /// Surface interactions before this vertex (sampler dimensions).
+    pub vertex: u32,
+    /// Absorption of the medium the vertex lies in.
+    pub sigma_a: Vec3,
+}
+
+impl Vertex<'_> {
+    /// The origin of a shadow ray towards `wi` (world), `None` when the BSDF sends no light
+    /// that way (the far side of a surface that does not transmit).
+    fn origin_towards(&self, wi: Vec3) -> Option<Vec3> {
+        if wi.dot(self.ng) > 0.0 {
+            Some(self.p_out)
+        } else if self.two_sided {
+            Some(self.spawn.origin(-self.ng))
+        } else {
+            None
+        }
+    }
+}
+
+impl Integrator<'_> {
+    /// Next-event estimation towards every punctual light (deltas: light sampling only).
+    pub(super) fn direct_punctual<const AOV: bool>(
+        &self,
+        v: &Vertex<'_>,
+        beta: Vec3,
+        path: &mut PathState<'_, AOV>,
+    ) {
+        for light in &self.geom.scene.lights {
+            let Some((wi, dist, e)) = punctual_incident(light, v.p) else {
+                continue;
+            };
+            if e == Vec3::ZERO {
+                continue;
+            }
+            let Some(origin) = v.origin_towards(wi) else {
+                continue;
+            };
+            let wi_l = v.frame.to_local(wi);
+            let (f, _) = v.bsdf.eval(v.wo_l, wi_l);
+            let c = beta * f * wi_l.z.abs() * e;
+            if c != Vec3::ZERO {
+                let dist = if dist.is_finite() {
+                    (light.position - origin).length()
+                } else {
+                    dist
+                };
+                self.add_direct(v, path, c, wi_l, origin, wi, dist);
+            }
+        }
+    }
+
+    /// Next-event estimation towards one emissive triangle picked by power, weighted against
+    /// BSDF sampling by MIS.
+    pub(super) fn direct_emissive<const AOV: bool>(
+        &self,
+        v: &Vertex<'_>,
+        beta: Vec3,
+        bs: &BounceSample,
+        path: &mut PathState<'_, AOV>,
+    ) {
+        let Some(em) = &self.emissive else { return };
+        let i = em.table.sample(bs.light_pick);
+        let t = em.triangles[i];
+        let (a, b) = (bs.light[0].sqrt(), bs.light[1]);
+        let q = self
+            .geom
+            .surface(t.instance, t.triangle, a * (1.0 - b), a * b);
+        let d = q.p - v.p;
+        let d2 = d.length_squared();
+        let dist = d2.sqrt();
+        let wi = d / dist;
+        let cos_l = q.ng.dot(wi).abs();
+        if !(d2 > 0.0 && cos_l > 0.0 && q.area > 0.0) {
+            return;
+        }
+        let Some(origin) = v.origin_towards(wi) else {
+            return;
+        };
+        let light_pdf = em.table.pmf(i) / q.area * d2 / cos_l;
+        let wi_l = v.frame.to_local(wi);
+        let (f, bsdf_pdf) = v.bsdf.eval(v.wo_l, wi_l);
+        let le = self.geom.emission(&q);
+        let c = beta * f * wi_l.z.abs() * le * (power_heuristic(light_pdf, bsdf_pdf) / light_pdf);
+        if c != Vec3::ZERO && c.is_finite() {
+            let qn = if q.ng.dot(wi) < 0.0 { q.ng } else { -q.ng };
+            let target = self.accel.surface_point(t.instance, q.p).origin(qn);
+            let to = target - origin;
+            let len = to.length();
+            self.add_direct(v, path, c, wi_l, origin, to / len, len);
+        }
+    }
+
+    /// Next-event estimation towards an environment image, weighted against BSDF sampling by
+    /// MIS. Only an image is light-sampled; a constant colour is met by BSDF rays alone, so
+    /// its pair of sample values (two scrambled Sobol dimensions) is not even drawn.
+    pub(super) fn direct_environment<const AOV: bool>(
+        &self,
+        v: &Vertex<'_>,
+        beta: Vec3,
+        stream: &SampleStream,
+        path: &mut PathState<'_, AOV>,
+    ) {
+        if !self.env.is_sampled() {
+            return;
+        }
+        let Some(es) = self.env.sample(stream.environment(v.vertex)) else {
+            return;
+        };
+        let Some(origin) = v.origin_towards(es.wi) else {
+            return;
+        };
+        if es.radiance == Vec3::ZERO {
+            return;
+        }
+        let wi_l = v.frame.to_local(es.wi);
+        let (f, bsdf_pdf) = v.bsdf.eval(v.wo_l, wi_l);
+        let c =
+            beta * f * wi_l.z.abs() * es.radiance * (power_heuristic(es.pdf, bsdf_pdf) / es.pdf);
+        if c != Vec3::ZERO && c.is_finite() {
+            self.add_direct(v, path, c, wi_l, origin, es.wi, f32::INFINITY);
+        }
+    }
+
+    /// The contribution every light sample shares: `c` (light over its density, through the
+    /// BSDF) clamped as light after one more scattering, times the shadow ray's transmittance
+    /// from `origin` along `dir` over `dist`; `wi_l` is the local light direction, which
+    /// splits the contribution among the lobes at the first vertex.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn add_direct<const AOV: bool>(
+        &self,
+        v: &Vertex<'_>,
+        path: &mut PathState<'_, AOV>,
+        c: Vec3,
+        wi_l: Vec3,
+        origin: Vec3,
+        dir: Vec3,
+        dist: f32,
+    ) {
+        let lit =
+            self.clamp.apply(c, v.scatter + 1) * self.visibility(origin, dir, dist, v.sigma_a);
+        path.l += lit;
+        if AOV && path.light_passes {
+            let split = if v.scatter == 0 {
+                v.bsdf.lobe_split(v.wo_l, wi_l)
+            } else {
+                path.first_split
+            };
+            path.aov
+                .add_light(lit, v.scatter + 1, &split, Seen::Surface);
+        }
+    }
+
+    /// Fraction of light arriving along a shadow ray from `origin` in unit direction `dir` over
+    /// `dist`, inside a medium absorbing `sigma_a`: alpha-cut and blended surfaces and
+    /// thin-walled ideal transmission let light through, refractive boundaries do not (light
+    /// through them bends).
+    pub(super) fn visibility(&self, origin: Vec3, dir: Vec3, dist: f32, sigma_a: Vec3) -> Vec3 {
+        let tmax = if dist.is_finite() {
+            dist * (1.0 - 1e-4)
+        } else {
+            f32::INFINITY
+        };
+        let mut ray = Ray {
+            origin,
+            dir,
+            tmin: 0.0,
+            tmax,
+        };
+        let absorbed = if sigma_a == Vec3::ZERO {
+            Vec3::ONE
+        } else {
+            let t = (-sigma_a * dist).exp();
+            Vec3::select(sigma_a.cmpgt(Vec3::ZERO), t, Vec3::ONE)
+        };
+        if !self.geom.has_alpha && !self.geom.has_thin {
+            return if self.accel.occluded(&ray) {
+                Vec3::ZERO
+            } else {
+                absorbed
+            };
+        }
+        let mut tr = absorbed;
+        for _ in 0..MAX_ALPHA_PASSES {
+            let Some(hit) = self.accel.intersect(&ray) else {
+                return tr;
+            };
+            let s = self.geom.surface(hit.instance, hit.triangle, hit.u, hit.v);
+            tr *= match self.geom.kind(hit.instance, s.material) {
+                SurfaceKind::Opaque => Vec3::splat(self.geom.transmittance(&s)),
+                SurfaceKind::Thin => {
+                    self.geom
+                        .pane_transmittance(&s, dir, self.energy_compensation)
+                }
+                SurfaceKind::Refractive => Vec3::ZERO,
+            };
+            if tr.max_element() <= 0.0 {
+                return Vec3::ZERO;
+            }
+            let n = if s.ng.dot(dir) > 0.0 { s.ng } else { -s.ng };
+            let error = self.accel.spawn_point(&ray, &hit).error;
+            let o = SpawnPoint { p: s.p, error }.origin(n);
+            let travelled = (o - ray.origin).dot(dir);
+            ray.origin = o;
+            ray.tmax -= travelled;
+            if ray.tmax <= 0.0 {
+                return tr;
+            }
+        }
+        Vec3::ZERO
+    }
+}

@@ -1,0 +1,455 @@
+//! Unidirectional path tracing with next-event estimation: punctual lights by NEE alone (they are
+//! deltas), emissive triangles and environment images by NEE and BSDF sampling combined with
+//! multiple importance sampling (power heuristic). Russian roulette from the fourth vertex on.
+//!
+//! `max_bounces` has Blender Cycles' meaning: 0 is direct light only (the camera ray's hit is lit
+//! by light sampling and by one BSDF-sampled ray that may find an emitter or the environment).
+//!
+//! Transmission (SPEC §5): ideal (delta) lobes are followed by BSDF sampling alone, which light
+//! sampling cannot find, so emitters met after them weigh fully. Thin-walled ideal
+//! transmission is a straight line: shadow rays pass it with its transmittance, and a path
+//! passing it keeps the MIS state of the vertex before it (both strategies then see the same
+//! light through the pane). Refractive boundaries block shadow rays (a bent path is no
+//! straight line): caustics through refractive glass come from sampled paths, as in Cycles.
+//! Inside a refractive body the path is absorbed by Beer–Lambert (its [`MediumStack`]).
+
+mod direct;
+mod trace;
+
+use crate::aov::{Features, SampleAov, Seen};
+use crate::bsdf::{Interface, LobeSplit};
+use crate::environment::EnvLight;
+use crate::lights::EmissiveLights;
+use crate::media::{Crossing, Medium, MediumStack};
+use crate::sampler::SampleStream;
+use crate::spectrum;
+use crate::surface::{shading_frame, view_normal, Geometry, SurfaceKind};
+use crate::warp::power_heuristic;
+use aperture_accel::{Accel, Hit, Ray, SpawnPoint};
+use glam::Vec3;
+
+/// Vertices before Russian roulette may end a path.
+const RR_START: u32 = 3;
+/// Surfaces a single ray may pass through by alpha before it is stopped.
+const MAX_ALPHA_PASSES: u32 = 64;
+/// Total internal reflections one path may take (they are not bounces).
+const MAX_INTERNAL: u32 = 256;
+
+/// Everything a path needs, shared by all threads.
+pub(crate) struct Integrator<'a> {
+    pub geom: Geometry<'a>,
+    pub accel: &'a Accel,
+    pub emissive: Option<EmissiveLights>,
+    pub env: EnvLight,
+    pub max_bounces: u32,
+    pub clamp: Clamp,
+    /// Record the light passes (with `AOV`): the lobe split of every light sample is work that
+    /// only they need.
+    pub light_passes: bool,
+    /// Multiple-scattering energy compensation of microfacet lobes (see `bsdf::energy`).
+    pub energy_compensation: bool,
+}
+
+/// Blender Cycles' "Clamp Direct" / "Clamp Indirect": the largest value one sample's
+/// contribution may add, as the sum of its R, G and B (0 = no limit). Clamping trades bias
+/// (bright caustics and highlights come out darker) for the removal of rare, very bright
+/// samples that unidirectional path tracing otherwise converges on very slowly.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Clamp {
+    /// Limit for light reaching the camera after at most one scattering (the camera ray's hit
+    /// seen directly, and that hit lit by a light or emitter).
+    pub direct: f32,
+    /// Limit for light that scattered more than once.
+    pub indirect: f32,
+}
+
+impl Clamp {
+    /// No clamping: the unbiased estimate.
+    pub const OFF: Clamp = Clamp {
+        direct: 0.0,
+        indirect: 0.0,
+    };
+
+    /// `c` scaled down (hue kept) so that its channel sum is at most the limit for light that
+    /// scattered `scatterings` times before reaching the camera (Cycles' `kernel_accum_clamp`).
+    #[inline]
+    fn apply(self, c: Vec3, scatterings: u32) -> Vec3 {
+        let limit = if scatterings <= 1 {
+            self.direct
+        } else {
+            self.indirect
+        };
+        // Off (the default) costs one comparison per contribution on this hot path.
+        if limit <= 0.0 {
+            return c;
+        }
+        let sum = c.x.abs() + c.y.abs() + c.z.abs();
+        if sum > limit {
+            c * (limit / sum)
+        } else {
+            c
+        }
+    }
+}
+
+/// How the path reached the current vertex: what MIS at an emitter found there needs.
+#[derive(Debug, Clone, Copy)]
+struct Arrival {
+    /// The last scattering vertex's position.
+    p: Vec3,
+    /// Solid-angle density of the direction it drew; ∞ for the camera and delta lobes (no
+    /// light sample could have found the emitter: weight 1).
+    pdf: f32,
+}
+
+/// Where a path is between vertices.
+struct Walk {
+    beta: Vec3,
+    ray: Ray,
+    arrival: Arrival,
+    /// Surface interactions so far: selects the sampler dimensions.
+    vertex: u32,
+    /// Scatterings so far (Cycles' bounces): a straight pass through thin glass after the
+    /// first hit is not one.
+    scatter: u32,
+    media: MediumStack,
+    /// The wavelength a dispersive refraction chose (nm), once chosen.
+    wavelength: Option<f32>,
+    /// Total internal reflections so far.
+    internal: u32,
+}
+
+impl Integrator<'_> {
+    /// Radiance along a primary ray (unit direction), and whether it hit geometry. (The render
+    /// loop traces primary rays in batches and calls [`Integrator::li_with_first_hit`].)
+    #[cfg(test)]
+    pub fn li(&self, origin: Vec3, dir: Vec3, stream: &SampleStream) -> (Vec3, bool) {
+        self.li_from::<false>(origin, dir, stream, None, &mut SampleAov::default())
+    }
+
+    /// [`Integrator::li`] with the primary ray's closest hit already found:
+    /// `first = accel.intersect(&Ray::new(origin, dir))` (from a batch query; the result is the
+    /// same as `li`'s). With `AOV`, the sample's pass values are recorded into `aov` (which
+    /// must start as [`SampleAov::default`]); the radiance is the same bit for bit either way.
+    pub fn li_with_first_hit<const AOV: bool>(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        stream: &SampleStream,
+        first: Option<Hit>,
+        aov: &mut SampleAov,
+    ) -> (Vec3, bool) {
+        self.li_from::<AOV>(origin, dir, stream, Some(first), aov)
+    }
+
+    #[inline]
+    fn li_from<const AOV: bool>(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        stream: &SampleStream,
+        mut first: Option<Option<Hit>>,
+        aov: &mut SampleAov,
+    ) -> (Vec3, bool) {
+        let mut path = PathState::<AOV> {
+            l: Vec3::ZERO,
+            aov,
+            first_split: LobeSplit::DIFFUSE,
+            features: Features::default(),
+            light_passes: self.light_passes,
+        };
+        let mut w = Walk {
+            beta: Vec3::ONE,
+            ray: Ray::new(origin, dir),
+            arrival: Arrival {
+                p: origin,
+                pdf: f32::INFINITY,
+            },
+            vertex: 0,
+            scatter: 0,
+            media: MediumStack::default(),
+            wavelength: None,
+            internal: 0,
+        };
+        let mut covered = false;
+        loop {
+            let bs = stream.bounce(w.vertex);
+            let ray = w.ray;
+            let traced = self.trace(&ray, stream, w.vertex, bs.alpha, first.take(), &mut w);
+            let Some((hit, s, error)) = traced else {
+                self.escape(&mut path, &w);
+                break;
+            };
+            if w.vertex == 0 {
+                covered = true;
+            }
+            let wo = -w.ray.dir;
+            let ng = if s.ng.dot(wo) < 0.0 { -s.ng } else { s.ng };
+            let shading = self.geom.shade(&s);
+            let ns = view_normal(&s, &shading, wo);
+            if AOV && w.vertex == 0 {
+                path.aov.normal = ns;
+                path.aov.instance = hit.instance;
+                path.aov.material = s.material;
+            }
+            if let Some(c) = shading.unlit {
+                path.add(
+                    self.clamp.apply(w.beta * c, w.scatter),
+                    w.scatter,
+                    Seen::Surface,
+                );
+                if AOV {
+                    path.features.at_colour(path.aov, c, ns);
+                }
+                break;
+            }
+            if shading.emission != Vec3::ZERO {
+                let mis = self.emitter_weight(&w.arrival, hit, &s, ng, wo);
+                // An emitter found after v scatterings has scattered v times on the way to
+                // the camera.
+                let c = self.clamp.apply(w.beta * shading.emission * mis, w.scatter);
+                path.add(c, w.scatter, Seen::Surface);
+            }
+            if w.scatter > self.max_bounces {
+                break;
+            }
+            let Some(mut bsdf) = shading.bsdf else { break };
+            let (frame, wo_l) = shading_frame(ns, ng, shading.tangent, wo);
+            let entering = w.ray.dir.dot(s.ng) < 0.0;
+            let kind = if self.geom.has_refractive || self.geom.has_thin {
+                self.geom.kind(hit.instance, s.material)
+            } else {
+                SurfaceKind::Opaque
+            };
+            let (interface, medium) = self.interface(kind, s.material, entering, stream, &mut w);
+            bsdf.prepare(&frame, wo_l, interface, self.energy_compensation);
+            if AOV && (path.light_passes || path.features.pending()) {
+                let albedos = bsdf.albedos(wo_l);
+                if w.vertex == 0 {
+                    path.aov.set_colours(&albedos);
+                }
+                let rough = bsdf.glossy_is_rough();
+                path.features.at_surface(path.aov, &albedos, rough, ns);
+            }
+            let v = direct::Vertex {
+                bsdf: &bsdf,
+                frame,
+                wo_l,
+                ng,
+                p: s.p,
+                // Our point is interpolated from the vertices; the accel's bound covers the
+                // rounding of instanced transforms, which a few ulps of the point alone would
+                // not.
+                p_out: SpawnPoint { p: s.p, error }.origin(ng),
+                spawn: SpawnPoint { p: s.p, error },
+                two_sided: bsdf.transmits() && kind != SurfaceKind::Refractive,
+                scatter: w.scatter,
+                vertex: w.vertex,
+                sigma_a: w.media.sigma_a(),
+            };
+            self.direct_punctual(&v, w.beta, &mut path);
+            self.direct_emissive(&v, w.beta, &bs, &mut path);
+            self.direct_environment(&v, w.beta, stream, &mut path);
+
+            let Some(sample) = bsdf.sample(wo_l, bs.lobe, bs.bsdf) else {
+                break;
+            };
+            let wi = frame.to_world(sample.wi);
+            let side = wi.dot(ng);
+            // Which side of the surface the path continues on is the geometric normal's call:
+            // the shading normal may put a sampled direction on the other side than its lobe
+            // meant. A surface that only reflects ends such a path (light would leak through
+            // it); through one that transmits, the path goes on where the direction points,
+            // crossing into the medium behind only if it does cross (as Mitsuba decides).
+            let transmitted = side < 0.0;
+            if side == 0.0 || (transmitted && !bsdf.transmits()) {
+                break;
+            }
+            let straight = sample.delta.is_some_and(|d| d.straight);
+            let internal = sample.delta.is_some_and(|d| d.internal);
+            if AOV && path.light_passes && w.scatter == 0 {
+                path.first_split = match sample.delta {
+                    Some(d) => LobeSplit::pure(d.lobe),
+                    None => bsdf.lobe_split(wo_l, sample.wi),
+                };
+            }
+            if transmitted {
+                if let Some(m) = medium {
+                    w.media.cross(&m, entering);
+                }
+            }
+            w.beta *= sample.weight();
+            if !straight {
+                // Light sampling covers the far side only where `two_sided` says so: an
+                // emitter met through a refractive boundary was found by this sample alone.
+                let unsampled = sample.delta.is_some() || (transmitted && !v.two_sided);
+                w.arrival = Arrival {
+                    p: s.p,
+                    pdf: if unsampled { f32::INFINITY } else { sample.pdf },
+                };
+            }
+            if w.vertex >= RR_START {
+                // Survive with probability q and divide by it: unbiased.
+                let q = w.beta.max_element().min(1.0);
+                if bs.rr >= q || q.is_nan() {
+                    break;
+                }
+                w.beta /= q;
+            }
+            if w.beta == Vec3::ZERO {
+                break;
+            }
+            let o = if transmitted {
+                v.spawn.origin(-ng)
+            } else {
+                v.p_out
+            };
+            w.ray = Ray::new(o, wi);
+            w.vertex += 1;
+            // A straight pass through a pane is a scattering only as the camera's first hit
+            // (so what is seen through glass fills the Transmission passes, as in Cycles).
+            // Total internal reflection is no choice of the light's: it does not count
+            // against `max_bounces` (a glass wall guiding light would go dark at the limit),
+            // but a path takes at most `MAX_INTERNAL` of them.
+            if internal {
+                w.internal += 1;
+                if w.internal > MAX_INTERNAL {
+                    break;
+                }
+            } else if !straight || w.scatter == 0 {
+                w.scatter += 1;
+            }
+        }
+        (path.l, covered)
+    }
+
+    /// The MIS weight of an emitter at `s` found by a path that arrived as `arrival` says.
+    fn emitter_weight(
+        &self,
+        arrival: &Arrival,
+        hit: Hit,
+        s: &crate::surface::Surface,
+        ng: Vec3,
+        wo: Vec3,
+    ) -> f32 {
+        if arrival.pdf.is_infinite() {
+            return 1.0;
+        }
+        match &self.emissive {
+            Some(em) => {
+                let pick = em.pick_probability(hit.instance, hit.triangle);
+                let cos_l = ng.dot(wo).abs();
+                let d2 = (s.p - arrival.p).length_squared();
+                let light_pdf = if cos_l > 0.0 && s.area > 0.0 {
+                    pick / s.area * d2 / cos_l
+                } else {
+                    0.0
+                };
+                power_heuristic(arrival.pdf, light_pdf)
+            }
+            None => 1.0,
+        }
+    }
+
+    /// The interface a surface of `kind` is for this path, and the medium behind it when it
+    /// is a refractive boundary. A dispersive body makes the path choose its wavelength here.
+    fn interface(
+        &self,
+        kind: SurfaceKind,
+        material: u32,
+        entering: bool,
+        stream: &SampleStream,
+        w: &mut Walk,
+    ) -> (Interface, Option<Medium>) {
+        match kind {
+            SurfaceKind::Opaque => (Interface::Opaque, None),
+            SurfaceKind::Thin => (Interface::Thin, None),
+            SurfaceKind::Refractive => {
+                let info = self.geom.info(material);
+                let mut medium = info.medium;
+                if info.dispersion > 0.0 {
+                    let lambda = *w.wavelength.get_or_insert_with(|| {
+                        let (lambda, weight) = spectrum::sample(stream.wavelength(w.vertex));
+                        w.beta *= weight;
+                        lambda
+                    });
+                    medium.ior = spectrum::dispersed_ior(medium.ior, info.dispersion, lambda);
+                }
+                match w.media.classify(&medium, entering) {
+                    Crossing::Real { from, to } => {
+                        (Interface::Refractive { eta: to / from }, Some(medium))
+                    }
+                    // `trace` passes false interfaces; never here.
+                    Crossing::False => (Interface::Refractive { eta: 1.0 }, Some(medium)),
+                }
+            }
+        }
+    }
+}
+
+/// One path's running sums.
+struct PathState<'a, const AOV: bool> {
+    /// Radiance so far.
+    l: Vec3,
+    /// The sample's pass values (untouched unless `AOV`).
+    aov: &'a mut SampleAov,
+    /// How the first vertex's sampled direction split among the lobes.
+    first_split: LobeSplit,
+    features: Features,
+    light_passes: bool,
+}
+
+impl<const AOV: bool> PathState<'_, AOV> {
+    /// Adds light that reached the camera after `scatterings` scatterings.
+    #[inline]
+    fn add(&mut self, c: Vec3, scatterings: u32, seen: Seen) {
+        self.l += c;
+        if AOV && self.light_passes {
+            self.aov.add_light(c, scatterings, &self.first_split, seen);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    use crate::bsdf::bend_towards;
+
+    #[test]
+    fn bent_normals_face_the_viewer() {
+        let wo = Vec3::new(0.0, 0.6, 0.8);
+        // Already facing: unchanged.
+        assert_eq!(bend_towards(Vec3::Z, wo), Vec3::Z);
+        for n in [
+            Vec3::new(0.0, -1.0, 0.0),
+            Vec3::new(0.0, -0.8, 0.6),
+            -wo,
+            Vec3::new(1.0, -0.6, 0.0).normalize(),
+        ] {
+            let b = bend_towards(n, wo);
+            assert!(b.is_finite() && (b.length() - 1.0).abs() < 1e-5, "{b}");
+            assert!(b.dot(wo) > 0.0, "{n} -> {b}");
+        }
+    }
+
+    #[test]
+    fn clamp_scales_by_channel_sum_and_keeps_hue() {
+        let c = Clamp {
+            direct: 3.0,
+            indirect: 1.0,
+        };
+        let v = Vec3::new(4.0, 2.0, 0.0);
+        // Direct: the camera ray's hit (0 scatterings) and its lighting (1).
+        for n in [0, 1] {
+            let d = c.apply(v, n);
+            assert!((d.x + d.y + d.z - 3.0).abs() < 1e-6, "{d}");
+            assert!((d.x / d.y - 2.0).abs() < 1e-6);
+        }
+        let i = c.apply(v, 2);
+        assert!((i.x + i.y + i.z - 1.0).abs() < 1e-6, "{i}");
+        // Below the limit, or with no limit: unchanged.
+        assert_eq!(c.apply(Vec3::splat(0.2), 2), Vec3::splat(0.2));
+        assert_eq!(Clamp::OFF.apply(v * 1e6, 5), v * 1e6);
+    }
+}

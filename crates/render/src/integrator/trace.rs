@@ -1,0 +1,144 @@
+//! Following a ray to the surface it scatters at (through alpha-cut surfaces and false
+//! interfaces of nested dielectrics, absorbed on the way inside a medium), and what a ray
+//! leaving the scene sees.
+
+use super::{Integrator, PathState, Walk, MAX_ALPHA_PASSES};
+use crate::aov::Seen;
+use crate::media::Crossing;
+use crate::sampler::SampleStream;
+use crate::surface::{Surface, SurfaceKind};
+use crate::warp::power_heuristic;
+use aperture_accel::{Hit, Ray, SpawnPoint};
+use glam::Vec3;
+
+/// Beer–Lambert transmittance over `t` for absorption `sigma` (1 where σ = 0, even for an
+/// infinite `t`).
+fn absorption(sigma: Vec3, t: f32) -> Vec3 {
+    Vec3::select(sigma.cmpgt(Vec3::ZERO), (-sigma * t).exp(), Vec3::ONE)
+}
+
+impl Integrator<'_> {
+    /// The closest surface along `ray` that scatters, passing through alpha-cut or blended
+    /// surfaces and false interfaces of nested dielectrics (updating `w.media`), with the
+    /// rounding-error bound of the hit point (from the ray segment that found it). Absorption
+    /// of the media crossed multiplies `w.beta`. `first`, when given, is
+    /// `accel.intersect(ray)` already found (by a batch query).
+    pub(super) fn trace(
+        &self,
+        ray: &Ray,
+        stream: &SampleStream,
+        vertex: u32,
+        u_alpha: f32,
+        mut first: Option<Option<Hit>>,
+        w: &mut Walk,
+    ) -> Option<(Hit, Surface, f32)> {
+        let mut r = *ray;
+        let passes = self.geom.has_alpha || self.geom.has_refractive;
+        for pass in 0..MAX_ALPHA_PASSES {
+            let hit = match first.take() {
+                Some(hit) => hit?,
+                None => self.accel.intersect(&r)?,
+            };
+            let s = self.geom.surface(hit.instance, hit.triangle, hit.u, hit.v);
+            let error = self.accel.spawn_point(&r, &hit).error;
+            if !passes {
+                return Some((hit, s, error));
+            }
+            let sigma = w.media.sigma_a();
+            if sigma != Vec3::ZERO {
+                w.beta *= absorption(sigma, hit.t * r.dir.length());
+            }
+            let opaque = !self.geom.has_alpha || {
+                let u = if pass == 0 {
+                    u_alpha
+                } else {
+                    stream.extra(vertex, pass)
+                };
+                self.geom.is_opaque(&s, u)
+            };
+            if opaque && !self.is_false_interface(&hit, &s, &r, w) {
+                return Some((hit, s, error));
+            }
+            // Continue on the far side of the surface.
+            let n = if s.ng.dot(r.dir) > 0.0 { s.ng } else { -s.ng };
+            r = Ray::new(SpawnPoint { p: s.p, error }.origin(n), r.dir);
+        }
+        None
+    }
+
+    /// True (and the path's media updated) when `s` is a refractive surface the path's media
+    /// make a false interface.
+    fn is_false_interface(&self, hit: &Hit, s: &Surface, r: &Ray, w: &mut Walk) -> bool {
+        if !self.geom.has_refractive
+            || self.geom.kind(hit.instance, s.material) != SurfaceKind::Refractive
+        {
+            return false;
+        }
+        let medium = self.geom.info(s.material).medium;
+        let entering = r.dir.dot(s.ng) < 0.0;
+        if w.media.classify(&medium, entering) == Crossing::False {
+            w.media.cross(&medium, entering);
+            return true;
+        }
+        false
+    }
+
+    /// The first surface along a ray (unit direction) that is opaque at coverage ½: what the
+    /// Depth and Position passes show. Deterministic, unlike a sample: alpha-blended surfaces
+    /// count as solid where their alpha is at least ½.
+    pub fn first_surface(&self, origin: Vec3, dir: Vec3) -> Option<Vec3> {
+        let mut r = Ray::new(origin, dir);
+        for _ in 0..MAX_ALPHA_PASSES {
+            let hit = self.accel.intersect(&r)?;
+            let s = self.geom.surface(hit.instance, hit.triangle, hit.u, hit.v);
+            if !self.geom.has_alpha || self.geom.is_opaque(&s, 0.5) {
+                return Some(s.p);
+            }
+            let error = self.accel.spawn_point(&r, &hit).error;
+            let n = if s.ng.dot(r.dir) > 0.0 { s.ng } else { -s.ng };
+            r = Ray::new(SpawnPoint { p: s.p, error }.origin(n), r.dir);
+        }
+        None
+    }
+
+    /// A ray leaving the scene: the environment it sees. Seen by the camera (or after ideal
+    /// specular lobes only) it is filtered as a background and weighs fully; a constant
+    /// environment is found by BSDF sampling alone (weight 1); an image is also light-sampled,
+    /// so escaping BSDF rays share it by MIS. Inside an absorbing medium (an open mesh) an
+    /// infinite path is absorbed.
+    pub(super) fn escape<const AOV: bool>(&self, path: &mut PathState<'_, AOV>, w: &Walk) {
+        let dir = w.ray.dir;
+        let sigma = w.media.sigma_a();
+        let beta = if sigma == Vec3::ZERO {
+            w.beta
+        } else {
+            w.beta * absorption(sigma, f32::INFINITY)
+        };
+        if w.arrival.pdf.is_infinite() {
+            let seen = self.env.radiance_seen(dir);
+            path.add(
+                self.clamp.apply(beta * seen, w.scatter),
+                w.scatter,
+                Seen::Environment,
+            );
+            if AOV {
+                path.features.at_colour(path.aov, seen, Vec3::ZERO);
+            }
+            return;
+        }
+        let mis = if self.env.is_sampled() {
+            power_heuristic(w.arrival.pdf, self.env.pdf(dir))
+        } else {
+            1.0
+        };
+        let radiance = self.env.radiance(dir);
+        path.add(
+            self.clamp.apply(beta * radiance * mis, w.scatter),
+            w.scatter,
+            Seen::Environment,
+        );
+        if AOV {
+            path.features.at_colour(path.aov, radiance, Vec3::ZERO);
+        }
+    }
+}
