@@ -20,6 +20,9 @@ pub struct InfoArgs {
     /// Time, frame and animation (SPEC §7): bounds, lights and cameras as posed then.
     #[command(flatten)]
     pub when: crate::time_args::TimeArgs,
+    /// Transmission and variants, as `render` would interpret them.
+    #[command(flatten)]
+    pub materials: crate::material_args::MaterialArgs,
 }
 
 /// Counts that are not stored on the scene directly.
@@ -147,7 +150,19 @@ fn node_bounds(s: &Scene) -> Vec<Value> {
         .collect()
 }
 
-fn report(s: &Scene) -> Value {
+/// Which meaning of transmission applies, why, and what it makes of the file's meshes.
+fn transmission_json(s: &Scene, mode: aperture_render::TransmissionMode) -> Value {
+    let (model, why) = mode.resolve(s);
+    let (refractive, thin) = aperture_render::transmissive_meshes(s, model);
+    json!({
+        "applies": model.to_string(),
+        "why": why,
+        "refractive_meshes": refractive,
+        "thin_walled_meshes": thin,
+    })
+}
+
+fn report(s: &Scene, mode: aperture_render::TransmissionMode) -> Value {
     let c = counts(s);
     let b = s.bounds();
     let bounds = if b.is_empty() {
@@ -180,6 +195,10 @@ fn report(s: &Scene) -> Value {
             "features": s.stats.skipped_features,
         },
         "warnings": s.stats.warnings,
+        "generator": s.stats.generator,
+        "transmission": transmission_json(s, mode),
+        "variants": s.stats.variants,
+        "variant": s.stats.variant,
         "time": s.stats.time.map(f),
         "animations": s
             .stats
@@ -253,6 +272,28 @@ fn print_text(path: &std::path::Path, r: &Value) {
     for w in r["warnings"].as_array().into_iter().flatten() {
         println!("  warning: {}", w.as_str().unwrap_or_default());
     }
+    let tr = &r["transmission"];
+    println!(
+        "  transmission: {} ({}); {} refractive and {} thin-walled transmissive mesh(es)",
+        tr["applies"].as_str().unwrap_or_default(),
+        tr["why"].as_str().unwrap_or_default(),
+        n(&tr["refractive_meshes"]),
+        n(&tr["thin_walled_meshes"]),
+    );
+    let variants = r["variants"].as_array().cloned().unwrap_or_default();
+    if !variants.is_empty() {
+        println!(
+            "  material variants: {} (drawing {})",
+            variants
+                .iter()
+                .map(|v| v.to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+            r["variant"]
+                .as_str()
+                .map_or("the default materials".into(), |v| format!("{v:?}"))
+        );
+    }
     match r["time"].as_f64() {
         Some(t) => println!("  posed at {t} s"),
         None => println!("  posed as stored (no time given)"),
@@ -319,11 +360,12 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
         skip_textures: true,
         time: args.when.seconds(),
         animation: args.when.selection(),
+        variant: args.materials.variant.clone(),
         ..LoadOptions::default()
     };
     let s = aperture_scene::load(&args.scene, &options)
         .map_err(|e| anyhow::anyhow!(e).context(format!("loading {}", args.scene.display())))?;
-    let r = report(&s);
+    let r = report(&s, args.materials.transmission);
     if args.json {
         println!("{}", serde_json::to_string_pretty(&r)?);
     } else {
@@ -399,7 +441,7 @@ mod tests {
 
     #[test]
     fn json_report_has_the_documented_keys_and_counts() {
-        let r = report(&scene());
+        let r = report(&scene(), Default::default());
         assert_eq!(r["triangles"]["unique"], 2);
         assert_eq!(r["triangles"]["drawn"], 4);
         assert_eq!(r["triangles"]["emissive_drawn"], 2);
@@ -429,17 +471,20 @@ mod tests {
     fn recentred_scenes_report_file_coordinates() {
         let mut s = scene();
         s.world_origin = glam::DVec3::new(1e6, -2e6, 0.5);
-        let r = report(&s);
+        let r = report(&s, Default::default());
         assert_eq!(r["world_origin"], json!([1e6, -2e6, 0.5]));
         assert_eq!(r["bounds"]["min"], json!([1e6, -2e6, 0.5]));
         assert_eq!(r["bounds"]["max"], json!([1e6 + 3.0, -2e6 + 1.0, 1.5]));
         assert_eq!(r["cameras"][0]["position"], json!([1e6, -2e6, 0.5]));
-        assert_eq!(report(&scene())["world_origin"], json!([0.0, 0.0, 0.0]));
+        assert_eq!(
+            report(&scene(), Default::default())["world_origin"],
+            json!([0.0, 0.0, 0.0])
+        );
     }
 
     #[test]
     fn empty_scene_has_null_bounds() {
-        let r = report(&Scene::default());
+        let r = report(&Scene::default(), Default::default());
         assert_eq!(r["bounds"]["min"], Value::Null);
         assert_eq!(r["triangles"]["drawn"], 0);
     }

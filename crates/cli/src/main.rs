@@ -2,6 +2,7 @@
 
 mod bench;
 mod info;
+mod material_args;
 mod progress;
 mod render_cmd;
 mod time_args;

@@ -261,6 +261,9 @@ pub struct RenderArgs {
     /// Time, frame and animation (SPEC §7).
     #[command(flatten)]
     pub when: crate::time_args::TimeArgs,
+    /// Transmission, variants and energy compensation (SPEC §5).
+    #[command(flatten)]
+    pub materials: crate::material_args::MaterialArgs,
     /// Sample sequence.
     #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
     pub sampler: SamplerArg,
@@ -355,6 +358,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             focus_object: args.focus_object.clone(),
         },
         skip_textures: false,
+        variant: args.materials.variant.clone(),
         time: args.when.seconds(),
         animation: args.when.selection(),
     };
@@ -368,7 +372,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         Err(
             e @ (aperture_scene::Error::NoSuchScene { .. }
-            | aperture_scene::Error::NoSuchAnimation { .. }),
+            | aperture_scene::Error::NoSuchAnimation { .. }
+            | aperture_scene::Error::NoSuchVariant { .. }),
         ) => usage_error(format!("{}: {e}", args.scene.display())),
         Err(e) => {
             return Err(anyhow::Error::new(e).context(format!("loading {}", args.scene.display())))
@@ -438,6 +443,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         max_bounces: args.tracing.max_bounces,
         clamp: args.tracing.clamp(),
         filter: args.tracing.filter.into(),
+        transmission: args.materials.transmission,
+        energy_compensation: !args.materials.no_energy_compensation,
         sampler: match args.sampler {
             SamplerArg::Sobol => SamplerKind::Sobol,
             SamplerArg::Random => SamplerKind::Random,

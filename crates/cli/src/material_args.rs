@@ -1,0 +1,61 @@
+//! `--transmission`, `--variant` and `--no-energy-compensation` (SPEC §5), shared by `render`
+//! and `info`.
+
+use aperture_render::TransmissionMode;
+
+/// How materials are interpreted.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct MaterialArgs {
+    /// What a transmissive surface is: `gltf` = thin-walled unless KHR_materials_volume gives
+    /// it a thickness (the Khronos meaning); `blender` = every transmissive closed mesh
+    /// refracts as a volume of its IOR, as Cycles renders a Blender export; `auto` = `blender`
+    /// for files written by Blender's glTF exporter, else `gltf`.
+    #[arg(long, value_name = "auto|gltf|blender", default_value = "auto", value_parser = parse_transmission)]
+    pub transmission: TransmissionMode,
+    /// Draw the materials of this KHR_materials_variants variant (its name, or its index in
+    /// the file) [default: the default materials].
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub variant: Option<String>,
+    /// Render glTF's single-scattering formulas literally: no multiple-scattering energy
+    /// compensation of rough lobes and no albedo scaling of layers (rough metals darker, and
+    /// dielectrics brighter at grazing angles, than Cycles shows them).
+    #[arg(long)]
+    pub no_energy_compensation: bool,
+}
+
+fn parse_transmission(s: &str) -> Result<TransmissionMode, String> {
+    s.parse()
+        .map_err(|e: aperture_render::ParseTransmissionError| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        m: MaterialArgs,
+    }
+
+    #[test]
+    fn defaults_and_values() {
+        let d = Cli::parse_from(["x"]).m;
+        assert_eq!(d.transmission, TransmissionMode::Auto);
+        assert!(!d.no_energy_compensation && d.variant.is_none());
+        let a = Cli::parse_from([
+            "x",
+            "--transmission",
+            "blender",
+            "--variant",
+            "Yellow",
+            "--no-energy-compensation",
+        ])
+        .m;
+        assert_eq!(a.transmission, TransmissionMode::Blender);
+        assert_eq!(a.variant.as_deref(), Some("Yellow"));
+        assert!(a.no_energy_compensation);
+        assert!(Cli::try_parse_from(["x", "--transmission", "glass"]).is_err());
+    }
+}
