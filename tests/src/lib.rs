@@ -1,7 +1,9 @@
 //! Shared helpers for the end-to-end tests in `tests/tests/`.
 
 pub mod demo;
+pub mod gltf_writer;
 pub mod meshopt_writer;
+pub mod probe;
 
 use std::path::PathBuf;
 

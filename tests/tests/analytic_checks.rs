@@ -180,6 +180,9 @@ fn furnace(
     let o = RenderOptions {
         env: Environment::Constant(Vec3::ONE),
         material_override,
+        // The quadrature is of glTF's single-scattering lobes: compare them as they are.
+        // (`energy_furnace.rs` checks the compensated lobes, the default.)
+        energy_compensation: false,
         ..opts(size, 64, 4)
     };
     let film = render_checked(&scene, &o);
@@ -227,7 +230,9 @@ fn furnace(
 
 /// A white GGX conductor (F = 1) at five roughnesses, a white glTF dielectric, and the Lambert
 /// clay in a furnace of radiance 1: every view-cosine bin matches the quadrature of E(μo), and
-/// the conductors and the clay never create energy. On a convex sphere only the first bounce
+/// the conductors and the clay never create energy. Rendered without energy compensation
+/// (`--no-energy-compensation`): this pins glTF's single-scattering formulas, which the
+/// compensated default deliberately departs from (issue 14; `energy_furnace.rs`). On a convex sphere only the first bounce
 /// reaches the environment (a reflected ray leaves above the facet's plane and cannot meet the
 /// sphere again), so the image is E(μo) itself.
 #[test]
@@ -310,9 +315,11 @@ fn ggx_white_furnace_matches_directional_albedo_quadrature() {
             }
             // glTF's dielectric (Appendix B's fresnel_mix with F(ωo·h) per direction pair) is
             // not energy-conserving at grazing view: its own E(μo) exceeds 1 (1.074 at μo 0.2).
-            // SPEC §5 asks for that model, so the renderer must reproduce the excess, not
-            // remove it; the bin comparison above does that. Pin the reference's excess so a
-            // change of model is noticed here.
+            // Without energy compensation the renderer reproduces that excess (the bin
+            // comparison above); with it (the default, issue 14) the diffuse base is weighted
+            // by what the specular layer leaves at the view and the excess is gone
+            // (`energy_furnace.rs`). Pin the reference's excess so a change of model is
+            // noticed here.
             Kind::GltfDielectric => {
                 let e = table.at(FURNACE_MU_MIN);
                 assert!(

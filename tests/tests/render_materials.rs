@@ -153,3 +153,27 @@ fn alpha_mask_cuts_holes() {
     assert_eq!(film.pixel(12, 3)[3], 0.0, "cut out");
     assert_eq!(film.pixel(3, 3)[3], 1.0, "kept");
 }
+
+/// Any `TEXCOORD_n`: a texture that reads set 2 (here the quad's real coordinates, while sets 0
+/// and 1 are all zero) shows its four quadrants as set 0 would.
+#[test]
+fn a_texture_may_read_any_texcoord_set() {
+    let mut material = textured_material(true);
+    if let Some(t) = &mut material.base_color_texture {
+        t.tex_coord = 2;
+    }
+    let mut scene = textured_quad(material);
+    let mesh = &mut scene.meshes[0];
+    mesh.uv_more = vec![std::mem::take(&mut mesh.uv0)];
+    mesh.uv0 = vec![glam::Vec2::ZERO; 4];
+    mesh.uv1 = vec![glam::Vec2::ZERO; 4];
+    let film = aperture_tests::render_checked(&scene, &opts());
+    for (q, (x, y)) in [(0, (3, 3)), (1, (12, 3)), (2, (3, 12)), (3, (12, 12))] {
+        let p = film.pixel(x, y);
+        let want = expected(q);
+        assert!(
+            (Vec3::new(p[0], p[1], p[2]) - want).abs().max_element() < 1e-5,
+            "quadrant {q}: {p:?} vs {want}"
+        );
+    }
+}

@@ -80,6 +80,14 @@ fn unsupported_samples_fail_naming_the_extension() {
             assert!(b.max.x > 0.49 && b.min.x < -0.49, "{b:?}");
             continue;
         }
+        if folder == "unsupported/BoxInterleaved-SpecGloss" {
+            // KHR_materials_pbrSpecularGlossiness is implemented (issue 14): a file requiring
+            // it loads (this one requires it without using it: its box keeps its colour).
+            let s = load(&path, &LoadOptions::default()).unwrap();
+            assert_eq!(s.drawn_triangle_count(), 12);
+            assert!(s.materials.iter().all(|m| m.specular_glossiness.is_none()));
+            continue;
+        }
         let json: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
         let err = load(&path, &LoadOptions::default()).expect_err(folder);
         let Error::UnsupportedExtension { name, .. } = &err else {
@@ -95,10 +103,7 @@ fn unsupported_samples_fail_naming_the_extension() {
         assert!(err.to_string().contains(name.as_str()));
         seen += 1;
     }
-    assert_eq!(
-        seen, 2,
-        "refusals: BoxInterleaved-SpecGloss and StainedGlassLamp-KTX-BasisU"
-    );
+    assert_eq!(seen, 1, "refusals: StainedGlassLamp-KTX-BasisU");
 }
 
 #[test]

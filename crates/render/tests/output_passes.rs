@@ -86,6 +86,97 @@ fn busy_scene() -> Scene {
     s
 }
 
+/// [`busy_scene`] with glass: a refractive ball (with a volume), a thin-walled pane and a
+/// coated ball with sheen, so the Transmission passes fill.
+fn glass_scene() -> Scene {
+    let mut s = busy_scene();
+    let transmission = Some(aperture_scene::Transmission {
+        factor: 1.0,
+        texture: None,
+    });
+    let glass = Material {
+        name: Some("Glass".into()),
+        base_color_factor: glam::Vec4::new(0.9, 0.95, 1.0, 1.0),
+        metallic_factor: 0.0,
+        roughness_factor: 0.1,
+        transmission,
+        volume: Some(aperture_scene::Volume {
+            thickness_factor: 1.0,
+            thickness_texture: None,
+            attenuation_distance: 2.0,
+            attenuation_color: Vec3::new(0.8, 0.9, 1.0),
+        }),
+        ..Material::default()
+    };
+    let pane = Material {
+        name: Some("Pane".into()),
+        base_color_factor: glam::Vec4::new(0.7, 1.0, 0.8, 1.0),
+        metallic_factor: 0.0,
+        roughness_factor: 0.0,
+        transmission,
+        ..Material::default()
+    };
+    let velvet = Material {
+        name: Some("Velvet".into()),
+        base_color_factor: glam::Vec4::new(0.5, 0.1, 0.1, 1.0),
+        metallic_factor: 0.0,
+        roughness_factor: 0.6,
+        clearcoat: Some(aperture_scene::Clearcoat {
+            factor: 0.7,
+            texture: None,
+            roughness_factor: 0.1,
+            roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+        }),
+        sheen: Some(aperture_scene::Sheen {
+            color_factor: Vec3::new(0.9, 0.8, 0.7),
+            color_texture: None,
+            roughness_factor: 0.4,
+            roughness_texture: None,
+        }),
+        ..Material::default()
+    };
+    let first = s.materials.len() as u32;
+    s.materials.extend([glass, pane, velvet]);
+    let place = |mesh: aperture_scene::Mesh, scale: f32, t: Vec3| {
+        (
+            mesh,
+            Affine3A::from_scale_rotation_translation(Vec3::splat(scale), glam::Quat::IDENTITY, t),
+        )
+    };
+    let added = [
+        place(
+            test_scenes::icosphere(3, first),
+            0.45,
+            Vec3::new(-0.5, 0.45, 1.3),
+        ),
+        (
+            test_scenes::quad(1.2, first + 1),
+            Affine3A::from_rotation_translation(
+                glam::Quat::from_rotation_x(std::f32::consts::FRAC_PI_2),
+                Vec3::new(0.9, 0.6, 1.6),
+            ),
+        ),
+        place(
+            test_scenes::icosphere(3, first + 2),
+            0.3,
+            Vec3::new(-1.8, 0.3, 1.2),
+        ),
+    ];
+    for (mesh, xf) in added {
+        s.meshes.push(mesh);
+        s.instances.push(aperture_scene::Instance {
+            mesh: s.meshes.len() as u32 - 1,
+            world_from_object: xf,
+            node: s.instances.len() as u32,
+        });
+    }
+    s.node_names
+        .extend(["GlassBall", "Pane", "VelvetBall"].map(|n| Some(n.to_string())));
+    s
+}
+
 fn opts(passes: PassSet) -> RenderOptions {
     RenderOptions {
         width: 48,
@@ -112,18 +203,19 @@ fn rgb(image: &Image, layer: &str, p: usize) -> Vec3 {
     Vec3::from_slice(&l.data[p * n..p * n + 3])
 }
 
-#[test]
-fn light_passes_add_up_to_the_beauty() {
-    let scene = busy_scene();
-    let image = image_of(&scene, &opts(PassSet::all()));
+/// `(Direct + Indirect) × Color` summed over the lobes, plus Emission and Environment, is the
+/// beauty, pixel by pixel; returns the passes' totals over the image: (lit pixels, Diffuse
+/// Direct, Diffuse Indirect, Glossy Direct, Transmission Direct + Indirect, Transmission Color).
+fn check_light_passes(image: &Image) -> (usize, f32, f32, f32, f32, f32) {
     let (mut lit, mut direct, mut indirect, mut glossy) = (0, 0.0, 0.0, 0.0);
+    let (mut transmission, mut transmission_color) = (0.0, 0.0);
     for (p, px) in image.rgba.iter().enumerate() {
         let beauty = Vec3::new(px[0], px[1], px[2]);
-        let mut sum = rgb(&image, "Emission", p) + rgb(&image, "Environment", p);
+        let mut sum = rgb(image, "Emission", p) + rgb(image, "Environment", p);
         for lobe in ["Diffuse", "Glossy", "Transmission"] {
-            let colour = rgb(&image, &format!("{lobe} Color"), p);
-            let light = rgb(&image, &format!("{lobe} Direct"), p)
-                + rgb(&image, &format!("{lobe} Indirect"), p);
+            let colour = rgb(image, &format!("{lobe} Color"), p);
+            let light = rgb(image, &format!("{lobe} Direct"), p)
+                + rgb(image, &format!("{lobe} Indirect"), p);
             sum += light * colour;
         }
         let err = (sum - beauty).abs().max_element();
@@ -132,16 +224,49 @@ fn light_passes_add_up_to_the_beauty() {
             "pixel {p}: passes {sum} vs beauty {beauty}"
         );
         lit += usize::from(beauty.max_element() > 0.0);
-        direct += rgb(&image, "Diffuse Direct", p).max_element();
-        indirect += rgb(&image, "Diffuse Indirect", p).max_element();
-        glossy += rgb(&image, "Glossy Direct", p).max_element();
+        direct += rgb(image, "Diffuse Direct", p).max_element();
+        indirect += rgb(image, "Diffuse Indirect", p).max_element();
+        glossy += rgb(image, "Glossy Direct", p).max_element();
+        transmission += (rgb(image, "Transmission Direct", p)
+            + rgb(image, "Transmission Indirect", p))
+        .max_element();
+        transmission_color += rgb(image, "Transmission Color", p).max_element();
     }
+    (
+        lit,
+        direct,
+        indirect,
+        glossy,
+        transmission,
+        transmission_color,
+    )
+}
+
+#[test]
+fn light_passes_add_up_to_the_beauty() {
+    let scene = busy_scene();
+    let image = image_of(&scene, &opts(PassSet::all()));
+    let (lit, direct, indirect, glossy, _, transmission_color) = check_light_passes(&image);
     // Not vacuous: the scene fills every kind of pass.
     assert!(lit > image.rgba.len() / 2 && direct > 0.0 && indirect > 0.0 && glossy > 0.0);
     assert!((0..image.rgba.len()).any(|p| rgb(&image, "Emission", p).max_element() > 1.0));
     assert!((0..image.rgba.len()).any(|p| rgb(&image, "Environment", p).max_element() > 0.2));
-    // Nothing transmits yet.
-    assert!((0..image.rgba.len()).all(|p| rgb(&image, "Transmission Color", p) == Vec3::ZERO));
+    // Nothing transmits here.
+    assert_eq!(transmission_color, 0.0);
+}
+
+/// The same with a refractive glass ball, a thin pane and a coated, sheened ball: their
+/// transmission fills the Transmission passes, and everything still adds up.
+#[test]
+fn light_passes_add_up_with_glass() {
+    let scene = glass_scene();
+    let image = image_of(&scene, &opts(PassSet::all()));
+    let (lit, direct, indirect, glossy, transmission, colour) = check_light_passes(&image);
+    assert!(lit > image.rgba.len() / 2 && direct > 0.0 && indirect > 0.0 && glossy > 0.0);
+    assert!(
+        transmission > 1.0 && colour > 1.0,
+        "{transmission} {colour}"
+    );
 }
 
 #[test]
@@ -294,10 +419,7 @@ fn windows_are_bit_identical_to_the_whole_render() {
         let counts = &whole.layer("Debug Sample Count").map(|l| l.data.clone());
         if adaptive {
             let c = counts.as_ref().unwrap();
-            assert!(
-                c.contains(&4.0) && c.contains(&32.0),
-                "adaptive varies"
-            );
+            assert!(c.contains(&4.0) && c.contains(&32.0), "adaptive varies");
         }
         for w in [
             Window {

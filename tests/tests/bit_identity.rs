@@ -1,0 +1,200 @@
+//! Materials without the extended lobes render as they did before issue 14 added them: with
+//! energy compensation off (glTF Appendix B's formulas), every beauty and pass value of these
+//! renders is bit-identical to what commit 90c6b3f (the last commit before the extended
+//! material) rendered, whose hashes are pinned here. They were produced by running this file
+//! against that commit's source (the only edit: without the `energy_compensation` option,
+//! which did not exist yet). With compensation on (the default) rough GGX lobes change
+//! deliberately; `materials_extended.rs` checks that.
+//!
+//! The scenes cover what the path tracer's opaque paths do: metallic-roughness dielectrics,
+//! metals and a near-mirror, an emitter (MIS), a point light, a constant and an image
+//! environment (NEE of both kinds), alpha blending and masking, normal maps and textures from
+//! real files, every pass.
+
+use aperture_render::output;
+use aperture_render::{
+    build_accel, render, test_scenes, EnvImage, EnvSampling, Environment, PassSet, RenderOptions,
+};
+use aperture_scene::{Dof, Light, LightKind, LoadOptions, Material, Scene};
+use glam::{Affine3A, Vec3};
+use std::sync::Arc;
+
+/// FNV-1a over bytes.
+fn fnv(h: &mut u64, bytes: &[u8]) {
+    for b in bytes {
+        *h ^= u64::from(*b);
+        *h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+}
+
+/// A hash of every beauty and pass value of a render.
+fn render_hash(scene: &Scene, opts: &RenderOptions) -> u64 {
+    let accel = build_accel(scene, Default::default());
+    let film = render(scene, &accel, opts, &|_, _| {}).expect("renders");
+    assert_eq!(film.dropped_samples(), 0);
+    let image = output::film_to_image(&film, scene, opts, false, 0.0).expect("image");
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for px in &image.rgba {
+        for c in px {
+            fnv(&mut h, &c.to_bits().to_le_bytes());
+        }
+    }
+    for layer in &image.layers {
+        fnv(&mut h, layer.name.as_bytes());
+        for v in &layer.data {
+            fnv(&mut h, &v.to_bits().to_le_bytes());
+        }
+    }
+    h
+}
+
+fn opts(env: Environment) -> RenderOptions {
+    RenderOptions {
+        width: 48,
+        height: 32,
+        spp: 8,
+        passes: PassSet::all(),
+        env,
+        energy_compensation: false,
+        ..RenderOptions::default()
+    }
+}
+
+/// A small equirectangular sky: a bright sun texel over a blue gradient.
+fn sky() -> Environment {
+    let (w, h) = (16u32, 8u32);
+    let texels = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            if (x, y) == (3, 2) {
+                Vec3::new(40.0, 35.0, 30.0)
+            } else {
+                Vec3::new(0.2, 0.3, 0.5) * (1.0 - y as f32 / h as f32)
+            }
+        })
+        .collect();
+    Environment::Image(Arc::new(EnvImage {
+        width: w,
+        height: h,
+        texels,
+        rotation: 0.3,
+        strength: 1.0,
+        sampling: EnvSampling::Importance,
+    }))
+}
+
+/// A matte ground, a glossy dielectric, a rough gold and a mirror ball, an emitter and a
+/// point light, through a lens.
+fn balls() -> Scene {
+    let dof = Dof {
+        enabled: true,
+        aperture_radius: 0.05,
+        focus_distance: 6.0,
+        ..Dof::default()
+    };
+    let camera =
+        test_scenes::look_at_camera(Vec3::new(0.0, 1.5, 6.0), Vec3::new(0.0, 0.8, 0.0), 0.7, dof);
+    let glossy = Material {
+        base_color_factor: glam::Vec4::new(0.2, 0.4, 0.8, 1.0),
+        metallic_factor: 0.0,
+        roughness_factor: 0.3,
+        ..Material::default()
+    };
+    let gold = Material {
+        base_color_factor: glam::Vec4::new(1.0, 0.8, 0.3, 1.0),
+        metallic_factor: 1.0,
+        roughness_factor: 0.5,
+        ..Material::default()
+    };
+    let mirror = Material {
+        metallic_factor: 1.0,
+        roughness_factor: 0.05,
+        ..Material::default()
+    };
+    let ground = test_scenes::matte(Vec3::new(0.7, 0.6, 0.5));
+    let lamp = test_scenes::emitter(Vec3::new(6.0, 5.0, 4.0));
+    let ball = |m: u32, x: f32, r: f32| {
+        (
+            test_scenes::icosphere(3, m),
+            Affine3A::from_scale_rotation_translation(
+                Vec3::splat(r),
+                glam::Quat::IDENTITY,
+                Vec3::new(x, r, 0.0),
+            ),
+        )
+    };
+    let mut s = test_scenes::scene(
+        vec![
+            (test_scenes::quad(8.0, 0), Affine3A::IDENTITY),
+            ball(1, -1.3, 0.6),
+            ball(2, 0.0, 0.7),
+            ball(3, 1.3, 0.5),
+            ball(4, 0.4, 0.15),
+        ],
+        vec![ground, glossy, gold, mirror, lamp],
+        camera,
+    );
+    s.instances[4].world_from_object = Affine3A::from_scale_rotation_translation(
+        Vec3::splat(0.15),
+        glam::Quat::IDENTITY,
+        Vec3::new(0.5, 1.9, 0.8),
+    );
+    s.lights.push(Light {
+        name: None,
+        kind: LightKind::Point,
+        position: Vec3::new(2.0, 4.0, 3.0),
+        direction: Vec3::NEG_Y,
+        intensity: Vec3::splat(20.0),
+    });
+    s
+}
+
+/// `(scene, hash with a constant environment, hash with the sky)` as rendered at 90c6b3f.
+const BALLS: (u64, u64) = (0x333991e5e9413003, 0x8e02a60ffafe868e);
+
+#[test]
+fn opaque_scene_renders_as_before_the_extended_material() {
+    let s = balls();
+    let constant = render_hash(&s, &opts(Environment::Constant(Vec3::splat(0.3))));
+    let image = render_hash(&s, &opts(sky()));
+    println!("balls: constant {constant:#018x}, sky {image:#018x}");
+    assert_eq!((constant, image), BALLS);
+}
+
+/// Real files (alpha, textures, normal maps), their hashes at 90c6b3f.
+const SAMPLES: &[(&str, u64)] = &[
+    (
+        "correctness/AlphaBlendModeTest/AlphaBlendModeTest.glb",
+        0xc5b3d58b1110a248,
+    ),
+    (
+        "correctness/MetalRoughSpheresNoTextures/MetalRoughSpheresNoTextures.glb",
+        0x93188e1d6078a3bd,
+    ),
+    (
+        "correctness/NormalTangentMirrorTest/NormalTangentMirrorTest.glb",
+        0x682af9f0c6941877,
+    ),
+    (
+        "correctness/TextureSettingsTest/TextureSettingsTest.glb",
+        0xc5d9437aac98858d,
+    ),
+];
+
+#[test]
+fn opaque_samples_render_as_before_the_extended_material() {
+    let Some(dir) = aperture_tests::samples_dir() else {
+        return;
+    };
+    let mut got = Vec::new();
+    for (rel, want) in SAMPLES {
+        let scene = aperture_scene::load(&dir.join(rel), &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{rel}: {e}"));
+        let h = render_hash(&scene, &opts(sky()));
+        println!("{rel}: {h:#018x}");
+        got.push((*rel, h, *want));
+    }
+    for (rel, h, want) in got {
+        assert_eq!(h, want, "{rel}");
+    }
+}
