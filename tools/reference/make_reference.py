@@ -188,7 +188,113 @@ def scene_defs():
         "pinhole_point": {"light": point, "dof": None, "env": None},
         "dof_area": {"light": area, "dof": dof, "env": None},
         "dof_env": {"light": None, "dof": dof, "env": ENV},
+        # Glass (issue 14): a refractive sphere, smooth and rough, and an absorbing block, on a
+        # textured ground under the area light, through a pinhole. Rendered with their own
+        # materials, not the diffuse override.
+        "glass_smooth": {"light": area, "dof": None, "env": None, "glass": GLASS_SPHERE},
+        "glass_rough": {"light": area, "dof": None, "env": None,
+                        "glass": {**GLASS_SPHERE, "roughness": 0.3}},
+        "glass_absorbing": {"light": area, "dof": None, "env": None, "glass": GLASS_BLOCK},
     }
+
+
+# The glass scenes' objects. The sphere is a UV sphere mesh (96 x 48, smooth normals) given to
+# both renderers; the block is the cube, 2 cm above the ground (faces that coincide with the
+# ground would be a tie each renderer breaks its own way). Attenuation:
+# sigma_a = -ln(colour) / distance.
+GLASS_SPHERE = {"shape": "sphere", "matrix": trs((0.0, 0.62, 0.0), s=(0.62, 0.62, 0.62)), "ior": 1.5,
+                "roughness": 0.0, "attenuation": None}
+GLASS_BLOCK = {"shape": "cube", "matrix": trs((0.0, 0.57, 0.0), ry=-25, s=(0.55, 0.55, 0.55)), "ior": 1.5,
+               "roughness": 0.0, "attenuation": {"color": (0.35, 0.65, 0.9), "distance": 0.8}}
+# Bounces for the glass scenes (refraction needs more than the diffuse scenes' 3).
+GLASS_MAX_BOUNCES = 8
+# The ground's checker texture: 2 x 2 texels (linear RGB), repeated 8 times over the ground.
+CHECKER = [(0.8, 0.8, 0.8), (0.2, 0.3, 0.45)]
+CHECKER_REPEAT = 8.0
+
+
+def sigma_a(att):
+    """KHR_materials_volume's absorption: -ln(attenuationColor) / attenuationDistance."""
+    return [-math.log(c) / att["distance"] for c in att["color"]]
+
+
+def max_bounces(sdef):
+    return GLASS_MAX_BOUNCES if sdef.get("glass") else MAX_BOUNCES
+
+
+def linear_to_srgb8(c):
+    v = 12.92 * c if c <= 0.0031308 else 1.055 * c ** (1 / 2.4) - 0.055
+    return max(0, min(255, round(v * 255)))
+
+
+def checker_png():
+    """The 2 x 2 checker as an sRGB PNG (texel (0,0) top-left: colours 0 1 / 1 0)."""
+    import zlib
+    rows = []
+    for y in range(2):
+        row = b"\x00"
+        for x in range(2):
+            row += bytes(linear_to_srgb8(c) for c in CHECKER[(x + y) % 2])
+        rows.append(row)
+    raw = b"".join(rows)
+
+    def chunk(kind, data):
+        body = kind + data
+        return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body) & 0xFFFFFFFF)
+
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 2, 2, 8, 2, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+def uv_sphere(segments=96, rings=48):
+    """Unit UV sphere: smooth normals, counter-clockwise seen from outside, no degenerate
+    triangles at the poles (bench_mitsuba.py's)."""
+    pos, nrm, idx = [], [], []
+    for j in range(rings + 1):
+        theta = math.pi * j / rings
+        for i in range(segments + 1):
+            phi = 2.0 * math.pi * i / segments
+            p = (math.sin(theta) * math.cos(phi), math.cos(theta), -math.sin(theta) * math.sin(phi))
+            pos.append(p)
+            nrm.append(p)
+    row = segments + 1
+    for j in range(rings):
+        for i in range(segments):
+            a, b = j * row + i, j * row + i + 1
+            c, d = (j + 1) * row + i, (j + 1) * row + i + 1
+            if j != 0:
+                idx += [a, c, b]
+            if j != rings - 1:
+                idx += [b, c, d]
+    return pos, nrm, idx
+
+
+SPHERE_POS, SPHERE_NRM, SPHERE_IDX = uv_sphere()
+check_winding(SPHERE_POS, SPHERE_IDX, SPHERE_NRM)
+
+
+def write_ply(path, pos, nrm, idx):
+    """Binary PLY with per-vertex normals, which Mitsuba's `ply` shape interpolates as the glTF
+    NORMAL attribute is."""
+    with open(path, "wb") as f:
+        f.write((
+            "ply\nformat binary_little_endian 1.0\n"
+            f"element vertex {len(pos)}\n"
+            "property float x\nproperty float y\nproperty float z\n"
+            "property float nx\nproperty float ny\nproperty float nz\n"
+            f"element face {len(idx) // 3}\n"
+            "property list uchar int vertex_indices\nend_header\n"
+        ).encode())
+        for p, n in zip(pos, nrm):
+            f.write(struct.pack("<6f", *p, *n))
+        for t in range(0, len(idx), 3):
+            f.write(struct.pack("<B3i", 3, *idx[t : t + 3]))
+
+
+def glass_objects():
+    """The glass scenes' ground and boxes (base_objects without the green box the glass
+    replaces)."""
+    return [o for o in base_objects() if o[0] != "green_mid"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -257,6 +363,16 @@ def write_gltf(name, sdef, path):
         return {"POSITION": p, "NORMAL": n}, i
 
     shapes = {"quad": add_shape(QUAD_POS, QUAD_NRM, QUAD_IDX), "cube": add_shape(CUBE_POS, CUBE_NRM, CUBE_IDX)}
+    glass = sdef.get("glass")
+    if glass and glass["shape"] == "sphere":
+        shapes["sphere"] = add_shape(SPHERE_POS, SPHERE_NRM, SPHERE_IDX)
+    if glass:
+        # The ground's texture coordinates: Mitsuba's rectangle's (u along its local x, v
+        # along its local y), repeated. Mitsuba's bitmap puts v = 0 at the image's first row,
+        # as glTF does, so they carry over unchanged (checked: flipping v makes the test fail).
+        uv = [(CHECKER_REPEAT * (p[0] + 1) / 2, CHECKER_REPEAT * (p[1] + 1) / 2) for p in QUAD_POS]
+        t = add(pack_f32([c for q in uv for c in q]), 34962, 5126, 4, "VEC2")
+        shapes["ground"] = ({**shapes["quad"][0], "TEXCOORD_0": t}, shapes["quad"][1])
 
     materials, meshes, nodes = [], [], []
 
@@ -275,11 +391,43 @@ def write_gltf(name, sdef, path):
             "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}},
         }
 
-    for oname, shape, matrix, albedo in base_objects():
-        add_object(oname, shape, matrix, diffuse(oname, albedo))
-
     ext_used = ["KHR_materials_specular"]
     extensions = {}
+    extra = {}
+    if glass:
+        for oname, shape, matrix, albedo in glass_objects():
+            if oname == "ground":
+                mat = diffuse(oname, (1.0, 1.0, 1.0))
+                mat["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 0}
+                add_object(oname, "ground", matrix, mat)
+            else:
+                add_object(oname, shape, matrix, diffuse(oname, albedo))
+        png = checker_png()
+        extra = {
+            "images": [{"name": "checker", "uri": "data:image/png;base64," + base64.b64encode(png).decode()}],
+            # NEAREST (9728) magnification, REPEAT wrap: exactly Mitsuba's nearest lookup.
+            "samplers": [{"magFilter": 9728, "minFilter": 9728, "wrapS": 10497, "wrapT": 10497}],
+            "textures": [{"sampler": 0, "source": 0}],
+        }
+        gmat = {
+            "name": "glass",
+            "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0.0,
+                                      "roughnessFactor": glass["roughness"]},
+            "extensions": {
+                "KHR_materials_transmission": {"transmissionFactor": 1.0},
+                "KHR_materials_ior": {"ior": glass["ior"]},
+                "KHR_materials_volume": {"thicknessFactor": 1.0},
+            },
+        }
+        if glass["attenuation"]:
+            att = glass["attenuation"]
+            gmat["extensions"]["KHR_materials_volume"].update(
+                {"attenuationColor": list(att["color"]), "attenuationDistance": att["distance"]})
+        add_object("glass", glass["shape"], glass["matrix"], gmat)
+        ext_used += ["KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_volume"]
+    else:
+        for oname, shape, matrix, albedo in base_objects():
+            add_object(oname, shape, matrix, diffuse(oname, albedo))
     light = sdef["light"]
     if light and light["kind"] == "area":
         rad = light["radiance"]
@@ -329,6 +477,7 @@ def write_gltf(name, sdef, path):
         "meshes": meshes,
         "materials": materials,
         "cameras": [cam],
+        **extra,
         **gltf_buffer_entries(buf, views, accessors),
     }
     if extensions:
@@ -340,7 +489,7 @@ def write_gltf(name, sdef, path):
 # Mitsuba scene and render.
 
 
-def mitsuba_scene(mi, sdef, spp, seed):
+def mitsuba_scene(mi, sdef, spp, seed, tmp=None):
     T = mi.ScalarTransform4f
 
     def twosided(rgb):
@@ -368,14 +517,43 @@ def mitsuba_scene(mi, sdef, spp, seed):
         sensor["aperture_radius"] = sdef["dof"]["aperture_radius"]
         sensor["focus_distance"] = sdef["dof"]["focus_distance"]
 
+    glass = sdef.get("glass")
     scene = {
         "type": "scene",
-        "integrator": {"type": "path", "max_depth": MAX_BOUNCES + 2, "hide_emitters": False},
+        # volpath for the absorbing medium (with no medium it is the path integrator).
+        "integrator": {"type": "volpath" if glass else "path", "max_depth": max_bounces(sdef) + 2,
+                       "hide_emitters": False},
         "sensor": sensor,
     }
     kinds = {"quad": "rectangle", "cube": "cube"}
-    for oname, shape, matrix, albedo in base_objects():
+    for oname, shape, matrix, albedo in (glass_objects() if glass else base_objects()):
         scene[oname] = {"type": kinds[shape], "to_world": T(matrix), "bsdf": twosided(albedo)}
+    if glass:
+        png = os.path.join(tmp, "checker.png")
+        with open(png, "wb") as f:
+            f.write(checker_png())
+        scene["ground"]["bsdf"] = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {
+            "type": "bitmap", "filename": png, "filter_type": "nearest", "wrap_mode": "repeat",
+            "to_uv": mi.ScalarTransform3f().scale([CHECKER_REPEAT, CHECKER_REPEAT])}}}
+        if glass["roughness"] > 0:
+            bsdf = {"type": "roughdielectric", "distribution": "ggx", "sample_visible": True,
+                    "alpha": glass["roughness"] ** 2, "int_ior": glass["ior"], "ext_ior": 1.0}
+        else:
+            bsdf = {"type": "dielectric", "int_ior": glass["ior"], "ext_ior": 1.0}
+        obj = {"bsdf": bsdf, "to_world": T(glass["matrix"])}
+        if glass["shape"] == "sphere":
+            ply = os.path.join(tmp, "sphere.ply")
+            write_ply(ply, SPHERE_POS, SPHERE_NRM, SPHERE_IDX)
+            obj.update({"type": "ply", "filename": ply})
+        else:
+            obj["type"] = "cube"
+        if glass["attenuation"]:
+            # sigma_t as an RGB in [0, 1] times `scale` (Mitsuba's RGB values are bounded).
+            s = sigma_a(glass["attenuation"])
+            peak = max(s)
+            obj["interior"] = {"type": "homogeneous", "albedo": {"type": "rgb", "value": [0.0, 0.0, 0.0]},
+                               "sigma_t": {"type": "rgb", "value": [c / peak for c in s]}, "scale": peak}
+        scene["glass"] = obj
     light = sdef["light"]
     if light and light["kind"] == "point":
         scene["light"] = {
@@ -399,9 +577,11 @@ def mitsuba_scene(mi, sdef, spp, seed):
 
 
 def render_mitsuba(mi, sdef, spp, seed):
-    scene = mi.load_dict(mitsuba_scene(mi, sdef, spp, seed))
-    img = mi.render(scene, spp=spp, seed=seed)
-    return np.array(img, dtype=np.float64)[:, :, :3]
+    import tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        scene = mi.load_dict(mitsuba_scene(mi, sdef, spp, seed, tmp))
+        img = mi.render(scene, spp=spp, seed=seed)
+        return np.array(img, dtype=np.float64)[:, :, :3]
 
 
 # What aperture's test does with each scene: two renders at TEST_SPP, one per seed.
@@ -427,10 +607,15 @@ def cli_args(name, sdef):
         "render", f"assets/reference/{name}.gltf",
         "--width", str(WIDTH), "--height", str(HEIGHT),
         "--spp", str(TEST_SPP),
-        "--max-bounces", str(MAX_BOUNCES),
+        "--max-bounces", str(max_bounces(sdef)),
         "--filter", "box",
-        "--override-material", "diffuse",
     ]
+    glass = sdef.get("glass")
+    if not glass:
+        args += ["--override-material", "diffuse"]
+    elif glass["roughness"] > 0:
+        # Mitsuba's rough dielectric is single-scattering: compare the same model.
+        args += ["--no-energy-compensation"]
     if sdef["env"]:
         args += ["--env", ",".join(repr(c) for c in sdef["env"])]
     return args
@@ -444,8 +629,13 @@ def static_entry(name, sdef):
         "exr": f"{name}.exr",
         "width": WIDTH,
         "height": HEIGHT,
-        "max_bounces": MAX_BOUNCES,
-        "mitsuba_max_depth": MAX_BOUNCES + 2,
+        "max_bounces": max_bounces(sdef),
+        "mitsuba_max_depth": max_bounces(sdef) + 2,
+        # The diffuse override (two-sided Lambert of the base colour), or the scene's own
+        # materials; whether aperture's energy compensation is on (off where Mitsuba's model
+        # is single scattering).
+        "material_override": None if sdef.get("glass") else "diffuse",
+        "energy_compensation": not (sdef.get("glass") and sdef["glass"]["roughness"] > 0),
         "env": list(sdef["env"]) if sdef["env"] else None,
         "aperture_radius": sdef["dof"]["aperture_radius"] if sdef["dof"] else 0.0,
         "focus_distance": sdef["dof"]["focus_distance"] if sdef["dof"] else None,
