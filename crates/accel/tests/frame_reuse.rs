@@ -4,8 +4,11 @@
 use aperture_accel::{Accel, BvhQuality, FrameHints, InstanceInput, MeshInput, Ray};
 use glam::{Affine3A, Quat, Vec3};
 
+/// Positions and triangles of one mesh.
+type Geometry = (Vec<Vec3>, Vec<[u32; 3]>);
+
 /// A grid of `n × n` quads in the plane z = 0, spanning [-1, 1]², bumped by `bump`.
-fn grid(n: u32, bump: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+fn grid(n: u32, bump: f32) -> Geometry {
     let mut p = Vec::new();
     for j in 0..=n {
         for i in 0..=n {
@@ -29,7 +32,7 @@ fn grid(n: u32, bump: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
 
 /// Mesh 0: static, drawn twice (one moving instance); mesh 1: static, drawn once by a still
 /// instance (flattened); mesh 2: static, drawn once by a moving instance; mesh 3: deforming.
-fn frame(t: f32) -> (Vec<(Vec<Vec3>, Vec<[u32; 3]>)>, Vec<InstanceInput>) {
+fn frame(t: f32) -> (Vec<Geometry>, Vec<InstanceInput>) {
     let meshes = vec![grid(12, 0.1), grid(9, 0.3), grid(7, 0.0), grid(10, 0.2 + t)];
     let at = |x: f32, y: f32, angle: f32| {
         Affine3A::from_rotation_translation(Quat::from_rotation_y(angle), Vec3::new(x, y, -4.0))

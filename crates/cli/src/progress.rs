@@ -34,6 +34,18 @@ impl Progress {
         }
     }
 
+    /// Prints a line above the bar (or alone without one) and starts the bar over, for the
+    /// next frame of a sequence.
+    pub fn next_frame(&self, line: &str) {
+        match &self.bar {
+            Some(bar) => {
+                bar.println(line);
+                bar.set_position(0);
+            }
+            None => eprintln!("{line}"),
+        }
+    }
+
     /// Removes the bar.
     pub fn finish(&self) {
         if let Some(bar) = &self.bar {
