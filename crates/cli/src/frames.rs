@@ -54,13 +54,18 @@ pub fn run(
     let (mut rendered, mut secs) = (0usize, 0.0f64);
     let quiet = args.quiet;
     pool.install(|| {
-        let progress = Progress::new(quiet);
+        let progress = Progress::with_mode(quiet, args.progress);
+        let samples = u64::from(opts.width) * u64::from(opts.height) * u64::from(opts.spp);
+        let mut frames_left = frames.frames();
+        progress.set_samples(samples, frames_left.next());
         let report = |done, total| progress.update(done, total);
         let done = sequence::render_sequence(&seq, &report, &mut |r: &FrameReport| {
             if let Some(w) = &r.rendered {
                 rendered += 1;
                 secs += w.total_secs;
+                progress.frame_written(Some(r.frame), &r.path, w.total_secs);
             }
+            progress.set_samples(samples, frames_left.next());
             // Dropped samples are reported even with --quiet, as for one frame.
             let dropped = r.rendered.is_some_and(|w| w.summary.dropped > 0);
             if !quiet || dropped {

@@ -329,6 +329,10 @@ pub struct RenderArgs {
     /// No progress bar and no summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Progress display: a bar on a terminal, or JSON lines on stdout for programs (farm
+    /// wrappers, the Blender engine).
+    #[arg(long, value_enum, default_value_t = crate::progress::ProgressArg::Auto)]
+    pub progress: crate::progress::ProgressArg,
 }
 
 /// A usage error in clap's format, exit code 2 (as clap's own parse errors).
@@ -514,7 +518,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         // The same structure a sequence builds for this frame, so their images agree bit for bit.
         let accel = aperture_render::sequence::build_frame_accel(&scene, quality, &hints, None);
         let load_secs = t_load.elapsed().as_secs_f64();
-        let progress = Progress::new(args.quiet);
+        let progress = Progress::with_mode(args.quiet, args.progress);
+        progress.set_samples(
+            u64::from(width) * u64::from(height) * u64::from(args.spp),
+            None,
+        );
         let report = |done, total| progress.update(done, total);
         let summary = if ext.as_deref() == Some("png") {
             aperture_render::output::render_png(
@@ -530,10 +538,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             aperture_render::output::render_exr(&scene, &accel, &opts, &args.output, &exr, &report)
         };
         progress.finish();
-        Ok((
-            summary.with_context(|| format!("writing {}", args.output.display()))?,
-            load_secs,
-        ))
+        let summary = summary.with_context(|| format!("writing {}", args.output.display()))?;
+        progress.frame_written(args.when.frame, &args.output, summary.render_secs);
+        Ok((summary, load_secs))
     })?;
 
     if summary.half_clamped > 0 {
