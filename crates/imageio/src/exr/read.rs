@@ -63,7 +63,10 @@ fn header_of(reader: impl std::io::Read, path: &Path) -> Result<ExrHeader, Error
         path: path.to_path_buf(),
         what: what.into(),
     };
-    let first = meta.headers.first().ok_or_else(|| unsupported("no parts"))?;
+    let first = meta
+        .headers
+        .first()
+        .ok_or_else(|| unsupported("no parts"))?;
     let (size, position) = (first.layer_size, first.own_attributes.layer_position);
     let mut channels = Vec::new();
     let mut metadata = Vec::new();

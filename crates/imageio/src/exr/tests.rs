@@ -786,7 +786,11 @@ fn header_alone_matches_the_whole_read() {
     let names: Vec<&str> = header.channels.iter().map(|c| c.name.as_str()).collect();
     assert_eq!(names[..4], ["A", "B", "G", "R"]);
     assert!(names.contains(&"depth.Z") && names.contains(&"normal.Y"));
-    let depth = header.channels.iter().find(|c| c.name == "depth.Z").unwrap();
+    let depth = header
+        .channels
+        .iter()
+        .find(|c| c.name == "depth.Z")
+        .unwrap();
     assert_eq!(depth.sample_type, crate::SampleType::F16);
 
     let bytes = std::fs::read(&path).unwrap();
