@@ -2,8 +2,10 @@
 
 mod bench;
 mod info;
+mod merge_cmd;
 mod progress;
 mod render_cmd;
+mod split_args;
 
 use clap::{Parser, Subcommand};
 
@@ -21,6 +23,8 @@ pub(crate) enum Command {
     Info(info::InfoArgs),
     /// Render a scene to EXR or PNG.
     Render(render_cmd::RenderArgs),
+    /// Put the parts of a render split across machines (tiles, sample batches) together.
+    Merge(merge_cmd::MergeArgs),
     /// Error against time per sampler configuration: CSV, log-log plot and table.
     Bench(bench::BenchArgs),
 }
@@ -30,6 +34,7 @@ fn main() -> std::process::ExitCode {
     let result = match cli.command {
         Command::Info(args) => info::run(args),
         Command::Render(args) => render_cmd::run(args),
+        Command::Merge(args) => merge_cmd::run(args),
         Command::Bench(args) => bench::run(args),
     };
     match result {

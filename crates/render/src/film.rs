@@ -97,7 +97,7 @@ impl Window {
     /// The window from `x0` to `x1` and `y0` to `y1`, half-open (pbrt's `--pixelbounds`,
     /// SPEC §8's `--region`); `None` unless `x0 < x1` and `y0 < y1`.
     pub fn from_corners(x0: u32, y0: u32, x1: u32, y1: u32) -> Option<Self> {
-        (x0 < x1 && y0 < y1).then_some(Self {
+        (x0 < x1 && y0 < y1).then(|| Self {
             x0,
             y0,
             width: x1 - x0,
