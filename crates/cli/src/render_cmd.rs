@@ -505,8 +505,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     };
     let exr = aperture_render::output::ExrOptions {
         half: args.half,
-        region: part.map(|p| p.0),
-        tile: part.and_then(|p| p.1),
+        region: part.map(|p| p.window),
+        tile: part.and_then(|p| p.tile),
         ..Default::default()
     };
     let (summary, load_secs) = pool.install(|| -> anyhow::Result<_> {
@@ -561,9 +561,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         };
         let render_secs = summary.render_secs;
         let size = match part {
-            Some((w, _)) => format!(
+            Some(p) => format!(
                 "region {} of {width}x{height}",
-                aperture_render::output::header::region_text(&w)
+                aperture_render::output::header::region_text(&p.window)
             ),
             None => format!("{width}x{height}"),
         };

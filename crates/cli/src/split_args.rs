@@ -63,14 +63,19 @@ fn parse_tile(s: &str) -> Result<Tile, String> {
     Ok(Tile { index, count })
 }
 
+/// The part of the image one run renders.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ImagePart {
+    /// Its pixels.
+    pub window: Window,
+    /// `(K, N)` when it is band K of N.
+    pub tile: Option<(u32, u32)>,
+}
+
 impl SplitArgs {
     /// The part of a `width × height` image to render and its tile, or `None` for the whole
     /// image; an error message for a region outside the image or more bands than rows.
-    pub fn window(
-        &self,
-        width: u32,
-        height: u32,
-    ) -> Result<Option<(Window, Option<(u32, u32)>)>, String> {
+    pub fn window(&self, width: u32, height: u32) -> Result<Option<ImagePart>, String> {
         if let Some(r) = self.region {
             if !r.fits(width, height) {
                 let (x1, y1) = r.end();
@@ -79,12 +84,20 @@ impl SplitArgs {
                     r.x0, r.y0
                 ));
             }
-            return Ok(Some((r, None)));
+            return Ok(Some(ImagePart {
+                window: r,
+                tile: None,
+            }));
         }
         match self.tile {
             None => Ok(None),
             Some(Tile { index, count }) => Window::band(index, count, width, height)
-                .map(|w| Some((w, Some((index, count)))))
+                .map(|window| {
+                    Some(ImagePart {
+                        window,
+                        tile: Some((index, count)),
+                    })
+                })
                 .ok_or_else(|| {
                     format!(
                         "invalid value '{index}/{count}' for '--tile': the image has {height} rows, \
@@ -133,8 +146,11 @@ mod tests {
             ..SplitArgs::default()
         };
         assert_eq!(SplitArgs::default().window(10, 8), Ok(None));
-        let (w, t) = tile(1, 4).window(10, 8).unwrap().unwrap();
-        assert_eq!((w, t), (Window::band(1, 4, 10, 8).unwrap(), Some((1, 4))));
+        let part = tile(1, 4).window(10, 8).unwrap().unwrap();
+        assert_eq!(
+            (part.window, part.tile),
+            (Window::band(1, 4, 10, 8).unwrap(), Some((1, 4)))
+        );
         assert!(tile(0, 9).window(10, 8).unwrap_err().contains("8 rows"));
         let region = SplitArgs {
             region: Window::from_corners(5, 0, 11, 8),

@@ -136,7 +136,7 @@ impl Part {
                 )
             })?,
             Some(other) => return Err(bad(split::SAMPLE_RANGES, format!("{other:?}"), "text")),
-            None => SampleRanges::union([offset..offset.saturating_add(spp)]),
+            None => SampleRanges::union(std::iter::once(offset..offset.saturating_add(spp))),
         };
         let tile = match h.meta(split::TILE) {
             Some(MetaValue::Text(t)) => t
