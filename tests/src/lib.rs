@@ -1,6 +1,7 @@
 //! Shared helpers for the end-to-end tests in `tests/tests/`.
 
 pub mod demo;
+pub mod meshopt_writer;
 
 use std::path::PathBuf;
 

@@ -67,6 +67,19 @@ fn unsupported_samples_fail_naming_the_extension() {
             continue;
         }
         let path = dir.join(folder).join(e["file"].as_str().unwrap());
+        if folder == "unsupported/Box-Draco" {
+            // KHR_draco_mesh_compression is implemented (issue 15): the box loads, 12 triangles
+            // within its accessor's bounds.
+            let s = load(&path, &geometry_only()).unwrap();
+            assert_eq!(s.drawn_triangle_count(), 12);
+            let b = s.bounds();
+            assert!(
+                b.min.cmpge(glam::Vec3::splat(-0.5005)).all()
+                    && b.max.cmple(glam::Vec3::splat(0.5005)).all()
+            );
+            assert!(b.max.x > 0.49 && b.min.x < -0.49, "{b:?}");
+            continue;
+        }
         let json: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
         let err = load(&path, &LoadOptions::default()).expect_err(folder);
         let Error::UnsupportedExtension { name, .. } = &err else {
@@ -82,7 +95,10 @@ fn unsupported_samples_fail_naming_the_extension() {
         assert!(err.to_string().contains(name.as_str()));
         seen += 1;
     }
-    assert_eq!(seen, 3);
+    assert_eq!(
+        seen, 2,
+        "refusals: BoxInterleaved-SpecGloss and StainedGlassLamp-KTX-BasisU"
+    );
 }
 
 #[test]

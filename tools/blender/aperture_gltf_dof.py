@@ -27,6 +27,10 @@ The rules:
   kept.
 - Blade counts of 1 and 2 (Blender's own settings cannot hold them) are written as 0, a round
   aperture, which is what Cycles renders.
+- Keyframed ``dof.focus_distance`` and ``dof.aperture_fstop`` (a focus pull) are exported as
+  ``KHR_animation_pointer`` channels at ``/cameras/{i}/extras/focus_distance`` and
+  ``/cameras/{i}/extras/aperture_fstop``, sampled at every frame of their keys' range (time = frame
+  / fps, as the exporter writes object animation), in one animation named ``<camera data>_dof``.
 
 Install: Edit > Preferences > Add-ons > Install from Disk (this file), then enable
 "aperture: glTF camera depth of field". After that, File > Export > glTF 2.0 writes the extras.
@@ -44,9 +48,13 @@ bl_info = {
     "category": "Import-Export",
 }
 
+import math
 import struct
 
 import bpy
+
+# Camera data paths a focus pull keys, and the extras key each is exported to.
+ANIMATED_KEYS = {"dof.focus_distance": "focus_distance", "dof.aperture_fstop": "aperture_fstop"}
 
 # The keys this add-on writes, in SPEC section 3's order.
 KEYS = (
@@ -157,6 +165,8 @@ class glTF2ExportUserExtension:
     def __init__(self):
         # id(gltf camera) -> (camera data name, keys this add-on wrote from native values)
         self._written = {}
+        # camera data name -> the glTF camera written for it
+        self._gltf_cameras = {}
 
     def gather_camera_hook(self, gltf2_camera, blender_camera, export_settings):
         """Adds the camera's depth of field to ``gltf2_camera.extras`` (custom properties win)."""
@@ -193,6 +203,26 @@ class glTF2ExportUserExtension:
 
         gltf2_camera.extras = extras
         self._written[id(gltf2_camera)] = (blender_camera.name, written)
+        self._gltf_cameras[blender_camera.name] = gltf2_camera
+
+    def gather_gltf_hook(self, active_scene_idx, scenes, animations, export_settings):
+        """Adds a ``KHR_animation_pointer`` animation for each camera with keyed DOF values."""
+        for name, gltf_camera in self._gltf_cameras.items():
+            data = bpy.data.cameras.get(name)
+            curves = _dof_fcurves(data) if data is not None else {}
+            if not curves:
+                continue
+            channels, samplers = [], []
+            for key, curve in curves.items():
+                frames = [k.co[0] for k in curve.keyframe_points]
+                first, last = int(math.floor(min(frames))), int(math.ceil(max(frames)))
+                scene = bpy.context.scene
+                fps = scene.render.fps * scene.render.fps_base  # as the exporter's own keyframes
+                times = [f / fps for f in range(first, last + 1)]
+                values = [float(curve.evaluate(f)) for f in range(first, last + 1)]
+                samplers.append(_sampler(times, values))
+                channels.append(_pointer_channel(len(samplers) - 1, gltf_camera, key))
+            animations.append(_animation(f"{name}_dof", channels, samplers))
 
     def gather_gltf_extensions_hook(self, gltf2_plan, export_settings):
         """Checks that each ``focus_object`` names an exported node, else falls back to a distance."""
@@ -237,6 +267,87 @@ class glTF2ExportUserExtension:
                 f"camera '{data_name}': focus object '{target}' is not exported; "
                 f"focus_distance = {extras.get('focus_distance')} is used instead",
             )
+
+
+def _dof_fcurves(camera):
+    """``{extras key: fcurve}`` of the camera data's keyed depth of field (Blender 4.2 to 5.x)."""
+    anim = camera.animation_data
+    action = anim.action if anim is not None else None
+    if action is None:
+        return {}
+    fcurves = None
+    try:  # Blender 4.4+: slotted actions
+        from bpy_extras import anim_utils
+
+        bag = anim_utils.action_get_channelbag_for_slot(action, anim.action_slot)
+        fcurves = bag.fcurves if bag is not None else None
+    except (ImportError, AttributeError):
+        pass
+    if fcurves is None:
+        fcurves = getattr(action, "fcurves", None) or []
+    return {
+        ANIMATED_KEYS[c.data_path]: c
+        for c in fcurves
+        if c.data_path in ANIMATED_KEYS and len(c.keyframe_points) > 0
+    }
+
+
+def _io():
+    """The exporter's glTF object model (module names of Blender 4.2 to 5.x)."""
+    from io_scene_gltf2.io.com import gltf2_io
+
+    try:
+        from io_scene_gltf2.io.com import constants
+    except ImportError:
+        from io_scene_gltf2.io.com import gltf2_io_constants as constants
+    try:
+        from io_scene_gltf2.io.exp.binary_data import BinaryData
+    except ImportError:
+        from io_scene_gltf2.io.exp.gltf2_io_binary_data import BinaryData
+    return gltf2_io, constants, BinaryData
+
+
+def _scalar_accessor(values):
+    gltf2_io, constants, BinaryData = _io()
+    return gltf2_io.Accessor(
+        buffer_view=BinaryData.from_list(values, constants.ComponentType.Float),
+        byte_offset=None,
+        component_type=constants.ComponentType.Float,
+        count=len(values),
+        extensions=None,
+        extras=None,
+        max=[max(values)],
+        min=[min(values)],
+        name=None,
+        normalized=None,
+        sparse=None,
+        type=constants.DataType.Scalar,
+    )
+
+
+def _sampler(times, values):
+    gltf2_io, _, _ = _io()
+    return gltf2_io.AnimationSampler(
+        extensions=None,
+        extras=None,
+        input=_scalar_accessor(times),
+        interpolation="LINEAR",
+        output=_scalar_accessor(values),
+    )
+
+
+def _pointer_channel(sampler_index, gltf_camera, key):
+    """A channel the exporter turns into ``/cameras/{index of gltf_camera}/extras/<key>``."""
+    gltf2_io, _, _ = _io()
+    target = gltf2_io.AnimationChannelTarget(
+        extensions=None, extras=None, node=gltf_camera, path=f"/cameras/XXX/extras/{key}"
+    )
+    return gltf2_io.AnimationChannel(extensions=None, extras=None, sampler=sampler_index, target=target)
+
+
+def _animation(name, channels, samplers):
+    gltf2_io, _, _ = _io()
+    return gltf2_io.Animation(channels=channels, extensions=None, extras=None, name=name, samplers=samplers)
 
 
 def register():

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Runs the Blender add-on acceptance test (tools/blender/test_export.py) with Blender as a Python
+# Runs the Blender acceptance tests (tools/blender/test_export.py, test_animation.py and
+# test_compositor.py) with Blender as a Python
 # module: bpy 5.0.1 (or APERTURE_BPY) on Python 3.11, in a cached virtual environment that is
 # created and filled on first use. Never part of the Rust build.
 #
@@ -32,6 +33,10 @@ if ! "$venv/bin/python" -c 'import bpy' >/dev/null 2>&1; then
     "$venv/bin/pip" install --quiet --disable-pip-version-check "bpy==$bpy_version"
     echo "== bpy installed in $(($(date +%s) - start)) s"
 fi
+# OpenEXR's own Python reader, for the compositor test (numpy comes with bpy).
+if ! "$venv/bin/python" -c 'import OpenEXR' >/dev/null 2>&1; then
+    "$venv/bin/pip" install --quiet --disable-pip-version-check "OpenEXR==3.5.3"
+fi
 
 bin="${APERTURE_BIN:-target/release/aperture}"
 if [ -z "${APERTURE_BIN:-}" ]; then
@@ -42,5 +47,13 @@ fi
 echo "== tools/blender/test_export.py"
 status=0
 "$venv/bin/python" tools/blender/test_export.py --aperture "$bin" "$@" || status=$?
+# SPEC §7: --frame N is Blender's frame N, and a focus pull follows SPEC §2 (about 20 s).
+echo "== tools/blender/test_animation.py"
+anim_args=()
+for a in "$@"; do [ "$a" = "--require-all" ] && anim_args+=(--require-all); done
+"$venv/bin/python" tools/blender/test_animation.py --aperture "$bin" "${anim_args[@]}" || status=$?
+# SPEC §6: the EXR passes in Blender's compositor, Cycles' pass names, OpenEXR's reader.
+echo "== tools/blender/test_compositor.py"
+"$venv/bin/python" tools/blender/test_compositor.py --aperture "$bin" "${anim_args[@]}" || status=$?
 echo "== blender test: exit $status after $(($(date +%s) - start)) s"
 exit $status

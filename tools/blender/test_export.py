@@ -47,6 +47,8 @@ import subprocess
 import sys
 import tempfile
 
+from checks import check, record, summary
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ADDON_FILE = os.path.join(HERE, "aperture_gltf_dof.py")
 ADDON = "aperture_gltf_dof"
@@ -67,19 +69,6 @@ SPHERES = [  # name, depth along +Y, image x in [-1, 1], colour
 ]
 FOCUS = "SphereMid"
 BULB = ("Bulb", 6.0, -0.5, 0.4, 0.08, 20.0)  # name, depth, image x, image y, radius, emission
-
-RESULTS = []
-
-
-def record(name, ok, detail):
-    status = {True: "PASS", False: "FAIL", None: "SKIP"}[ok]
-    RESULTS.append((name, status, detail))
-    print(f"{status} {name}: {detail}", flush=True)
-
-
-def check(name, cond, detail):
-    record(name, bool(cond), detail)
-    return bool(cond)
 
 
 # --------------------------------------------------------------------------------------------
@@ -507,14 +496,9 @@ def render_cycles(path, spp, seed):
 
 
 def load_exr(path):
-    import numpy as np
+    from exr_beauty import read_beauty
 
-    img = bpy.data.images.load(path, check_existing=False)
-    w, h = img.size
-    px = np.empty(w * h * 4, dtype=np.float32)
-    img.pixels.foreach_get(px)
-    bpy.data.images.remove(img)
-    return px.reshape(h, w, 4)[:, :, :3].astype(np.float64)  # rows bottom to top
+    return read_beauty(path, bottom_up=True)  # rows bottom to top, as Blender's pixels
 
 
 def rmse(a, b):
@@ -716,11 +700,7 @@ def main():
         if not ARGS.out:
             shutil.rmtree(WORK, ignore_errors=True)
 
-    passed = sum(1 for r in RESULTS if r[1] == "PASS")
-    failed = sum(1 for r in RESULTS if r[1] == "FAIL")
-    skipped = sum(1 for r in RESULTS if r[1] == "SKIP")
-    print(f"{passed} passed, {failed} failed, {skipped} skipped")
-    return 1 if failed else 0
+    return summary()
 
 
 if __name__ == "__main__":

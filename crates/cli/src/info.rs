@@ -17,6 +17,9 @@ pub struct InfoArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Time, frame and animation (SPEC §7): bounds, lights and cameras as posed then.
+    #[command(flatten)]
+    pub when: crate::time_args::TimeArgs,
 }
 
 /// Counts that are not stored on the scene directly.
@@ -117,6 +120,33 @@ fn camera_json(c: &Camera, origin: glam::DVec3) -> Value {
     })
 }
 
+/// World-space bounds of each drawing node's geometry (every instance it places), by node index.
+fn node_bounds(s: &Scene) -> Vec<Value> {
+    let mut by_node: std::collections::BTreeMap<u32, aperture_scene::Bounds> = Default::default();
+    for inst in &s.instances {
+        let Some(mesh) = s.meshes.get(inst.mesh as usize) else {
+            continue;
+        };
+        let b = by_node
+            .entry(inst.node)
+            .or_insert(aperture_scene::Bounds::EMPTY);
+        for p in &mesh.positions {
+            b.include(inst.world_from_object.transform_point3(*p));
+        }
+    }
+    by_node
+        .into_iter()
+        .filter(|(_, b)| !b.is_empty())
+        .map(|(node, b)| {
+            json!({
+                "node": node,
+                "min": file_point(s.world_origin, b.min),
+                "max": file_point(s.world_origin, b.max),
+            })
+        })
+        .collect()
+}
+
 fn report(s: &Scene) -> Value {
     let c = counts(s);
     let b = s.bounds();
@@ -143,12 +173,28 @@ fn report(s: &Scene) -> Value {
         "textures": s.textures.len(),
         "lights": {"point": c.point, "spot": c.spot, "directional": c.directional},
         "bounds": bounds,
+        "node_bounds": node_bounds(s),
         "world_origin": [s.world_origin.x, s.world_origin.y, s.world_origin.z],
         "skipped": {
             "primitives": s.stats.skipped_primitives,
             "features": s.stats.skipped_features,
         },
         "warnings": s.stats.warnings,
+        "time": s.stats.time.map(f),
+        "animations": s
+            .stats
+            .animations
+            .iter()
+            .map(|a| json!({
+                "index": a.index,
+                "name": a.name,
+                "start": f(a.start),
+                "end": f(a.end),
+                "duration": f(a.end - a.start.min(0.0)),
+                "channels": a.channels,
+                "selected": a.selected,
+            }))
+            .collect::<Vec<_>>(),
         "cameras": s
             .cameras
             .iter()
@@ -207,6 +253,27 @@ fn print_text(path: &std::path::Path, r: &Value) {
     for w in r["warnings"].as_array().into_iter().flatten() {
         println!("  warning: {}", w.as_str().unwrap_or_default());
     }
+    match r["time"].as_f64() {
+        Some(t) => println!("  posed at {t} s"),
+        None => println!("  posed as stored (no time given)"),
+    }
+    for a in r["animations"].as_array().into_iter().flatten() {
+        println!(
+            "  animation {} {}: {} s to {} s, {} channel(s){}",
+            a["index"],
+            a["name"]
+                .as_str()
+                .map_or("(unnamed)".into(), |n| format!("{n:?}")),
+            a["start"],
+            a["end"],
+            a["channels"],
+            if a["selected"] == json!(true) {
+                ""
+            } else {
+                " (not played)"
+            }
+        );
+    }
     let cams = r["cameras"].as_array().cloned().unwrap_or_default();
     println!("  cameras: {}", cams.len());
     for c in &cams {
@@ -250,6 +317,8 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
         scene: args.scene_index,
         // Counts need no texels.
         skip_textures: true,
+        time: args.when.seconds(),
+        animation: args.when.selection(),
         ..LoadOptions::default()
     };
     let s = aperture_scene::load(&args.scene, &options)

@@ -6,6 +6,7 @@ mod merge_cmd;
 mod progress;
 mod render_cmd;
 mod split_args;
+mod time_args;
 
 use clap::{Parser, Subcommand};
 

@@ -258,6 +258,9 @@ pub struct RenderArgs {
     /// Bounces, clamps and pixel filter.
     #[command(flatten)]
     pub tracing: TracingArgs,
+    /// Time, frame and animation (SPEC §7).
+    #[command(flatten)]
+    pub when: crate::time_args::TimeArgs,
     /// Sample sequence.
     #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
     pub sampler: SamplerArg,
@@ -355,6 +358,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             focus_object: args.focus_object.clone(),
         },
         skip_textures: false,
+        time: args.when.seconds(),
+        animation: args.when.selection(),
     };
     let t_load = Instant::now();
     let scene = match aperture_scene::load(&args.scene, &load) {
@@ -364,9 +369,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         Err(e @ aperture_scene::Error::InvalidDof { .. }) if matches!(&e, aperture_scene::Error::InvalidDof { key, .. } if key.starts_with("command line")) => {
             usage_error(format!("{}: {e}", args.scene.display()))
         }
-        Err(e @ aperture_scene::Error::NoSuchScene { .. }) => {
-            usage_error(format!("{}: {e}", args.scene.display()))
-        }
+        Err(
+            e @ (aperture_scene::Error::NoSuchScene { .. }
+            | aperture_scene::Error::NoSuchAnimation { .. }),
+        ) => usage_error(format!("{}: {e}", args.scene.display())),
         Err(e) => {
             return Err(anyhow::Error::new(e).context(format!("loading {}", args.scene.display())))
         }
@@ -588,6 +594,21 @@ mod tests {
             crate::Command::Render(r) => Ok(r),
             _ => unreachable!("render subcommand"),
         }
+    }
+
+    #[test]
+    fn passes_and_half_parse() {
+        let a = parse(&[]).unwrap();
+        assert_eq!(a.passes, PassSet::compositing());
+        assert!(!a.half);
+        let b = parse(&["--passes", "all,Debug Sample Count", "--half"]).unwrap();
+        assert!(
+            b.half && b.passes.contains(Pass::Position) && b.passes.contains(Pass::SampleCount)
+        );
+        assert_eq!(parse(&["--passes", "none"]).unwrap().passes, PassSet::NONE);
+        let e = parse(&["--passes", "Depth,Albedo"]).expect_err("unknown pass");
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("Albedo"), "{e}");
     }
 
     #[test]

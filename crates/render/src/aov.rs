@@ -124,6 +124,12 @@ impl Default for Features {
 }
 
 impl Features {
+    /// True while the features are still to be written.
+    #[inline]
+    pub fn pending(&self) -> bool {
+        self.pending.is_some()
+    }
+
     /// At a surface with lobe albedos `a`: write the features here unless three quarters or
     /// more of the weight is in sharp specular lobes (Cycles' rule), else follow the bounce.
     #[inline]

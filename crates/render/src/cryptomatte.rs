@@ -130,16 +130,30 @@ impl CryptoPixel {
     /// The [`RANKS`] strongest IDs as (ID bits, coverage) with coverage = count / `samples`,
     /// strongest first, ties by ID; missing ranks are (0, 0).
     pub fn ranked(&self, samples: f64) -> [(u32, f32); RANKS] {
-        let mut order: Vec<usize> = (0..SLOTS).filter(|&i| self.ids[i] != 0).collect();
-        order.sort_by(|&a, &b| {
-            self.counts[b]
-                .total_cmp(&self.counts[a])
-                .then(self.ids[a].cmp(&self.ids[b]))
-        });
+        // Insertion into a sorted top list: no allocation, once per pixel at output.
+        let mut top = [(0u32, 0.0f32); RANKS];
+        let mut n = 0;
+        let before = |a: (u32, f32), b: (u32, f32)| a.1 > b.1 || (a.1 == b.1 && a.0 < b.0);
+        for (&id, &count) in self.ids.iter().zip(&self.counts) {
+            if id == 0 {
+                break;
+            }
+            let entry = (id, count);
+            if n == RANKS && !before(entry, top[RANKS - 1]) {
+                continue;
+            }
+            let mut at = n.min(RANKS - 1);
+            while at > 0 && before(entry, top[at - 1]) {
+                top[at] = top[at - 1];
+                at -= 1;
+            }
+            top[at] = entry;
+            n = (n + 1).min(RANKS);
+        }
         let mut out = [(0, 0.0); RANKS];
         if samples > 0.0 {
-            for (rank, &i) in order.iter().take(RANKS).enumerate() {
-                out[rank] = (self.ids[i], (f64::from(self.counts[i]) / samples) as f32);
+            for (o, &(id, count)) in out.iter_mut().zip(&top[..n]) {
+                *o = (id, (f64::from(count) / samples) as f32);
             }
         }
         out
@@ -213,6 +227,24 @@ mod tests {
         assert_eq!(r[1], (9, 3.0 / 11.0));
         assert_eq!(r[2], (5, 2.0 / 11.0));
         assert_eq!(r[3], (11, 1.0 / 11.0));
+        // The top list agrees with a full sort, ties by ID, over many random pixels.
+        let mut x = 7u32;
+        for _ in 0..500 {
+            let mut p = CryptoPixel::default();
+            for _ in 0..30 {
+                x = x.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                p.add(1 + (x >> 28));
+            }
+            let mut all: Vec<(u32, f32)> = (0..SLOTS)
+                .filter(|&i| p.ids[i] != 0)
+                .map(|i| (p.ids[i], p.counts[i]))
+                .collect();
+            all.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+            let r = p.ranked(30.0);
+            for (k, e) in all.iter().take(RANKS).enumerate() {
+                assert_eq!(r[k], (e.0, (f64::from(e.1) / 30.0) as f32));
+            }
+        }
         // More IDs than slots: the extra ones are not counted, nothing panics.
         let mut full = CryptoPixel::default();
         for id in 1..=40 {

@@ -27,6 +27,9 @@ pub(crate) struct Integrator<'a> {
     pub env: EnvLight,
     pub max_bounces: u32,
     pub clamp: Clamp,
+    /// Record the light passes (with `AOV`): the lobe split of every light sample is work that
+    /// only they need.
+    pub light_passes: bool,
 }
 
 /// Blender Cycles' "Clamp Direct" / "Clamp Indirect": the largest value one sample's
@@ -230,6 +233,7 @@ impl Integrator<'_> {
             aov,
             first_split: LobeSplit::DIFFUSE,
             features: Features::default(),
+            light_passes: self.light_passes,
         };
         let mut beta = Vec3::ONE;
         let mut ray = Ray::new(origin, dir);
@@ -305,7 +309,7 @@ impl Integrator<'_> {
                 frame = Frame::from_normal(ng);
                 wo_l = frame.to_local(wo);
             }
-            if AOV {
+            if AOV && (path.light_passes || path.features.pending()) {
                 let albedos = bsdf.albedos(wo_l);
                 if vertex == 0 {
                     path.aov.set_colours(&albedos);
@@ -336,7 +340,7 @@ impl Integrator<'_> {
             if wi.dot(ng) <= 0.0 {
                 break;
             }
-            if AOV && vertex == 0 {
+            if AOV && path.light_passes && vertex == 0 {
                 path.first_split = bsdf.lobe_split(wo_l, sample.wi);
             }
             beta *= sample.f * (sample.wi.z / sample.pdf);
@@ -501,7 +505,7 @@ impl Integrator<'_> {
     ) {
         let lit = self.clamp.apply(c, v.vertex + 1) * self.visibility(v.p_out, dir, dist);
         path.l += lit;
-        if AOV {
+        if AOV && path.light_passes {
             let split = if v.vertex == 0 {
                 v.bsdf.lobe_split(v.wo_l, wi_l)
             } else {
@@ -537,6 +541,7 @@ struct PathState<'a, const AOV: bool> {
     /// How the first vertex's sampled direction split among the lobes.
     first_split: LobeSplit,
     features: Features,
+    light_passes: bool,
 }
 
 impl<const AOV: bool> PathState<'_, AOV> {
@@ -544,7 +549,7 @@ impl<const AOV: bool> PathState<'_, AOV> {
     #[inline]
     fn add(&mut self, c: Vec3, scatterings: u32, seen: Seen) {
         self.l += c;
-        if AOV {
+        if AOV && self.light_passes {
             self.aov.add_light(c, scatterings, &self.first_split, seen);
         }
     }

@@ -420,6 +420,7 @@ fn integrator<'a>(scene: &'a Scene, accel: &'a Accel, opts: &RenderOptions) -> I
         env: EnvLight::new(&opts.env),
         max_bounces: opts.max_bounces,
         clamp: opts.clamp,
+        light_passes: opts.passes.has_light_passes(),
     }
 }
 

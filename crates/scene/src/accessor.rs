@@ -5,6 +5,8 @@
 //! Handles strided views, sparse storage, normalized integers and `KHR_mesh_quantization`'s
 //! integer attributes.
 
+use std::collections::HashMap;
+
 use gltf::accessor::{DataType, Dimensions};
 
 use crate::Error;
@@ -14,6 +16,9 @@ pub(crate) struct Buffers {
     pub data: Vec<Vec<u8>>,
     /// Sum of all buffer lengths: the budget for accessors with no bytes behind them.
     pub total: u64,
+    /// Bytes of `EXT_meshopt_compression` buffer views, decoded, by view index: read instead of
+    /// the view's own (fallback) bytes.
+    pub decoded: HashMap<usize, Vec<u8>>,
 }
 
 /// Accessors without a buffer view are zeros plus optional sparse values: nothing backs their
@@ -33,8 +38,14 @@ fn dimension_count(d: Dimensions) -> usize {
     d.multiplicity()
 }
 
-/// The bytes of a buffer view, checked against its buffer.
-fn view_bytes<'a>(view: &gltf::buffer::View<'_>, buffers: &'a Buffers) -> Result<&'a [u8], Error> {
+/// The bytes of a buffer view, checked against its buffer (decoded, for a compressed view).
+pub(crate) fn view_bytes<'a>(
+    view: &gltf::buffer::View<'_>,
+    buffers: &'a Buffers,
+) -> Result<&'a [u8], Error> {
+    if let Some(bytes) = buffers.decoded.get(&view.index()) {
+        return Ok(bytes);
+    }
     let at = format!("bufferViews[{}]", view.index());
     let buffer = buffers
         .data
@@ -128,18 +139,6 @@ fn read<T: Copy + Default>(
     let ctype = acc.data_type();
     let csize = component_size(ctype);
     let dims = dimension_count(acc.dimensions());
-    if matches!(
-        acc.dimensions(),
-        Dimensions::Mat2 | Dimensions::Mat3 | Dimensions::Mat4
-    ) {
-        return Err(Error::BadAccessor {
-            at: at.into(),
-            reason: format!(
-                "accessors[{}]: matrix accessors are not used here",
-                acc.index()
-            ),
-        });
-    }
     let elem = (csize * dims) as u64;
     let count = acc.count() as u64;
     let mut out: Vec<T> = match acc.view() {
@@ -246,10 +245,37 @@ pub(crate) fn read_f32(
     buffers: &Buffers,
     at: &str,
 ) -> Result<(Vec<f32>, usize), Error> {
+    if matches!(
+        acc.dimensions(),
+        Dimensions::Mat2 | Dimensions::Mat3 | Dimensions::Mat4
+    ) {
+        return Err(Error::BadAccessor {
+            at: at.into(),
+            reason: format!(
+                "accessors[{}]: matrix accessors are not used here",
+                acc.index()
+            ),
+        });
+    }
     let ctype = acc.data_type();
     let normalized = acc.normalized();
     let v = read(acc, buffers, at, |b| to_f32(ctype, b, normalized))?;
     Ok((v, dimension_count(acc.dimensions())))
+}
+
+/// Reads a float MAT4 accessor (inverse bind matrices): 16 floats per element, column-major.
+pub(crate) fn read_mat4(
+    acc: &gltf::Accessor<'_>,
+    buffers: &Buffers,
+    at: &str,
+) -> Result<Vec<f32>, Error> {
+    if acc.dimensions() != Dimensions::Mat4 || acc.data_type() != DataType::F32 {
+        return Err(Error::BadAccessor {
+            at: at.into(),
+            reason: format!("accessors[{}] must be a float MAT4", acc.index()),
+        });
+    }
+    read(acc, buffers, at, |b| to_f32(DataType::F32, b, false))
 }
 
 /// Reads a scalar accessor of unsigned integers (vertex indices).
@@ -332,6 +358,7 @@ mod tests {
             Buffers {
                 total: bytes.len() as u64,
                 data,
+                decoded: HashMap::new(),
             },
         )
     }

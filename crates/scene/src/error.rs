@@ -157,6 +157,23 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// Compressed geometry (`KHR_draco_mesh_compression`, `EXT_meshopt_compression`) that does
+    /// not decode, or decodes to other sizes than its accessors state.
+    #[error("{at}: {reason}")]
+    Compressed {
+        /// JSON path of the compressed data (`meshes[0].primitives[1].extensions.KHR_draco_mesh_compression`).
+        at: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// `--animation` names an animation the file does not have.
+    #[error("no animation {wanted} in the file (it has: {available})")]
+    NoSuchAnimation {
+        /// The index or name asked for.
+        wanted: String,
+        /// The file's animations, `index "name"`.
+        available: String,
+    },
     /// An image could not be decoded.
     #[error("images[{image}]: {source}")]
     Image {

@@ -12,7 +12,11 @@
 //! What the loader guarantees:
 //! - `extensionsRequired` is checked before any buffer is read ([`SUPPORTED_EXTENSIONS`]); an
 //!   extension that is only used is ignored (and reported in [`SceneStats::warnings`]).
-//! - Animations, skins and morph targets are not evaluated: the rest pose is drawn.
+//! - Without a time the stored pose is drawn: node transforms, morph weights (`node.weights`, else
+//!   `mesh.weights`) and skins posed by their joints (SPEC §7). With [`LoadOptions::time`] the
+//!   selected animations are evaluated at that time; [`Animated`] loads once and poses at any time.
+//! - `KHR_draco_mesh_compression` and `EXT_meshopt_compression` geometry is decoded, its sizes
+//!   checked against the accessors before anything is allocated.
 //! - Only the selected scene's meshes are loaded, each once, with one [`Instance`] per drawing node
 //!   or `EXT_mesh_gpu_instancing` instance; only images used by drawn materials are decoded, in
 //!   parallel.
@@ -30,17 +34,27 @@
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 mod accessor;
+mod animated;
+mod animation;
+mod camera;
 mod dof;
+mod draco;
 mod error;
 mod glb;
 mod load;
 mod material;
 mod mesh;
+mod meshopt;
+mod morph;
+mod pointer;
 mod prepass;
+mod skin;
 mod tangents;
 mod types;
 mod uri;
 
+pub use animated::Animated;
+pub use animation::{AnimationInfo, AnimationSelection};
 pub use dof::{lens_from_yfov, DEFAULT_ASPECT};
 pub use error::Error;
 pub use load::{content_hash, load, load_bytes};

@@ -1,43 +1,19 @@
-//! The loader: file → pre-pass → buffers → node hierarchy → meshes, materials, textures, lights,
-//! cameras.
+//! The loader's entry points and its shared steps: buffers, the node hierarchy, transforms in
+//! f64, `EXT_mesh_gpu_instancing` and the world origin. [`Animated`] does the rest.
 
 use std::collections::HashMap;
 use std::path::Path;
 
-use glam::{Affine3A, DAffine3, DMat4, DQuat, DVec3, Mat3, Vec3};
+use glam::{Affine3A, DAffine3, DMat4, DQuat, DVec3};
 use serde_json::Value;
 
 use crate::accessor::{read_vec, Buffers};
-use crate::dof::{self, CameraInput, NodeInfo};
-use crate::material::Materials;
-use crate::{
-    glb, mesh, prepass, uri, Camera, Error, Instance, Light, LightKind, LoadOptions, Projection,
-    Scene, SceneStats,
-};
+use crate::{uri, Animated, Error, LoadOptions, Scene, SceneStats};
 
-/// Watts per lumen at 555 nm: Blender's importer divides candela and lux by it (SPEC §4).
-const LUMENS_PER_WATT: f32 = 683.0;
-
-/// Loads a `.gltf` or `.glb` file into a render-ready [`Scene`].
+/// Loads a `.gltf` or `.glb` file into a render-ready [`Scene`], posed at
+/// [`LoadOptions::time`] (the stored pose without one).
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, Error> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let base_dir = path.parent().unwrap_or(Path::new("."));
-    let base_dir = if base_dir.as_os_str().is_empty() {
-        Path::new(".")
-    } else {
-        base_dir
-    };
-    let named_glb = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
-    if named_glb && !glb::is_glb(&bytes) {
-        // A .glb without the magic is a damaged container, not JSON: say so.
-        glb::parse(&bytes)?;
-    }
-    load_bytes(&bytes, base_dir, options)
+    Animated::load(path, options)?.into_scene(options.time)
 }
 
 /// A fast 64-bit hash of `bytes` (not cryptographic: it tells files apart, it does not
@@ -59,207 +35,55 @@ pub fn content_hash(bytes: &[u8]) -> u64 {
 
 /// Loads a scene from the bytes of a `.gltf` or `.glb` file; external URIs resolve inside `base_dir`.
 pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Result<Scene, Error> {
-    let mut scene = load_document(bytes, base_dir, options)?;
-    scene.source_hash = content_hash(bytes);
-    Ok(scene)
+    Animated::load_bytes(bytes, base_dir, options)?.into_scene(options.time)
 }
 
-fn load_document(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Result<Scene, Error> {
-    let glb_is = glb::is_glb(bytes);
-    let (json, bin) = if glb_is {
-        let g = glb::parse(bytes)?;
-        (g.json, g.bin)
-    } else {
-        (bytes, None)
-    };
-    let prepared = prepass::prepare(json)?;
-    let doc = prepared.document;
-    let mut stats = SceneStats {
-        skipped_features: prepared.skipped,
-        warnings: prepared
-            .ignored_extensions
-            .iter()
-            .map(|e| format!("extension {e} is used but not implemented: ignored"))
-            .collect(),
-        ..SceneStats::default()
-    };
-    let buffers = load_buffers(&doc, bin, base_dir)?;
-    let world_from_node = world_transforms(&doc)?;
+/// A node as stored: what posing needs of it.
+#[derive(Debug, Clone)]
+pub(crate) struct NodeData {
+    /// Local transform as stored.
+    pub local: DAffine3,
+    /// The same as scale, rotation, translation (decomposed from a matrix), which animation
+    /// channels replace component by component.
+    pub trs: (DVec3, DQuat, DVec3),
+    pub mesh: Option<usize>,
+    pub skin: Option<usize>,
+    pub camera: Option<usize>,
+    pub light: Option<usize>,
+    /// `weights` (morph weights overriding the mesh's).
+    pub weights: Option<Vec<f32>>,
+    /// `extras`, for a camera node's depth of field.
+    pub extras: Option<Value>,
+    /// `EXT_mesh_gpu_instancing` local transforms.
+    pub instances: Option<Vec<DAffine3>>,
+}
 
-    // The scene to draw.
-    let scene = match options.scene {
-        Some(i) => Some(doc.scenes().nth(i).ok_or(Error::NoSuchScene {
-            index: i,
-            count: doc.scenes().len(),
-        })?),
-        None => doc.default_scene().or_else(|| doc.scenes().next()),
-    };
-    let mut order = Vec::new();
-    match &scene {
-        Some(s) => {
-            let mut seen = vec![false; world_from_node.len()];
-            let mut stack: Vec<usize> = s.nodes().map(|n| n.index()).collect();
-            stack.reverse();
-            while let Some(i) = stack.pop() {
-                if std::mem::replace(&mut seen[i], true) {
-                    continue;
-                }
-                order.push(i);
-                if let Some(n) = doc.nodes().nth(i) {
-                    let mut kids: Vec<usize> = n.children().map(|c| c.index()).collect();
-                    kids.reverse();
-                    stack.extend(kids);
-                }
-            }
-        }
-        None => stats
-            .warnings
-            .push("the file has no scene: nothing is drawn".into()),
-    }
-    stats.nodes = order.len();
-
-    let mut out = Scene::default();
-    let mut materials = Materials::default();
-    let mut mesh_of: HashMap<usize, u32> = HashMap::new();
-    // Transforms stay in f64 until the world origin is known (see `world_origin`).
-    let mut placed: Vec<(u32, DAffine3, u32)> = Vec::new();
-    let mut mesh_offsets: Vec<DVec3> = Vec::new();
-    let mut light_positions: Vec<(usize, DVec3)> = Vec::new();
-    let all_nodes: Vec<gltf::Node<'_>> = doc.nodes().collect();
-    for &ni in &order {
-        let node = &all_nodes[ni];
-        let world = world_from_node[ni];
-        if let Some(m) = node.mesh() {
-            let mesh_index = match mesh_of.get(&m.index()) {
-                Some(&i) => i,
-                None => {
-                    let mut loaded = mesh::load_mesh(&m, &buffers, &mut stats, &mut |mi| {
-                        materials.get(&doc, mi)
-                    })?;
-                    mesh_offsets.push(recentre(&mut loaded));
-                    out.meshes.push(loaded);
-                    let i = (out.meshes.len() - 1) as u32;
-                    mesh_of.insert(m.index(), i);
-                    i
-                }
-            };
-            let offset = DAffine3::from_translation(mesh_offsets[mesh_index as usize]);
-            match node.extension_value("EXT_mesh_gpu_instancing") {
-                Some(ext) => {
-                    for local in gpu_instances(&doc, &buffers, ext, ni)? {
-                        placed.push((mesh_index, world * local * offset, ni as u32));
-                    }
-                }
-                None => placed.push((mesh_index, world * offset, ni as u32)),
-            }
-        }
-        if let Some(light) = node.light() {
-            let color = Vec3::from(light.color());
-            let intensity = color * light.intensity() / LUMENS_PER_WATT;
-            let kind = match light.kind() {
-                gltf::khr_lights_punctual::Kind::Point => LightKind::Point,
-                gltf::khr_lights_punctual::Kind::Directional => LightKind::Directional,
-                gltf::khr_lights_punctual::Kind::Spot {
-                    inner_cone_angle,
-                    outer_cone_angle,
-                } => LightKind::Spot {
-                    inner_cone: inner_cone_angle,
-                    outer_cone: outer_cone_angle,
-                },
-            };
-            if !intensity.is_finite() {
-                return Err(Error::NonFinite {
-                    at: format!("KHR_lights_punctual.lights[{}]", light.index()),
-                    value: format!("{intensity:?}"),
-                });
-            }
-            light_positions.push((ni, world.translation));
-            out.lights.push(Light {
-                name: light.name().map(str::to_owned),
-                kind,
-                position: Vec3::ZERO,
-                direction: world
-                    .transform_vector3(DVec3::NEG_Z)
-                    .as_vec3()
-                    .try_normalize()
-                    .unwrap_or(Vec3::NEG_Z),
-                intensity,
-            });
-        }
-    }
-
-    let origin = world_origin(&out.meshes, &placed, &mut stats);
-    out.world_origin = origin;
-    let relative = |m: DAffine3| DAffine3 {
-        matrix3: m.matrix3,
-        translation: m.translation - origin,
-    };
-    out.instances = placed
-        .iter()
-        .map(|&(mesh, world, node)| {
-            Ok(Instance {
-                mesh,
-                world_from_object: finite_world(node as usize, to_f32(relative(world)))?,
-                node,
-            })
-        })
-        .collect::<Result<_, Error>>()?;
-    for (light, &(node, p)) in out.lights.iter_mut().zip(&light_positions) {
-        let position = (p - origin).as_vec3();
-        finite_world(node, Affine3A::from_translation(position))?;
-        light.position = position;
-    }
-    let world_from_node: Vec<Affine3A> = world_from_node
-        .iter()
-        .map(|&m| to_f32(relative(m)))
-        .collect();
-
-    let names: Vec<Option<String>> = all_nodes
-        .iter()
-        .map(|n| n.name().map(str::to_owned))
-        .collect();
-    let origins: Vec<Vec3> = world_from_node
-        .iter()
-        .map(|m| Vec3::from(m.translation))
-        .collect();
-    let info = NodeInfo {
-        names: &names,
-        origins: &origins,
-    };
-    for &ni in &order {
-        let node = &all_nodes[ni];
-        if let Some(cam) = node.camera() {
-            let world = finite_world(ni, world_from_node[ni])?;
-            out.cameras.push(camera(&cam, node, world, &info, options)?);
-        }
-    }
-
-    out.materials = std::mem::take(&mut materials.materials);
-    stats.warnings.append(&mut materials.warnings);
-    crate::tangents::generate_missing_tangents(&mut out);
-    out.textures = materials.textures(&doc, &buffers, base_dir, options.skip_textures)?;
-    if out.cameras.is_empty() {
-        out.cameras.push(automatic_camera(&out, &info, options)?);
-    }
-    if doc.meshes().len() > 0 && out.instances.is_empty() {
-        stats
-            .warnings
-            .push("the selected scene draws no mesh".into());
-    }
-    out.stats = stats;
-    out.node_names = names;
-    Ok(out)
+/// The node hierarchy, checked to be a forest.
+#[derive(Debug, Clone)]
+pub(crate) struct NodeGraph {
+    pub nodes: Vec<NodeData>,
+    pub names: Vec<Option<String>>,
+    pub parent: Vec<Option<usize>>,
+    pub children: Vec<Vec<usize>>,
+    /// Every node, parents before their children.
+    pub topological: Vec<usize>,
 }
 
 /// Reads every buffer: the GLB BIN chunk, `data:` URIs or files beside the scene.
-fn load_buffers(
+pub(crate) fn load_buffers(
     doc: &gltf::Document,
+    root: &Value,
     bin: Option<&[u8]>,
     base_dir: &Path,
 ) -> Result<Buffers, Error> {
     let mut data = Vec::with_capacity(doc.buffers().len());
     for b in doc.buffers() {
         let at = format!("buffers[{}]", b.index());
+        if crate::meshopt::is_fallback(root, b.index()) {
+            // EXT_meshopt_compression's placeholder: no bytes; its views are decoded instead.
+            data.push(Vec::new());
+            continue;
+        }
         let mut bytes = match b.source() {
             gltf::buffer::Source::Bin => bin
                 .ok_or_else(|| Error::Invalid {
@@ -282,7 +106,11 @@ fn load_buffers(
         data.push(bytes);
     }
     let total = data.iter().map(|d| d.len() as u64).sum();
-    Ok(Buffers { data, total })
+    Ok(Buffers {
+        data,
+        total,
+        decoded: HashMap::new(),
+    })
 }
 
 fn finite(at: impl FnOnce() -> String, values: &[f32]) -> Result<(), Error> {
@@ -335,7 +163,7 @@ fn local_transform(node: &gltf::Node<'_>) -> Result<DAffine3, Error> {
 
 /// `m` if every entry is finite: each node's values are, but their composition may overflow
 /// f32 (a scale of 1e30 under another of 1e30).
-fn finite_world(node: usize, m: Affine3A) -> Result<Affine3A, Error> {
+pub(crate) fn finite_world(node: usize, m: Affine3A) -> Result<Affine3A, Error> {
     if m.is_finite() {
         Ok(m)
     } else {
@@ -347,7 +175,7 @@ fn finite_world(node: usize, m: Affine3A) -> Result<Affine3A, Error> {
 }
 
 /// An f64 transform rounded to f32 (call it on world-origin-relative transforms only).
-fn to_f32(m: DAffine3) -> Affine3A {
+pub(crate) fn to_f32(m: DAffine3) -> Affine3A {
     Affine3A::from_mat3_translation(m.matrix3.as_mat3(), m.translation.as_vec3())
 }
 
@@ -358,7 +186,7 @@ fn to_f32(m: DAffine3) -> Affine3A {
 /// object space inherits that error. The subtraction is done in f64 and the stored f32 values
 /// are exact multiples of their spacing, so the recentred vertices lose nothing that the file
 /// held.
-fn recentre(mesh: &mut crate::Mesh) -> DVec3 {
+pub(crate) fn recentre(mesh: &mut crate::Mesh) -> DVec3 {
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for p in &mesh.positions {
         lo = lo.min(p.as_dvec3());
@@ -384,7 +212,7 @@ fn recentre(mesh: &mut crate::Mesh) -> DVec3 {
 ///
 /// The geometry's centre, rather than a camera's position, because a file has any number of
 /// cameras (or none) and the bounds are what every camera looks at.
-fn world_origin(
+pub(crate) fn world_origin(
     meshes: &[crate::Mesh],
     placed: &[(u32, DAffine3, u32)],
     stats: &mut SceneStats,
@@ -485,13 +313,27 @@ fn shortest_edge(mesh: &crate::Mesh) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// World transforms of all nodes (not only the drawn scene's: `focus_object` may name any node).
-fn world_transforms(doc: &gltf::Document) -> Result<Vec<DAffine3>, Error> {
+/// Every node (not only the drawn scene's: `focus_object` may name any node), its hierarchy
+/// checked to be a forest.
+pub(crate) fn node_graph(doc: &gltf::Document, buffers: &Buffers) -> Result<NodeGraph, Error> {
     let n = doc.nodes().len();
     let mut parent: Vec<Option<usize>> = vec![None; n];
-    let mut local = Vec::with_capacity(n);
+    let mut nodes = Vec::with_capacity(n);
+    let mut children = Vec::with_capacity(n);
     for node in doc.nodes() {
-        local.push(local_transform(&node)?);
+        let local = local_transform(&node)?;
+        let trs = match node.transform() {
+            gltf::scene::Transform::Decomposed {
+                translation,
+                rotation,
+                scale,
+            } => (
+                DVec3::from_array(scale.map(f64::from)),
+                DQuat::from_array(rotation.map(f64::from)).normalize(),
+                DVec3::from_array(translation.map(f64::from)),
+            ),
+            gltf::scene::Transform::Matrix { .. } => local.to_scale_rotation_translation(),
+        };
         for c in node.children() {
             if c.index() == node.index() {
                 return Err(Error::NodeGraph {
@@ -506,37 +348,53 @@ fn world_transforms(doc: &gltf::Document) -> Result<Vec<DAffine3>, Error> {
                 });
             }
         }
+        children.push(node.children().map(|c| c.index()).collect::<Vec<_>>());
+        let instances = match node.extension_value("EXT_mesh_gpu_instancing") {
+            Some(ext) if node.mesh().is_some() => {
+                Some(gpu_instances(doc, buffers, ext, node.index())?)
+            }
+            _ => None,
+        };
+        nodes.push(NodeData {
+            local,
+            trs,
+            mesh: node.mesh().map(|m| m.index()),
+            skin: node.skin().map(|s| s.index()),
+            camera: node.camera().map(|c| c.index()),
+            light: node.light().map(|l| l.index()),
+            weights: node.weights().map(<[f32]>::to_vec),
+            extras: crate::camera::raw(node.extras()),
+            instances,
+        });
     }
-    let mut world: Vec<Option<DAffine3>> = vec![None; n];
-    let children: Vec<Vec<usize>> = doc
-        .nodes()
-        .map(|nd| nd.children().map(|c| c.index()).collect())
-        .collect();
+    let mut topological = Vec::with_capacity(n);
     let mut stack: Vec<usize> = (0..n).filter(|&i| parent[i].is_none()).collect();
-    for &r in &stack {
-        world[r] = Some(local[r]);
-    }
     while let Some(i) = stack.pop() {
-        let w = world[i].unwrap_or(DAffine3::IDENTITY);
-        for &c in &children[i] {
-            world[c] = Some(w * local[c]);
-            stack.push(c);
-        }
+        topological.push(i);
+        stack.extend(&children[i]);
     }
-    world
-        .into_iter()
-        .enumerate()
-        .map(|(i, w)| {
-            w.ok_or_else(|| Error::NodeGraph {
-                node: i,
-                reason: "is part of a cycle in the node hierarchy".into(),
-            })
-        })
-        .collect()
+    if topological.len() < n {
+        let mut seen = vec![false; n];
+        for &i in &topological {
+            seen[i] = true;
+        }
+        let node = seen.iter().position(|s| !s).unwrap_or(0);
+        return Err(Error::NodeGraph {
+            node,
+            reason: "is part of a cycle in the node hierarchy".into(),
+        });
+    }
+    Ok(NodeGraph {
+        nodes,
+        names: doc.nodes().map(|n| n.name().map(str::to_owned)).collect(),
+        parent,
+        children,
+        topological,
+    })
 }
 
 /// `EXT_mesh_gpu_instancing`: one local transform per instance (TRS, each optional).
-fn gpu_instances(
+pub(crate) fn gpu_instances(
     doc: &gltf::Document,
     buffers: &Buffers,
     ext: &Value,
@@ -609,145 +467,12 @@ fn gpu_instances(
         .collect()
 }
 
-/// Rotation and translation of a world transform: scale and shear removed (SPEC §1), keeping the
-/// view axis (−Z) exact and +Y as close to the node's as possible.
-fn orthonormal(world: Affine3A) -> Option<Affine3A> {
-    let z = Vec3::from(world.matrix3.z_axis).try_normalize()?;
-    let y0 = Vec3::from(world.matrix3.y_axis);
-    let y = (y0 - z * z.dot(y0)).try_normalize()?;
-    let x = y.cross(z);
-    Some(Affine3A {
-        matrix3: Mat3::from_cols(x, y, z).into(),
-        translation: world.translation,
-    })
-}
-
-fn camera(
-    cam: &gltf::Camera<'_>,
-    node: &gltf::Node<'_>,
-    world: Affine3A,
-    info: &NodeInfo<'_>,
-    options: &LoadOptions,
-) -> Result<Camera, Error> {
-    let name = cam
-        .name()
-        .or(node.name())
-        .map(str::to_owned)
-        .unwrap_or_else(|| format!("camera {}", cam.index()));
-    let at = format!("cameras[{}]", cam.index());
-    let projection = match cam.projection() {
-        gltf::camera::Projection::Perspective(p) => {
-            let yfov = p.yfov();
-            if !(yfov.is_finite() && yfov > 0.0 && yfov < std::f32::consts::PI) {
-                return Err(Error::Invalid {
-                    at: format!("{at}.perspective.yfov"),
-                    reason: format!("{yfov} is not in (0, π)"),
-                });
-            }
-            Projection::Perspective {
-                yfov,
-                aspect_ratio: p.aspect_ratio(),
-            }
-        }
-        gltf::camera::Projection::Orthographic(o) => {
-            let (xmag, ymag) = (o.xmag(), o.ymag());
-            finite(|| format!("{at}.orthographic"), &[xmag, ymag])?;
-            Projection::Orthographic { xmag, ymag }
-        }
-    };
-    let world_from_camera = orthonormal(world).ok_or_else(|| Error::NodeGraph {
-        node: node.index(),
-        reason: "the camera's transform has no rotation (zero scale)".into(),
-    })?;
-    let raw = |e: &Option<Box<serde_json::value::RawValue>>| {
-        e.as_ref()
-            .and_then(|r| serde_json::from_str::<Value>(r.get()).ok())
-    };
-    let camera_extras = raw(cam.extras());
-    let node_extras = raw(node.extras());
-    let dof = dof::resolve(
-        &CameraInput {
-            name: &name,
-            projection,
-            world_from_camera,
-            physical: cam.extension_value("EXT_camera_physical"),
-            camera_extras: camera_extras.as_ref(),
-            node_extras: node_extras.as_ref(),
-        },
-        &options.dof_overrides,
-        info,
-    )?;
-    Ok(Camera {
-        name,
-        node: Some(node.index() as u32),
-        world_from_camera,
-        projection,
-        dof,
-    })
-}
-
-/// Vertical field of view of the automatic camera.
-const AUTO_YFOV_DEGREES: f32 = 40.0;
-
-/// A camera that frames the scene's bounding sphere from the +Z side, slightly above; pinhole
-/// unless the command line asks for depth of field.
-fn automatic_camera(
-    scene: &Scene,
-    info: &NodeInfo<'_>,
-    options: &LoadOptions,
-) -> Result<Camera, Error> {
-    let b = scene.bounds();
-    let (center, radius) = if b.is_empty() {
-        (Vec3::ZERO, 1.0)
-    } else {
-        (b.center(), (0.5 * b.diagonal()).max(1e-3))
-    };
-    let yfov = AUTO_YFOV_DEGREES.to_radians();
-    // The sphere touches the top and bottom of the frame; wider frames have room to spare.
-    let distance = radius / (0.5 * yfov).sin();
-    let back = Vec3::new(0.0, 0.3, 1.0).normalize();
-    let eye = center + back * distance;
-    // Camera +Z points back at the eye from the centre; +X right, +Y up.
-    let z = back;
-    let x = Vec3::Y.cross(z).normalize();
-    let y = z.cross(x);
-    let world_from_camera = Affine3A::from_mat3_translation(Mat3::from_cols(x, y, z), eye);
-    let projection = Projection::Perspective {
-        yfov,
-        aspect_ratio: None,
-    };
-    let name = "automatic camera".to_owned();
-    let mut dof = dof::resolve(
-        &CameraInput {
-            name: &name,
-            projection,
-            world_from_camera,
-            physical: None,
-            camera_extras: None,
-            node_extras: None,
-        },
-        &options.dof_overrides,
-        info,
-    )?;
-    if options.dof_overrides.focus_distance.is_none()
-        && options.dof_overrides.focus_object.is_none()
-    {
-        // Focus on the scene's centre rather than Blender's 10 m.
-        dof.focus_distance = distance;
-    }
-    Ok(Camera {
-        name,
-        node: None,
-        world_from_camera,
-        projection,
-        dof,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::LightKind;
     use base64::Engine;
+    use glam::Vec3;
     use serde_json::json;
 
     /// One triangle (no normals) plus, from byte 44, instancing translations for 3 instances.

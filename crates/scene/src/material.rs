@@ -148,6 +148,14 @@ impl Materials {
         }
     }
 
+    /// Our index of each glTF material built so far (for animation pointers).
+    pub fn gltf_indices(&self) -> HashMap<usize, u32> {
+        self.by_gltf
+            .iter()
+            .filter_map(|(k, v)| Some(((*k)?, *v)))
+            .collect()
+    }
+
     /// Our index of a glTF material (None = the glTF default material), creating it on first use.
     pub fn get(&mut self, doc: &gltf::Document, index: Option<usize>) -> u32 {
         if let Some(&i) = self.by_gltf.get(&index) {

@@ -2,9 +2,9 @@
 //!
 //! 1. `extensionsRequired` is compared with what we implement, before any buffer is read, so an
 //!    unsupported file fails fast with the extension's name.
-//! 2. Animations and skins are dropped: a still image uses the rest pose, and Blender's exporter
-//!    writes animation channels without `target.node` (`KHR_animation_pointer`), which the typed
-//!    parser refuses.
+//! 2. Animations are taken out of what the `gltf` crate sees: Blender's exporter writes channels
+//!    without `target.node` (`KHR_animation_pointer`), which the typed parser refuses; the loader
+//!    reads them from the kept JSON instead (`animation.rs`).
 //! 3. The edited JSON is deserialised and validated by the `gltf` crate.
 
 use serde_json::Value;
@@ -21,11 +21,16 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "EXT_mesh_gpu_instancing",
     "KHR_materials_ior",
     "KHR_materials_specular",
+    "KHR_draco_mesh_compression",
+    "EXT_meshopt_compression",
+    "KHR_animation_pointer",
 ];
 
 /// The validated document plus what the pre-pass removed.
 pub(crate) struct Prepared {
     pub document: gltf::Document,
+    /// The file's JSON as written (animations, pointers and extension objects are read from it).
+    pub root: Value,
     pub skipped: Vec<String>,
     /// Extensions the file uses that we ignore (allowed: they are not required).
     pub ignored_extensions: Vec<String>,
@@ -125,6 +130,34 @@ fn check_shapes_the_typed_api_assumes(root: &mut Value) -> Result<(), Error> {
     Ok(())
 }
 
+/// The `gltf` crate's validation, less its one rule stricter than glTF 2.0: an accessor may have
+/// no `bufferView` (§3.6.2.4: zeros, or the data of a compression extension such as
+/// `KHR_draco_mesh_compression`), where the crate asks for one unless the accessor is sparse.
+fn validate(json_root: gltf::json::Root) -> Result<gltf::Document, Error> {
+    use gltf::json::validation::{Error as Rule, Validate};
+    let mut list = Vec::new();
+    json_root.validate(&json_root, gltf::json::Path::new, &mut |path, error| {
+        let path = path().to_string();
+        let spec_allows = matches!(error, Rule::Missing)
+            && path.starts_with("accessors[")
+            && path.ends_with("].bufferView");
+        if !spec_allows {
+            list.push((path, error));
+        }
+    });
+    if let Some((at, reason)) = list.first() {
+        return Err(Error::Invalid {
+            at: at.clone(),
+            reason: if list.len() > 1 {
+                format!("{reason} (and {} more problems)", list.len() - 1)
+            } else {
+                reason.to_string()
+            },
+        });
+    }
+    Ok(gltf::Document::from_json_without_validation(json_root))
+}
+
 /// Parses, checks and cleans the JSON, then hands it to the `gltf` crate for validation.
 pub(crate) fn prepare(json: &[u8]) -> Result<Prepared, Error> {
     let mut root: Value = serde_json::from_slice(json).map_err(|source| Error::Json { source })?;
@@ -145,72 +178,23 @@ pub(crate) fn prepare(json: &[u8]) -> Result<Prepared, Error> {
         .filter(|e| !SUPPORTED_EXTENSIONS.contains(e))
         .map(str::to_owned)
         .collect();
-    let mut skipped = Vec::new();
-    let animations = len_of(&root, "animations");
-    let skins = len_of(&root, "skins");
-    let morphed = root
-        .get("meshes")
-        .and_then(Value::as_array)
-        .map_or(0, |meshes| {
-            meshes
-                .iter()
-                .filter_map(|m| m.get("primitives").and_then(Value::as_array))
-                .flatten()
-                .filter(|p| p.get("targets").is_some())
-                .count()
-        });
-    if animations > 0 {
-        skipped.push(format!("{animations} animation(s) (rest pose)"));
-    }
-    if skins > 0 {
-        skipped.push(format!("{skins} skin(s) (rest pose)"));
-    }
-    if morphed > 0 {
-        skipped.push(format!(
-            "morph targets in {morphed} primitive(s) (base shape)"
-        ));
-    }
-
+    let skipped = Vec::new();
+    let kept = root.clone();
     if let Some(obj) = root.as_object_mut() {
         obj.remove("animations");
-        obj.remove("skins");
         // Checked above; the gltf crate's own list lacks KHR_mesh_quantization and
         // EXT_mesh_gpu_instancing and would refuse them.
         obj.remove("extensionsRequired");
-        if let Some(nodes) = obj.get_mut("nodes").and_then(Value::as_array_mut) {
-            for node in nodes.iter_mut().filter_map(Value::as_object_mut) {
-                // Would dangle once `skins` is gone.
-                node.remove("skin");
-            }
-        }
     }
 
     check_position_indices(&root)?;
     check_shapes_the_typed_api_assumes(&mut root)?;
     let json_root: gltf::json::Root =
         serde_json::from_value(root).map_err(|source| Error::Json { source })?;
-    let document = gltf::Document::from_json(json_root).map_err(|e| match e {
-        gltf::Error::Validation(list) => {
-            let (at, reason) = list
-                .first()
-                .map(|(path, err)| (path.to_string(), err.to_string()))
-                .unwrap_or_else(|| ("(root)".into(), "invalid".into()));
-            Error::Invalid {
-                at,
-                reason: if list.len() > 1 {
-                    format!("{reason} (and {} more problems)", list.len() - 1)
-                } else {
-                    reason
-                },
-            }
-        }
-        other => Error::Invalid {
-            at: "(root)".into(),
-            reason: other.to_string(),
-        },
-    })?;
+    let document = validate(json_root)?;
     Ok(Prepared {
         document,
+        root: kept,
         skipped,
         ignored_extensions,
     })
@@ -222,28 +206,32 @@ mod tests {
 
     #[test]
     fn unsupported_required_extension_is_named() {
-        let e = prepare(br#"{"asset":{"version":"2.0"},"extensionsRequired":["KHR_lights_punctual","KHR_draco_mesh_compression"]}"#)
+        let e = prepare(br#"{"asset":{"version":"2.0"},"extensionsRequired":["KHR_lights_punctual","KHR_texture_basisu"]}"#)
             .err()
             .unwrap();
-        assert!(e.to_string().contains("KHR_draco_mesh_compression"), "{e}");
+        assert!(e.to_string().contains("KHR_texture_basisu"), "{e}");
         assert!(matches!(e, Error::UnsupportedExtension { index: 1, .. }));
     }
 
     #[test]
     fn used_only_extensions_are_ignored_and_required_supported_ones_pass() {
-        let p = prepare(br#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_draco_mesh_compression","EXT_mesh_gpu_instancing"],"extensionsRequired":["EXT_mesh_gpu_instancing","KHR_mesh_quantization"]}"#)
+        let p = prepare(br#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_texture_basisu","EXT_mesh_gpu_instancing"],"extensionsRequired":["EXT_mesh_gpu_instancing","KHR_mesh_quantization"]}"#)
             .unwrap();
-        assert_eq!(p.ignored_extensions, ["KHR_draco_mesh_compression"]);
+        assert_eq!(p.ignored_extensions, ["KHR_texture_basisu"]);
     }
 
     #[test]
-    fn animation_pointer_channels_are_dropped() {
+    fn animation_pointer_channels_are_kept_out_of_the_typed_parser() {
         let p = prepare(br#"{"asset":{"version":"2.0"},"nodes":[{"skin":0}],
             "skins":[{"joints":[0]}],
             "animations":[{"channels":[{"sampler":0,"target":{"path":"pointer"}}],"samplers":[{"input":5,"output":6}]}]}"#)
             .unwrap();
-        assert_eq!(p.skipped.len(), 2);
         assert_eq!(p.document.animations().count(), 0);
+        assert_eq!(p.document.skins().count(), 1);
+        assert_eq!(
+            p.root["animations"][0]["channels"][0]["target"]["path"],
+            "pointer"
+        );
     }
 
     #[test]

@@ -474,6 +474,11 @@ pub struct LoadOptions {
     /// Skip decoding textures (for `info` and geometry-only uses). Textures are still listed
     /// (with their sampler and colour space), each as a 1×1 white placeholder.
     pub skip_textures: bool,
+    /// The time to pose the scene at, in seconds (`--time`, or `--frame N` as N / fps). `None`:
+    /// the stored pose, no animation evaluated (SPEC §7).
+    pub time: Option<f32>,
+    /// Which animations a time evaluates (`--animation`); default all together.
+    pub animation: crate::AnimationSelection,
 }
 
 /// An axis-aligned box.
@@ -531,10 +536,14 @@ pub struct SceneStats {
     pub primitives: usize,
     /// Primitives skipped (points, lines).
     pub skipped_primitives: usize,
-    /// Animations, skins and morph targets present in the file but not evaluated (rest pose).
+    /// Features present in the file but not evaluated.
     pub skipped_features: Vec<String>,
     /// Warnings for the user (one line each).
     pub warnings: Vec<String>,
+    /// The file's animations (name, key range, whether the load evaluates it).
+    pub animations: Vec<crate::AnimationInfo>,
+    /// The time the scene is posed at (`None`: the stored pose).
+    pub time: Option<f32>,
 }
 
 impl Scene {

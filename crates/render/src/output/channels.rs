@@ -61,6 +61,7 @@ pub fn channels(passes: PassSet, half: bool) -> Vec<ChannelSpec> {
 }
 
 /// Turns a film's sums into the values of [`channels`], pixel by pixel.
+#[derive(Clone, Copy)]
 pub struct PixelResolver<'a> {
     film: &'a Film,
     passes: PassSet,
@@ -104,6 +105,32 @@ impl<'a> PixelResolver<'a> {
                 c
             });
         }
+    }
+
+    /// Every pixel's values, rows top to bottom (`channels` per pixel), resolved in parallel
+    /// a row at a time; and how many colour values were clamped to the half range.
+    pub fn rows(&self, channels: usize) -> (Vec<f32>, u64) {
+        use rayon::prelude::*;
+        let w = self.film.window();
+        let per_row = w.width as usize * channels;
+        let mut values = vec![0.0f32; w.pixels() * channels];
+        let clamped = values
+            .par_chunks_mut(per_row.max(1))
+            .enumerate()
+            .map(|(y, row)| {
+                let mut me = PixelResolver {
+                    clamped: 0,
+                    ..*self
+                };
+                let mut out = Vec::with_capacity(per_row);
+                for x in 0..w.width as usize {
+                    me.pixel(y * w.width as usize + x, &mut out);
+                }
+                row.copy_from_slice(&out);
+                me.clamped
+            })
+            .sum();
+        (values, clamped)
     }
 
     /// Appends the values of pixel `i` of the film (row-major in its window).

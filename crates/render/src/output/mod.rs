@@ -160,16 +160,13 @@ pub fn render_exr(
             let film = render_window(scene, accel, &camera, &opts, *band, &report)?;
             summary.render_secs += t0.elapsed().as_secs_f64();
             offset += n;
-            let mut resolver =
+            let resolver =
                 PixelResolver::new(&film, passes, exr.half, world_from_camera, world_origin);
-            let mut values = Vec::with_capacity(band.pixels() * layout.channels.len());
-            for i in 0..band.pixels() {
-                resolver.pixel(i, &mut values);
-            }
+            let (values, clamped) = resolver.rows(layout.channels.len());
             rows.push_rows(&values)?;
             summary.samples += film.total_samples();
             summary.dropped += film.dropped_samples();
-            summary.half_clamped += resolver.clamped;
+            summary.half_clamped += clamped;
         }
         Ok(late_values(&summary, &opts))
     })?;

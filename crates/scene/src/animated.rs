@@ -1,0 +1,731 @@
+//! A loaded, decoded glTF document that can be posed at any time (SPEC §7): [`Animated`].
+//!
+//! Loading reads and decodes everything once (buffers, compressed geometry, meshes with their
+//! morph targets and joint influences, materials, textures, animations). Posing evaluates the
+//! selected animations at a time, composes the node hierarchy, deforms what is skinned or morphed
+//! and places meshes, lights and cameras. Meshes that no selected animation deforms are built
+//! once, at load, and come first in every posed [`Scene::meshes`], identical at every time; the
+//! meshes deformed per pose follow them.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::{Affine3A, DAffine3, DQuat, DVec3, Vec3};
+
+use crate::animation::{self, AnimationInfo, Animations, NodeProperty, Target};
+use crate::camera::{self, CameraData};
+use crate::dof::NodeInfo;
+use crate::load::{
+    finite_world, load_buffers, node_graph, recentre, to_f32, world_origin, NodeData, NodeGraph,
+};
+use crate::material::Materials;
+use crate::mesh::LoadedMesh;
+use crate::pointer::{self, CameraProperty, LightProperty, Pointer};
+use crate::skin::Skin;
+use crate::{
+    glb, mesh, morph, prepass, skin, Error, Instance, Light, LightKind, LoadOptions, Material,
+    Mesh, Projection, Scene, SceneStats, Texture,
+};
+
+/// Watts per lumen at 555 nm: Blender's importer divides candela and lux by it (SPEC §4).
+const LUMENS_PER_WATT: f32 = 683.0;
+
+/// A `KHR_lights_punctual` light as stored.
+#[derive(Debug, Clone)]
+struct LightData {
+    name: Option<String>,
+    color: Vec3,
+    intensity: f32,
+    kind: LightKind,
+}
+
+/// How a drawing node's mesh is obtained at a pose.
+#[derive(Debug, Clone, Copy)]
+enum Shape {
+    /// The same for every pose: `Scene::meshes[mesh]`, placed by the node's world transform times
+    /// a translation by `offset` (its recentring), or, for a skinned mesh (already in world
+    /// space), by the translation alone.
+    Static {
+        mesh: u32,
+        offset: DVec3,
+        world_space: bool,
+    },
+    /// Morphed or skinned differently at every time: deformed per pose.
+    Deforming,
+}
+
+/// A glTF document loaded and decoded once, ready to be posed at any time.
+///
+/// ```no_run
+/// use aperture_scene::{Animated, LoadOptions};
+/// let doc = Animated::load("walk.glb".as_ref(), &LoadOptions::default())?;
+/// for frame in 1..=3 {
+///     let scene = doc.scene_at(Some(frame as f32 / 24.0))?;
+///     // Meshes below doc.static_mesh_count() are the same at every time: reuse their BVHs.
+///     println!("{frame}: {} meshes, {} deformed", scene.meshes.len(),
+///         scene.meshes.len() - doc.static_mesh_count());
+/// }
+/// # Ok::<(), aperture_scene::Error>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct Animated {
+    graph: NodeGraph,
+    /// Drawn nodes, depth first from the selected scene's roots.
+    order: Vec<usize>,
+    meshes: HashMap<usize, LoadedMesh>,
+    skins: Vec<Skin>,
+    cameras: Vec<CameraData>,
+    lights: Vec<LightData>,
+    materials: Vec<Material>,
+    material_index: HashMap<usize, u32>,
+    textures: Vec<Texture>,
+    animations: Animations,
+    static_meshes: Vec<Mesh>,
+    shapes: HashMap<usize, Shape>,
+    /// Per node: it or an ancestor is moved by a selected channel.
+    moves: Vec<bool>,
+    options: LoadOptions,
+    stats: SceneStats,
+    draws_nothing: bool,
+    /// `content_hash` of the file's bytes.
+    source_hash: u64,
+}
+
+/// What makes a static deformed mesh unique: the glTF mesh, the skin posing it and the bits of
+/// its morph weights.
+type StaticKey = (usize, Option<usize>, Vec<u32>);
+
+/// Node transforms and morph weights at one time, plus the pointer values.
+struct Pose {
+    world: Vec<DAffine3>,
+    node_weights: HashMap<usize, Vec<f32>>,
+    mesh_weights: HashMap<usize, Vec<f32>>,
+    pointers: Vec<(Pointer, Vec<f64>)>,
+}
+
+impl Animated {
+    /// Loads and decodes a `.gltf` or `.glb` file once.
+    pub fn load(path: &Path, options: &LoadOptions) -> Result<Self, Error> {
+        let bytes = std::fs::read(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let base_dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let named_glb = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+        if named_glb && !glb::is_glb(&bytes) {
+            // A .glb without the magic is a damaged container, not JSON: say so.
+            glb::parse(&bytes)?;
+        }
+        Self::load_bytes(&bytes, base_dir, options)
+    }
+
+    /// Loads from the bytes of a `.gltf` or `.glb` file; external URIs resolve inside `base_dir`.
+    pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Result<Self, Error> {
+        let (json, bin) = if glb::is_glb(bytes) {
+            let g = glb::parse(bytes)?;
+            (g.json, g.bin)
+        } else {
+            (bytes, None)
+        };
+        let prepared = prepass::prepare(json)?;
+        let doc = prepared.document;
+        let root = prepared.root;
+        let mut stats = SceneStats {
+            skipped_features: prepared.skipped,
+            warnings: prepared
+                .ignored_extensions
+                .iter()
+                .map(|e| format!("extension {e} is used but not implemented: ignored"))
+                .collect(),
+            ..SceneStats::default()
+        };
+        let mut buffers = load_buffers(&doc, &root, bin, base_dir)?;
+        crate::meshopt::decode_views(&root, &mut buffers)?;
+        let graph = node_graph(&doc, &buffers)?;
+        let order = drawn_order(&doc, options, &graph, &mut stats)?;
+        stats.nodes = order.len();
+
+        let animations = animation::parse(&doc, &buffers, &root, &options.animation)?;
+        if !animations.ignored_pointers.is_empty() {
+            stats.warnings.push(format!(
+                "KHR_animation_pointer: {} pointer(s) at what aperture does not animate, ignored: {}",
+                animations.ignored_pointers.len(),
+                animations.ignored_pointers.join(", ")
+            ));
+        }
+        stats.animations = animations.info.clone();
+
+        let mut materials = Materials::default();
+        let mut meshes = HashMap::new();
+        for &ni in &order {
+            let Some(m) = doc.nodes().nth(ni).and_then(|n| n.mesh()) else {
+                continue;
+            };
+            if meshes.contains_key(&m.index()) {
+                continue;
+            }
+            let loaded = mesh::load_mesh(&doc, &m, &buffers, &mut stats, &mut |mi| {
+                materials.get(&doc, mi)
+            })?;
+            meshes.insert(m.index(), loaded);
+        }
+        let material_index = materials.gltf_indices();
+        // MikkTSpace tangents for normal-mapped meshes, on the rest shape (deformed with it).
+        let mut keys: Vec<usize> = meshes.keys().copied().collect();
+        keys.sort_unstable();
+        let mut tmp = Scene {
+            meshes: keys
+                .iter()
+                .filter_map(|k| meshes.get_mut(k).map(|m| std::mem::take(&mut m.mesh)))
+                .collect(),
+            materials: materials.materials.clone(),
+            ..Scene::default()
+        };
+        crate::tangents::generate_missing_tangents(&mut tmp);
+        for (k, m) in keys.iter().zip(tmp.meshes) {
+            if let Some(l) = meshes.get_mut(k) {
+                l.mesh = m;
+            }
+        }
+        let material_list = std::mem::take(&mut materials.materials);
+        stats.warnings.append(&mut materials.warnings);
+        let textures = materials.textures(&doc, &buffers, base_dir, options.skip_textures)?;
+        let skins = skin::read_skins(&doc, &buffers)?;
+        let cameras = camera::read_cameras(&doc)?;
+        let lights = read_lights(&doc)?;
+
+        let mut animated = Animated {
+            moves: vec![false; graph.nodes.len()],
+            graph,
+            order,
+            meshes,
+            skins,
+            cameras,
+            lights,
+            materials: material_list,
+            material_index,
+            textures,
+            animations,
+            static_meshes: Vec::new(),
+            shapes: HashMap::new(),
+            options: options.clone(),
+            stats,
+            draws_nothing: doc.meshes().len() > 0,
+            source_hash: crate::load::content_hash(bytes),
+        };
+        animated.classify()?;
+        Ok(animated)
+    }
+
+    /// The file's animations (every one, with whether this load evaluates it).
+    pub fn animations(&self) -> &[AnimationInfo] {
+        &self.animations.info
+    }
+
+    /// True when a selected animation changes anything (else every time gives the stored pose).
+    pub fn is_animated(&self) -> bool {
+        !self.animations.channels.is_empty()
+    }
+
+    /// How many meshes at the start of every posed [`Scene::meshes`] are the same at every time
+    /// (nothing deforms them): a renderer may keep their BVHs from one time to the next. The
+    /// meshes after them are deformed per pose (skinned or morphed by a selected animation).
+    pub fn static_mesh_count(&self) -> usize {
+        self.static_meshes.len()
+    }
+
+    /// Nodes whose world transform changes with time (moved by a selected channel, or below
+    /// such a node): their instances, lights and cameras move; nothing else does.
+    pub fn moving_nodes(&self) -> Vec<u32> {
+        (0..self.moves.len())
+            .filter(|&n| self.moves[n])
+            .map(|n| n as u32)
+            .collect()
+    }
+
+    /// The scene at `time` seconds (`None`: the stored pose, no animation evaluated).
+    pub fn scene_at(&self, time: Option<f32>) -> Result<Scene, Error> {
+        self.build(time, self.static_meshes.clone(), self.textures.clone())
+    }
+
+    /// [`Animated::scene_at`], consuming the document (no copy of the geometry and textures).
+    pub fn into_scene(mut self, time: Option<f32>) -> Result<Scene, Error> {
+        let meshes = std::mem::take(&mut self.static_meshes);
+        let textures = std::mem::take(&mut self.textures);
+        self.build(time, meshes, textures)
+    }
+
+    /// Decides, per drawing node, whether its mesh is static (built now) or deformed per pose.
+    fn classify(&mut self) -> Result<(), Error> {
+        let n = self.graph.nodes.len();
+        let mut moved = vec![false; n];
+        let mut weights_animated = vec![false; n];
+        let mut mesh_weights_animated: Vec<usize> = Vec::new();
+        for c in &self.animations.channels {
+            match &c.target {
+                Target::Node(i, NodeProperty::Weights) => weights_animated[*i] = true,
+                Target::Node(i, _) => moved[*i] = true,
+                Target::Pointer(Pointer::MeshWeights(m)) => mesh_weights_animated.push(*m),
+                Target::Pointer(_) => {}
+            }
+        }
+        for &i in &self.graph.topological {
+            let parent_moves = self.graph.parent[i].is_some_and(|p| self.moves[p]);
+            self.moves[i] = moved[i] || parent_moves;
+        }
+        let rest = self.pose(None);
+        let mut cache: HashMap<StaticKey, (u32, DVec3, bool)> = HashMap::new();
+        for &ni in &self.order.clone() {
+            let node = &self.graph.nodes[ni];
+            let Some(mi) = node.mesh else { continue };
+            let Some(lm) = self.meshes.get(&mi) else {
+                continue;
+            };
+            let skin = node.skin.filter(|_| lm.influences.is_some());
+            let skin_moves = skin.and_then(|s| self.skins.get(s)).is_some_and(|s| {
+                s.joints
+                    .iter()
+                    .any(|&j| self.moves.get(j).copied().unwrap_or(false))
+            });
+            let morph_moves = !lm.targets.is_empty()
+                && (weights_animated[ni]
+                    || (node.weights.is_none() && mesh_weights_animated.contains(&mi)));
+            if skin_moves || morph_moves {
+                self.shapes.insert(ni, Shape::Deforming);
+                continue;
+            }
+            let weights = rest.weights(ni, mi, node, lm);
+            let key = (
+                mi,
+                skin,
+                if lm.targets.is_empty() {
+                    Vec::new()
+                } else {
+                    weights.iter().map(|w| w.to_bits()).collect()
+                },
+            );
+            let (mesh, offset, world_space) = match cache.get(&key) {
+                Some(&v) => v,
+                None => {
+                    let (mut m, centre) = self.deform(ni, mi, &rest)?;
+                    let (offset, world_space) = match centre {
+                        Some(c) => (c, true),
+                        None => (recentre(&mut m), false),
+                    };
+                    self.static_meshes.push(m);
+                    let v = ((self.static_meshes.len() - 1) as u32, offset, world_space);
+                    cache.insert(key, v);
+                    v
+                }
+            };
+            self.shapes.insert(
+                ni,
+                Shape::Static {
+                    mesh,
+                    offset,
+                    world_space,
+                },
+            );
+        }
+        Ok(())
+    }
+
+    /// Node transforms and weights at `time` (`None`: stored).
+    fn pose(&self, time: Option<f32>) -> Pose {
+        let n = self.graph.nodes.len();
+        let mut trs: Vec<Option<(DVec3, DQuat, DVec3)>> = vec![None; n];
+        let mut pose = Pose {
+            world: vec![DAffine3::IDENTITY; n],
+            node_weights: HashMap::new(),
+            mesh_weights: HashMap::new(),
+            pointers: Vec::new(),
+        };
+        if let Some(t) = time {
+            for c in &self.animations.channels {
+                let rotation = matches!(c.target, Target::Node(_, NodeProperty::Rotation));
+                let v = c.sampler.sample(t, rotation);
+                match &c.target {
+                    Target::Node(i, NodeProperty::Weights) => {
+                        pose.node_weights
+                            .insert(*i, v.iter().map(|&x| x as f32).collect());
+                    }
+                    Target::Node(i, prop) => {
+                        let slot = trs[*i].get_or_insert(self.graph.nodes[*i].trs);
+                        match prop {
+                            NodeProperty::Translation => slot.2 = animation::vec3(&v),
+                            NodeProperty::Rotation => {
+                                if let Some(q) = animation::quat(&v) {
+                                    slot.1 = q;
+                                }
+                            }
+                            NodeProperty::Scale => slot.0 = animation::vec3(&v),
+                            NodeProperty::Weights => {}
+                        }
+                    }
+                    Target::Pointer(Pointer::MeshWeights(m)) => {
+                        pose.mesh_weights
+                            .insert(*m, v.iter().map(|&x| x as f32).collect());
+                    }
+                    Target::Pointer(p) => pose.pointers.push((p.clone(), v)),
+                }
+            }
+        }
+        for &i in &self.graph.topological {
+            let local = match trs[i] {
+                Some((s, r, t)) => DAffine3::from_scale_rotation_translation(s, r, t),
+                None => self.graph.nodes[i].local,
+            };
+            pose.world[i] = match self.graph.parent[i] {
+                Some(p) => pose.world[p] * local,
+                None => local,
+            };
+        }
+        pose
+    }
+
+    /// The mesh of node `ni` at `pose`: morphed and skinned. For a skinned mesh, also the world
+    /// centre its positions are relative to.
+    fn deform(&self, ni: usize, mi: usize, pose: &Pose) -> Result<(Mesh, Option<DVec3>), Error> {
+        let node = &self.graph.nodes[ni];
+        let lm = &self.meshes[&mi];
+        let mut m = lm.mesh.clone();
+        let at = format!("meshes[{mi}]");
+        if !lm.targets.is_empty() {
+            let w = pose.weights(ni, mi, node, lm);
+            morph::apply(&mut m, &lm.targets, &w);
+        }
+        let skin = node.skin.and_then(|s| self.skins.get(s).map(|k| (s, k)));
+        let centre = match (skin, &lm.influences) {
+            (Some((s, skin)), Some(inf)) => {
+                let mut joints = Vec::with_capacity(skin.joints.len());
+                for (k, &j) in skin.joints.iter().enumerate() {
+                    let world = pose.world.get(j).ok_or_else(|| Error::Invalid {
+                        at: format!("skins[{s}].joints[{k}]"),
+                        reason: format!("node {j} does not exist"),
+                    })?;
+                    joints.push(*world * skin.inverse_bind[k]);
+                }
+                Some(skin::apply(&mut m, inf, &joints, pose.world[ni], &at)?)
+            }
+            _ => None,
+        };
+        skin::refresh_flat_normals(&mut m, &lm.flat);
+        Ok((m, centre))
+    }
+
+    /// The scene at `time`, with the static meshes and textures given.
+    fn build(
+        &self,
+        time: Option<f32>,
+        static_meshes: Vec<Mesh>,
+        textures: Vec<Texture>,
+    ) -> Result<Scene, Error> {
+        let pose = self.pose(time);
+        let mut stats = self.stats.clone();
+        stats.time = time;
+        let mut out = Scene {
+            meshes: static_meshes,
+            textures,
+            ..Scene::default()
+        };
+        let mut placed: Vec<(u32, DAffine3, u32)> = Vec::new();
+        let mut light_positions: Vec<(usize, DVec3)> = Vec::new();
+        let mut light_data = self.lights.clone();
+        let mut camera_data = self.cameras.clone();
+        let mut materials = self.materials.clone();
+        self.apply_pointers(&pose, &mut light_data, &mut camera_data, &mut materials)?;
+        for &ni in &self.order {
+            let node = &self.graph.nodes[ni];
+            let world = pose.world[ni];
+            if let Some(mi) = node.mesh {
+                let (mesh, world_from_mesh) = match self.shapes.get(&ni) {
+                    Some(Shape::Static {
+                        mesh,
+                        offset,
+                        world_space,
+                    }) => (
+                        *mesh,
+                        if *world_space {
+                            DAffine3::from_translation(*offset)
+                        } else {
+                            world * DAffine3::from_translation(*offset)
+                        },
+                    ),
+                    Some(Shape::Deforming) => {
+                        let (m, centre) = self.deform(ni, mi, &pose)?;
+                        out.meshes.push(m);
+                        let i = (out.meshes.len() - 1) as u32;
+                        (
+                            i,
+                            match centre {
+                                Some(c) => DAffine3::from_translation(c),
+                                None => world,
+                            },
+                        )
+                    }
+                    None => continue,
+                };
+                match &node.instances {
+                    Some(locals)
+                        if !matches!(
+                            self.shapes.get(&ni),
+                            Some(Shape::Static {
+                                world_space: true,
+                                ..
+                            })
+                        ) =>
+                    {
+                        let offset = world.inverse() * world_from_mesh;
+                        for local in locals {
+                            placed.push((mesh, world * *local * offset, ni as u32));
+                        }
+                    }
+                    _ => placed.push((mesh, world_from_mesh, ni as u32)),
+                }
+            }
+            if let Some(li) = node.light {
+                let Some(light) = light_data.get(li) else {
+                    continue;
+                };
+                let intensity = light.color * light.intensity / LUMENS_PER_WATT;
+                if !intensity.is_finite() {
+                    return Err(Error::NonFinite {
+                        at: format!("KHR_lights_punctual.lights[{li}]"),
+                        value: format!("{intensity:?}"),
+                    });
+                }
+                light_positions.push((ni, world.translation));
+                out.lights.push(Light {
+                    name: light.name.clone(),
+                    kind: light.kind,
+                    position: Vec3::ZERO,
+                    direction: world
+                        .transform_vector3(DVec3::NEG_Z)
+                        .as_vec3()
+                        .try_normalize()
+                        .unwrap_or(Vec3::NEG_Z),
+                    intensity,
+                });
+            }
+        }
+
+        let origin = world_origin(&out.meshes, &placed, &mut stats);
+        out.world_origin = origin;
+        let relative = |m: DAffine3| DAffine3 {
+            matrix3: m.matrix3,
+            translation: m.translation - origin,
+        };
+        out.instances = placed
+            .iter()
+            .map(|&(mesh, world, node)| {
+                Ok(Instance {
+                    mesh,
+                    world_from_object: finite_world(node as usize, to_f32(relative(world)))?,
+                    node,
+                })
+            })
+            .collect::<Result<_, Error>>()?;
+        for (light, &(node, p)) in out.lights.iter_mut().zip(&light_positions) {
+            let position = (p - origin).as_vec3();
+            finite_world(node, Affine3A::from_translation(position))?;
+            light.position = position;
+        }
+        let world_from_node: Vec<Affine3A> =
+            pose.world.iter().map(|&m| to_f32(relative(m))).collect();
+        let origins: Vec<Vec3> = world_from_node
+            .iter()
+            .map(|m| Vec3::from(m.translation))
+            .collect();
+        let info = NodeInfo {
+            names: &self.graph.names,
+            origins: &origins,
+        };
+        for &ni in &self.order {
+            let node = &self.graph.nodes[ni];
+            let Some(ci) = node.camera else { continue };
+            let Some(data) = camera_data.get(ci) else {
+                continue;
+            };
+            let world = finite_world(ni, world_from_node[ni])?;
+            let at = camera::CameraNode {
+                camera: ci,
+                node: ni,
+                name: self.graph.names[ni].as_deref(),
+                extras: node.extras.as_ref(),
+            };
+            out.cameras
+                .push(camera::camera(data, &at, world, &info, &self.options)?);
+        }
+        out.materials = materials;
+        if out.cameras.is_empty() {
+            out.cameras
+                .push(camera::automatic_camera(&out, &info, &self.options)?);
+        }
+        if self.draws_nothing && out.instances.is_empty() {
+            stats
+                .warnings
+                .push("the selected scene draws no mesh".into());
+        }
+        out.stats = stats;
+        out.node_names = self.graph.names.clone();
+        out.source_hash = self.source_hash;
+        Ok(out)
+    }
+
+    /// Sets what `KHR_animation_pointer` channels animate at this pose.
+    fn apply_pointers(
+        &self,
+        pose: &Pose,
+        lights: &mut [LightData],
+        cameras: &mut [CameraData],
+        materials: &mut [Material],
+    ) -> Result<(), Error> {
+        for (p, v) in &pose.pointers {
+            let f = |k: usize| v.get(k).copied().unwrap_or(0.0) as f32;
+            match p {
+                Pointer::Camera(i, prop) => {
+                    let Some(c) = cameras.get_mut(*i) else {
+                        continue;
+                    };
+                    match (prop, &mut c.projection) {
+                        (CameraProperty::Yfov, Projection::Perspective { yfov, .. }) => {
+                            camera::check_yfov(
+                                f(0),
+                                &format!("cameras[{i}].perspective.yfov (animated)"),
+                            )?;
+                            *yfov = f(0);
+                        }
+                        (CameraProperty::Xmag, Projection::Orthographic { xmag, .. }) => {
+                            *xmag = f(0)
+                        }
+                        (CameraProperty::Ymag, Projection::Orthographic { ymag, .. }) => {
+                            *ymag = f(0)
+                        }
+                        _ => {}
+                    }
+                }
+                Pointer::CameraExtra(i, key) => {
+                    if let Some(c) = cameras.get_mut(*i) {
+                        pointer::apply_camera_extra(&mut c.extras, key, v[0]);
+                    }
+                }
+                Pointer::Light(i, prop) => {
+                    let Some(l) = lights.get_mut(*i) else {
+                        continue;
+                    };
+                    match prop {
+                        LightProperty::Color => l.color = Vec3::new(f(0), f(1), f(2)),
+                        LightProperty::Intensity => l.intensity = f(0),
+                        LightProperty::InnerCone | LightProperty::OuterCone => {
+                            if let LightKind::Spot {
+                                inner_cone,
+                                outer_cone,
+                            } = &mut l.kind
+                            {
+                                if *prop == LightProperty::InnerCone {
+                                    *inner_cone = f(0);
+                                } else {
+                                    *outer_cone = f(0);
+                                }
+                            }
+                        }
+                        LightProperty::Range => {}
+                    }
+                }
+                Pointer::Material(i, prop) => {
+                    if let Some(&ours) = self.material_index.get(i) {
+                        if let Some(m) = materials.get_mut(ours as usize) {
+                            pointer::apply_material(m, *prop, v);
+                        }
+                    }
+                }
+                Pointer::Node(..) | Pointer::MeshWeights(_) => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Pose {
+    /// Morph weights of node `ni` drawing mesh `mi`: animated node weights, else `node.weights`,
+    /// else animated mesh weights, else `mesh.weights`.
+    fn weights(&self, ni: usize, mi: usize, node: &NodeData, lm: &LoadedMesh) -> Vec<f32> {
+        if let Some(w) = self.node_weights.get(&ni) {
+            return w.clone();
+        }
+        if let Some(w) = &node.weights {
+            return w.clone();
+        }
+        if let Some(w) = self.mesh_weights.get(&mi) {
+            return w.clone();
+        }
+        lm.weights.clone()
+    }
+}
+
+/// The drawn nodes of the selected scene, depth first.
+fn drawn_order(
+    doc: &gltf::Document,
+    options: &LoadOptions,
+    graph: &NodeGraph,
+    stats: &mut SceneStats,
+) -> Result<Vec<usize>, Error> {
+    let scene = match options.scene {
+        Some(i) => Some(doc.scenes().nth(i).ok_or(Error::NoSuchScene {
+            index: i,
+            count: doc.scenes().len(),
+        })?),
+        None => doc.default_scene().or_else(|| doc.scenes().next()),
+    };
+    let mut order = Vec::new();
+    match &scene {
+        Some(s) => {
+            let mut seen = vec![false; graph.nodes.len()];
+            let mut stack: Vec<usize> = s.nodes().map(|n| n.index()).collect();
+            stack.reverse();
+            while let Some(i) = stack.pop() {
+                if std::mem::replace(&mut seen[i], true) {
+                    continue;
+                }
+                order.push(i);
+                let mut kids = graph.children[i].clone();
+                kids.reverse();
+                stack.extend(kids);
+            }
+        }
+        None => stats
+            .warnings
+            .push("the file has no scene: nothing is drawn".into()),
+    }
+    Ok(order)
+}
+
+/// Every `KHR_lights_punctual` light.
+fn read_lights(doc: &gltf::Document) -> Result<Vec<LightData>, Error> {
+    let Some(lights) = doc.lights() else {
+        return Ok(Vec::new());
+    };
+    Ok(lights
+        .map(|light| LightData {
+            name: light.name().map(str::to_owned),
+            color: Vec3::from(light.color()),
+            intensity: light.intensity(),
+            kind: match light.kind() {
+                gltf::khr_lights_punctual::Kind::Point => LightKind::Point,
+                gltf::khr_lights_punctual::Kind::Directional => LightKind::Directional,
+                gltf::khr_lights_punctual::Kind::Spot {
+                    inner_cone_angle,
+                    outer_cone_angle,
+                } => LightKind::Spot {
+                    inner_cone: inner_cone_angle,
+                    outer_cone: outer_cone_angle,
+                },
+            },
+        })
+        .collect())
+}
