@@ -452,6 +452,19 @@ fn merge_refuses_parts_that_do_not_belong_together() {
     );
     assert!(matches!(err, MergeError::OtherScene { .. }), "{err}");
 
+    // The same file in another pose (another --time).
+    let mut later = s.clone();
+    later.stats.time = Some(1.5);
+    let posed = dir.path("frame-36.exr");
+    render_part(&later, &small, &posed, Window::band(1, 3, 40, 30));
+    let err = refused(
+        &dir,
+        &[tiles[0].clone(), posed, tiles[2].clone()],
+        "frame-36.exr",
+    );
+    assert!(matches!(err, MergeError::OtherPose { .. }), "{err}");
+    assert!(err.to_string().contains("t=1.5"), "{err}");
+
     // Other options (another seed).
     let seeded = dir.path("seed-7.exr");
     let o = RenderOptions {

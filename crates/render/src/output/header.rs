@@ -46,6 +46,27 @@ pub mod split {
     pub const TILE: &str = "aperture:tile";
     /// How many part files a merged file was made of (i32).
     pub const MERGED_PARTS: &str = "aperture:mergedParts";
+    /// The pose the scene was rendered in ([`super::pose_text`]): parts share it, so tiles of
+    /// two frames of one file are not merged into one image.
+    pub const POSE: &str = "aperture:pose";
+}
+
+/// The pose of `scene` as text: `stored` for the pose in the file, else the time and the
+/// animations evaluated (`t=1.25 animations=0,2`).
+pub fn pose_text(scene: &Scene) -> String {
+    match scene.stats.time {
+        None => "stored".to_string(),
+        Some(t) => {
+            let played: Vec<String> = scene
+                .stats
+                .animations
+                .iter()
+                .filter(|a| a.selected)
+                .map(|a| a.index.to_string())
+                .collect();
+            format!("t={t} animations={}", played.join(","))
+        }
+    }
 }
 
 /// The `X0,Y0,X1,Y1` text of a window (what `--region` takes).
@@ -54,17 +75,22 @@ pub fn region_text(w: &Window) -> String {
     format!("{},{},{x1},{y1}", w.x0, w.y0)
 }
 
-/// The header attributes of a part of a split render: its sample offset always, its region
-/// when `window` is not the whole image, and `tile` (K, N) when it is band K of N.
+/// The header attributes of a part of a split render: its sample offset and the scene's
+/// pose always, its region when `window` is not the whole image, and `tile` (K, N) when it is
+/// band K of N.
 pub fn split_metadata(
+    scene: &Scene,
     opts: &RenderOptions,
     window: Window,
     tile: Option<(u32, u32)>,
 ) -> Vec<(String, MetaValue)> {
-    let mut meta = vec![(
-        split::SAMPLE_OFFSET.to_string(),
-        MetaValue::Int(opts.sample_offset.min(i32::MAX as u32) as i32),
-    )];
+    let mut meta = vec![
+        (
+            split::SAMPLE_OFFSET.to_string(),
+            MetaValue::Int(opts.sample_offset.min(i32::MAX as u32) as i32),
+        ),
+        (split::POSE.to_string(), MetaValue::Text(pose_text(scene))),
+    ];
     if window != Window::whole(opts.width, opts.height) {
         meta.push((
             split::REGION.to_string(),

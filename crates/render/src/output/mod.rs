@@ -128,7 +128,7 @@ pub fn render_exr(
         placement: placement(window, whole),
         metadata: [
             header::metadata(scene, &camera, &opts, passes),
-            header::split_metadata(&opts, window, exr.tile),
+            header::split_metadata(scene, &opts, window, exr.tile),
         ]
         .concat(),
         channels,
@@ -325,7 +325,7 @@ pub fn film_to_image(
     image.metadata = header::metadata(scene, &camera, opts, passes);
     image
         .metadata
-        .extend(header::split_metadata(opts, film.window(), None));
+        .extend(header::split_metadata(scene, opts, film.window(), None));
     let summary = RenderSummary {
         window: film.window(),
         samples: film.total_samples(),

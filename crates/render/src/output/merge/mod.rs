@@ -13,8 +13,8 @@
 //!   each part's (ID, coverage) pairs into sample counts per ID and ranked again.
 //! - Tiles of sample batches (both at once) are averaged per tile, then pasted.
 //!
-//! Before reading any pixels every part's header is checked (see [`plan`]): the same scene
-//! and options (hashes in the header), windows equal or disjoint, sample ranges disjoint
+//! Before reading any pixels every part's header is checked (see [`plan`]): the same scene,
+//! pose and options (hashes and the pose in the header), windows equal or disjoint, sample ranges disjoint
 //! within a window and the same for every window, and every pixel covered (unless
 //! [`MergeOptions::allow_partial`]). A refusal names the part; nothing is written. The merge
 //! holds the output image, the sums of the window being averaged and one part at a time, so
@@ -106,6 +106,23 @@ pub enum MergeError {
         /// The part it was compared with.
         reference: PathBuf,
         /// Its scene hash.
+        found: String,
+        /// The reference's.
+        expected: String,
+    },
+    /// A part shows the scene in another pose (another --time or --frame, or other
+    /// animations) than the first part.
+    #[error(
+        "{}: the scene in another pose than in {} ({found}, expected {expected}); \
+         parts of one image need the same --time/--frame and --animation",
+        path.display(), reference.display()
+    )]
+    OtherPose {
+        /// The part.
+        path: PathBuf,
+        /// The part it was compared with.
+        reference: PathBuf,
+        /// Its pose.
         found: String,
         /// The reference's.
         expected: String,

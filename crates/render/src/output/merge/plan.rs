@@ -75,6 +75,8 @@ pub(super) struct Part {
     pub full: (u32, u32),
     pub scene_hash: String,
     pub options_hash: String,
+    /// The pose the scene was rendered in (`stored` when the header does not say).
+    pub pose: String,
     /// The sample indices the part holds.
     pub ranges: SampleRanges,
     /// Samples per pixel when the part has no sample count pass.
@@ -122,6 +124,10 @@ impl Part {
         };
         let scene_hash = text(split::SCENE_HASH)?;
         let options_hash = text(split::OPTIONS_HASH)?;
+        let pose = match text(split::POSE) {
+            Err(MergeError::NotAPart { .. }) => "stored".to_string(),
+            other => other?,
+        };
         let spp = int(split::SPP)?.ok_or_else(|| missing(split::SPP))?;
         if spp == 0 {
             return Err(bad(split::SPP, "0".into(), "must be ≥ 1"));
@@ -167,6 +173,7 @@ impl Part {
             full,
             scene_hash,
             options_hash,
+            pose,
             ranges,
             spp,
             channels,
@@ -244,6 +251,14 @@ fn check_identity(parts: &[Part]) -> Result<(), MergeError> {
                 reference: r.path.clone(),
                 found: p.scene_hash.clone(),
                 expected: r.scene_hash.clone(),
+            });
+        }
+        if p.pose != r.pose {
+            return Err(MergeError::OtherPose {
+                path: p.path.clone(),
+                reference: r.path.clone(),
+                found: p.pose.clone(),
+                expected: r.pose.clone(),
             });
         }
         if p.options_hash != r.options_hash || p.full != r.full {
