@@ -1,6 +1,7 @@
 //! `aperture`: render glTF scenes with physically based depth of field.
 
 mod bench;
+mod frames;
 mod info;
 mod merge_cmd;
 mod progress;
@@ -48,17 +49,23 @@ fn main() -> std::process::ExitCode {
 }
 
 #[cfg(test)]
-/// `BoxTextured.glb` from the samples folder (`APERTURE_SAMPLES`, else `../shared/gltf-samples`
-/// beside the repository). Missing: a skip with a message, but a failure with `CI=true`, where
-/// a silent skip would hide that the test never ran.
+/// `BoxTextured.glb` from the samples folder (see [`sample`]).
 fn box_textured_sample() -> Option<std::path::PathBuf> {
+    sample("correctness/BoxTextured/BoxTextured.glb")
+}
+
+#[cfg(test)]
+/// A file of the samples folder (`APERTURE_SAMPLES`, else `../shared/gltf-samples` beside the
+/// repository). Missing: a skip with a message, but a failure with `CI=true`, where a silent
+/// skip would hide that the test never ran.
+fn sample(relative: &str) -> Option<std::path::PathBuf> {
     let samples = std::env::var_os("APERTURE_SAMPLES")
         .map(std::path::PathBuf::from)
         .unwrap_or_else(|| {
             std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
                 .join("../../../shared/gltf-samples")
         });
-    let path = samples.join("correctness/BoxTextured/BoxTextured.glb");
+    let path = samples.join(relative);
     if path.is_file() {
         return Some(path);
     }

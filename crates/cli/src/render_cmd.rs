@@ -320,9 +320,22 @@ pub struct RenderArgs {
     /// A part of a render split across machines: --region, --tile, --sample-offset.
     #[command(flatten)]
     pub split: crate::split_args::SplitArgs,
+    /// Render a sequence of frames (Blender's frame range: `1..250`, `1..250:2`); `#` in the
+    /// output name become the zero-padded frame number (`shot_####.exr`). The file is loaded
+    /// once, and only what moves is rebuilt per frame.
+    #[arg(long, value_name = "A..B[:STEP]", value_parser = aperture_render::sequence::FrameRange::parse, conflicts_with_all = ["time", "frame"])]
+    pub frames: Option<aperture_render::sequence::FrameRange>,
+    /// With --frames: leave frames whose file already exists (a restarted job goes on where it
+    /// stopped; files are written whole or not at all).
+    #[arg(long, requires = "frames")]
+    pub skip_existing: bool,
     /// No progress bar and no summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Progress display: a bar on a terminal, or JSON lines on stdout for programs (farm
+    /// wrappers, the Blender engine).
+    #[arg(long, value_enum, default_value_t = crate::progress::ProgressArg::Auto)]
+    pub progress: crate::progress::ProgressArg,
 }
 
 /// A usage error in clap's format, exit code 2 (as clap's own parse errors).
@@ -362,7 +375,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         animation: args.when.selection(),
     };
     let t_load = Instant::now();
-    let scene = match aperture_scene::load(&args.scene, &load) {
+    let posed = aperture_scene::Animated::load(&args.scene, &load).and_then(|animated| {
+        // A sequence checks its cameras and sizes on its first frame.
+        let first = args
+            .frames
+            .map(|f| (f.start as f64 / f64::from(args.when.fps)) as f32);
+        let scene = animated.scene_at(first.or(load.time))?;
+        Ok((animated, scene))
+    });
+    let (animated, scene) = match posed {
         Ok(s) => s,
         // A flag's value the scene refuses (`--focus-object` naming no node, `--scene 9`) is a
         // usage error like any other bad flag value: exit code 2.
@@ -501,6 +522,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         b.build().context("starting worker threads")?
     };
+    if let Some(frames) = args.frames {
+        return crate::frames::run(&args, &animated, frames, &opts, quality, &pool);
+    }
+    let hints = aperture_render::sequence::SceneHints::new(&animated, &scene);
+    drop(animated);
     let png = aperture_imageio::PngOptions {
         exposure: args.exposure,
         view: match args.view {
@@ -516,9 +542,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         ..Default::default()
     };
     let (summary, load_secs) = pool.install(|| -> anyhow::Result<_> {
-        let accel = aperture_render::build_accel(&scene, quality);
+        // The same structure a sequence builds for this frame, so their images agree bit for bit.
+        let accel = aperture_render::sequence::build_frame_accel(&scene, quality, &hints, None);
         let load_secs = t_load.elapsed().as_secs_f64();
-        let progress = Progress::new(args.quiet);
+        let progress = Progress::with_mode(args.quiet, args.progress);
+        progress.set_samples(
+            u64::from(width) * u64::from(height) * u64::from(args.spp),
+            None,
+        );
         let report = |done, total| progress.update(done, total);
         let summary = if ext.as_deref() == Some("png") {
             aperture_render::output::render_png(
@@ -534,10 +565,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             aperture_render::output::render_exr(&scene, &accel, &opts, &args.output, &exr, &report)
         };
         progress.finish();
-        Ok((
-            summary.with_context(|| format!("writing {}", args.output.display()))?,
-            load_secs,
-        ))
+        let summary = summary.with_context(|| format!("writing {}", args.output.display()))?;
+        progress.frame_written(args.when.frame, &args.output, summary.render_secs);
+        Ok((summary, load_secs))
     })?;
 
     if summary.half_clamped > 0 {
