@@ -56,12 +56,25 @@ fn submit(
     output: &Path,
     args: &[&str],
 ) -> Submitted {
+    submit_scene(dir, aperture, mode, n, &common::demo_scene(), output, args)
+}
+
+/// [`submit`] of another scene.
+fn submit_scene(
+    dir: &Scratch,
+    aperture: &Path,
+    mode: &str,
+    n: u32,
+    scene: &Path,
+    output: &Path,
+    args: &[&str],
+) -> Submitted {
     let out = Command::new(common::repo().join("tools/farm/slurm/submit.sh"))
         .current_dir(&dir.0)
         .env("APERTURE", aperture)
         .arg(mode)
         .arg(n.to_string())
-        .arg(common::demo_scene())
+        .arg(scene)
         .arg(output)
         .args(args)
         .output()
@@ -81,7 +94,11 @@ fn submit(
     };
     Submitted {
         array: id("array "),
-        merge: id("merge "),
+        merge: if mode == "frames" {
+            String::new()
+        } else {
+            id("merge ")
+        },
     }
 }
 
@@ -260,4 +277,59 @@ fn a_failed_tile_cancels_the_merge() {
         "the merge was cancelled only after {latency:?}"
     );
     assert!(!output.exists());
+}
+
+/// A shot split by frames: 4 frames of an animated sample in 3 chunks (one of two frames),
+/// each chunk one `--frames` sequence; every frame equals this machine's sequence render.
+#[test]
+fn frame_chunks_through_sbatch_equal_the_local_sequence() {
+    if !cluster() {
+        return;
+    }
+    let Some(scene) = common::sample("animation/BoxAnimated/BoxAnimated.glb") else {
+        return;
+    };
+    let dir = Scratch::new("slurm-frames");
+    let size = ["--width", "48", "--height", "36", "--spp", "4"];
+    let mut a: Vec<&str> = size.to_vec();
+    a.extend(["--frames", "1..7:2"]);
+    let jobs = submit_scene(
+        &dir,
+        &common::aperture(),
+        "frames",
+        3,
+        &scene,
+        &dir.path("shot_####.exr"),
+        &a,
+    );
+    let t0 = Instant::now();
+    loop {
+        let tasks = states(&jobs.array);
+        if tasks.len() == 3 && tasks.iter().all(|(_, s)| finished(s)) {
+            for (task, state) in &tasks {
+                assert_eq!(state, "COMPLETED", "task {task}\n{}", logs(&dir));
+            }
+            break;
+        }
+        assert!(t0.elapsed() < JOB_DEADLINE, "frames unfinished: {tasks:?}");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    common::local_render_of(&scene, &dir.path("local_####.exr"), &a);
+    for frame in [1, 3, 5, 7] {
+        let farm = aperture_imageio::read_exr(&dir.path(&format!("shot_{frame:04}.exr"))).unwrap();
+        let local =
+            aperture_imageio::read_exr(&dir.path(&format!("local_{frame:04}.exr"))).unwrap();
+        common::assert_same_pixels(&farm, &local);
+    }
+    let shots = std::fs::read_dir(&dir.0)
+        .unwrap()
+        .filter(|e| {
+            e.as_ref()
+                .unwrap()
+                .file_name()
+                .to_string_lossy()
+                .starts_with("shot_")
+        })
+        .count();
+    assert_eq!(shots, 4, "exactly the range's frames");
 }

@@ -164,3 +164,32 @@ pub fn largest_relative_difference(merged: &Image, expected: &Image) -> (f64, St
     }
     worst
 }
+
+/// A glTF sample from the samples folder (`APERTURE_SAMPLES`, else `../shared/gltf-samples`
+/// beside the repository), or `None` after [`missing`].
+pub fn sample(relative: &str) -> Option<PathBuf> {
+    let samples = std::env::var_os("APERTURE_SAMPLES")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| repo().join("../shared/gltf-samples"));
+    let path = samples.join(relative);
+    if path.is_file() {
+        Some(path)
+    } else {
+        missing(&format!("the glTF sample {} is missing", path.display()));
+        None
+    }
+}
+
+/// Renders `scene` on this machine with `args` (an output pattern with `#` for `--frames`).
+pub fn local_render_of(scene: &Path, out: &Path, args: &[&str]) {
+    let status = Command::new(aperture())
+        .arg("render")
+        .arg(scene)
+        .arg("-o")
+        .arg(out)
+        .arg("--quiet")
+        .args(args)
+        .status()
+        .unwrap();
+    assert!(status.success(), "local render {args:?}");
+}
