@@ -249,3 +249,87 @@ fn kubernetes_jobs_render_and_merge_what_they_say() {
         }
     }
 }
+
+/// Every frame `1, 3, 5, 7` under `dir/PREFIX_####.exr` equals this machine's sequence.
+fn assert_frames_equal_local(scene: &Path, dir: &Path, prefix: &str, args: &[&str]) {
+    let local = dir.join("local");
+    std::fs::create_dir_all(&local).unwrap();
+    let mut a = args.to_vec();
+    a.extend(["--frames", "1..7:2"]);
+    common::local_render_of(scene, &local.join("f_####.exr"), &a);
+    let names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(prefix))
+        .collect();
+    assert_eq!(names.len(), 4, "{names:?}");
+    for f in [1, 3, 5, 7] {
+        let farm = aperture_imageio::read_exr(&dir.join(format!("{prefix}{f:04}.exr"))).unwrap();
+        let here = aperture_imageio::read_exr(&local.join(format!("f_{f:04}.exr"))).unwrap();
+        common::assert_same_pixels(&farm, &here);
+    }
+}
+
+const FRAME_SIZE: [&str; 6] = ["--width", "48", "--height", "36", "--spp", "4"];
+
+#[test]
+fn openjd_frames_template_renders_every_frame() {
+    let Some(bin) = tools() else { return };
+    let Some(scene) = common::sample("animation/BoxAnimated/BoxAnimated.glb") else {
+        return;
+    };
+    let template = farm("openjd/aperture-frames.yaml");
+    let said = run(Command::new(bin.join("openjd")).arg("check").arg(&template));
+    assert!(said.contains("passes validation"), "{said}");
+    let dir = Scratch::new("openjd-frames");
+    let shots = dir.path("shots");
+    let log = run(Command::new(bin.join("openjd"))
+        .arg("run")
+        .arg(&template)
+        .args(["--step", "Render"])
+        .args(["-p", &format!("SceneFile={}", scene.display())])
+        .args([
+            "-p",
+            &format!("OutputPattern={}/shot_####.exr", shots.display()),
+        ])
+        .args(["-p", "Frames=1-7:2"])
+        .args([
+            "-p",
+            &format!("RenderArgs={} --quiet", FRAME_SIZE.join(" ")),
+        ])
+        .args(["-p", &format!("Aperture={}", common::aperture().display())]));
+    assert!(log.contains("Session ended successfully"), "{log}");
+    assert_frames_equal_local(&scene, &shots, "shot_", &FRAME_SIZE);
+}
+
+#[test]
+fn kubernetes_frames_job_renders_every_frame_once() {
+    let Some(bin) = tools() else { return };
+    let Some(scene) = common::sample("animation/BoxAnimated/BoxAnimated.glb") else {
+        return;
+    };
+    let job = manifest(&bin, "render-frames.yaml");
+    assert_eq!(job["spec"]["completionMode"], "Indexed");
+    let completions = job["spec"]["completions"].as_u64().unwrap();
+    let (script, env) = container(&job);
+    let chunks = env.iter().find(|(n, _)| n == "CHUNKS").unwrap().1.clone();
+    assert_eq!(chunks, completions.to_string(), "CHUNKS = completions");
+    let dir = Scratch::new("kubernetes-frames");
+    let data = dir.path("data");
+    std::fs::create_dir_all(&data).unwrap();
+    std::fs::copy(&scene, data.join("scene.glb")).unwrap();
+    // More pods than frames: most chunks are empty and must say so and succeed.
+    for k in 0..completions {
+        run_script(
+            &script,
+            &env,
+            &[
+                ("FRAMES", "1..7:2".to_string()),
+                ("RENDER_ARGS", format!("{} --quiet", FRAME_SIZE.join(" "))),
+                ("JOB_COMPLETION_INDEX", k.to_string()),
+            ],
+            &data,
+        );
+    }
+    assert_frames_equal_local(&scene, &data.join("frames"), "shot_", &FRAME_SIZE);
+}
