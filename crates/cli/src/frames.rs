@@ -35,8 +35,12 @@ pub fn run(
             transparent: args.transparent,
         }
     } else {
+        // --region/--tile apply to every frame (checked against the image by the caller).
+        let part = args.split.window(opts.width, opts.height).ok().flatten();
         FrameFormat::Exr(aperture_render::output::ExrOptions {
             half: args.half,
+            region: part.map(|p| p.window),
+            tile: part.and_then(|p| p.tile),
             ..Default::default()
         })
     };

@@ -3,8 +3,10 @@
 mod bench;
 mod frames;
 mod info;
+mod merge_cmd;
 mod progress;
 mod render_cmd;
+mod split_args;
 mod time_args;
 
 use clap::{Parser, Subcommand};
@@ -23,6 +25,8 @@ pub(crate) enum Command {
     Info(info::InfoArgs),
     /// Render a scene to EXR or PNG.
     Render(render_cmd::RenderArgs),
+    /// Put the parts of a render split across machines (tiles, sample batches) together.
+    Merge(merge_cmd::MergeArgs),
     /// Error against time per sampler configuration: CSV, log-log plot and table.
     Bench(bench::BenchArgs),
 }
@@ -32,6 +36,7 @@ fn main() -> std::process::ExitCode {
     let result = match cli.command {
         Command::Info(args) => info::run(args),
         Command::Render(args) => render_cmd::run(args),
+        Command::Merge(args) => merge_cmd::run(args),
         Command::Bench(args) => bench::run(args),
     };
     match result {

@@ -317,6 +317,9 @@ pub struct RenderArgs {
     /// always have it. Same as adding `Debug Sample Count` to --passes.
     #[arg(long)]
     pub samples_pass: bool,
+    /// A part of a render split across machines: --region, --tile, --sample-offset.
+    #[command(flatten)]
+    pub split: crate::split_args::SplitArgs,
     /// Render a sequence of frames (Blender's frame range: `1..250`, `1..250:2`); `#` in the
     /// output name become the zero-padded frame number (`shot_####.exr`). The file is loaded
     /// once, and only what moves is rebuilt per frame.
@@ -441,6 +444,27 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             args.spp
         ));
     }
+    let part = args
+        .split
+        .window(width, height)
+        .unwrap_or_else(|e| usage_error(e));
+    if part.is_some() && ext.as_deref() != Some("exr") {
+        usage_error(
+            "--region and --tile need .exr output: its data window records where the pixels belong",
+        );
+    }
+    if args.split.sample_offset > 0 && args.noise_threshold.is_some() {
+        usage_error(
+            "--sample-offset cannot be used with --noise-threshold: adaptive sampling decides from \
+             every sample of a pixel from the first (split an adaptive render with --tile instead)",
+        );
+    }
+    if u64::from(args.split.sample_offset) + u64::from(args.spp) > 65536 {
+        usage_error(format!(
+            "invalid value '{}' for '--sample-offset': with --spp {} it passes the sampler's 65536 samples",
+            args.split.sample_offset, args.spp
+        ));
+    }
     let adaptive = args
         .noise_threshold
         .map(|threshold| aperture_render::AdaptiveOptions {
@@ -454,6 +478,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         width,
         height,
         spp: args.spp,
+        sample_offset: args.split.sample_offset,
         seed: args.seed,
         camera: camera_index,
         max_bounces: args.tracing.max_bounces,
@@ -512,6 +537,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     };
     let exr = aperture_render::output::ExrOptions {
         half: args.half,
+        region: part.map(|p| p.window),
+        tile: part.and_then(|p| p.tile),
         ..Default::default()
     };
     let (summary, load_secs) = pool.install(|| -> anyhow::Result<_> {
@@ -553,6 +580,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let dropped = summary.dropped;
     if !args.quiet || dropped > 0 {
         let spp = match opts.adaptive {
+            None if opts.sample_offset > 0 => format!(
+                "{} spp (samples {}..{})",
+                opts.spp,
+                opts.sample_offset,
+                opts.sample_offset + opts.spp
+            ),
             None => format!("{} spp", opts.spp),
             Some(a) => format!(
                 "adaptive {}..{} spp (mean {:.1}, threshold {})",
@@ -563,8 +596,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             ),
         };
         let render_secs = summary.render_secs;
+        let size = match part {
+            Some(p) => format!(
+                "region {} of {width}x{height}",
+                aperture_render::output::header::region_text(&p.window)
+            ),
+            None => format!("{width}x{height}"),
+        };
         eprintln!(
-            "{}: {width}x{height}, {spp}, {render_secs:.2} s ({load_secs:.2} s loading, BVH {quality}), {:.2} Msamples/s, {dropped} dropped samples (NaN/Inf)",
+            "{}: {size}, {spp}, {render_secs:.2} s ({load_secs:.2} s loading, BVH {quality}), {:.2} Msamples/s, {dropped} dropped samples (NaN/Inf)",
             args.output.display(),
             summary.samples as f64 / render_secs.max(1e-9) / 1e6,
         );
@@ -633,6 +673,13 @@ mod tests {
             &["--noise-threshold", "0.01", "--min-spp", "0"],
             &["--clamp-indirect", "-1"],
             &["--clamp-direct", "nan"],
+            &["--tile", "4/4"],
+            &["--tile", "1"],
+            &["--region", "1,2,3"],
+            &["--region", "1,1,1,2"],
+            &["--region", "0,0,4,4", "--tile", "0/2"],
+            &["--sample-offset", "65536"],
+            &["--sample-offset", "-64"],
         ] {
             let e = parse(bad).expect_err("must be refused");
             assert_eq!(e.exit_code(), 2, "{bad:?}");
