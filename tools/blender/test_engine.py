@@ -181,6 +181,25 @@ def test_resolution():
           f"50%: {half.shape[1]}x{half.shape[0]} from {W}x{H}")
 
 
+def test_border(base):
+    sc = bpy.context.scene
+    r = sc.render
+    r.use_border, r.use_crop_to_border = True, False
+    r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = 0.25, 0.75, 0.5, 1.0
+    part = render(name="border")
+    cmd = engine_module().LAST_RUN["command"]
+    r.use_border = False
+    region = cmd[cmd.index("--region") + 1] if "--region" in cmd else None
+    inside = (slice(0, H // 2), slice(W // 4, 3 * W // 4))  # the top half, middle half
+    same = np.array_equal(part[inside][..., :3].view(np.uint32), base[inside][..., :3].view(np.uint32))
+    outside = part.copy()
+    outside[inside] = 0.0
+    check("engine.border", region == f"{W // 4},0,{3 * W // 4},{H // 2}" and same
+          and not outside[..., :3].any(),
+          f"a border render passes --region {region}: inside bit-identical to the whole "
+          f"render, nothing outside")
+
+
 def test_camera(base):
     sc = bpy.context.scene
     sc.camera = bpy.data.objects["CamB"]
@@ -314,6 +333,7 @@ def main():
     base, cli = test_combined_bits()
     test_passes(cli)
     test_resolution()
+    test_border(base)
     test_camera(base)
     test_frame()
     test_world()

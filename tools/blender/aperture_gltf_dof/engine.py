@@ -66,6 +66,20 @@ def find_binary(settings):
     return path
 
 
+def border(scene):
+    """The border region as (x0, y0, x1, y1) in image pixels, rows from the top (aperture's
+    `--region`), or None for the whole image."""
+    r = scene.render
+    if not r.use_border:
+        return None
+    w, h = resolution(scene)
+    x0, x1 = int(r.border_min_x * w), int(r.border_max_x * w)
+    bottom, top = int(r.border_min_y * h), int(r.border_max_y * h)
+    if x1 <= x0 or top <= bottom:
+        return None
+    return x0, h - top, x1, h - bottom
+
+
 def export_scene(path):
     """The evaluated scene at the current frame, as a GLB: cameras, lights, custom properties
     and this add-on's depth of field on, modifiers applied, render-visible objects only."""
@@ -101,6 +115,9 @@ def command(binary, glb, out, scene, view_layer):
         cmd += ["--transmission", s.transmission.lower()]
     if scene.camera is not None:
         cmd += ["--camera", scene.camera.data.name]
+    region = border(scene)
+    if region is not None:
+        cmd += ["--region", ",".join(map(str, region))]
     env, problems = world.env_arguments(scene.world)
     return cmd + env, problems
 
@@ -208,7 +225,10 @@ class ApertureRenderEngine(bpy.types.RenderEngine):
         (rows flipped: Blender's are bottom to top)."""
         channels, _ = exr.read(path)
         w, h = resolution(scene)
-        result = self.begin_result(0, 0, w, h, layer=view_layer.name)
+        x0, y0, x1, y1 = border(scene) or (0, 0, w, h)
+        # With a border, Blender's render result is the border itself (placed in the image by
+        # Blender, cropped or not as the scene says): the region's pixels fill it.
+        result = self.begin_result(0, 0, x1 - x0, y1 - y0, layer=view_layer.name)
         layer = result.layers[0]
 
         def put(name, names):
