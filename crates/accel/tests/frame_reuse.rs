@@ -62,15 +62,19 @@ fn frame(t: f32) -> (Vec<Geometry>, Vec<InstanceInput>) {
     (meshes, instances)
 }
 
-fn build(t: f32, previous: Option<Accel>) -> Accel {
-    let (meshes, instances) = frame(t);
-    let inputs: Vec<MeshInput> = meshes
+fn inputs(meshes: &[Geometry]) -> Vec<MeshInput<'_>> {
+    meshes
         .iter()
         .map(|(p, i)| MeshInput {
             positions: p,
             indices: i,
         })
-        .collect();
+        .collect()
+}
+
+fn build(t: f32, previous: Option<Accel>) -> Accel {
+    let (meshes, instances) = frame(t);
+    let inputs = inputs(&meshes);
     let hints = FrameHints {
         moving: &[false, true, false, true, false],
         deforming_from: 3,
@@ -120,13 +124,7 @@ fn reused_frames_answer_like_fresh_builds() {
 #[test]
 fn still_scenes_flatten_as_before_and_moving_instances_do_not() {
     let (meshes, instances) = frame(0.0);
-    let inputs: Vec<MeshInput> = meshes
-        .iter()
-        .map(|(p, i)| MeshInput {
-            positions: p,
-            indices: i,
-        })
-        .collect();
+    let inputs = inputs(&meshes);
     let still = Accel::build(&inputs, &instances, BvhQuality::Medium);
     // Meshes 1, 2 and 3 are drawn once: one world-space BVH holds them; mesh 0 has its own.
     assert_eq!(still.stats().flattened_instances, 3);

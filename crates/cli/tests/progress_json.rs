@@ -1,25 +1,8 @@
 //! `aperture render --progress json`, as a program reading the binary's stdout sees it.
 
-/// A file of the samples folder; missing: a skip outside CI, a failure with `CI=true`.
-fn sample(relative: &str) -> Option<std::path::PathBuf> {
-    let samples = std::env::var_os("APERTURE_SAMPLES")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| {
-            std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-                .join("../../../shared/gltf-samples")
-        });
-    let path = samples.join(relative);
-    if path.is_file() {
-        return Some(path);
-    }
-    assert!(
-        std::env::var("CI").map_or(true, |v| v != "true"),
-        "CI=true but the glTF sample {} is missing",
-        path.display()
-    );
-    eprintln!("skipping: {} not found", path.display());
-    None
-}
+mod common;
+
+use common::sample;
 
 /// One parseable JSON object per line on stdout, progress growing to the total, and a last
 /// line naming the file written.

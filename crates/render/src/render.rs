@@ -175,23 +175,8 @@ fn check(opts: &RenderOptions) -> Result<(), RenderError> {
 
 /// Builds the ray-query structure for a scene.
 pub fn build_accel(scene: &Scene, quality: aperture_accel::BvhQuality) -> Accel {
-    let meshes: Vec<_> = scene
-        .meshes
-        .iter()
-        .map(|m| aperture_accel::MeshInput {
-            positions: &m.positions,
-            indices: &m.indices,
-        })
-        .collect();
-    let instances: Vec<_> = scene
-        .instances
-        .iter()
-        .map(|i| aperture_accel::InstanceInput {
-            mesh: i.mesh,
-            world_from_object: i.world_from_object,
-        })
-        .collect();
-    Accel::build(&meshes, &instances, quality)
+    let still = crate::sequence::SceneHints::still();
+    crate::sequence::build_frame_accel(scene, quality, &still, None)
 }
 
 /// The BVH preset for a job of `samples` camera samples over `triangles` stored triangles, so a

@@ -101,6 +101,14 @@ pub struct SceneHints {
 }
 
 impl SceneHints {
+    /// A still scene: nothing moves or deforms ([`FrameHints::STILL`]).
+    pub fn still() -> Self {
+        Self {
+            moving: Vec::new(),
+            deforming_from: FrameHints::STILL.deforming_from,
+        }
+    }
+
     /// The hints of `scene`, posed from `animated`.
     pub fn new(animated: &Animated, scene: &Scene) -> Self {
         let moving_nodes = animated.moving_nodes();

@@ -9,71 +9,9 @@ use aperture_render::output::{self, ExrOptions};
 use aperture_render::{
     build_accel, test_scenes, AdaptiveOptions, Environment, PassSet, RenderOptions, Window,
 };
-use aperture_scene::{Dof, Light, LightKind, Material, Scene};
-use glam::{Affine3A, Vec3};
+use aperture_scene::Scene;
+use glam::Vec3;
 use std::path::{Path, PathBuf};
-
-/// A matte ground, a glossy ball, a gold ball, an emitter, a point light and a grey sky,
-/// through a lens: every kind of pass, silhouettes against the sky for Cryptomatte.
-fn scene() -> Scene {
-    let dof = Dof {
-        enabled: true,
-        aperture_radius: 0.05,
-        focus_distance: 6.0,
-        ..Dof::default()
-    };
-    let camera =
-        test_scenes::look_at_camera(Vec3::new(0.0, 1.5, 6.0), Vec3::new(0.0, 0.8, 0.0), 0.7, dof);
-    let glossy = Material {
-        name: Some("Glossy".into()),
-        base_color_factor: glam::Vec4::new(0.2, 0.4, 0.8, 1.0),
-        roughness_factor: 0.3,
-        ..Material::default()
-    };
-    let gold = Material {
-        name: Some("Gold".into()),
-        base_color_factor: glam::Vec4::new(1.0, 0.8, 0.3, 1.0),
-        metallic_factor: 1.0,
-        roughness_factor: 0.5,
-        ..Material::default()
-    };
-    let ball = |m: u32, x: f32, y: f32, r: f32| {
-        (
-            test_scenes::icosphere(3, m),
-            Affine3A::from_scale_rotation_translation(
-                Vec3::splat(r),
-                glam::Quat::IDENTITY,
-                Vec3::new(x, y, 0.0),
-            ),
-        )
-    };
-    let mut s = test_scenes::scene(
-        vec![
-            (test_scenes::quad(8.0, 0), Affine3A::IDENTITY),
-            ball(1, -0.8, 0.6, 0.6),
-            ball(2, 0.7, 0.5, 0.5),
-            ball(3, 0.2, 1.8, 0.15),
-        ],
-        vec![
-            test_scenes::matte(Vec3::new(0.7, 0.6, 0.5)),
-            glossy,
-            gold,
-            test_scenes::emitter(Vec3::new(6.0, 5.0, 4.0)),
-        ],
-        camera,
-    );
-    s.lights.push(Light {
-        name: None,
-        kind: LightKind::Point,
-        position: Vec3::new(2.0, 4.0, 3.0),
-        direction: Vec3::NEG_Y,
-        intensity: Vec3::splat(20.0),
-    });
-    s.node_names = ["Ground", "Blue", "Gold", "Lamp"]
-        .map(|n| Some(n.to_string()))
-        .into();
-    s
-}
 
 fn opts() -> RenderOptions {
     RenderOptions {
@@ -170,7 +108,7 @@ fn assert_bit_identical(merged: &Image, whole: &Image) {
 #[test]
 fn tiles_merge_into_the_whole_render_bit_for_bit() {
     let dir = Scratch::new("tiles");
-    let s = scene();
+    let s = test_scenes::passes();
     for adaptive in [false, true] {
         let mut o = opts();
         o.adaptive = adaptive.then_some(AdaptiveOptions {
@@ -254,7 +192,7 @@ fn rel_px(a: &[f32], b: &[f32]) -> f64 {
 #[test]
 fn sample_batches_merge_into_the_longer_render() {
     let dir = Scratch::new("batches");
-    let s = scene();
+    let s = test_scenes::passes();
     let whole_opts = RenderOptions { spp: 24, ..opts() };
     let whole_path = dir.path("whole.exr");
     render_part(&s, &whole_opts, &whole_path, None);
@@ -355,7 +293,7 @@ fn sample_batches_merge_into_the_longer_render() {
 #[test]
 fn tiles_of_batches_merge_too() {
     let dir = Scratch::new("tiles-of-batches");
-    let s = scene();
+    let s = test_scenes::passes();
     let whole_path = dir.path("whole.exr");
     render_part(&s, &opts(), &whole_path, None);
     let whole = read_exr(&whole_path).unwrap();
@@ -432,7 +370,7 @@ fn refused(dir: &Scratch, parts: &[PathBuf], culprit: &str) -> MergeError {
 #[test]
 fn merge_refuses_parts_that_do_not_belong_together() {
     let dir = Scratch::new("refusals");
-    let s = scene();
+    let s = test_scenes::passes();
     let small = RenderOptions {
         spp: 4,
         passes: PassSet::compositing(),
@@ -535,7 +473,7 @@ fn merge_refuses_parts_that_do_not_belong_together() {
 #[test]
 fn merge_refuses_damaged_parts_naming_them() {
     let dir = Scratch::new("damaged");
-    let s = scene();
+    let s = test_scenes::passes();
     let small = RenderOptions { spp: 2, ..opts() };
     let tiles = render_tiles(&s, &small, &dir, 2);
     let bytes = std::fs::read(&tiles[1]).unwrap();
