@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs the Blender acceptance tests (tools/blender/test_export.py, test_animation.py,
-# test_compositor.py and test_materials.py) with Blender as a Python
+# test_compositor.py, test_engine.py and test_materials.py) with Blender as a Python
 # module: bpy 5.0.1 (or APERTURE_BPY) on Python 3.11, in a cached virtual environment that is
 # created and filled on first use. Never part of the Rust build.
 #
@@ -55,6 +55,9 @@ for a in "$@"; do [ "$a" = "--require-all" ] && anim_args+=(--require-all); done
 # SPEC §6: the EXR passes in Blender's compositor, Cycles' pass names, OpenEXR's reader.
 echo "== tools/blender/test_compositor.py"
 "$venv/bin/python" tools/blender/test_compositor.py --aperture "$bin" "${anim_args[@]}" || status=$?
+# Issue 20: the "aperture" render engine of the add-on (F12 renders with aperture).
+echo "== tools/blender/test_engine.py"
+"$venv/bin/python" tools/blender/test_engine.py --aperture "$bin" "${anim_args[@]}" || status=$?
 # SPEC §5 (issue 14): Blender's glass and Principled spheres, Cycles against aperture (~1 min).
 echo "== tools/blender/test_materials.py"
 "$venv/bin/python" tools/blender/test_materials.py --aperture "$bin" "${anim_args[@]}" || status=$?

@@ -34,6 +34,7 @@ import sys
 import tempfile
 
 import numpy as np
+from checks import check, record, summary
 
 WIDTH, HEIGHT = 160, 90
 # Denoising needs a converged reference: a smaller image keeps the 4096-spp render short.
@@ -45,20 +46,8 @@ CRATE = ("Crate", (-1.4, 5.0, 0.6), 1.2, (0.6, 0.4, 0.2))  # name, centre, size,
 CAM_LOCATION, CAM_PITCH, LENS, FSTOP = (0.0, -1.5, 1.0), 84.0, 35.0, 2.0
 GROUND = 60.0  # side of the ground square
 
-RESULTS = []
 ARGS = None
 WORK = None
-
-
-def record(name, ok, detail):
-    status = {True: "PASS", False: "FAIL", None: "SKIP"}[ok]
-    RESULTS.append((name, status, detail))
-    print(f"{status} {name}: {detail}", flush=True)
-
-
-def check(name, cond, detail):
-    record(name, bool(cond), detail)
-    return bool(cond)
 
 
 # --------------------------------------------------------------------------------------------
@@ -483,11 +472,7 @@ def main():
     finally:
         if not ARGS.out:
             shutil.rmtree(WORK, ignore_errors=True)
-    passed = sum(1 for r in RESULTS if r[1] == "PASS")
-    failed = sum(1 for r in RESULTS if r[1] == "FAIL")
-    skipped = sum(1 for r in RESULTS if r[1] == "SKIP")
-    print(f"{passed} passed, {failed} failed, {skipped} skipped")
-    return 1 if failed else 0
+    return summary()
 
 
 if __name__ == "__main__":

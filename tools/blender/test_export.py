@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT OR Apache-2.0
-"""Acceptance test for the Blender add-on `aperture_gltf_dof.py` (issue 8).
+"""Acceptance test for the Blender add-on the `aperture_gltf_dof` add-on (issue 8).
 
 Run it with Blender as a Python module (bpy 5.0.1, Python 3.11); `run_test.sh` beside this file
 sets that up. It is never part of the Rust build.
@@ -47,8 +47,10 @@ import subprocess
 import sys
 import tempfile
 
+from addon_zip import addon_zip
+from checks import check, record, summary
+
 HERE = os.path.dirname(os.path.abspath(__file__))
-ADDON_FILE = os.path.join(HERE, "aperture_gltf_dof.py")
 ADDON = "aperture_gltf_dof"
 
 ARGS = None
@@ -68,19 +70,6 @@ SPHERES = [  # name, depth along +Y, image x in [-1, 1], colour
 FOCUS = "SphereMid"
 BULB = ("Bulb", 6.0, -0.5, 0.4, 0.08, 20.0)  # name, depth, image x, image y, radius, emission
 
-RESULTS = []
-
-
-def record(name, ok, detail):
-    status = {True: "PASS", False: "FAIL", None: "SKIP"}[ok]
-    RESULTS.append((name, status, detail))
-    print(f"{status} {name}: {detail}", flush=True)
-
-
-def check(name, cond, detail):
-    record(name, bool(cond), detail)
-    return bool(cond)
-
 
 # --------------------------------------------------------------------------------------------
 # Blender side
@@ -97,10 +86,11 @@ def import_bpy(user_scripts):
 
 
 def install_addon():
-    bpy.ops.preferences.addon_install(filepath=ADDON_FILE, overwrite=True)
+    addon_file = addon_zip(tempfile.mkdtemp(prefix="aperture-addon-"))
+    bpy.ops.preferences.addon_install(filepath=addon_file, overwrite=True)
     bpy.ops.preferences.addon_enable(module=ADDON)
     enabled = ADDON in bpy.context.preferences.addons.keys()
-    check("install", enabled, f"add-on installed from {ADDON_FILE} and enabled")
+    check("install", enabled, f"add-on installed from {addon_file} and enabled")
     if not enabled:
         raise SystemExit(1)
 
@@ -711,11 +701,7 @@ def main():
         if not ARGS.out:
             shutil.rmtree(WORK, ignore_errors=True)
 
-    passed = sum(1 for r in RESULTS if r[1] == "PASS")
-    failed = sum(1 for r in RESULTS if r[1] == "FAIL")
-    skipped = sum(1 for r in RESULTS if r[1] == "SKIP")
-    print(f"{passed} passed, {failed} failed, {skipped} skipped")
-    return 1 if failed else 0
+    return summary()
 
 
 if __name__ == "__main__":

@@ -31,8 +31,8 @@ mod png;
 pub mod view;
 
 pub use crate::exr::{
-    encode_exr, read_exr, write_exr, write_exr_streamed, ChannelSpec, ExrLayout, LateValues,
-    RowWriter,
+    encode_exr, read_exr, read_exr_header, write_exr, write_exr_streamed, ChannelSpec, ExrHeader,
+    ExrLayout, LateValues, RowWriter,
 };
 pub use crate::png::{encode_png, write_png};
 

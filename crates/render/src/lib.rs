@@ -33,6 +33,7 @@ pub mod output;
 pub mod passes;
 mod render;
 pub mod sampler;
+pub mod sequence;
 mod shade_extended;
 mod spectrum;
 mod surface;

@@ -17,7 +17,7 @@ mod write;
 
 #[cfg(test)]
 use read::decode_exr;
-pub use read::read_exr;
+pub use read::{read_exr, read_exr_header, ExrHeader};
 pub use write::{
     encode_exr, write_exr, write_exr_streamed, ChannelSpec, ExrLayout, LateValues, RowWriter,
 };
