@@ -15,9 +15,7 @@ mod guard;
 mod read;
 mod write;
 
-#[cfg(test)]
-use read::decode_exr;
-pub use read::read_exr;
+pub use read::{decode_exr, read_exr};
 pub use write::{
     encode_exr, write_exr, write_exr_streamed, ChannelSpec, ExrLayout, LateValues, RowWriter,
 };

@@ -42,7 +42,7 @@ pub fn read_exr(path: &Path) -> Result<Image, Error> {
 }
 
 /// Decodes EXR bytes; see [`read_exr`]. `path` only names the file in errors.
-pub(crate) fn decode_exr(bytes: &[u8], path: &Path) -> Result<Image, Error> {
+pub fn decode_exr(bytes: &[u8], path: &Path) -> Result<Image, Error> {
     // The `exr` decoder can panic on some damaged data (seen: an integer overflow in its B44
     // decompressor), so a panic is turned into an error: a damaged file must not bring down
     // the caller. Nothing shared is mutated inside, so unwinding leaves no broken state.
