@@ -144,7 +144,7 @@ impl Animated {
                 .collect(),
             ..SceneStats::default()
         };
-        let mut buffers = load_buffers(&doc, &root, bin, base_dir)?;
+        let mut buffers = load_buffers(&doc, &root, bin, base_dir, &options.memory)?;
         crate::meshopt::decode_views(&root, &mut buffers)?;
         let graph = node_graph(&doc, &buffers)?;
         let order = drawn_order(&doc, options, &graph, &mut stats)?;
@@ -194,7 +194,7 @@ impl Animated {
         }
         let material_list = std::mem::take(&mut materials.materials);
         stats.warnings.append(&mut materials.warnings);
-        let textures = materials.textures(&doc, &buffers, base_dir, options.skip_textures)?;
+        let textures = materials.textures(&doc, &buffers, base_dir, options.skip_textures, &options.memory)?;
         let skins = skin::read_skins(&doc, &buffers)?;
         let cameras = camera::read_cameras(&doc)?;
         let lights = read_lights(&doc)?;

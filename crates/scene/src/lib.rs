@@ -50,6 +50,7 @@ mod pointer;
 mod prepass;
 mod skin;
 mod tangents;
+mod texels;
 mod types;
 mod uri;
 
@@ -60,4 +61,5 @@ pub use error::Error;
 pub use load::{content_hash, load, load_bytes};
 pub use prepass::SUPPORTED_EXTENSIONS;
 pub use tangents::generate_missing_tangents;
+pub use texels::decode_texture;
 pub use types::*;

@@ -75,6 +75,7 @@ pub(crate) fn load_buffers(
     root: &Value,
     bin: Option<&[u8]>,
     base_dir: &Path,
+    budget: &aperture_budget::MemoryBudget,
 ) -> Result<Buffers, Error> {
     let mut data = Vec::with_capacity(doc.buffers().len());
     for b in doc.buffers() {
@@ -110,6 +111,8 @@ pub(crate) fn load_buffers(
         data,
         total,
         decoded: HashMap::new(),
+        charged: Default::default(),
+        budget: *budget,
     })
 }
 

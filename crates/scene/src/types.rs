@@ -479,6 +479,9 @@ pub struct LoadOptions {
     pub time: Option<f32>,
     /// Which animations a time evaluates (`--animation`); default all together.
     pub animation: crate::AnimationSelection,
+    /// The most memory decoded textures and geometry may take, checked before they are
+    /// allocated: the machine's memory by default, `--max-memory` on the command line.
+    pub memory: aperture_budget::MemoryBudget,
 }
 
 /// An axis-aligned box.
