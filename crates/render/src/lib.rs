@@ -20,8 +20,10 @@
 pub mod adaptive;
 mod aov;
 mod bsdf;
+mod cancel;
 pub mod camera;
 pub mod cryptomatte;
+mod footprint;
 mod environment;
 mod film;
 mod filter;
@@ -36,11 +38,13 @@ pub mod test_scenes;
 mod texture;
 
 pub use adaptive::AdaptiveOptions;
+pub use cancel::Cancel;
 pub use bsdf::{Bsdf, BsdfSample, Dielectric, Frame};
 pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, CameraSample};
 pub use environment::{EnvImage, EnvSampling, Environment};
 pub use film::{Film, PixelSum, Window};
 pub use filter::{Filter, FilterKind};
+pub use footprint::{check_output, footprint, Footprint, FootprintError, OutputKind};
 pub use integrator::Clamp;
 pub use passes::{Pass, PassSet};
 pub use render::{
