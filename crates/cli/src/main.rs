@@ -2,6 +2,7 @@
 
 mod bench;
 mod info;
+mod interrupt;
 mod progress;
 mod render_cmd;
 mod time_args;
@@ -37,7 +38,17 @@ fn main() -> std::process::ExitCode {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            std::process::ExitCode::FAILURE
+            let interrupted = e.chain().any(|c| {
+                matches!(
+                    c.downcast_ref(),
+                    Some(aperture_render::output::OutputError::Interrupted { .. })
+                )
+            }) || e.downcast_ref::<render_cmd::Interrupted>().is_some();
+            if interrupted {
+                std::process::ExitCode::from(interrupt::EXIT_INTERRUPTED)
+            } else {
+                std::process::ExitCode::FAILURE
+            }
         }
     }
 }
