@@ -338,7 +338,10 @@ impl Animated {
     /// Node transforms and weights at `time` (`None`: stored).
     fn pose(&self, time: Option<f32>) -> Pose {
         let n = self.graph.nodes.len();
-        let mut trs: Vec<Option<(DVec3, DQuat, DVec3)>> = vec![None; n];
+        // Per node, its animated scale, rotation and translation: only when something is
+        // animated (88 bytes a node, 176 MB for two million nodes, for nothing otherwise).
+        let animated = time.is_some() && !self.animations.channels.is_empty();
+        let mut trs: Vec<Option<(DVec3, DQuat, DVec3)>> = vec![None; if animated { n } else { 0 }];
         let mut pose = Pose {
             world: vec![DAffine3::IDENTITY; n],
             node_weights: HashMap::new(),
@@ -376,7 +379,7 @@ impl Animated {
             }
         }
         for &i in &self.graph.topological {
-            let local = match trs[i] {
+            let local = match trs.get(i).copied().flatten() {
                 Some((s, r, t)) => DAffine3::from_scale_rotation_translation(s, r, t),
                 None => self.graph.nodes[i].local,
             };
