@@ -161,12 +161,15 @@ fn read<T: Copy + Default>(
     let dims = dimension_count(acc.dimensions());
     let elem = (csize * dims) as u64;
     let count = acc.count() as u64;
-    buffers.charge(
-        at,
-        count
-            .saturating_mul(dims as u64)
-            .saturating_mul(std::mem::size_of::<T>() as u64),
-    )?;
+    // Charged once the count is known to be backed (so a lying count gets the precise error).
+    let charge = || {
+        buffers.charge(
+            at,
+            count
+                .saturating_mul(dims as u64)
+                .saturating_mul(std::mem::size_of::<T>() as u64),
+        )
+    };
     let mut out: Vec<T> = match acc.view() {
         Some(view) => {
             let bytes = view_bytes(&view, buffers)?;
@@ -192,6 +195,7 @@ fn read<T: Copy + Default>(
             if needed > bytes.len() as u64 {
                 return Err(out_of_bounds(at, acc.index(), needed, bytes.len() as u64));
             }
+            charge()?;
             // Safe to allocate: every element is backed by bytes we hold.
             let (offset, stride, elem) = (offset as usize, stride as usize, elem as usize);
             let mut out = Vec::with_capacity(count as usize * dims);
@@ -207,6 +211,7 @@ fn read<T: Copy + Default>(
             if size > budget {
                 return Err(out_of_bounds(at, acc.index(), size, budget));
             }
+            charge()?;
             vec![T::default(); count as usize * dims]
         }
     };
