@@ -169,7 +169,9 @@ mod tests {
             e.to_string(),
             "a 65536x65536 PNG render needs 137.0 GB but this machine has 23.0 GB; render EXR"
         );
-        let e = MemoryBudget::fixed(1 << 20).check("t", 2 << 20).unwrap_err();
+        let e = MemoryBudget::fixed(1 << 20)
+            .check("t", 2 << 20)
+            .unwrap_err();
         assert!(e.to_string().contains("--max-memory"), "{e}");
     }
 }

@@ -145,7 +145,11 @@ fn parse_env(s: &str) -> Result<EnvArg, String> {
 fn load_env_image(path: &std::path::Path, max_bytes: u64) -> anyhow::Result<(u32, u32, Vec<Vec3>)> {
     let im = aperture_imageio::read_env_image(path, max_bytes)?;
     let (w, h) = (im.width, im.height);
-    let texels: Vec<Vec3> = im.rgba.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
+    let texels: Vec<Vec3> = im
+        .rgba
+        .iter()
+        .map(|p| Vec3::new(p[0], p[1], p[2]))
+        .collect();
     if w == 0 || h == 0 {
         anyhow::bail!("the image has no pixels");
     }
@@ -400,10 +404,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             height,
             spp: args.spp,
             passes,
-            adaptive: args.noise_threshold.map(|threshold| aperture_render::AdaptiveOptions {
-                threshold,
-                min_spp: 1,
-            }),
+            adaptive: args
+                .noise_threshold
+                .map(|threshold| aperture_render::AdaptiveOptions {
+                    threshold,
+                    min_spp: 1,
+                }),
             ..RenderOptions::default()
         };
         check_footprint(&args, &early, &exr, &budget)?;

@@ -19,7 +19,9 @@ fn long_render(out: &Path, extra: &[&str]) -> Child {
         .arg(demo())
         .arg("-o")
         .arg(out)
-        .args(["--width", "96", "--height", "64", "--spp", "65536", "--quiet"])
+        .args([
+            "--width", "96", "--height", "64", "--spp", "65536", "--quiet",
+        ])
         .args(extra)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())

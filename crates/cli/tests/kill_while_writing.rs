@@ -41,13 +41,31 @@ const KINDS: &[Kind] = &[
     Kind {
         name: "EXR",
         file: "out.exr",
-        args: &["--width", "768", "--height", "512", "--spp", "1", "--max-bounces", "0"],
+        args: &[
+            "--width",
+            "768",
+            "--height",
+            "512",
+            "--spp",
+            "1",
+            "--max-bounces",
+            "0",
+        ],
         complete: exr_complete,
     },
     Kind {
         name: "PNG",
         file: "out.png",
-        args: &["--width", "1024", "--height", "768", "--spp", "1", "--max-bounces", "0"],
+        args: &[
+            "--width",
+            "1024",
+            "--height",
+            "768",
+            "--spp",
+            "1",
+            "--max-bounces",
+            "0",
+        ],
         complete: png_complete,
     },
 ];
@@ -157,7 +175,11 @@ fn kill_while_writing(kind: &Kind) {
     );
     std::fs::remove_dir_all(&dir).unwrap();
     // The kills must have landed before the end (else nothing was tested).
-    assert!(kept_old > 0, "{}: every render finished before its kill", kind.name);
+    assert!(
+        kept_old > 0,
+        "{}: every render finished before its kill",
+        kind.name
+    );
 }
 
 #[test]

@@ -81,8 +81,8 @@ pub fn footprint(opts: &RenderOptions, kind: OutputKind, exr: &ExrOptions) -> Fo
             let bpp = film_bytes_per_pixel(passes, adaptive, specs.len()) as u64;
             let w = u64::from(window.width);
             // As output::bands: whole rows within the band budget, at least one tile row.
-            let rows = (exr.band_bytes as u64 / (bpp * w).max(1)) / u64::from(TILE)
-                * u64::from(TILE);
+            let rows =
+                (exr.band_bytes as u64 / (bpp * w).max(1)) / u64::from(TILE) * u64::from(TILE);
             let rows = rows.max(u64::from(TILE)).min(u64::from(window.height));
             // Adaptive rounds render an apron of one pixel per round around the band.
             let apron = if adaptive { 2 * 17 } else { 0 };
@@ -187,7 +187,11 @@ mod tests {
         assert!(big.memory > 100_000_000_000, "{}", big.memory);
         let e = footprint(&opts(65536, 65536), OutputKind::Exr, &exr);
         // One band: at this width the band is one tile row (32 rows), above BAND_BYTES.
-        assert!(e.memory < 3 << 30 && e.memory * 100 < big.memory, "{}", e.memory);
+        assert!(
+            e.memory < 3 << 30 && e.memory * 100 < big.memory,
+            "{}",
+            e.memory
+        );
         assert!(e.disk > 100_000_000_000, "{}", e.disk);
     }
 
@@ -203,7 +207,10 @@ mod tests {
         .unwrap_err();
         let m = e.to_string();
         assert!(m.starts_with("a 65536x65536 PNG render needs "), "{m}");
-        assert!(m.contains("GB but the memory limit (--max-memory) is 23.0 GB"), "{m}");
+        assert!(
+            m.contains("GB but the memory limit (--max-memory) is 23.0 GB"),
+            "{m}"
+        );
         assert!(check_output(
             &opts(64, 64),
             OutputKind::Png { sixteen_bit: false },

@@ -20,13 +20,13 @@
 pub mod adaptive;
 mod aov;
 mod bsdf;
-mod cancel;
 pub mod camera;
+mod cancel;
 pub mod cryptomatte;
-mod footprint;
 mod environment;
 mod film;
 mod filter;
+mod footprint;
 mod integrator;
 mod lights;
 pub mod output;
@@ -38,9 +38,9 @@ pub mod test_scenes;
 mod texture;
 
 pub use adaptive::AdaptiveOptions;
-pub use cancel::Cancel;
 pub use bsdf::{Bsdf, BsdfSample, Dielectric, Frame};
 pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, CameraSample};
+pub use cancel::Cancel;
 pub use environment::{EnvImage, EnvSampling, Environment};
 pub use film::{Film, PixelSum, Window};
 pub use filter::{Filter, FilterKind};

@@ -325,7 +325,10 @@ fn render_uniform(job: &Job<'_>, window: Window, progress: &(dyn Fn(usize, usize
         if opts.cancel.is_cancelled() {
             // Stopped early: each pixel took what its tile got to.
             for (k, &n) in taken.iter().enumerate() {
-                let (x, y) = (window.x0 + x0 + k as u32 % tw, window.y0 + y0 + k as u32 / tw);
+                let (x, y) = (
+                    window.x0 + x0 + k as u32 % tw,
+                    window.y0 + y0 + k as u32 / tw,
+                );
                 let i = ((y - window.y0) * window.width + (x - window.x0)) as usize;
                 film.counts_mut().0[i] = n;
             }

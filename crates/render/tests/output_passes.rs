@@ -294,10 +294,7 @@ fn windows_are_bit_identical_to_the_whole_render() {
         let counts = &whole.layer("Debug Sample Count").map(|l| l.data.clone());
         if adaptive {
             let c = counts.as_ref().unwrap();
-            assert!(
-                c.contains(&4.0) && c.contains(&32.0),
-                "adaptive varies"
-            );
+            assert!(c.contains(&4.0) && c.contains(&32.0), "adaptive varies");
         }
         for w in [
             Window {

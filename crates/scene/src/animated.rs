@@ -194,7 +194,13 @@ impl Animated {
         }
         let material_list = std::mem::take(&mut materials.materials);
         stats.warnings.append(&mut materials.warnings);
-        let textures = materials.textures(&doc, &buffers, base_dir, options.skip_textures, &options.memory)?;
+        let textures = materials.textures(
+            &doc,
+            &buffers,
+            base_dir,
+            options.skip_textures,
+            &options.memory,
+        )?;
         let skins = skin::read_skins(&doc, &buffers)?;
         let cameras = camera::read_cameras(&doc)?;
         let lights = read_lights(&doc)?;
@@ -362,7 +368,8 @@ impl Animated {
                             .insert(*i, v.iter().map(|&x| x as f32).collect());
                     }
                     Target::Node(i, prop) => {
-                        let slot = trs[*i].get_or_insert_with(|| self.graph.nodes[*i].transform.trs());
+                        let slot =
+                            trs[*i].get_or_insert_with(|| self.graph.nodes[*i].transform.trs());
                         match prop {
                             NodeProperty::Translation => slot.2 = animation::vec3(&v),
                             NodeProperty::Rotation => {

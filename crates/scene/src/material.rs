@@ -302,7 +302,8 @@ impl Materials {
                 uses_left[s] += 1;
             }
         }
-        let decoded = crate::texels::decode_images(doc, buffers, base_dir, &images, &uses_left, budget)?;
+        let decoded =
+            crate::texels::decode_images(doc, buffers, base_dir, &images, &uses_left, budget)?;
         let mut slot: Vec<Option<(u32, u32, Texels)>> = decoded.into_iter().map(Some).collect();
         let mut out = Vec::with_capacity(self.keys.len());
         for k in &self.keys {

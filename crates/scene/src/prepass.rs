@@ -188,7 +188,8 @@ pub(crate) fn prepare(json: &[u8]) -> Result<Prepared, Error> {
     };
     let mut kept = serde_json::Map::new();
     for (key, raw) in &top {
-        let counted = COUNTED_ONLY.contains(&key.as_str())
+        let counted = COUNTED_ONLY
+            .contains(&key.as_str())
             .then(|| serde_json::from_str::<Vec<&RawValue>>(raw.get()).ok())
             .flatten();
         let value = match counted {

@@ -88,10 +88,7 @@ pub fn decode_texture(
 ) -> Result<(u32, u32, Texels), Error> {
     let h = header(bytes, image)?;
     aperture_budget::MemoryBudget::fixed(max_bytes)
-        .check(
-            &format!("a {}x{} texture", h.width, h.height),
-            h.peak(),
-        )
+        .check(&format!("a {}x{} texture", h.width, h.height), h.peak())
         .map_err(|source| Error::OverBudget {
             at: format!("images[{image}]"),
             source,
@@ -273,7 +270,11 @@ mod tests {
         for &b in bytes {
             c ^= u32::from(b);
             for _ in 0..8 {
-                c = if c & 1 != 0 { 0xEDB8_8320 ^ (c >> 1) } else { c >> 1 };
+                c = if c & 1 != 0 {
+                    0xEDB8_8320 ^ (c >> 1)
+                } else {
+                    c >> 1
+                };
             }
         }
         !c

@@ -34,12 +34,7 @@ pub fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
 const DRACO_HEADER: usize = 7;
 
 /// The fuzz input for a Draco stream with these counts and attribute ids (for seeds).
-pub fn draco_input(
-    points: u16,
-    triangles: u16,
-    ids: [Option<u8>; 3],
-    stream: &[u8],
-) -> Vec<u8> {
+pub fn draco_input(points: u16, triangles: u16, ids: [Option<u8>; 3], stream: &[u8]) -> Vec<u8> {
     let mut out = Vec::with_capacity(DRACO_HEADER + stream.len());
     out.extend_from_slice(&points.to_le_bytes());
     out.extend_from_slice(&triangles.to_le_bytes());
@@ -56,10 +51,15 @@ pub fn draco(data: &[u8]) -> Option<Vec<u8>> {
     let triangles = u16::from_le_bytes([head[2], head[3]]);
     let mut attributes = serde_json::Map::new();
     let mut ids = serde_json::Map::new();
-    let mut accessors = vec![json!({"componentType": 5125, "count": u32::from(triangles) * 3, "type": "SCALAR"})];
-    for ((name, ty), &id) in [("POSITION", "VEC3"), ("NORMAL", "VEC3"), ("TEXCOORD_0", "VEC2")]
-        .iter()
-        .zip(&head[4..7])
+    let mut accessors =
+        vec![json!({"componentType": 5125, "count": u32::from(triangles) * 3, "type": "SCALAR"})];
+    for ((name, ty), &id) in [
+        ("POSITION", "VEC3"),
+        ("NORMAL", "VEC3"),
+        ("TEXCOORD_0", "VEC2"),
+    ]
+    .iter()
+    .zip(&head[4..7])
     {
         if id == 255 {
             continue;
@@ -164,7 +164,10 @@ mod tests {
     fn wrapped_streams_are_well_formed_glb() {
         let g = draco(&draco_input(3, 1, [Some(0), None, None], b"DRACO")).unwrap();
         assert!(g.starts_with(b"glTF"));
-        assert_eq!(u32::from_le_bytes(g[8..12].try_into().unwrap()) as usize, g.len());
+        assert_eq!(
+            u32::from_le_bytes(g[8..12].try_into().unwrap()) as usize,
+            g.len()
+        );
         let e = aperture_scene::load_bytes(
             &g,
             std::path::Path::new("."),

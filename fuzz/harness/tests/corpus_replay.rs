@@ -49,12 +49,20 @@ fn wrapped_seeds_decode() {
     let options = aperture_scene::LoadOptions::default();
     let here = Path::new(".");
     for (dir, wrap) in [
-        ("draco", aperture_fuzz_harness::wrap_draco as fn(&[u8]) -> Option<Vec<u8>>),
+        (
+            "draco",
+            aperture_fuzz_harness::wrap_draco as fn(&[u8]) -> Option<Vec<u8>>,
+        ),
         ("meshopt", aperture_fuzz_harness::wrap_meshopt),
     ] {
         for e in std::fs::read_dir(root.join(dir)).expect("corpus") {
             let p = e.expect("entry").path();
-            if !p.file_name().unwrap().to_string_lossy().starts_with("seed-") {
+            if !p
+                .file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("seed-")
+            {
                 continue;
             }
             let glb = wrap(&std::fs::read(&p).unwrap()).expect("wraps");

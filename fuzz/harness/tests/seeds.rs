@@ -19,7 +19,9 @@ use serde_json::Value;
 fn samples() -> PathBuf {
     std::env::var_os("APERTURE_SAMPLES")
         .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/gltf-samples"))
+        .unwrap_or_else(|| {
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/gltf-samples")
+        })
 }
 
 fn corpus(target: &str) -> PathBuf {
@@ -49,7 +51,11 @@ fn inline(path: &Path) -> Vec<u8> {
                 }
                 let file = percent_decode(uri);
                 let bytes = std::fs::read(dir.join(&file)).unwrap();
-                let mime = if key == "images" { "image/png" } else { "application/octet-stream" };
+                let mime = if key == "images" {
+                    "image/png"
+                } else {
+                    "application/octet-stream"
+                };
                 item["uri"] = Value::from(format!(
                     "data:{mime};base64,{}",
                     base64::engine::general_purpose::STANDARD.encode(bytes)
@@ -115,62 +121,158 @@ fn write_seeds() {
 
     // Draco: Box-Draco's and Avocado's streams with their real counts and attribute ids.
     let bin = std::fs::read(s.join("unsupported/Box-Draco/Box.bin")).unwrap();
-    put("draco", "box", &draco_input(24, 12, [Some(0), Some(1), None], &bin));
+    put(
+        "draco",
+        "box",
+        &draco_input(24, 12, [Some(0), Some(1), None], &bin),
+    );
     let bin = std::fs::read(s.join("compression/Avocado-Draco/Avocado.bin")).unwrap();
-    put("draco", "avocado", &draco_input(406, 682, [Some(3), Some(1), Some(0)], &bin));
-    put("load", "box-draco.gltf", &inline(&s.join("unsupported/Box-Draco/Box.gltf")));
+    put(
+        "draco",
+        "avocado",
+        &draco_input(406, 682, [Some(3), Some(1), Some(0)], &bin),
+    );
+    put(
+        "load",
+        "box-draco.gltf",
+        &inline(&s.join("unsupported/Box-Draco/Box.gltf")),
+    );
 
     // meshopt: a cube's positions, normals (octahedral filter) and indices, each mode.
     let positions: Vec<u8> = (0..24u32)
-        .flat_map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32, 1.0])
+        .flat_map(|i| {
+            [
+                (i & 1) as f32,
+                ((i >> 1) & 1) as f32,
+                ((i >> 2) & 1) as f32,
+                1.0,
+            ]
+        })
         .flat_map(f32::to_le_bytes)
         .collect();
     let v = meshopt::encoding::encode_vertex_buffer(
-        &positions.chunks_exact(16).map(|c| <[u8; 16]>::try_from(c).unwrap()).collect::<Vec<_>>(),
+        &positions
+            .chunks_exact(16)
+            .map(|c| <[u8; 16]>::try_from(c).unwrap())
+            .collect::<Vec<_>>(),
     )
     .unwrap();
-    put("meshopt", "positions", &meshopt_input(MeshoptMode::Attributes, 0, 16, 24, &v));
-    put("meshopt", "exponential", &meshopt_input(MeshoptMode::Attributes, 3, 16, 24, &v));
+    put(
+        "meshopt",
+        "positions",
+        &meshopt_input(MeshoptMode::Attributes, 0, 16, 24, &v),
+    );
+    put(
+        "meshopt",
+        "exponential",
+        &meshopt_input(MeshoptMode::Attributes, 3, 16, 24, &v),
+    );
     let normals: Vec<[u8; 4]> = (0..24u8).map(|i| [i * 9, 255 - i * 7, 127, 0]).collect();
     let n = meshopt::encoding::encode_vertex_buffer(&normals).unwrap();
-    put("meshopt", "octahedral", &meshopt_input(MeshoptMode::Attributes, 1, 4, 24, &n));
-    put("meshopt", "color", &meshopt_input(MeshoptMode::Attributes, 4, 4, 24, &n));
+    put(
+        "meshopt",
+        "octahedral",
+        &meshopt_input(MeshoptMode::Attributes, 1, 4, 24, &n),
+    );
+    put(
+        "meshopt",
+        "color",
+        &meshopt_input(MeshoptMode::Attributes, 4, 4, 24, &n),
+    );
     let quats: Vec<[u8; 8]> = (0..24u8).map(|i| [i, 2 * i, 3, 4, 5, 6, 7, 3]).collect();
     let q = meshopt::encoding::encode_vertex_buffer(&quats).unwrap();
-    put("meshopt", "quaternion", &meshopt_input(MeshoptMode::Attributes, 2, 8, 24, &q));
-    let tris: Vec<u32> = (0..12u32).flat_map(|t| [t, (t + 1) % 24, (t + 5) % 24]).collect();
+    put(
+        "meshopt",
+        "quaternion",
+        &meshopt_input(MeshoptMode::Attributes, 2, 8, 24, &q),
+    );
+    let tris: Vec<u32> = (0..12u32)
+        .flat_map(|t| [t, (t + 1) % 24, (t + 5) % 24])
+        .collect();
     let t = meshopt::encoding::encode_index_buffer(&tris, 24).unwrap();
-    put("meshopt", "triangles32", &meshopt_input(MeshoptMode::Triangles, 0, 4, 36, &t));
-    put("meshopt", "triangles16", &meshopt_input(MeshoptMode::Triangles, 0, 2, 36, &t));
+    put(
+        "meshopt",
+        "triangles32",
+        &meshopt_input(MeshoptMode::Triangles, 0, 4, 36, &t),
+    );
+    put(
+        "meshopt",
+        "triangles16",
+        &meshopt_input(MeshoptMode::Triangles, 0, 2, 36, &t),
+    );
     let seq = meshopt::encoding::encode_index_sequence(&tris, 24).unwrap();
-    put("meshopt", "indices", &meshopt_input(MeshoptMode::Indices, 0, 4, 36, &seq));
+    put(
+        "meshopt",
+        "indices",
+        &meshopt_input(MeshoptMode::Indices, 0, 4, 36, &seq),
+    );
 
     // Textures: 8-bit, 16-bit, grey, palette-free PNGs, a JPEG and a lossless WebP.
-    let rgba = image::RgbaImage::from_fn(8, 6, |x, y| image::Rgba([x as u8 * 30, y as u8 * 40, 7, 200]));
+    let rgba = image::RgbaImage::from_fn(8, 6, |x, y| {
+        image::Rgba([x as u8 * 30, y as u8 * 40, 7, 200])
+    });
     let enc = |img: image::DynamicImage, f: image::ImageFormat| {
         let mut out = Vec::new();
         img.write_to(&mut Cursor::new(&mut out), f).unwrap();
         out
     };
     let d = image::DynamicImage::ImageRgba8(rgba);
-    put("texture", "rgba8.png", &enc(d.clone(), image::ImageFormat::Png));
-    put("texture", "rgb16.png", &enc(image::DynamicImage::ImageRgb16(d.to_rgb16()), image::ImageFormat::Png));
-    put("texture", "grey.png", &enc(image::DynamicImage::ImageLuma8(d.to_luma8()), image::ImageFormat::Png));
-    put("texture", "rgb.jpg", &enc(image::DynamicImage::ImageRgb8(d.to_rgb8()), image::ImageFormat::Jpeg));
-    put("texture", "rgba.webp", &enc(d.clone(), image::ImageFormat::WebP));
+    put(
+        "texture",
+        "rgba8.png",
+        &enc(d.clone(), image::ImageFormat::Png),
+    );
+    put(
+        "texture",
+        "rgb16.png",
+        &enc(
+            image::DynamicImage::ImageRgb16(d.to_rgb16()),
+            image::ImageFormat::Png,
+        ),
+    );
+    put(
+        "texture",
+        "grey.png",
+        &enc(
+            image::DynamicImage::ImageLuma8(d.to_luma8()),
+            image::ImageFormat::Png,
+        ),
+    );
+    put(
+        "texture",
+        "rgb.jpg",
+        &enc(
+            image::DynamicImage::ImageRgb8(d.to_rgb8()),
+            image::ImageFormat::Jpeg,
+        ),
+    );
+    put(
+        "texture",
+        "rgba.webp",
+        &enc(d.clone(), image::ImageFormat::WebP),
+    );
 
     // Environment maps and EXR: RGBE, and EXRs in several compressions and layouts.
     let sky = image::Rgb32FImage::from_fn(8, 4, |x, y| image::Rgb([x as f32 * 0.3, y as f32, 5.0]));
-    let hdr = enc(image::DynamicImage::ImageRgb32F(sky), image::ImageFormat::Hdr);
+    let hdr = enc(
+        image::DynamicImage::ImageRgb32F(sky),
+        image::ImageFormat::Hdr,
+    );
     put("env", "sky.hdr", &hdr);
     let mut im = aperture_imageio::Image::new(8, 4);
     im.rgba = (0..32).map(|i| [i as f32, 0.5, 2.0, 1.0]).collect();
     let plain = aperture_imageio::encode_exr(&im, Path::new("s.exr")).unwrap();
     put("env", "sky.exr", &plain);
     put("exr", "zip.exr", &plain);
-    im.layers.push(aperture_imageio::Layer::new("Depth", &["Z"], vec![3.0; 32]));
-    im.metadata.push(("aperture:spp".into(), aperture_imageio::MetaValue::Int(4)));
-    put("exr", "layers.exr", &aperture_imageio::encode_exr(&im, Path::new("l.exr")).unwrap());
+    im.layers
+        .push(aperture_imageio::Layer::new("Depth", &["Z"], vec![3.0; 32]));
+    im.metadata
+        .push(("aperture:spp".into(), aperture_imageio::MetaValue::Int(4)));
+    put(
+        "exr",
+        "layers.exr",
+        &aperture_imageio::encode_exr(&im, Path::new("l.exr")).unwrap(),
+    );
     use exr::prelude::*;
     for (name, c) in [
         ("none", Compression::Uncompressed),
@@ -183,11 +285,19 @@ fn write_seeds() {
         let layer = Layer::new(
             (8, 4),
             LayerAttributes::named("part"),
-            Encoding { compression: c, ..Encoding::default() },
-            SpecificChannels::rgba(|p: Vec2<usize>| (p.x() as f32, 0.5f32, f16::from_f32(2.0), 1.0f32)),
+            Encoding {
+                compression: c,
+                ..Encoding::default()
+            },
+            SpecificChannels::rgba(|p: Vec2<usize>| {
+                (p.x() as f32, 0.5f32, f16::from_f32(2.0), 1.0f32)
+            }),
         );
         let mut out = Vec::new();
-        Image::from_layer(layer).write().to_buffered(Cursor::new(&mut out)).unwrap();
+        Image::from_layer(layer)
+            .write()
+            .to_buffered(Cursor::new(&mut out))
+            .unwrap();
         put("exr", &format!("{name}.exr"), &out);
     }
 }
