@@ -26,3 +26,15 @@ fn exr_whose_decoder_panics_is_a_damaged_file_error() {
     let e = aperture_imageio::decode_env_image(&bytes, &path, 1 << 30).expect_err("damaged");
     assert!(e.to_string().contains("EXR"), "{e}");
 }
+
+/// Fuzz target `exr`, 527,981 executions in: an offset table entry near `usize::MAX`
+/// overflowed the DWA guard's own arithmetic (`guard.rs`, before the decoder ran). Now every
+/// position read from the file is added with a check; the file is an ordinary error.
+#[test]
+fn exr_with_an_offset_near_usize_max_is_an_error_not_an_overflow() {
+    let (path, bytes) = data("exr-offset-overflow.exr");
+    match aperture_imageio::decode_exr(&bytes, &path) {
+        Ok(_) => {}
+        Err(e) => assert!(!e.to_string().contains("panicked"), "{e}"),
+    }
+}

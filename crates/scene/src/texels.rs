@@ -96,7 +96,24 @@ pub fn decode_texture(
     decode_checked(bytes, image, h)
 }
 
+/// [`decode_unguarded`], with a decoder's panic on damaged data turned into an error: the
+/// image crate's decoders are third-party code (zune-jpeg overflows on some damaged JPEGs in
+/// builds with overflow checks), and one bad texture must not bring down the process.
 fn decode_checked(bytes: &[u8], image: usize, h: Header) -> Result<(u32, u32, Texels), Error> {
+    std::panic::catch_unwind(|| decode_unguarded(bytes, image, h)).unwrap_or_else(|panic| {
+        let message = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Err(Error::Invalid {
+            at: format!("images[{image}]"),
+            reason: format!("the image decoder panicked on damaged data: {message}"),
+        })
+    })
+}
+
+fn decode_unguarded(bytes: &[u8], image: usize, h: Header) -> Result<(u32, u32, Texels), Error> {
     let mut d = decoder(bytes, image)?;
     // The decoder may allocate what its header claims (and a little for its own state), not
     // more: a header that lies cannot grow it.

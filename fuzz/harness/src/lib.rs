@@ -96,18 +96,32 @@ pub fn load(data: &[u8]) {
     }
 }
 
-/// For the EXR-reading targets under libFuzzer, whose panic hook aborts on every panic: a
-/// panic raised inside the `exr` crate is left to [`aperture_imageio::decode_exr`], which
-/// catches it and reports a damaged file (the crate's B44 decoder overflows on some damaged
-/// blocks); any other panic still aborts, as a finding. Call once, after libFuzzer's hook is
+/// Crates whose panics the readers catch and report as damaged data: the `exr` crate (its
+/// B44 decoder overflows on some damaged blocks; `aperture_imageio::decode_exr`) and the image
+/// crate's decoders (zune-jpeg overflows on some damaged JPEGs; `aperture_scene`'s texture
+/// decoding).
+const CAUGHT_IN: &[&str] = &[
+    "/exr-1.",
+    "/image-0.",
+    "/zune-jpeg-",
+    "/zune-core-",
+    "/png-0.",
+    "/image-webp-",
+];
+
+/// For targets whose readers catch third-party decoders' panics, under libFuzzer, whose panic
+/// hook aborts on every panic: a panic raised inside one of those crates is left to the
+/// reader's `catch_unwind` (if nothing catches it, libFuzzer's own wrapper still aborts: a
+/// finding); any other panic aborts at once, as before. Call once, after libFuzzer's hook is
 /// installed (the targets' `init`).
-pub fn tolerate_exr_crate_panics() {
+pub fn tolerate_caught_decoder_panics() {
     let aborting = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
-        let in_exr = info
-            .location()
-            .is_some_and(|l| l.file().replace('\\', "/").contains("/exr-1."));
-        if !in_exr {
+        let caught = info.location().is_some_and(|l| {
+            let file = l.file().replace('\\', "/");
+            CAUGHT_IN.iter().any(|c| file.contains(c))
+        });
+        if !caught {
             aborting(info);
         }
     }));

@@ -32,11 +32,15 @@ pub(super) fn walk_header(bytes: &[u8], mut at: usize) -> Option<(Vec<Record>, u
 }
 
 fn read_i32(bytes: &[u8], at: usize) -> Option<i32> {
-    Some(i32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?))
+    Some(i32::from_le_bytes(
+        bytes.get(at..at.checked_add(4)?)?.try_into().ok()?,
+    ))
 }
 
 fn read_u64(bytes: &[u8], at: usize) -> Option<u64> {
-    Some(u64::from_le_bytes(bytes.get(at..at + 8)?.try_into().ok()?))
+    Some(u64::from_le_bytes(
+        bytes.get(at..at.checked_add(8)?)?.try_into().ok()?,
+    ))
 }
 
 /// Position after all headers (magic and version take 8 bytes; a multi-part file ends its
@@ -68,26 +72,29 @@ fn parse_chunk(
     meta: &MetaData,
     multipart: bool,
 ) -> Option<(usize, i32, usize, usize)> {
+    // `at` comes from the file's offset table: any value, so every step is checked.
     let part = if multipart {
-        at += 4;
-        usize::try_from(read_i32(bytes, at - 4)?).ok()?
+        let part = usize::try_from(read_i32(bytes, at)?).ok()?;
+        at = at.checked_add(4)?;
+        part
     } else {
         0
     };
     let header = meta.headers.get(part)?;
     let y = match header.blocks {
         BlockDescription::ScanLines => {
-            at += 4;
-            read_i32(bytes, at - 4)?
+            let y = read_i32(bytes, at)?;
+            at = at.checked_add(4)?;
+            y
         }
         // Tile x, y, level x, level y; the row is not needed (tiled DWA is refused).
         BlockDescription::Tiles(_) => {
-            at += 16;
+            at = at.checked_add(16)?;
             0
         }
     };
     let len = usize::try_from(read_i32(bytes, at)?).ok()?;
-    let start = at + 4;
+    let start = at.checked_add(4)?;
     (start.checked_add(len)? <= bytes.len()).then_some((part, y, start, len))
 }
 
@@ -126,7 +133,7 @@ pub(super) fn check_dwa_blocks(bytes: &[u8], meta: &MetaData) -> Result<(), DwaP
     let total: usize = meta.headers.iter().map(|h| h.chunk_count).sum();
 
     let mut positions: Vec<usize> = (0..total)
-        .filter_map(|i| read_u64(bytes, tables + 8 * i))
+        .filter_map(|i| read_u64(bytes, tables.checked_add(i.checked_mul(8)?)?))
         .filter_map(|offset| usize::try_from(offset).ok())
         .collect();
     let mut at = tables.saturating_add(total.saturating_mul(8));
