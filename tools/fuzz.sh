@@ -7,7 +7,8 @@
 # after SECONDS or FUZZ_RUNS executions (default 1000000), whichever comes first. The committed,
 # minimised corpus fuzz/corpus/TARGET seeds the run; what the run finds grows in
 # fuzz/corpus-run/TARGET (not committed). A crash, a timeout (> 2 s for one input) or an
-# allocation past libFuzzer's limits (RSS 2 GiB, above the targets' 512 MiB budget) stops the
+# allocation past libFuzzer's limits (one malloc over 96 MiB, above the targets' 64 MiB
+# budget; RSS 2 GiB, AddressSanitizer's own memory included) stops the
 # run with its input in fuzz/artifacts/TARGET/: make it a regression test in the crate's tests,
 # then fix it. --minimise then merges the run's corpus into fuzz/corpus/TARGET (libFuzzer's
 # -merge=1 keeps only inputs that add coverage; inputs above 16 KiB are left out).
@@ -36,10 +37,10 @@ run_dir=fuzz/corpus-run/$target
 mkdir -p "$run_dir" "fuzz/artifacts/$target"
 cd fuzz
 if [[ $seconds -gt 0 ]]; then
-    # -timeout: an input taking over 2 s is a finding; -rss_limit_mb/-malloc_limit_mb: memory
-    # past 2 GiB (a single allocation or the process) is one too.
+    # -timeout: an input taking over 2 s is a finding; -malloc_limit_mb: one allocation past
+    # the budget (fuzz/harness MEMORY_BUDGET, 64 MiB) is one too, as is a process past 2 GiB.
     nice -n 19 cargo +nightly fuzz run "$target" "corpus-run/$target" "corpus/$target" -- \
-        -max_total_time="$seconds" -runs="${FUZZ_RUNS:-1000000}" -timeout=2 -rss_limit_mb=2048 -malloc_limit_mb=2048 \
+        -max_total_time="$seconds" -runs="${FUZZ_RUNS:-1000000}" -timeout=2 -rss_limit_mb=2048 -malloc_limit_mb=96 \
         -max_len=16384 -print_final_stats=1 -artifact_prefix="artifacts/$target/"
 fi
 if [[ $minimise == --minimise ]]; then

@@ -51,9 +51,36 @@ fn decoder(bytes: &[u8], image: usize) -> Result<impl image::ImageDecoder + '_, 
         .map_err(image_error(image))
 }
 
+/// Most decoded bytes a PNG or JPEG can hold per byte of file. Deflate (PNG) cannot
+/// compress beyond 1032:1, and a baseline JPEG spends at least about two bits on every 8×8
+/// block of every component (a DC code and an end of block), about 1:512 for RGB; a header
+/// claiming more is a decompression bomb (or a truncated file the decoder would pad with
+/// grey). WebP is not bounded so (a constant image codes to almost nothing).
+const MAX_RATIO: u64 = 1100;
+
 fn header(bytes: &[u8], image: usize) -> Result<Header, Error> {
+    let format = image::ImageReader::new(Cursor::new(bytes))
+        .with_guessed_format()
+        .ok()
+        .and_then(|r| r.format());
     let d = decoder(bytes, image)?;
     let (width, height) = d.dimensions();
+    let claimed =
+        u64::from(width) * u64::from(height) * u64::from(d.color_type().bytes_per_pixel());
+    let bounded = matches!(
+        format,
+        Some(image::ImageFormat::Png | image::ImageFormat::Jpeg)
+    );
+    if bounded && claimed > MAX_RATIO * bytes.len() as u64 + (1 << 20) {
+        return Err(Error::Invalid {
+            at: format!("images[{image}]"),
+            reason: format!(
+                "a {}-byte file cannot hold a {width}x{height} image ({claimed} bytes decoded): \
+                 a decompression bomb or a truncated file",
+                bytes.len()
+            ),
+        });
+    }
     if width == 0 || height == 0 {
         return Err(Error::Invalid {
             at: format!("images[{image}]"),
@@ -276,10 +303,13 @@ mod tests {
         p[20..24].copy_from_slice(&60000u32.to_be_bytes());
         let crc = crc32(&p[12..29]);
         p[29..33].copy_from_slice(&crc.to_be_bytes());
-        let e = decode_texture(&p, 0, 1 << 30).unwrap_err();
+        // 14.4 GB from 69 bytes: more than deflate can expand them.
+        let e = decode_texture(&p, 0, u64::MAX).unwrap_err();
+        assert!(e.to_string().contains("decompression bomb"), "{e}");
+        // A PNG whose size fits its bytes but not the budget: refused by the budget.
+        let big = png(600, 600);
+        let e = decode_texture(&big, 0, 1 << 20).unwrap_err();
         assert!(matches!(e, Error::OverBudget { .. }), "{e}");
-        // Within the budget the lie is caught by the decoder: an error, not 14 GB.
-        assert!(decode_texture(&p, 0, u64::MAX).is_err());
     }
 
     fn crc32(bytes: &[u8]) -> u32 {

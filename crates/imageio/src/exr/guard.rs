@@ -65,8 +65,8 @@ fn is_dwa(header: &Header) -> bool {
     )
 }
 
-/// A chunk: (part index, first row, data start, data length).
-fn parse_chunk(
+/// A chunk's header: (part index, first row, data start, claimed data length).
+fn chunk_header(
     bytes: &[u8],
     mut at: usize,
     meta: &MetaData,
@@ -95,7 +95,53 @@ fn parse_chunk(
     };
     let len = usize::try_from(read_i32(bytes, at)?).ok()?;
     let start = at.checked_add(4)?;
+    Some((part, y, start, len))
+}
+
+/// A chunk that lies within the file: (part index, first row, data start, data length).
+fn parse_chunk(
+    bytes: &[u8],
+    at: usize,
+    meta: &MetaData,
+    multipart: bool,
+) -> Option<(usize, i32, usize, usize)> {
+    let (part, y, start, len) = chunk_header(bytes, at, meta, multipart)?;
     (start.checked_add(len)? <= bytes.len()).then_some((part, y, start, len))
+}
+
+/// The `exr` decoder allocates a block's data by the size the block claims, before reading
+/// it: a 400-byte file whose block claims 2 GB costs a 2 GB allocation (and seconds to clear
+/// it). Every block the offset table points at (and that lies in the file) may claim at most
+/// the bytes that follow it; scan-line and tiled flat parts (deep parts are not read).
+pub(super) fn check_chunk_sizes(bytes: &[u8], meta: &MetaData) -> Result<(), String> {
+    if meta.headers.iter().any(|h| h.deep) {
+        return Ok(());
+    }
+    let multipart = meta.requirements.has_multiple_layers;
+    let Some(tables) = headers_end(bytes, multipart) else {
+        return Ok(());
+    };
+    let total: usize = meta.headers.iter().map(|h| h.chunk_count).sum();
+    for i in 0..total {
+        let Some(offset) = tables
+            .checked_add(i.saturating_mul(8))
+            .and_then(|at| read_u64(bytes, at))
+            .and_then(|o| usize::try_from(o).ok())
+        else {
+            continue;
+        };
+        let Some((_, _, start, len)) = chunk_header(bytes, offset, meta, multipart) else {
+            continue;
+        };
+        let available = bytes.len().saturating_sub(start);
+        if len > available {
+            return Err(format!(
+                "the block at byte {offset} claims {len} bytes, but the file has {available} \
+                 after it"
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// What is wrong with the DWA blocks, if anything.

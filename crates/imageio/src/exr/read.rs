@@ -83,6 +83,10 @@ fn decode_exr_inner(bytes: &[u8], path: &Path) -> Result<Image, Error> {
             })
         }
     }
+    guard::check_chunk_sizes(bytes, &meta).map_err(|message| Error::Exr {
+        path: path.to_path_buf(),
+        message,
+    })?;
     let limit = (1u64 << 30).max(4096 * bytes.len() as u64);
     let mut decoded = 0u64;
     for header in &meta.headers {
