@@ -48,3 +48,13 @@ fn exr_block_claiming_more_than_the_file_is_refused_before_decoding() {
     let e = aperture_imageio::decode_exr(&bytes, &path).expect_err("damaged");
     assert!(e.to_string().contains("claims"), "{e}");
 }
+
+/// Fuzz target `env`, 886,879 executions in: an EXR environment map whose data window is so
+/// large that its size in bytes overflowed the limit check's multiplication (`env.rs`; in
+/// release builds it wrapped and could pass the check). Now saturating: refused as too large.
+#[test]
+fn environment_map_whose_size_overflows_u64_is_refused_as_too_large() {
+    let (path, bytes) = data("env-size-overflow.exr");
+    let e = aperture_imageio::decode_env_image(&bytes, &path, 1 << 30).expect_err("too large");
+    assert!(!e.to_string().contains("panicked"), "{e}");
+}
