@@ -57,7 +57,7 @@ pub fn decode_env_image(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Ima
             if let Some((w, h)) = head {
                 check_size(path, w, h, max_bytes)?;
             }
-            let mut image = crate::decode_exr(bytes, path)?;
+            let mut image = crate::decode_exr_within(bytes, path, max_bytes)?;
             image.layers.clear();
             image.metadata.clear();
             image

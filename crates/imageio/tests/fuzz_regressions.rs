@@ -58,3 +58,14 @@ fn environment_map_whose_size_overflows_u64_is_refused_as_too_large() {
     let e = aperture_imageio::decode_env_image(&bytes, &path, 1 << 30).expect_err("too large");
     assert!(!e.to_string().contains("panicked"), "{e}");
 }
+
+/// Fuzz target `exr` with one allocation limited to 96 MiB (an out-of-memory finding): a
+/// 387-byte file whose header claims 258 MB of samples, within the reader's default allowance
+/// (1 GiB, or 4096 times the file). A caller with a smaller budget (environment maps, the fuzz
+/// targets) gets an error before the decoder allocates.
+#[test]
+fn exr_claiming_more_samples_than_the_budget_is_refused_before_allocating() {
+    let (path, bytes) = data("exr-claims-258mb.exr");
+    let e = aperture_imageio::decode_exr_within(&bytes, &path, 64 << 20).expect_err("too big");
+    assert!(e.to_string().contains("bytes of samples"), "{e}");
+}

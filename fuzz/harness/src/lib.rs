@@ -131,7 +131,7 @@ pub fn tolerate_caught_decoder_panics() {
 
 /// `data` as an OpenEXR file (`merge` parts and EXR environment maps are read by it).
 pub fn exr(data: &[u8]) {
-    let _ = aperture_imageio::decode_exr(data, Path::new("fuzz.exr"));
+    let _ = aperture_imageio::decode_exr_within(data, Path::new("fuzz.exr"), MEMORY_BUDGET);
 }
 
 /// `data` as an environment map (Radiance HDR or EXR, told apart by content).
