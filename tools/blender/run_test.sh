@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Runs the Blender acceptance tests (tools/blender/test_export.py, test_animation.py and
-# test_compositor.py) with Blender as a Python
+# Runs the Blender acceptance tests (tools/blender/test_export.py, test_animation.py,
+# test_compositor.py and test_engine.py) with Blender as a Python
 # module: bpy 5.0.1 (or APERTURE_BPY) on Python 3.11, in a cached virtual environment that is
 # created and filled on first use. Never part of the Rust build.
 #
@@ -55,5 +55,8 @@ for a in "$@"; do [ "$a" = "--require-all" ] && anim_args+=(--require-all); done
 # SPEC §6: the EXR passes in Blender's compositor, Cycles' pass names, OpenEXR's reader.
 echo "== tools/blender/test_compositor.py"
 "$venv/bin/python" tools/blender/test_compositor.py --aperture "$bin" "${anim_args[@]}" || status=$?
+# Issue 20: the "aperture" render engine of the add-on (F12 renders with aperture).
+echo "== tools/blender/test_engine.py"
+"$venv/bin/python" tools/blender/test_engine.py --aperture "$bin" "${anim_args[@]}" || status=$?
 echo "== blender test: exit $status after $(($(date +%s) - start)) s"
 exit $status

@@ -25,8 +25,9 @@ import subprocess
 import sys
 import tempfile
 
+from addon_zip import addon_zip  # noqa: E402
+
 HERE = os.path.dirname(os.path.abspath(__file__))
-ADDON_FILE = os.path.join(HERE, "aperture_gltf_dof.py")
 ADDON = "aperture_gltf_dof"
 RESULTS = []
 FRAMES = (1, 12, 37)
@@ -184,7 +185,8 @@ def test_focus_pull(binary, work):
     from mathutils import Vector
 
     cams = focus_scene()
-    bpy.ops.preferences.addon_install(filepath=ADDON_FILE, overwrite=True)
+    addon_file = addon_zip(tempfile.mkdtemp(prefix="aperture-addon-"))
+    bpy.ops.preferences.addon_install(filepath=addon_file, overwrite=True)
     bpy.ops.preferences.addon_enable(module=ADDON)
     path = os.path.join(work, "focus.gltf")
     bpy.ops.export_scene.gltf(filepath=path, export_format="GLTF_SEPARATE", export_cameras=True,

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT OR Apache-2.0
-"""Acceptance test for the Blender add-on `aperture_gltf_dof.py` (issue 8).
+"""Acceptance test for the Blender add-on the `aperture_gltf_dof` add-on (issue 8).
 
 Run it with Blender as a Python module (bpy 5.0.1, Python 3.11); `run_test.sh` beside this file
 sets that up. It is never part of the Rust build.
@@ -47,10 +47,10 @@ import subprocess
 import sys
 import tempfile
 
+from addon_zip import addon_zip
 from checks import check, record, summary
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ADDON_FILE = os.path.join(HERE, "aperture_gltf_dof.py")
 ADDON = "aperture_gltf_dof"
 
 ARGS = None
@@ -86,10 +86,11 @@ def import_bpy(user_scripts):
 
 
 def install_addon():
-    bpy.ops.preferences.addon_install(filepath=ADDON_FILE, overwrite=True)
+    addon_file = addon_zip(tempfile.mkdtemp(prefix="aperture-addon-"))
+    bpy.ops.preferences.addon_install(filepath=addon_file, overwrite=True)
     bpy.ops.preferences.addon_enable(module=ADDON)
     enabled = ADDON in bpy.context.preferences.addons.keys()
-    check("install", enabled, f"add-on installed from {ADDON_FILE} and enabled")
+    check("install", enabled, f"add-on installed from {addon_file} and enabled")
     if not enabled:
         raise SystemExit(1)
 

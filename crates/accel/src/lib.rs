@@ -29,6 +29,8 @@
 //! assert!((hit.t - 2.0).abs() < 1e-6);
 //! ```
 
+mod build;
+pub use build::FrameHints;
 mod node;
 mod triangle;
 
@@ -36,13 +38,7 @@ pub use triangle::intersect_triangle;
 
 use glam::{Affine3A, Vec3};
 use node::BoxRay;
-use obvhs::{
-    aabb::Aabb,
-    bvh2::reinsertion::ReinsertionOptimizer,
-    cwbvh::{bvh2_to_cwbvh::bvh2_to_cwbvh, node::CwBvhNode},
-    ploc::PlocBuilder,
-    BvhBuildParams,
-};
+use obvhs::cwbvh::node::CwBvhNode;
 use rayon::prelude::*;
 use std::mem::MaybeUninit;
 use triangle::TriRay;
@@ -191,6 +187,9 @@ pub struct AccelStats {
     pub memory_bytes: usize,
     /// Wall time of [`Accel::build`].
     pub build_time: std::time::Duration,
+    /// Bottom-level BVHs taken from the previous frame instead of built
+    /// ([`Accel::build_frame`]).
+    pub reused_blases: usize,
 }
 
 /// A triangle in BVH order: its vertices exactly as given (shared vertices stay bitwise equal,
@@ -253,6 +252,12 @@ pub struct Accel {
     /// where a fused slab distance rounds differently.
     avx2: bool,
     stats: AccelStats,
+    /// Per input mesh: its bottom-level BVH in `blases`, or `u32::MAX` (flattened, or not drawn).
+    blas_of_mesh: Vec<u32>,
+    /// The world-space BVH's key and instance count, when there is one (`blases[0]`).
+    flat: Option<(u64, usize)>,
+    /// Triangles that only became degenerate in world space when flattened.
+    flat_degenerate: usize,
 }
 
 /// A hit's position in world space with a bound on its rounding error: where secondary rays
@@ -699,394 +704,7 @@ fn detect_avx2() -> bool {
     }
 }
 
-/// Depth (levels of nodes) of an obvhs CWBVH; children always follow their parent in `nodes`.
-fn cwbvh_depth(nodes: &[CwBvhNode]) -> usize {
-    let mut depth = vec![0u32; nodes.len()];
-    let mut max = 0u32;
-    for i in 0..nodes.len() {
-        let d = if i == 0 { 1 } else { depth[i] };
-        depth[i] = d;
-        max = max.max(d);
-        let n = &nodes[i];
-        let children = n.imask.count_ones();
-        for c in 0..children {
-            if let Some(slot) = depth.get_mut((n.child_base_idx + c) as usize) {
-                *slot = d + 1;
-            }
-        }
-    }
-    max as usize
-}
-
-fn build_params(quality: BvhQuality) -> BvhBuildParams {
-    // Chosen by measurement (BlenderIO-32bitIndices, Embree's 1 M thin-lens rays, one thread,
-    // interleaved runs on the shared 2-core machine; 1 M-triangle terrain build from
-    // `benches/benches/accel.rs`):
-    //   obvhs preset      closest Mrays/s   build 130 k   build 1 M
-    //   very_fast_build   2.9 - 3.1         47 - 62 ms    0.46 s
-    //   fast_build        3.3 - 3.5         63 - 75 ms    0.53 s
-    //   medium_build      2.0 - 3.0         62 - 110 ms   0.60 s
-    //   slow_build        2.3 - 2.7         110 - 160 ms  (not benched)
-    // Then refined with callgrind instruction counts of closest-hit queries (deterministic, unlike
-    // timings on that machine; 10 k thin-lens rays x 3, same scene), from fast_build:
-    //   as is (search depth threshold 2, reinsertion 0.02)   35.44 M   build  87 - 118 ms
-    //   search depth threshold 0                             34.64 M           87 -  95 ms
-    //   threshold 0, reinsertion 0.1                         34.39 M           95 - 119 ms
-    //   threshold 0, reinsertion 0.3                         34.34 M          180 - 250 ms
-    //   threshold 0, reinsertion 1.0                         34.19 M          380 - 395 ms
-    //   reinsertion 0.3, search Minimum                      39.01 M
-    //   medium_build (search Medium)                         40.37 M
-    //   very_fast_build                                      42.17 M
-    // so Medium and High start from fast_build with the threshold off (the full Low search from
-    // the first PLOC pass: fewer nodes visited at no build cost here); Medium keeps the light
-    // reinsertion, High reinserts every node once (4x the build for 1.3 % fewer instructions).
-    // Fast stays very_fast_build, the quickest build. More PLOC search (medium_build, High's
-    // preset before) made worse trees for this traversal.
-    // Spatial pre-splits are never used: they clip triangle boxes with rounded planes, which
-    // would void the conservative box test.
-    let mut p = match quality {
-        BvhQuality::Fast => BvhBuildParams::very_fast_build(),
-        BvhQuality::Medium => BvhBuildParams::fast_build(),
-        BvhQuality::High => BvhBuildParams {
-            reinsertion_batch_ratio: 1.0,
-            ..BvhBuildParams::fast_build()
-        },
-    };
-    if quality != BvhQuality::Fast {
-        p.search_depth_threshold = 0;
-    }
-    p.pre_split = false;
-    p.max_prims_per_leaf = 3;
-    p
-}
-
-fn build_cwbvh(aabbs: &[Aabb], quality: BvhQuality) -> (Vec<CwBvhNode>, Vec<u32>) {
-    if aabbs.is_empty() {
-        return (Vec::new(), Vec::new());
-    }
-    let p = build_params(quality);
-    let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
-        p.ploc_search_distance,
-        aabbs,
-        (0..aabbs.len() as u32).collect(),
-        p.sort_precision,
-        p.search_depth_threshold,
-    );
-    ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
-    let cw = bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf, true, false);
-    (cw.nodes, cw.primitive_indices)
-}
-
-/// Why a triangle is left out.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum TriCheck {
-    Ok([Vec3; 3]),
-    OutOfRange,
-    Degenerate,
-}
-
-fn check_triangle(positions: &[Vec3], tri: [u32; 3]) -> TriCheck {
-    let mut p = [Vec3::ZERO; 3];
-    for k in 0..3 {
-        match positions.get(tri[k] as usize) {
-            Some(v) => p[k] = *v,
-            None => return TriCheck::OutOfRange,
-        }
-    }
-    classify(p)
-}
-
-fn classify(p: [Vec3; 3]) -> TriCheck {
-    if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
-        return TriCheck::Degenerate;
-    }
-    // In f64 the edges of f32 points and their products are exact, so this is exactly "the
-    // three points are collinear", without a tolerance that would depend on the scene's scale.
-    let [a, b, c] = p.map(|v| v.as_dvec3());
-    if (b - a).cross(c - a) == glam::DVec3::ZERO {
-        return TriCheck::Degenerate;
-    }
-    TriCheck::Ok(p)
-}
-
-fn aabb_of(p: &[Vec3; 3]) -> Aabb {
-    let lo = p[0].min(p[1]).min(p[2]);
-    let hi = p[0].max(p[1]).max(p[2]);
-    Aabb::new(lo.into(), hi.into())
-}
-
-/// Builds one bottom-level BVH from kept triangles (`(vertices, original index, instance)`).
-fn build_blas(tris: Vec<(Tri, u32)>, quality: BvhQuality, keep_instance: bool) -> Blas {
-    let aabbs: Vec<Aabb> = tris.iter().map(|(t, _)| aabb_of(&t.p)).collect();
-    let (nodes, order) = build_cwbvh(&aabbs, quality);
-    drop(aabbs);
-    let bounds = tris.iter().fold(None, |acc: Option<(Vec3, Vec3)>, (t, _)| {
-        let (lo, hi) = (
-            t.p[0].min(t.p[1]).min(t.p[2]),
-            t.p[0].max(t.p[1]).max(t.p[2]),
-        );
-        Some(acc.map_or((lo, hi), |(a, b)| (a.min(lo), b.max(hi))))
-    });
-    let ordered: Vec<Tri> = order.iter().map(|&i| tris[i as usize].0).collect();
-    let tri_instance = if keep_instance {
-        order.iter().map(|&i| tris[i as usize].1).collect()
-    } else {
-        Vec::new()
-    };
-    let depth = cwbvh_depth(&nodes);
-    let box_bounds = bounds.unwrap_or((Vec3::ZERO, Vec3::ZERO));
-    Blas {
-        nodes,
-        tris: ordered,
-        tri_instance,
-        depth,
-        bounds,
-        box_bounds,
-    }
-}
-
-/// World bounds of an object-space box, widened by a relative margin so that rounding in the
-/// transform (of the box here, of the ray at query time) cannot make the box miss a hit.
-fn world_bounds(world_from_object: &Affine3A, (lo, hi): (Vec3, Vec3)) -> Aabb {
-    let mut wlo = Vec3::splat(f32::INFINITY);
-    let mut whi = Vec3::splat(f32::NEG_INFINITY);
-    for k in 0..8 {
-        let c = Vec3::new(
-            if k & 1 == 0 { lo.x } else { hi.x },
-            if k & 2 == 0 { lo.y } else { hi.y },
-            if k & 4 == 0 { lo.z } else { hi.z },
-        );
-        let w = world_from_object.transform_point3(c);
-        wlo = wlo.min(w);
-        whi = whi.max(w);
-    }
-    let margin = 1e-5
-        * wlo
-            .abs()
-            .max(whi.abs())
-            .max_element()
-            .max(f32::MIN_POSITIVE);
-    Aabb::new((wlo - margin).into(), (whi + margin).into())
-}
-
-/// `object_from_world` for a usable instance transform, computed in f64 for accuracy.
-fn invert(world_from_object: &Affine3A) -> Option<Affine3A> {
-    let m = world_from_object;
-    if !(m.matrix3.is_finite() && m.translation.is_finite()) {
-        return None;
-    }
-    let d = glam::DAffine3::from_mat3_translation(m.matrix3.as_dmat3(), m.translation.as_dvec3());
-    let det = d.matrix3.determinant();
-    if det == 0.0 || !det.is_finite() {
-        return None;
-    }
-    let inv = d.inverse();
-    let f = Affine3A::from_mat3_translation(inv.matrix3.as_mat3(), inv.translation.as_vec3());
-    (f.matrix3.is_finite() && f.translation.is_finite()).then_some(f)
-}
-
 impl Accel {
-    /// Builds the structure with obvhs (PLOC, reinsertion, CWBVH conversion) for each mesh drawn
-    /// more than once, one world-space BVH for the meshes drawn once, and a top-level BVH over the
-    /// instances. Invalid input is left out and counted in [`Accel::stats`], never a panic.
-    pub fn build(
-        meshes: &[MeshInput<'_>],
-        instances: &[InstanceInput],
-        quality: BvhQuality,
-    ) -> Self {
-        let start = std::time::Instant::now();
-        let mut stats = AccelStats::default();
-
-        // Usable instances and how often each mesh is drawn.
-        let mut usable: Vec<(u32, InstanceInput, Affine3A)> = Vec::with_capacity(instances.len());
-        let mut uses = vec![0u32; meshes.len()];
-        for (i, inst) in instances.iter().enumerate() {
-            let inv = invert(&inst.world_from_object);
-            match (meshes.get(inst.mesh as usize), inv) {
-                (Some(_), Some(inv)) => {
-                    uses[inst.mesh as usize] += 1;
-                    usable.push((i as u32, *inst, inv));
-                }
-                _ => stats.skipped_instances += 1,
-            }
-        }
-
-        // Per mesh: validity counts, and the kept triangles of meshes drawn more than once.
-        struct Checked {
-            shared: Vec<(Tri, u32)>,
-            kept: usize,
-            degenerate: usize,
-            out_of_range: usize,
-        }
-        let checked: Vec<Checked> = meshes
-            .par_iter()
-            .enumerate()
-            .map(|(m, mesh)| {
-                let mut c = Checked {
-                    shared: Vec::new(),
-                    kept: 0,
-                    degenerate: 0,
-                    out_of_range: 0,
-                };
-                for (i, tri) in mesh.indices.iter().enumerate() {
-                    match check_triangle(mesh.positions, *tri) {
-                        TriCheck::Ok(p) => {
-                            c.kept += 1;
-                            if uses[m] > 1 {
-                                c.shared.push((Tri { p, prim: i as u32 }, 0));
-                            }
-                        }
-                        TriCheck::OutOfRange => c.out_of_range += 1,
-                        TriCheck::Degenerate => c.degenerate += 1,
-                    }
-                }
-                c
-            })
-            .collect();
-
-        // Meshes drawn once: their triangles moved into world space, tagged with the instance.
-        let mut flat: Vec<(Tri, u32)> = Vec::new();
-        for (id, inst, _) in &usable {
-            let m = inst.mesh as usize;
-            if uses[m] != 1 {
-                continue;
-            }
-            stats.flattened_instances += 1;
-            let mesh = &meshes[m];
-            let world: Vec<Vec3> = mesh
-                .positions
-                .iter()
-                .map(|p| inst.world_from_object.transform_point3(*p))
-                .collect();
-            for (i, tri) in mesh.indices.iter().enumerate() {
-                // Triangles that only become degenerate in world space (rounding) are counted too.
-                match check_triangle(&world, *tri) {
-                    TriCheck::Ok(p) => flat.push((Tri { p, prim: i as u32 }, *id)),
-                    TriCheck::Degenerate
-                        if check_triangle(mesh.positions, *tri) != TriCheck::Degenerate =>
-                    {
-                        stats.degenerate_triangles += 1
-                    }
-                    _ => {}
-                }
-            }
-        }
-
-        for (m, c) in checked.iter().enumerate() {
-            stats.degenerate_triangles += c.degenerate;
-            stats.invalid_index_triangles += c.out_of_range;
-            if uses[m] > 0 {
-                stats.unique_triangles += c.kept;
-                stats.drawn_triangles += c.kept * uses[m] as usize;
-            }
-        }
-
-        // Bottom-level BVHs, built in parallel: index 0 is the flattened one (if any).
-        let has_flat = !flat.is_empty();
-        let mut jobs: Vec<(Vec<(Tri, u32)>, bool)> = Vec::new();
-        if has_flat {
-            jobs.push((flat, true));
-        }
-        let mut blas_of_mesh = vec![u32::MAX; meshes.len()];
-        for (m, c) in checked.into_iter().enumerate() {
-            if uses[m] > 1 && !c.shared.is_empty() {
-                blas_of_mesh[m] = jobs.len() as u32;
-                jobs.push((c.shared, false));
-            }
-        }
-        let blases: Vec<Blas> = jobs
-            .into_par_iter()
-            .map(|(tris, keep_instance)| build_blas(tris, quality, keep_instance))
-            .collect();
-
-        // Top-level entries and their world bounds.
-        let mut entries = Vec::new();
-        let mut bounds = Vec::new();
-        if has_flat {
-            if let Some(b) = blases[0].bounds {
-                entries.push(Entry {
-                    blas: 0,
-                    instance: FLATTENED,
-                    object_from_world: Affine3A::IDENTITY,
-                    identity: true,
-                });
-                bounds.push(world_bounds(&Affine3A::IDENTITY, b));
-            }
-        }
-        for (id, inst, inv) in &usable {
-            let b = blas_of_mesh[inst.mesh as usize];
-            if b == u32::MAX {
-                continue;
-            }
-            let Some(bb) = blases[b as usize].bounds else {
-                continue;
-            };
-            entries.push(Entry {
-                blas: b,
-                instance: *id,
-                object_from_world: *inv,
-                identity: false,
-            });
-            bounds.push(world_bounds(&inst.world_from_object, bb));
-        }
-        let (tlas, order) = if entries.len() > 1 {
-            build_cwbvh(&bounds, quality)
-        } else {
-            (Vec::new(), (0..entries.len() as u32).collect())
-        };
-        let entries: Vec<Entry> = order.iter().map(|&i| entries[i as usize]).collect();
-        let tlas_bounds = bounds
-            .iter()
-            .map(|b| (Vec3::from(b.min), Vec3::from(b.max)))
-            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
-            .unwrap_or((Vec3::ZERO, Vec3::ZERO));
-        let tlas_depth = cwbvh_depth(&tlas);
-        let max_blas_depth = blases.iter().map(|b| b.depth).max().unwrap_or(0);
-        let mut instance_magnitude = vec![0.0f32; instances.len()];
-        for (id, inst, _) in &usable {
-            let mesh = &meshes[inst.mesh as usize];
-            let obj = mesh
-                .positions
-                .iter()
-                .filter(|p| p.is_finite())
-                .fold(0.0f32, |m, p| m.max(p.abs().max_element()));
-            let m = &inst.world_from_object;
-            let rows = m.matrix3.transpose();
-            let norm = [rows.x_axis, rows.y_axis, rows.z_axis]
-                .iter()
-                .map(|r| r.abs().element_sum())
-                .fold(0.0f32, f32::max);
-            instance_magnitude[*id as usize] = m.translation.abs().max_element() + norm * obj;
-        }
-
-        stats.blas_count = blases.len();
-        stats.tlas_entries = entries.len();
-        stats.bvh_nodes = tlas.len() + blases.iter().map(|b| b.nodes.len()).sum::<usize>();
-        stats.max_blas_depth = max_blas_depth;
-        stats.memory_bytes = blases
-            .iter()
-            .map(|b| {
-                b.nodes.len() * size_of::<CwBvhNode>()
-                    + b.tris.len() * size_of::<Tri>()
-                    + b.tri_instance.len() * 4
-            })
-            .sum::<usize>()
-            + tlas.len() * size_of::<CwBvhNode>()
-            + entries.len() * size_of::<Entry>();
-        stats.build_time = start.elapsed();
-        Self {
-            blases,
-            entries,
-            tlas,
-            tlas_depth,
-            tlas_bounds,
-            max_blas_depth,
-            instance_magnitude,
-            avx2: detect_avx2(),
-            stats,
-        }
-    }
-
     /// The world position of `hit` (found by `ray`) with a bound on its error, for spawning
     /// secondary rays with [`SpawnPoint::origin`].
     pub fn spawn_point(&self, ray: &Ray, hit: &Hit) -> SpawnPoint {

@@ -1,10 +1,13 @@
 //! `aperture`: render glTF scenes with physically based depth of field.
 
 mod bench;
+mod frames;
 mod info;
 mod interrupt;
+mod merge_cmd;
 mod progress;
 mod render_cmd;
+mod split_args;
 mod time_args;
 
 use clap::{Parser, Subcommand};
@@ -23,6 +26,8 @@ pub(crate) enum Command {
     Info(info::InfoArgs),
     /// Render a scene to EXR or PNG.
     Render(render_cmd::RenderArgs),
+    /// Put the parts of a render split across machines (tiles, sample batches) together.
+    Merge(merge_cmd::MergeArgs),
     /// Error against time per sampler configuration: CSV, log-log plot and table.
     Bench(bench::BenchArgs),
 }
@@ -32,6 +37,7 @@ fn main() -> std::process::ExitCode {
     let result = match cli.command {
         Command::Info(args) => info::run(args),
         Command::Render(args) => render_cmd::run(args),
+        Command::Merge(args) => merge_cmd::run(args),
         Command::Bench(args) => bench::run(args),
     };
     match result {
@@ -54,17 +60,23 @@ fn main() -> std::process::ExitCode {
 }
 
 #[cfg(test)]
-/// `BoxTextured.glb` from the samples folder (`APERTURE_SAMPLES`, else `../shared/gltf-samples`
-/// beside the repository). Missing: a skip with a message, but a failure with `CI=true`, where
-/// a silent skip would hide that the test never ran.
+/// `BoxTextured.glb` from the samples folder (see [`sample`]).
 fn box_textured_sample() -> Option<std::path::PathBuf> {
+    sample("correctness/BoxTextured/BoxTextured.glb")
+}
+
+#[cfg(test)]
+/// A file of the samples folder (`APERTURE_SAMPLES`, else `../shared/gltf-samples` beside the
+/// repository). Missing: a skip with a message, but a failure with `CI=true`, where a silent
+/// skip would hide that the test never ran.
+fn sample(relative: &str) -> Option<std::path::PathBuf> {
     let samples = std::env::var_os("APERTURE_SAMPLES")
         .map(std::path::PathBuf::from)
         .unwrap_or_else(|| {
             std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
                 .join("../../../shared/gltf-samples")
         });
-    let path = samples.join("correctness/BoxTextured/BoxTextured.glb");
+    let path = samples.join(relative);
     if path.is_file() {
         return Some(path);
     }

@@ -309,12 +309,30 @@ pub struct RenderArgs {
     #[arg(long, value_parser = aperture_budget::parse_bytes)]
     pub max_memory: Option<u64>,
     /// On Ctrl-C (or SIGTERM), write the samples taken so far to the EXR (with `Debug Sample
-    /// Count`, and `aperture:interrupted` = 1 in the header) instead of nothing. EXR only.
-    #[arg(long)]
+    /// Count`, and `aperture:interrupted` = 1 in the header) instead of nothing. EXR only; not
+    /// with --frames, where an interrupted frame is left unwritten so that --skip-existing
+    /// renders it again.
+    #[arg(long, conflicts_with = "frames")]
     pub save_partial: bool,
+    /// A part of a render split across machines: --region, --tile, --sample-offset.
+    #[command(flatten)]
+    pub split: crate::split_args::SplitArgs,
+    /// Render a sequence of frames (Blender's frame range: `1..250`, `1..250:2`); `#` in the
+    /// output name become the zero-padded frame number (`shot_####.exr`). The file is loaded
+    /// once, and only what moves is rebuilt per frame.
+    #[arg(long, value_name = "A..B[:STEP]", value_parser = aperture_render::sequence::FrameRange::parse, conflicts_with_all = ["time", "frame"])]
+    pub frames: Option<aperture_render::sequence::FrameRange>,
+    /// With --frames: leave frames whose file already exists (a restarted job goes on where it
+    /// stopped; files are written whole or not at all).
+    #[arg(long, requires = "frames")]
+    pub skip_existing: bool,
     /// No progress bar and no summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Progress display: a bar on a terminal, or JSON lines on stdout for programs (farm
+    /// wrappers, the Blender engine).
+    #[arg(long, value_enum, default_value_t = crate::progress::ProgressArg::Auto)]
+    pub progress: crate::progress::ProgressArg,
 }
 
 /// A render stopped by a signal after writing its partial EXR (`--save-partial`).
@@ -415,7 +433,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         check_footprint(&args, &early, &exr, &budget)?;
     }
     let t_load = Instant::now();
-    let scene = match aperture_scene::load(&args.scene, &load) {
+    let posed = aperture_scene::Animated::load(&args.scene, &load).and_then(|animated| {
+        // A sequence checks its cameras and sizes on its first frame.
+        let first = args
+            .frames
+            .map(|f| (f.start as f64 / f64::from(args.when.fps)) as f32);
+        let scene = animated.scene_at(first.or(load.time))?;
+        Ok((animated, scene))
+    });
+    let (animated, scene) = match posed {
         Ok(s) => s,
         // A flag's value the scene refuses (`--focus-object` naming no node, `--scene 9`) is a
         // usage error like any other bad flag value: exit code 2.
@@ -476,6 +502,27 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             args.spp
         ));
     }
+    let part = args
+        .split
+        .window(width, height)
+        .unwrap_or_else(|e| usage_error(e));
+    if part.is_some() && ext.as_deref() != Some("exr") {
+        usage_error(
+            "--region and --tile need .exr output: its data window records where the pixels belong",
+        );
+    }
+    if args.split.sample_offset > 0 && args.noise_threshold.is_some() {
+        usage_error(
+            "--sample-offset cannot be used with --noise-threshold: adaptive sampling decides from \
+             every sample of a pixel from the first (split an adaptive render with --tile instead)",
+        );
+    }
+    if u64::from(args.split.sample_offset) + u64::from(args.spp) > 65536 {
+        usage_error(format!(
+            "invalid value '{}' for '--sample-offset': with --spp {} it passes the sampler's 65536 samples",
+            args.split.sample_offset, args.spp
+        ));
+    }
     let adaptive = args
         .noise_threshold
         .map(|threshold| aperture_render::AdaptiveOptions {
@@ -489,6 +536,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         width,
         height,
         spp: args.spp,
+        sample_offset: args.split.sample_offset,
         seed: args.seed,
         camera: camera_index,
         max_bounces: args.tracing.max_bounces,
@@ -530,6 +578,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         b.build().context("starting worker threads")?
     };
+    if let Some(frames) = args.frames {
+        return crate::frames::run(&args, &animated, frames, &opts, quality, &pool);
+    }
+    let hints = aperture_render::sequence::SceneHints::new(&animated, &scene);
+    drop(animated);
     let png = aperture_imageio::PngOptions {
         exposure: args.exposure,
         view: match args.view {
@@ -538,10 +591,22 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         },
         ..Default::default()
     };
+    let exr = aperture_render::output::ExrOptions {
+        half: args.half,
+        save_partial: args.save_partial,
+        region: part.map(|p| p.window),
+        tile: part.and_then(|p| p.tile),
+        ..Default::default()
+    };
     let (summary, load_secs) = pool.install(|| -> anyhow::Result<_> {
-        let accel = aperture_render::build_accel(&scene, quality);
+        // The same structure a sequence builds for this frame, so their images agree bit for bit.
+        let accel = aperture_render::sequence::build_frame_accel(&scene, quality, &hints, None);
         let load_secs = t_load.elapsed().as_secs_f64();
-        let progress = Progress::new(args.quiet);
+        let progress = Progress::with_mode(args.quiet, args.progress);
+        progress.set_samples(
+            u64::from(width) * u64::from(height) * u64::from(args.spp),
+            None,
+        );
         let report = |done, total| progress.update(done, total);
         let summary = if ext.as_deref() == Some("png") {
             aperture_render::output::render_png(
@@ -557,10 +622,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             aperture_render::output::render_exr(&scene, &accel, &opts, &args.output, &exr, &report)
         };
         progress.finish();
-        Ok((
-            summary.with_context(|| format!("writing {}", args.output.display()))?,
-            load_secs,
-        ))
+        let summary = summary.with_context(|| format!("writing {}", args.output.display()))?;
+        progress.frame_written(args.when.frame, &args.output, summary.render_secs);
+        Ok((summary, load_secs))
     })?;
 
     if opts.cancel.is_cancelled() {
@@ -576,6 +640,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let dropped = summary.dropped;
     if !args.quiet || dropped > 0 {
         let spp = match opts.adaptive {
+            None if opts.sample_offset > 0 => format!(
+                "{} spp (samples {}..{})",
+                opts.spp,
+                opts.sample_offset,
+                opts.sample_offset + opts.spp
+            ),
             None => format!("{} spp", opts.spp),
             Some(a) => format!(
                 "adaptive {}..{} spp (mean {:.1}, threshold {})",
@@ -586,8 +656,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             ),
         };
         let render_secs = summary.render_secs;
+        let size = match part {
+            Some(p) => format!(
+                "region {} of {width}x{height}",
+                aperture_render::output::header::region_text(&p.window)
+            ),
+            None => format!("{width}x{height}"),
+        };
         eprintln!(
-            "{}: {width}x{height}, {spp}, {render_secs:.2} s ({load_secs:.2} s loading, BVH {quality}), {:.2} Msamples/s, {dropped} dropped samples (NaN/Inf)",
+            "{}: {size}, {spp}, {render_secs:.2} s ({load_secs:.2} s loading, BVH {quality}), {:.2} Msamples/s, {dropped} dropped samples (NaN/Inf)",
             args.output.display(),
             summary.samples as f64 / render_secs.max(1e-9) / 1e6,
         );
@@ -656,6 +733,13 @@ mod tests {
             &["--noise-threshold", "0.01", "--min-spp", "0"],
             &["--clamp-indirect", "-1"],
             &["--clamp-direct", "nan"],
+            &["--tile", "4/4"],
+            &["--tile", "1"],
+            &["--region", "1,2,3"],
+            &["--region", "1,1,1,2"],
+            &["--region", "0,0,4,4", "--tile", "0/2"],
+            &["--sample-offset", "65536"],
+            &["--sample-offset", "-64"],
         ] {
             let e = parse(bad).expect_err("must be refused");
             assert_eq!(e.exit_code(), 2, "{bad:?}");

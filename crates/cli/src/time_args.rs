@@ -12,8 +12,8 @@ pub struct TimeArgs {
     /// Pose the scene at Blender's frame N: time N / fps, as Blender's glTF exporter writes it.
     #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub frame: Option<i64>,
-    /// Frames per second for --frame (Blender's default 24).
-    #[arg(long, default_value_t = 24.0, value_parser = positive_f32, requires = "frame")]
+    /// Frames per second for --frame and --frames (Blender's default 24).
+    #[arg(long, default_value_t = 24.0, value_parser = positive_f32)]
     pub fps: f32,
     /// Play only this animation (its name, or its index in the file) [default: all together, as
     /// Blender's timeline plays every object's action].

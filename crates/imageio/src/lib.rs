@@ -33,8 +33,8 @@ pub mod view;
 
 pub use crate::env::{decode_env_image, read_env_image, EnvFormat};
 pub use crate::exr::{
-    decode_exr, decode_exr_within, encode_exr, read_exr, write_exr, write_exr_streamed,
-    ChannelSpec, ExrLayout, LateValues, RowWriter,
+    decode_exr, decode_exr_within, encode_exr, read_exr, read_exr_header, write_exr,
+    write_exr_streamed, ChannelSpec, ExrHeader, ExrLayout, LateValues, RowWriter,
 };
 pub use crate::png::{encode_png, write_png};
 

@@ -111,6 +111,22 @@ impl CryptoPixel {
         }
     }
 
+    /// Counts `count` samples of `id` at once (merging the ranks of several renders of the same
+    /// pixel); like [`CryptoPixel::add`], an ID beyond the slots is not counted.
+    pub fn add_count(&mut self, id: u32, count: f32) {
+        for (slot, c) in self.ids.iter_mut().zip(&mut self.counts) {
+            if *slot == id {
+                *c += count;
+                return;
+            }
+            if *slot == 0 {
+                *slot = id;
+                *c = count;
+                return;
+            }
+        }
+    }
+
     /// The [`RANKS`] strongest IDs as (ID bits, coverage) with coverage = count / `samples`,
     /// strongest first, ties by ID; missing ranks are (0, 0).
     pub fn ranked(&self, samples: f64) -> [(u32, f32); RANKS] {

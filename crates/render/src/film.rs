@@ -94,6 +94,40 @@ impl Window {
         }
     }
 
+    /// The window from `x0` to `x1` and `y0` to `y1`, half-open (pbrt's `--pixelbounds`,
+    /// SPEC §8's `--region`); `None` unless `x0 < x1` and `y0 < y1`.
+    pub fn from_corners(x0: u32, y0: u32, x1: u32, y1: u32) -> Option<Self> {
+        (x0 < x1 && y0 < y1).then(|| Self {
+            x0,
+            y0,
+            width: x1 - x0,
+            height: y1 - y0,
+        })
+    }
+
+    /// One past the last column and row: `(x1, y1)`.
+    pub fn end(&self) -> (u32, u32) {
+        (self.x0 + self.width, self.y0 + self.height)
+    }
+
+    /// Band `k` of `n` of a `w × h` image (`--tile K/N`, 0-based as Slurm array and Kubernetes
+    /// indexed-job indices are): whole rows `⌊k·h/n⌋ .. ⌊(k+1)·h/n⌋`, so the bands tile the
+    /// image and differ in height by at most one row. `None` unless `k < n ≤ h`.
+    pub fn band(k: u32, n: u32, w: u32, h: u32) -> Option<Self> {
+        if k >= n || n > h || w == 0 {
+            return None;
+        }
+        let row = |k: u32| (u64::from(k) * u64::from(h) / u64::from(n)) as u32;
+        Self::from_corners(0, row(k), w, row(k + 1))
+    }
+
+    /// True when the two windows share a pixel.
+    pub fn overlaps(&self, other: &Window) -> bool {
+        let (ax1, ay1) = self.end();
+        let (bx1, by1) = other.end();
+        self.x0 < bx1 && other.x0 < ax1 && self.y0 < by1 && other.y0 < ay1
+    }
+
     /// True when the window lies inside a `w × h` image and holds a pixel.
     pub fn fits(&self, w: u32, h: u32) -> bool {
         self.width > 0
@@ -458,5 +492,35 @@ mod tests {
             }
         );
         assert!(w.fits(7, 2) && !w.fits(6, 2));
+    }
+
+    #[test]
+    fn bands_tile_the_image() {
+        for (n, h) in [(1, 1), (4, 10), (3, 7), (7, 7), (5, 1080)] {
+            let bands: Vec<Window> = (0..n).map(|k| Window::band(k, n, 9, h).unwrap()).collect();
+            assert_eq!(bands[0].y0, 0);
+            assert_eq!(bands[n as usize - 1].end(), (9, h));
+            for pair in bands.windows(2) {
+                assert_eq!(pair[0].end().1, pair[1].y0, "{n} bands of {h}");
+                assert!(pair[0].height.abs_diff(pair[1].height) <= 1);
+                assert!(!pair[0].overlaps(&pair[1]));
+            }
+        }
+        assert_eq!(Window::band(4, 4, 9, 10), None);
+        assert_eq!(Window::band(0, 11, 9, 10), None, "more bands than rows");
+        assert_eq!(Window::band(0, 0, 9, 10), None);
+        assert_eq!(
+            Window::from_corners(2, 3, 5, 4),
+            Some(Window {
+                x0: 2,
+                y0: 3,
+                width: 3,
+                height: 1
+            })
+        );
+        assert_eq!(Window::from_corners(2, 3, 2, 4), None);
+        let a = Window::from_corners(0, 0, 4, 4).unwrap();
+        assert!(a.overlaps(&Window::from_corners(3, 3, 5, 5).unwrap()));
+        assert!(!a.overlaps(&Window::from_corners(4, 0, 5, 5).unwrap()));
     }
 }

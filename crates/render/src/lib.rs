@@ -33,6 +33,7 @@ pub mod output;
 pub mod passes;
 mod render;
 pub mod sampler;
+pub mod sequence;
 mod surface;
 pub mod test_scenes;
 mod texture;

@@ -211,6 +211,11 @@ impl PassSet {
         PassSet(self.0 | pass.bit())
     }
 
+    /// The set without `pass`.
+    pub fn without(self, pass: Pass) -> PassSet {
+        PassSet(self.0 & !pass.bit())
+    }
+
     /// The passes, in output order.
     pub fn iter(self) -> impl Iterator<Item = Pass> {
         Pass::ALL.into_iter().filter(move |&p| self.contains(p))
@@ -286,6 +291,7 @@ mod tests {
         let all = PassSet::parse("all").unwrap();
         assert!(all.contains(Pass::Position) && all.contains(Pass::GlossyIndirect));
         assert!(!all.contains(Pass::SampleCount));
+        assert_eq!(all.with(Pass::SampleCount).without(Pass::SampleCount), all);
         let mixed = PassSet::parse("default, Position,debug-sample-count").unwrap();
         assert_eq!(
             mixed.iter().count(),

@@ -38,6 +38,12 @@ pub struct RenderOptions {
     pub height: u32,
     /// Samples per pixel (1 ..= 65536); with adaptive sampling, the most any pixel takes.
     pub spp: u32,
+    /// First sample index of each pixel's sequence (Cycles' "sample offset"): the render takes
+    /// samples `sample_offset .. sample_offset + spp`, so batches with offsets 0, 64, 128, …
+    /// together are one longer render (SPEC §8). `sample_offset + spp` may not exceed
+    /// [`MAX_SPP`]. Not with adaptive sampling: its rounds decide from all of a pixel's samples
+    /// so far, which a batch starting past 0 does not have.
+    pub sample_offset: u32,
     /// Seed of every sample value.
     pub seed: u32,
     /// Index into `Scene::cameras`.
@@ -70,6 +76,7 @@ impl Default for RenderOptions {
             width: 960,
             height: 540,
             spp: 64,
+            sample_offset: 0,
             seed: 0,
             camera: 0,
             max_bounces: DEFAULT_MAX_BOUNCES,
@@ -121,6 +128,21 @@ fn check(opts: &RenderOptions) -> Result<(), RenderError> {
     if opts.spp == 0 || opts.spp > MAX_SPP {
         return bad("spp", opts.spp.to_string(), "must be in 1..=65536");
     }
+    if u64::from(opts.sample_offset) + u64::from(opts.spp) > u64::from(MAX_SPP) {
+        return bad(
+            "sample_offset",
+            opts.sample_offset.to_string(),
+            "sample_offset + spp must be at most 65536 (the sampler's sequence length)",
+        );
+    }
+    if opts.sample_offset > 0 && opts.adaptive.is_some() {
+        return bad(
+            "sample_offset",
+            opts.sample_offset.to_string(),
+            "must be 0 with adaptive sampling, whose stopping rule needs every sample of a pixel \
+             from the first (split an adaptive render into tiles instead)",
+        );
+    }
     if let Some(a) = opts.adaptive {
         if !(a.threshold.is_finite() && a.threshold > 0.0) {
             return bad(
@@ -157,23 +179,8 @@ fn check(opts: &RenderOptions) -> Result<(), RenderError> {
 
 /// Builds the ray-query structure for a scene.
 pub fn build_accel(scene: &Scene, quality: aperture_accel::BvhQuality) -> Accel {
-    let meshes: Vec<_> = scene
-        .meshes
-        .iter()
-        .map(|m| aperture_accel::MeshInput {
-            positions: &m.positions,
-            indices: &m.indices,
-        })
-        .collect();
-    let instances: Vec<_> = scene
-        .instances
-        .iter()
-        .map(|i| aperture_accel::InstanceInput {
-            mesh: i.mesh,
-            world_from_object: i.world_from_object,
-        })
-        .collect();
-    Accel::build(&meshes, &instances, quality)
+    let still = crate::sequence::SceneHints::still();
+    crate::sequence::build_frame_accel(scene, quality, &still, None)
 }
 
 /// The BVH preset for a job of `samples` camera samples over `triangles` stored triangles, so a
@@ -430,11 +437,12 @@ struct Job<'a> {
 }
 
 impl Job<'_> {
-    /// The sample stream of sample `i` of pixel `(x, y)` and its camera ray (`None` when the
-    /// camera makes none).
+    /// The sample stream of sample `i` of pixel `(x, y)` (index `sample_offset + i` of the
+    /// pixel's sequence) and its camera ray (`None` when the camera makes none).
     #[inline]
     fn camera_ray(&self, x: u32, y: u32, i: u32) -> (SampleStream, Option<CameraRay>) {
-        let stream = SampleStream::new(self.opts.sampler, x, y, i, self.opts.seed);
+        let index = self.opts.sample_offset + i;
+        let stream = SampleStream::new(self.opts.sampler, x, y, index, self.opts.seed);
         // A pinhole draws only the pixel pair; a lens draws the 4-D point.
         let (u_film, p_lens) = if self.pinhole {
             (stream.pixel(), Vec2::ZERO)
@@ -850,6 +858,21 @@ mod tests {
             },
             RenderOptions {
                 env: Environment::Constant(Vec3::new(-1.0, 0.0, 0.0)),
+                ..RenderOptions::default()
+            },
+            // Past the end of the sampler's sequence.
+            RenderOptions {
+                spp: 64,
+                sample_offset: MAX_SPP - 63,
+                ..RenderOptions::default()
+            },
+            // A batch past the first sample with adaptive sampling.
+            RenderOptions {
+                sample_offset: 64,
+                adaptive: Some(AdaptiveOptions {
+                    threshold: 0.01,
+                    min_spp: 4,
+                }),
                 ..RenderOptions::default()
             },
         ] {

@@ -8,83 +8,8 @@ use aperture_render::{
     build_accel, render, render_window, scene_camera, test_scenes, AdaptiveOptions, Environment,
     Pass, PassSet, RenderOptions, Window,
 };
-use aperture_scene::{Dof, Light, LightKind, Material, Scene};
-use glam::{Affine3A, Vec3};
-
-/// A matte ground, a glossy dielectric ball, a rough gold ball, a mirror ball, an emitter, a
-/// point light and a grey sky, through a lens: every kind of light pass. The camera sees sky
-/// above the horizon, so silhouettes against the background exist.
-fn busy_scene() -> Scene {
-    let dof = Dof {
-        enabled: true,
-        aperture_radius: 0.05,
-        focus_distance: 6.0,
-        ..Dof::default()
-    };
-    let camera =
-        test_scenes::look_at_camera(Vec3::new(0.0, 1.5, 6.0), Vec3::new(0.0, 0.8, 0.0), 0.7, dof);
-    let glossy = Material {
-        name: Some("Glossy".into()),
-        base_color_factor: glam::Vec4::new(0.2, 0.4, 0.8, 1.0),
-        metallic_factor: 0.0,
-        roughness_factor: 0.3,
-        ..Material::default()
-    };
-    let gold = Material {
-        name: Some("Gold".into()),
-        base_color_factor: glam::Vec4::new(1.0, 0.8, 0.3, 1.0),
-        metallic_factor: 1.0,
-        roughness_factor: 0.5,
-        ..Material::default()
-    };
-    let mirror = Material {
-        name: Some("Mirror".into()),
-        metallic_factor: 1.0,
-        roughness_factor: 0.05,
-        ..Material::default()
-    };
-    let mut ground = test_scenes::matte(Vec3::new(0.7, 0.6, 0.5));
-    ground.name = Some("Ground".into());
-    let mut lamp = test_scenes::emitter(Vec3::new(6.0, 5.0, 4.0));
-    lamp.name = Some("Lamp".into());
-    let ball = |m: u32, x: f32, r: f32| {
-        (
-            test_scenes::icosphere(3, m),
-            Affine3A::from_scale_rotation_translation(
-                Vec3::splat(r),
-                glam::Quat::IDENTITY,
-                Vec3::new(x, r, 0.0),
-            ),
-        )
-    };
-    let mut s = test_scenes::scene(
-        vec![
-            (test_scenes::quad(8.0, 0), Affine3A::IDENTITY),
-            ball(1, -1.3, 0.6),
-            ball(2, 0.0, 0.7),
-            ball(3, 1.3, 0.5),
-            ball(4, 0.4, 0.15),
-        ],
-        vec![ground, glossy, gold, mirror, lamp],
-        camera,
-    );
-    s.instances[4].world_from_object = Affine3A::from_scale_rotation_translation(
-        Vec3::splat(0.15),
-        glam::Quat::IDENTITY,
-        Vec3::new(0.5, 1.9, 0.8),
-    );
-    s.lights.push(Light {
-        name: None,
-        kind: LightKind::Point,
-        position: Vec3::new(2.0, 4.0, 3.0),
-        direction: Vec3::NEG_Y,
-        intensity: Vec3::splat(20.0),
-    });
-    s.node_names = ["Ground", "Blue", "Gold", "Mirror", "Lamp"]
-        .map(|n| Some(n.to_string()))
-        .into();
-    s
-}
+use aperture_scene::Scene;
+use glam::Vec3;
 
 fn opts(passes: PassSet) -> RenderOptions {
     RenderOptions {
@@ -114,7 +39,7 @@ fn rgb(image: &Image, layer: &str, p: usize) -> Vec3 {
 
 #[test]
 fn light_passes_add_up_to_the_beauty() {
-    let scene = busy_scene();
+    let scene = test_scenes::passes();
     let image = image_of(&scene, &opts(PassSet::all()));
     let (mut lit, mut direct, mut indirect, mut glossy) = (0, 0.0, 0.0, 0.0);
     for (p, px) in image.rgba.iter().enumerate() {
@@ -179,7 +104,7 @@ fn normals_are_unit_on_flat_surfaces_and_camera_space_for_the_denoiser() {
 
 #[test]
 fn depth_is_the_centre_ray_and_never_a_blend() {
-    let scene = busy_scene();
+    let scene = test_scenes::passes();
     let o = opts(PassSet::parse("Depth,Position").unwrap());
     let image = image_of(&scene, &o);
     let cam = scene_camera(&scene, &o).unwrap();
@@ -216,7 +141,7 @@ fn depth_is_the_centre_ray_and_never_a_blend() {
 
 #[test]
 fn cryptomatte_coverage_adds_up_to_alpha_and_names_the_objects() {
-    let scene = busy_scene();
+    let scene = test_scenes::passes();
     let image = image_of(&scene, &opts(PassSet::compositing()));
     let id = |name: &str| {
         f32::from_bits(aperture_render::cryptomatte::id_bits(
@@ -273,7 +198,7 @@ fn cryptomatte_coverage_adds_up_to_alpha_and_names_the_objects() {
 /// whole render there: what banded output and tiled farm renders rely on.
 #[test]
 fn windows_are_bit_identical_to_the_whole_render() {
-    let scene = busy_scene();
+    let scene = test_scenes::passes();
     let accel = build_accel(&scene, Default::default());
     for adaptive in [false, true] {
         let mut o = opts(PassSet::all());
@@ -356,7 +281,7 @@ fn windows_are_bit_identical_to_the_whole_render() {
 /// header's camera, lens, hashes and times.
 #[test]
 fn streamed_exr_in_bands_equals_the_film() {
-    let scene = busy_scene();
+    let scene = test_scenes::passes();
     let accel = build_accel(&scene, Default::default());
     let mut o = opts(PassSet::all());
     o.height = 70;
@@ -427,7 +352,7 @@ fn streamed_exr_in_bands_equals_the_film() {
 /// `--half` stores colour as half, clamped to its range (and counted), data as float32.
 #[test]
 fn half_clamps_colour_and_keeps_data_float() {
-    let mut scene = busy_scene();
+    let mut scene = test_scenes::passes();
     scene.materials[4].emissive_factor = Vec3::splat(1e6);
     let accel = build_accel(&scene, Default::default());
     let o = opts(PassSet::parse("default,Emission").unwrap());
@@ -459,7 +384,7 @@ fn half_clamps_colour_and_keeps_data_float() {
 fn passes_cost_nothing_in_the_beauty() {
     // The beauty is bit-identical with and without passes: the recording adds no arithmetic
     // to the radiance.
-    let scene = busy_scene();
+    let scene = test_scenes::passes();
     let a = image_of(&scene, &opts(PassSet::NONE));
     let b = image_of(&scene, &opts(PassSet::all()));
     assert_eq!(a.rgba, b.rgba);

@@ -15,7 +15,7 @@ mod guard;
 mod read;
 mod write;
 
-pub use read::{decode_exr, decode_exr_within, read_exr};
+pub use read::{decode_exr, decode_exr_within, read_exr, read_exr_header, ExrHeader};
 pub use write::{
     encode_exr, write_exr, write_exr_streamed, ChannelSpec, ExrLayout, LateValues, RowWriter,
 };

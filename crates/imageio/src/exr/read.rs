@@ -10,7 +10,107 @@ use ::exr::prelude::traits::{ReadChannels, ReadLayers};
 
 use super::attrs::{chromaticities, get_attributes, meta_value, string};
 use super::guard;
+use super::write::ChannelSpec;
 use crate::{Error, Image, Layer, Placement, SampleType};
+
+/// What an EXR file's header says, without its pixels: what a tool needs to decide whether
+/// to read the file (`aperture merge` checks every part before reading any).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExrHeader {
+    /// Width of the pixels stored (the data window).
+    pub width: u32,
+    /// Height of the pixels stored.
+    pub height: u32,
+    /// Where they sit in the whole image, as [`Image::placement`].
+    pub placement: Option<Placement>,
+    /// Every channel by full name (`R`, `Depth.Z`), sorted by name, of every part.
+    pub channels: Vec<ChannelSpec>,
+    /// The metadata [`read_exr`] would return.
+    pub metadata: Vec<(String, crate::MetaValue)>,
+}
+
+impl ExrHeader {
+    /// The metadata value under `key`, if any.
+    pub fn meta(&self, key: &str) -> Option<&crate::MetaValue> {
+        self.metadata.iter().find(|(k, _)| k == key).map(|(_, v)| v)
+    }
+}
+
+/// Reads only the header of an EXR file (a few kilobytes, whatever the image's size). A
+/// damaged header gives an error, never a panic; damaged pixels are found only by
+/// [`read_exr`].
+pub fn read_exr_header(path: &Path) -> Result<ExrHeader, Error> {
+    let file = std::fs::File::open(path).map_err(|e| Error::Io {
+        path: path.to_path_buf(),
+        message: format!("reading: {e}"),
+    })?;
+    let reader = std::io::BufReader::new(file);
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| header_of(reader, path)))
+        .unwrap_or_else(|_| {
+            Err(Error::Exr {
+                path: path.to_path_buf(),
+                message: "the decoder panicked on a damaged header".into(),
+            })
+        })
+}
+
+fn header_of(reader: impl std::io::Read, path: &Path) -> Result<ExrHeader, Error> {
+    let meta = MetaData::read_from_buffered(reader, false).map_err(|e| Error::Exr {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let unsupported = |what: &str| Error::UnsupportedExr {
+        path: path.to_path_buf(),
+        what: what.into(),
+    };
+    let first = meta
+        .headers
+        .first()
+        .ok_or_else(|| unsupported("no parts"))?;
+    let (size, position) = (first.layer_size, first.own_attributes.layer_position);
+    let mut channels = Vec::new();
+    let mut metadata = Vec::new();
+    for header in &meta.headers {
+        if header.layer_size != size || header.own_attributes.layer_position != position {
+            return Err(unsupported("parts with different data windows"));
+        }
+        let prefix = match &header.own_attributes.layer_name {
+            Some(name) if !name.as_slice().is_empty() => format!("{}.", string(name.as_slice())),
+            _ => String::new(),
+        };
+        for c in &header.channels.list {
+            channels.push(ChannelSpec {
+                name: format!("{prefix}{}", string(c.name.as_slice())),
+                sample_type: match c.sample_type {
+                    ::exr::meta::attribute::SampleType::F16 => SampleType::F16,
+                    _ => SampleType::F32,
+                },
+            });
+        }
+        if metadata.is_empty() {
+            metadata = get_attributes(&header.own_attributes);
+            for (name, value) in &header.shared_attributes.other {
+                if let Some(value) = meta_value(value) {
+                    metadata.push((string(name.as_slice()), value));
+                }
+            }
+            metadata.extend(chromaticities(&header.shared_attributes));
+        }
+    }
+    channels.sort_by(|a, b| a.name.cmp(&b.name));
+    metadata.sort_by(|a, b| a.0.cmp(&b.0));
+    let too_big = || unsupported("image larger than u32");
+    let width = u32::try_from(size.width()).map_err(|_| too_big())?;
+    let height = u32::try_from(size.height()).map_err(|_| too_big())?;
+    let display = first.shared_attributes.display_window;
+    Ok(ExrHeader {
+        width,
+        height,
+        placement: placement(display, position, width, height),
+        channels,
+        metadata,
+    })
+}
 
 /// Reads an EXR file: the beauty, the other channels as layers, and the metadata.
 ///

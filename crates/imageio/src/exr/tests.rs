@@ -760,3 +760,45 @@ fn late_values_are_patched_into_the_header() {
     }
     assert!(entries(&dir).is_empty());
 }
+
+/// The header alone says what the whole read says about size, placement, channels and
+/// metadata; a truncated header is an error naming the file, a truncated body is not
+/// noticed (only the pixel read finds it).
+#[test]
+fn header_alone_matches_the_whole_read() {
+    let dir = scratch_dir("header-only");
+    let path = dir.join("part.exr");
+    let mut image = sample_image();
+    image.placement = Some(crate::Placement {
+        x: 2,
+        y: 4,
+        full_width: 9,
+        full_height: 8,
+    });
+    image.layers[0].sample_type = crate::SampleType::F16;
+    crate::write_exr(&path, &image).unwrap();
+    let whole = read_exr(&path).unwrap();
+    let header = read_exr_header(&path).unwrap();
+    assert_eq!((header.width, header.height), (whole.width, whole.height));
+    assert_eq!(header.placement, whole.placement);
+    assert_eq!(header.metadata, whole.metadata);
+    assert_eq!(header.meta("samples"), Some(&MetaValue::Int(64)));
+    let names: Vec<&str> = header.channels.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names[..4], ["A", "B", "G", "R"]);
+    assert!(names.contains(&"depth.Z") && names.contains(&"normal.Y"));
+    let depth = header
+        .channels
+        .iter()
+        .find(|c| c.name == "depth.Z")
+        .unwrap();
+    assert_eq!(depth.sample_type, crate::SampleType::F16);
+
+    let bytes = std::fs::read(&path).unwrap();
+    let cut = dir.join("cut.exr");
+    std::fs::write(&cut, &bytes[..40]).unwrap();
+    let err = read_exr_header(&cut).unwrap_err();
+    assert!(err.to_string().contains("cut.exr"), "{err}");
+    std::fs::write(&cut, &bytes[..bytes.len() - 10]).unwrap();
+    assert!(read_exr_header(&cut).is_ok());
+    assert!(read_exr(&cut).is_err());
+}

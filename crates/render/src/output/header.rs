@@ -5,6 +5,7 @@
 use crate::camera::{Camera, CameraModel};
 use crate::cryptomatte;
 use crate::environment::Environment;
+use crate::film::Window;
 use crate::passes::{Pass, PassSet};
 use crate::render::{material_name, RenderOptions};
 use aperture_imageio::MetaValue;
@@ -26,6 +27,83 @@ pub mod late {
     /// 1 when the render was interrupted and the file holds the samples taken so far, 0 when
     /// it completed (i32; written with `--save-partial` only).
     pub const INTERRUPTED: &str = "aperture:interrupted";
+}
+
+/// Header keys that tell how parts of a render split across machines fit together (SPEC §8);
+/// `aperture merge` reads them back.
+pub mod split {
+    /// Hash of the glTF/GLB bytes (16 hex digits): parts of one render share it.
+    pub const SCENE_HASH: &str = "aperture:sceneHash";
+    /// [`super::options_hash`] (16 hex digits): parts of one render share it.
+    pub const OPTIONS_HASH: &str = "aperture:optionsHash";
+    /// Samples per pixel of the part (i32; the most any pixel took when adaptive).
+    pub const SPP: &str = "aperture:spp";
+    /// First sample index of the part (i32, `--sample-offset`).
+    pub const SAMPLE_OFFSET: &str = "aperture:sampleOffset";
+    /// Sample index ranges a merged file holds, `A-B,C-D` (half-open); absent in a rendered
+    /// part, whose one range is `sampleOffset .. sampleOffset + spp`.
+    pub const SAMPLE_RANGES: &str = "aperture:sampleRanges";
+    /// The part's pixels `X0,Y0,X1,Y1` (half-open), when it is not the whole image.
+    pub const REGION: &str = "aperture:region";
+    /// `K/N` when the part is band K of N (`--tile`).
+    pub const TILE: &str = "aperture:tile";
+    /// How many part files a merged file was made of (i32).
+    pub const MERGED_PARTS: &str = "aperture:mergedParts";
+    /// The pose the scene was rendered in ([`super::pose_text`]): parts share it, so tiles of
+    /// two frames of one file are not merged into one image.
+    pub const POSE: &str = "aperture:pose";
+}
+
+/// The pose of `scene` as text: `stored` for the pose in the file, else the time and the
+/// animations evaluated (`t=1.25 animations=0,2`).
+pub fn pose_text(scene: &Scene) -> String {
+    match scene.stats.time {
+        None => "stored".to_string(),
+        Some(t) => {
+            let played: Vec<String> = scene
+                .stats
+                .animations
+                .iter()
+                .filter(|a| a.selected)
+                .map(|a| a.index.to_string())
+                .collect();
+            format!("t={t} animations={}", played.join(","))
+        }
+    }
+}
+
+/// The `X0,Y0,X1,Y1` text of a window (what `--region` takes).
+pub fn region_text(w: &Window) -> String {
+    let (x1, y1) = w.end();
+    format!("{},{},{x1},{y1}", w.x0, w.y0)
+}
+
+/// The header attributes of a part of a split render: its sample offset and the scene's
+/// pose always, its region when `window` is not the whole image, and `tile` (K, N) when it is
+/// band K of N.
+pub fn split_metadata(
+    scene: &Scene,
+    opts: &RenderOptions,
+    window: Window,
+    tile: Option<(u32, u32)>,
+) -> Vec<(String, MetaValue)> {
+    let mut meta = vec![
+        (
+            split::SAMPLE_OFFSET.to_string(),
+            MetaValue::Int(opts.sample_offset.min(i32::MAX as u32) as i32),
+        ),
+        (split::POSE.to_string(), MetaValue::Text(pose_text(scene))),
+    ];
+    if window != Window::whole(opts.width, opts.height) {
+        meta.push((
+            split::REGION.to_string(),
+            MetaValue::Text(region_text(&window)),
+        ));
+    }
+    if let Some((k, n)) = tile {
+        meta.push((split::TILE.to_string(), MetaValue::Text(format!("{k}/{n}"))));
+    }
+    meta
 }
 
 /// The header of a render of `scene` through `camera` (scene camera `opts.camera`) with the
@@ -67,7 +145,7 @@ pub fn metadata(
             "aperture:apertureBlades".into(),
             MetaValue::Int(dof.blades.min(i32::MAX as u32) as i32),
         ),
-        ("aperture:spp".into(), MetaValue::Int(opts.spp as i32)),
+        (split::SPP.into(), MetaValue::Int(opts.spp as i32)),
         ("aperture:seed".into(), MetaValue::Int(opts.seed as i32)),
         (late::RENDER_TIME.into(), MetaValue::Float(0.0)),
         (
@@ -85,11 +163,11 @@ pub fn metadata(
         (late::DROPPED.into(), MetaValue::Int(0)),
         ("aperture:software".into(), text(&software)),
         (
-            "aperture:sceneHash".into(),
+            split::SCENE_HASH.into(),
             text(&format!("{:016x}", scene.source_hash)),
         ),
         (
-            "aperture:optionsHash".into(),
+            split::OPTIONS_HASH.into(),
             text(&format!("{:016x}", options_hash(opts))),
         ),
     ];
@@ -215,7 +293,9 @@ fn cap_date(t: std::time::SystemTime) -> String {
 }
 
 /// A hash of every option that changes pixel values, whatever the sample range or region:
-/// parts of one render split across machines share it.
+/// parts of one render split across machines share it. `spp` and `sample_offset` are left
+/// out (they say which samples a part holds, which merge checks on its own), and so is the
+/// `Debug Sample Count` pass, which files of tiles and batches get and a whole render may not.
 pub fn options_hash(opts: &RenderOptions) -> u64 {
     let mut bytes = format!(
         "{}x{} camera {} seed {} bounces {} {:?} {:?} {:?} {:?} {:?} {:?}",
@@ -229,7 +309,7 @@ pub fn options_hash(opts: &RenderOptions) -> u64 {
         opts.material_override,
         opts.clamp,
         opts.adaptive,
-        opts.passes,
+        opts.passes.without(Pass::SampleCount),
     )
     .into_bytes();
     match &opts.env {
@@ -312,6 +392,7 @@ mod tests {
         let a = RenderOptions::default();
         let more = RenderOptions {
             spp: 128,
+            sample_offset: 64,
             ..a.clone()
         };
         let seeded = RenderOptions {
@@ -319,6 +400,11 @@ mod tests {
             ..a.clone()
         };
         assert_eq!(options_hash(&a), options_hash(&more));
+        let counted = RenderOptions {
+            passes: a.passes.with(Pass::SampleCount),
+            ..a.clone()
+        };
+        assert_eq!(options_hash(&a), options_hash(&counted));
         assert_ne!(options_hash(&a), options_hash(&seeded));
     }
 }

@@ -9,6 +9,7 @@
 
 pub mod channels;
 pub mod header;
+pub mod merge;
 
 use crate::film::{AovLayout, Film, Window};
 use crate::passes::{Pass, PassSet};
@@ -52,6 +53,9 @@ pub struct ExrOptions {
     /// Render only this part of the image (a tile); the file's data window is the part and its
     /// display window the whole image.
     pub region: Option<Window>,
+    /// `(K, N)` when `region` is band K of N (`--tile K/N`, see [`Window::band`]): recorded
+    /// in the header so `aperture merge` can name a missing tile.
+    pub tile: Option<(u32, u32)>,
     /// Most bytes the sums of one band of rows may take ([`BAND_BYTES`] by default): lower
     /// it to render in more, smaller bands with less memory. The pixels do not change.
     pub band_bytes: usize,
@@ -66,6 +70,7 @@ impl Default for ExrOptions {
         Self {
             half: false,
             region: None,
+            tile: None,
             band_bytes: BAND_BYTES,
             save_partial: false,
         }
@@ -123,7 +128,7 @@ pub fn render_exr(
     let camera = scene_camera(scene, opts)?;
     let whole = Window::whole(opts.width, opts.height);
     let window = exr.region.unwrap_or(whole);
-    let passes = channels::file_passes(opts.passes, opts.adaptive.is_some() || window != whole);
+    let passes = channels::file_passes(opts.passes, needs_sample_count(opts, window));
     let opts = RenderOptions {
         passes,
         ..opts.clone()
@@ -133,7 +138,11 @@ pub fn render_exr(
         width: window.width,
         height: window.height,
         placement: placement(window, whole),
-        metadata: header::metadata(scene, &camera, &opts, passes),
+        metadata: [
+            header::metadata(scene, &camera, &opts, passes),
+            header::split_metadata(scene, &opts, window, exr.tile),
+        ]
+        .concat(),
         channels,
     };
     if exr.save_partial {
@@ -191,6 +200,14 @@ pub fn render_exr(
         Ok(late)
     })?;
     Ok(summary)
+}
+
+/// True when a file of `window` rendered with `opts` must say how many samples each pixel
+/// took (SPEC §6): adaptive, a region of the image, or a batch of samples past the first.
+fn needs_sample_count(opts: &RenderOptions, window: Window) -> bool {
+    opts.adaptive.is_some()
+        || window != Window::whole(opts.width, opts.height)
+        || opts.sample_offset > 0
 }
 
 /// The header values known only after rendering.
@@ -294,10 +311,7 @@ pub fn film_to_image(
 ) -> Result<Image, OutputError> {
     let camera = scene_camera(scene, opts)?;
     let whole = Window::whole(opts.width, opts.height);
-    let passes = channels::file_passes(
-        film.passes(),
-        opts.adaptive.is_some() || film.window() != whole,
-    );
+    let passes = channels::file_passes(film.passes(), needs_sample_count(opts, film.window()));
     let specs = channels::channels(passes, half);
     let mut resolver = PixelResolver::new(
         film,
@@ -343,6 +357,9 @@ pub fn film_to_image(
         c += count;
     }
     image.metadata = header::metadata(scene, &camera, opts, passes);
+    image
+        .metadata
+        .extend(header::split_metadata(scene, opts, film.window(), None));
     let summary = RenderSummary {
         window: film.window(),
         samples: film.total_samples(),

@@ -1,53 +1,6 @@
 # SPDX-License-Identifier: MIT OR Apache-2.0
-"""aperture: export Blender's camera depth of field to glTF camera extras.
-
-A single-file Blender add-on. It hooks the official glTF 2.0 exporter (io_scene_gltf2) through its
-user-extension interface (``glTF2ExportUserExtension``) and writes each camera's native settings to
-``cameras[i].extras`` under Blender's own property names. The aperture renderer reads them there
-(its SPEC, section 3):
-
-    use_dof, focus_distance, focus_object, aperture_fstop, aperture_blades, aperture_rotation,
-    aperture_ratio, lens, sensor_width, sensor_height, sensor_fit
-
-The rules:
-
-- Custom properties win. If you set a custom property with one of these names on the camera data
-  by hand, its value is exported, whether or not the exporter's "Custom Properties" option is on.
-- A camera with depth of field off still exports ``use_dof: false``, together with the other keys.
-- ``focus_object`` is the name of the focused object's glTF node. The exporter names nodes after
-  their objects. Focusing on a bone (``focus_subtarget``) is not supported: the exporter warns, and
-  the focus goes to the armature object's origin. If the focus object is not exported (for example
-  "Selected Objects" is on and the object is not selected), ``focus_object`` is replaced by
-  ``focus_distance``, the object's depth along the camera's view axis as it is in Blender, and the
-  exporter warns.
-- Orthographic cameras: Cycles uses a lens radius of ``1 / (2 * fstop)`` scene units for these
-  (no focal length); the test measured this with Blender 5.0.1. The add-on writes that radius as
-  ``aperture_radius``, which wins over ``aperture_fstop``, so the renderer gets the same aperture
-  as Cycles. A hand-set ``aperture_fstop`` is used for it, and a hand-set ``aperture_radius`` is
-  kept.
-- Blade counts of 1 and 2 (Blender's own settings cannot hold them) are written as 0, a round
-  aperture, which is what Cycles renders.
-- Keyframed ``dof.focus_distance`` and ``dof.aperture_fstop`` (a focus pull) are exported as
-  ``KHR_animation_pointer`` channels at ``/cameras/{i}/extras/focus_distance`` and
-  ``/cameras/{i}/extras/aperture_fstop``, sampled at every frame of their keys' range (time = frame
-  / fps, as the exporter writes object animation), in one animation named ``<camera data>_dof``.
-
-Install: Edit > Preferences > Add-ons > Install from Disk (this file), then enable
-"aperture: glTF camera depth of field". After that, File > Export > glTF 2.0 writes the extras.
-"""
-
-bl_info = {
-    "name": "aperture: glTF camera depth of field",
-    "author": "the aperture authors",
-    "version": (0, 1, 0),
-    "blender": (4, 2, 0),
-    "location": "File > Export > glTF 2.0 (cameras' extras)",
-    "description": "Writes each camera's depth of field, lens and sensor to cameras[i].extras "
-    "of the glTF export, under Blender's property names",
-    "doc_url": "",
-    "category": "Import-Export",
-}
-
+"""Depth of field into the glTF export: the exporter hook of the add-on (see the package's
+documentation for the rules)."""
 import math
 import struct
 
@@ -349,10 +302,3 @@ def _animation(name, channels, samplers):
     gltf2_io, _, _ = _io()
     return gltf2_io.Animation(channels=channels, extensions=None, extras=None, name=name, samplers=samplers)
 
-
-def register():
-    """Nothing to register: the exporter finds ``glTF2ExportUserExtension`` in this module."""
-
-
-def unregister():
-    """Nothing to unregister."""
