@@ -121,7 +121,10 @@ pub(super) fn check_chunk_sizes(bytes: &[u8], meta: &MetaData) -> Result<(), Str
     let Some(tables) = headers_end(bytes, multipart) else {
         return Ok(());
     };
+    // The header's chunk count is the file's claim (billions, for a huge claimed image); the
+    // table cannot hold more entries than the file has bytes for.
     let total: usize = meta.headers.iter().map(|h| h.chunk_count).sum();
+    let total = total.min(bytes.len().saturating_sub(tables) / 8);
     for i in 0..total {
         let Some(offset) = tables
             .checked_add(i.saturating_mul(8))
@@ -177,6 +180,7 @@ pub(super) fn check_dwa_blocks(bytes: &[u8], meta: &MetaData) -> Result<(), DwaP
         return Ok(());
     };
     let total: usize = meta.headers.iter().map(|h| h.chunk_count).sum();
+    let total = total.min(bytes.len().saturating_sub(tables) / 8);
 
     let mut positions: Vec<usize> = (0..total)
         .filter_map(|i| read_u64(bytes, tables.checked_add(i.checked_mul(8)?)?))
