@@ -11,7 +11,8 @@
 # budget; RSS 2 GiB, AddressSanitizer's own memory included) stops the
 # run with its input in fuzz/artifacts/TARGET/: make it a regression test in the crate's tests,
 # then fix it. --minimise then merges the run's corpus into fuzz/corpus/TARGET (libFuzzer's
-# -merge=1 keeps only inputs that add coverage; inputs above 16 KiB are left out).
+# -set_cover_merge=1 keeps a smallest set of inputs with the same coverage; inputs above
+# 16 KiB are left out; the seed-* files stay).
 #
 # Needs the nightly toolchain and cargo-fuzz (`cargo install cargo-fuzz`). CI does not fuzz:
 # it replays the committed corpus on stable (fuzz/harness/tests/corpus_replay.rs).
@@ -46,7 +47,8 @@ fi
 if [[ $minimise == --minimise ]]; then
     merged=$(mktemp -d)
     nice -n 19 cargo +nightly fuzz run "$target" "$merged" "corpus/$target" "corpus-run/$target" -- \
-        -merge=1 -max_len=16384 -timeout=2 -rss_limit_mb=2048
+        -set_cover_merge=1 -max_len=16384 -timeout=2 -rss_limit_mb=2048
+    find "corpus/$target" -name 'seed-*' -exec cp {} "$merged/" \;
     rm -rf "corpus/$target"
     mkdir -p "corpus/$target"
     find "$merged" -type f -size -16k -exec cp {} "corpus/$target/" \;
