@@ -3,6 +3,7 @@
 mod bench;
 mod frames;
 mod info;
+mod interrupt;
 mod material_args;
 mod merge_cmd;
 mod progress;
@@ -44,7 +45,17 @@ fn main() -> std::process::ExitCode {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            std::process::ExitCode::FAILURE
+            let interrupted = e.chain().any(|c| {
+                matches!(
+                    c.downcast_ref(),
+                    Some(aperture_render::output::OutputError::Interrupted { .. })
+                )
+            }) || e.downcast_ref::<render_cmd::Interrupted>().is_some();
+            if interrupted {
+                std::process::ExitCode::from(interrupt::EXIT_INTERRUPTED)
+            } else {
+                std::process::ExitCode::FAILURE
+            }
         }
     }
 }

@@ -140,30 +140,16 @@ fn parse_env(s: &str) -> Result<EnvArg, String> {
     }
 }
 
-/// Reads an equirectangular environment image as linear RGB texels, rows top to bottom.
-fn load_env_image(path: &std::path::Path) -> anyhow::Result<(u32, u32, Vec<Vec3>)> {
-    let is_exr = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-    let (w, h, texels) = if is_exr {
-        let im = aperture_imageio::read_exr(path)?;
-        let t: Vec<Vec3> = im
-            .rgba
-            .iter()
-            .map(|p| Vec3::new(p[0], p[1], p[2]))
-            .collect();
-        (im.width, im.height, t)
-    } else {
-        let im = image::open(path)?.into_rgb32f();
-        let (w, h) = im.dimensions();
-        let t: Vec<Vec3> = im
-            .into_raw()
-            .chunks_exact(3)
-            .map(|c| Vec3::new(c[0], c[1], c[2]))
-            .collect();
-        (w, h, t)
-    };
+/// Reads an equirectangular environment image (HDR or EXR, by content) as linear RGB
+/// texels, rows top to bottom, refusing one whose texels would not fit `max_bytes`.
+fn load_env_image(path: &std::path::Path, max_bytes: u64) -> anyhow::Result<(u32, u32, Vec<Vec3>)> {
+    let im = aperture_imageio::read_env_image(path, max_bytes)?;
+    let (w, h) = (im.width, im.height);
+    let texels: Vec<Vec3> = im
+        .rgba
+        .iter()
+        .map(|p| Vec3::new(p[0], p[1], p[2]))
+        .collect();
     if w == 0 || h == 0 {
         anyhow::bail!("the image has no pixels");
     }
@@ -320,6 +306,17 @@ pub struct RenderArgs {
     /// always have it. Same as adding `Debug Sample Count` to --passes.
     #[arg(long)]
     pub samples_pass: bool,
+    /// The most memory the render may use (e.g. 8G, 512M) [default: the machine's memory, or
+    /// its control group's limit]. Film, textures and geometry are sized against it before
+    /// they are allocated; a job that cannot fit fails at once, saying what it needs.
+    #[arg(long, value_parser = aperture_budget::parse_bytes)]
+    pub max_memory: Option<u64>,
+    /// On Ctrl-C (or SIGTERM), write the samples taken so far to the EXR (with `Debug Sample
+    /// Count`, and `aperture:interrupted` = 1 in the header) instead of nothing. EXR only; not
+    /// with --frames, where an interrupted frame is left unwritten so that --skip-existing
+    /// renders it again.
+    #[arg(long, conflicts_with = "frames")]
+    pub save_partial: bool,
     /// A part of a render split across machines: --region, --tile, --sample-offset.
     #[command(flatten)]
     pub split: crate::split_args::SplitArgs,
@@ -339,6 +336,36 @@ pub struct RenderArgs {
     /// wrappers, the Blender engine).
     #[arg(long, value_enum, default_value_t = crate::progress::ProgressArg::Auto)]
     pub progress: crate::progress::ProgressArg,
+}
+
+/// A render stopped by a signal after writing its partial EXR (`--save-partial`).
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted: {0} holds the samples taken so far (--save-partial)")]
+pub struct Interrupted(pub String);
+
+/// Checks the film and file of a `width`×`height` render against the memory and disk the job
+/// has, printing the warnings; an error says what it needs and what there is.
+fn check_footprint(
+    args: &RenderArgs,
+    opts: &RenderOptions,
+    exr: &aperture_render::output::ExrOptions,
+    budget: &aperture_budget::MemoryBudget,
+) -> anyhow::Result<()> {
+    let kind = if is_png(&args.output) {
+        aperture_render::OutputKind::Png { sixteen_bit: false }
+    } else {
+        aperture_render::OutputKind::Exr
+    };
+    for w in aperture_render::check_output(opts, kind, exr, &args.output, budget)? {
+        eprintln!("warning: {w}");
+    }
+    Ok(())
+}
+
+fn is_png(path: &std::path::Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"))
 }
 
 /// A usage error in clap's format, exit code 2 (as clap's own parse errors).
@@ -364,6 +391,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             args.output.display()
         ));
     }
+    let budget = match args.max_memory {
+        Some(bytes) => aperture_budget::MemoryBudget::fixed(bytes),
+        None => aperture_budget::MemoryBudget::from_system(),
+    };
     let load = LoadOptions {
         scene: args.scene_index,
         dof_overrides: DofOverrides {
@@ -377,7 +408,34 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         variant: args.materials.variant.clone(),
         time: args.when.seconds(),
         animation: args.when.selection(),
+        memory: budget,
     };
+    let exr = aperture_render::output::ExrOptions {
+        half: args.half,
+        save_partial: args.save_partial,
+        ..Default::default()
+    };
+    let passes = match args.samples_pass || args.save_partial {
+        true => args.passes.with(Pass::SampleCount),
+        false => args.passes,
+    };
+    if let (Some(width), Some(height)) = (args.width, args.height) {
+        // Both sides known: checked before the scene is read.
+        let early = RenderOptions {
+            width,
+            height,
+            spp: args.spp,
+            passes,
+            adaptive: args
+                .noise_threshold
+                .map(|threshold| aperture_render::AdaptiveOptions {
+                    threshold,
+                    min_spp: 1,
+                }),
+            ..RenderOptions::default()
+        };
+        check_footprint(&args, &early, &exr, &budget)?;
+    }
     let t_load = Instant::now();
     let posed = aperture_scene::Animated::load(&args.scene, &load).and_then(|animated| {
         // A sequence checks its cameras and sizes on its first frame.
@@ -499,7 +557,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             None => Environment::Constant(Vec3::ZERO),
             Some(EnvArg::Color(c)) => Environment::Constant(*c * args.env_strength),
             Some(EnvArg::File(path)) => {
-                let (width, height, texels) = load_env_image(path)
+                let (width, height, texels) = load_env_image(path, budget.limit)
                     .with_context(|| format!("reading the environment {}", path.display()))?;
                 Environment::Image(std::sync::Arc::new(EnvImage {
                     width,
@@ -515,12 +573,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             Some(OverrideArg::Diffuse) => MaterialOverride::Diffuse,
             None => MaterialOverride::None,
         },
-        passes: if args.samples_pass {
-            args.passes.with(Pass::SampleCount)
-        } else {
-            args.passes
-        },
+        passes,
+        cancel: crate::interrupt::install()?,
     };
+    check_footprint(&args, &opts, &exr, &budget)?;
 
     let pool = {
         let mut b = rayon::ThreadPoolBuilder::new();
@@ -544,6 +600,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     };
     let exr = aperture_render::output::ExrOptions {
         half: args.half,
+        save_partial: args.save_partial,
         region: part.map(|p| p.window),
         tile: part.and_then(|p| p.tile),
         ..Default::default()
@@ -577,6 +634,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         Ok((summary, load_secs))
     })?;
 
+    if opts.cancel.is_cancelled() {
+        return Err(Interrupted(args.output.display().to_string()).into());
+    }
     if summary.half_clamped > 0 {
         eprintln!(
             "warning: {}: {} colour values beyond ±65504 were clamped to fit half floats (--half)",

@@ -25,14 +25,16 @@
 use std::path::{Path, PathBuf};
 
 mod atomic;
+mod env;
 mod exr;
 pub mod metrics;
 mod png;
 pub mod view;
 
+pub use crate::env::{decode_env_image, read_env_image, EnvFormat};
 pub use crate::exr::{
-    encode_exr, read_exr, read_exr_header, write_exr, write_exr_streamed, ChannelSpec, ExrHeader,
-    ExrLayout, LateValues, RowWriter,
+    decode_exr, decode_exr_within, encode_exr, read_exr, read_exr_header, write_exr,
+    write_exr_streamed, ChannelSpec, ExrHeader, ExrLayout, LateValues, RowWriter,
 };
 pub use crate::png::{encode_png, write_png};
 
@@ -432,6 +434,28 @@ pub enum Error {
         /// The encoder's message.
         message: String,
     },
+    /// A Radiance HDR (or other non-EXR) image could not be decoded.
+    #[error("{path}: {message}")]
+    Decode {
+        /// The file.
+        path: PathBuf,
+        /// The decoder's message.
+        message: String,
+    },
+    /// Decoding the image would take more memory than allowed.
+    #[error("{path}: a {width}x{height} image needs {} decoded, more than the {} allowed", human(*.needed), human(*.limit))]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Width the file claims.
+        width: u32,
+        /// Height the file claims.
+        height: u32,
+        /// Bytes decoding needs.
+        needed: u64,
+        /// Bytes allowed.
+        limit: u64,
+    },
     /// Two images compared by a metric differ in size.
     #[error("images differ in size: {left:?} vs {right:?}")]
     SizeMismatch {
@@ -440,6 +464,16 @@ pub enum Error {
         /// (width, height) of the second image.
         right: (u32, u32),
     },
+}
+
+/// Bytes in words for errors ("1.2 GB"), decimal units.
+fn human(bytes: u64) -> String {
+    match bytes {
+        0..1000 => format!("{bytes} B"),
+        1000..1_000_000 => format!("{:.1} kB", bytes as f64 / 1e3),
+        1_000_000..1_000_000_000 => format!("{:.1} MB", bytes as f64 / 1e6),
+        _ => format!("{:.1} GB", bytes as f64 / 1e9),
+    }
 }
 
 /// The formats [`write_image`] chooses between.

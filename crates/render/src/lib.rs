@@ -21,11 +21,13 @@ pub mod adaptive;
 mod aov;
 mod bsdf;
 pub mod camera;
+mod cancel;
 mod color;
 pub mod cryptomatte;
 mod environment;
 mod film;
 mod filter;
+mod footprint;
 mod integrator;
 mod lights;
 mod media;
@@ -48,10 +50,12 @@ pub use bsdf::{
     Lobe, LobeSplit, MetalRough, Principled, SheenLayer, ThinFilm,
 };
 pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, CameraSample};
+pub use cancel::Cancel;
 pub use color::srgb_to_linear;
 pub use environment::{EnvImage, EnvSampling, Environment};
 pub use film::{Film, PixelSum, Window};
 pub use filter::{Filter, FilterKind};
+pub use footprint::{check_output, footprint, Footprint, FootprintError, OutputKind};
 pub use integrator::Clamp;
 pub use passes::{Pass, PassSet};
 pub use render::{

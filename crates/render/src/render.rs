@@ -71,6 +71,9 @@ pub struct RenderOptions {
     /// Give microfacet lobes back the energy single scattering loses, and layer materials by
     /// albedo scaling (on by default; off renders glTF Appendix B's formulas literally).
     pub energy_compensation: bool,
+    /// Stops the render early when cancelled (never, by default): the film then holds the
+    /// samples taken so far, each pixel's count saying how many.
+    pub cancel: crate::Cancel,
 }
 
 impl Default for RenderOptions {
@@ -92,6 +95,7 @@ impl Default for RenderOptions {
             passes: PassSet::NONE,
             transmission: TransmissionMode::Auto,
             energy_compensation: true,
+            cancel: crate::Cancel::default(),
         }
     }
 }
@@ -280,7 +284,8 @@ pub fn render_window(
         Some(a) => render_adaptive(&job, &a, window, progress),
         None => render_uniform(&job, window, progress),
     };
-    if opts.passes.contains(Pass::Depth) || opts.passes.contains(Pass::Position) {
+    let wanted = opts.passes.contains(Pass::Depth) || opts.passes.contains(Pass::Position);
+    if wanted && !opts.cancel.is_cancelled() {
         centre_rays(&job, &mut film);
     }
     Ok(film)
@@ -317,7 +322,7 @@ fn render_uniform(job: &Job<'_>, window: Window, progress: &(dyn Fn(usize, usize
     let tiles = tiles_of(window);
     let total = tiles.len();
     let done = AtomicUsize::new(0);
-    let results: Vec<(Accum, u64)> = tiles
+    let results: Vec<(Accum, u64, Vec<u32>)> = tiles
         .par_iter()
         .map(|&(x0, y0, tw, th)| {
             let r = if job.layout.records() {
@@ -330,8 +335,19 @@ fn render_uniform(job: &Job<'_>, window: Window, progress: &(dyn Fn(usize, usize
         })
         .collect();
     let mut film = Film::for_window(window, opts.width, opts.height, opts.passes);
-    for (&(x0, y0, tw, _), (tile, dropped)) in tiles.iter().zip(&results) {
+    for (&(x0, y0, tw, _), (tile, dropped, taken)) in tiles.iter().zip(&results) {
         film.merge_tile(x0, y0, tw, tile, opts.spp, *dropped);
+        if opts.cancel.is_cancelled() {
+            // Stopped early: each pixel took what its tile got to.
+            for (k, &n) in taken.iter().enumerate() {
+                let (x, y) = (
+                    window.x0 + x0 + k as u32 % tw,
+                    window.y0 + y0 + k as u32 / tw,
+                );
+                let i = ((y - window.y0) * window.width + (x - window.x0)) as usize;
+                film.counts_mut().0[i] = n;
+            }
+        }
     }
     film
 }
@@ -479,6 +495,9 @@ impl Job<'_> {
         let mut rays = Vec::with_capacity(PRIMARY_BATCH);
         let mut hits = vec![None; PRIMARY_BATCH];
         loop {
+            if self.opts.cancel.is_cancelled() {
+                return;
+            }
             run.clear();
             rays.clear();
             for (key, x, y, i) in items.by_ref().take(PRIMARY_BATCH) {
@@ -510,10 +529,18 @@ impl Job<'_> {
         }
     }
 
-    /// Every pixel of a tile at `spp` samples: the sums and the dropped-sample count.
-    fn render_tile<const AOV: bool>(&self, x0: u32, y0: u32, tw: u32, th: u32) -> (Accum, u64) {
+    /// Every pixel of a tile at `spp` samples: the sums, the dropped-sample count and the
+    /// samples each pixel took (`spp`, unless the render was cancelled).
+    fn render_tile<const AOV: bool>(
+        &self,
+        x0: u32,
+        y0: u32,
+        tw: u32,
+        th: u32,
+    ) -> (Accum, u64, Vec<u32>) {
         let mut acc = Accum::new((tw * th) as usize, self.layout);
         let mut dropped = 0u64;
+        let mut taken = vec![0u32; (tw * th) as usize];
         let spp = self.opts.spp;
         let items = (y0..y0 + th).flat_map(|y| {
             (x0..x0 + tw).flat_map(move |x| {
@@ -521,11 +548,14 @@ impl Job<'_> {
                 (0..spp).map(move |i| (k, x, y, i))
             })
         });
-        self.samples::<_, AOV>(items, |k, result, rec| match result {
-            Some((l, hit)) if acc.add(k, l, hit, rec, &self.ids) => {}
-            _ => dropped += 1,
+        self.samples::<_, AOV>(items, |k, result, rec| {
+            taken[k] += 1;
+            match result {
+                Some((l, hit)) if acc.add(k, l, hit, rec, &self.ids) => {}
+                _ => dropped += 1,
+            }
         });
-        (acc, dropped)
+        (acc, dropped, taken)
     }
 }
 
@@ -565,6 +595,7 @@ fn render_adaptive(
                     acc: Accum::new(pixels.len(), job.layout),
                     sq: pixels.iter().map(|&i| sq[i]).collect(),
                     dropped: vec![0; pixels.len()],
+                    taken: vec![0; pixels.len()],
                     pixels,
                 };
                 for (k, &i) in t.pixels.iter().enumerate() {
@@ -579,14 +610,16 @@ fn render_adaptive(
                         (taken[i]..target).map(move |s| (k, x, y, s))
                     })
                     .collect();
-                let mut add = |k: usize, result: Option<(Vec3, bool)>, rec: &SampleAov| match result
-                {
-                    Some((l, hit)) if t.acc.add(k, l, hit, rec, &job.ids) => {
-                        for (s, v) in t.sq[k].iter_mut().zip(l.to_array()) {
-                            *s += f64::from(v) * f64::from(v);
+                let mut add = |k: usize, result: Option<(Vec3, bool)>, rec: &SampleAov| {
+                    t.taken[k] += 1;
+                    match result {
+                        Some((l, hit)) if t.acc.add(k, l, hit, rec, &job.ids) => {
+                            for (s, v) in t.sq[k].iter_mut().zip(l.to_array()) {
+                                *s += f64::from(v) * f64::from(v);
+                            }
                         }
+                        _ => t.dropped[k] += 1,
                     }
-                    _ => t.dropped[k] += 1,
                 };
                 if job.layout.records() {
                     job.samples::<_, true>(items, &mut add);
@@ -602,10 +635,10 @@ fn render_adaptive(
                 state.copy_pixel(i, &t.acc, k);
                 sq[i] = t.sq[k];
                 dropped[i] += t.dropped[k];
-                taken[i] = target;
+                taken[i] += t.taken[k];
             }
         }
-        if r + 1 == rounds.len() {
+        if r + 1 == rounds.len() || opts.cancel.is_cancelled() {
             break;
         }
         let converged: Vec<bool> = (0..n)
@@ -643,6 +676,8 @@ struct AdaptiveTile {
     /// Per channel, the sums of squared samples, for the error estimate.
     sq: Vec<[f64; 3]>,
     dropped: Vec<u64>,
+    /// Samples each pixel took this round (all it was due, unless the render was cancelled).
+    taken: Vec<u32>,
 }
 
 #[cfg(test)]

@@ -19,6 +19,26 @@ pub(crate) struct Buffers {
     /// Bytes of `EXT_meshopt_compression` buffer views, decoded, by view index: read instead of
     /// the view's own (fallback) bytes.
     pub decoded: HashMap<usize, Vec<u8>>,
+    /// Bytes of accessor data read so far, every read counted (a file may have ten thousand
+    /// meshes read one large accessor): checked against `budget` before each allocation.
+    pub charged: std::sync::atomic::AtomicU64,
+    /// The most `charged` may reach.
+    pub budget: aperture_budget::MemoryBudget,
+}
+
+impl Buffers {
+    /// Counts `bytes` more of decoded data read at `at`, refusing them past the budget.
+    pub(crate) fn charge(&self, at: &str, bytes: u64) -> Result<(), Error> {
+        use std::sync::atomic::Ordering;
+        let before = self.charged.fetch_add(bytes, Ordering::Relaxed);
+        let total = before.saturating_add(bytes);
+        self.budget
+            .check("the geometry and animation data read so far", total)
+            .map_err(|source| Error::OverBudget {
+                at: at.into(),
+                source,
+            })
+    }
 }
 
 /// Accessors without a buffer view are zeros plus optional sparse values: nothing backs their
@@ -141,6 +161,15 @@ fn read<T: Copy + Default>(
     let dims = dimension_count(acc.dimensions());
     let elem = (csize * dims) as u64;
     let count = acc.count() as u64;
+    // Charged once the count is known to be backed (so a lying count gets the precise error).
+    let charge = || {
+        buffers.charge(
+            at,
+            count
+                .saturating_mul(dims as u64)
+                .saturating_mul(std::mem::size_of::<T>() as u64),
+        )
+    };
     let mut out: Vec<T> = match acc.view() {
         Some(view) => {
             let bytes = view_bytes(&view, buffers)?;
@@ -166,6 +195,7 @@ fn read<T: Copy + Default>(
             if needed > bytes.len() as u64 {
                 return Err(out_of_bounds(at, acc.index(), needed, bytes.len() as u64));
             }
+            charge()?;
             // Safe to allocate: every element is backed by bytes we hold.
             let (offset, stride, elem) = (offset as usize, stride as usize, elem as usize);
             let mut out = Vec::with_capacity(count as usize * dims);
@@ -181,6 +211,7 @@ fn read<T: Copy + Default>(
             if size > budget {
                 return Err(out_of_bounds(at, acc.index(), size, budget));
             }
+            charge()?;
             vec![T::default(); count as usize * dims]
         }
     };
@@ -359,6 +390,8 @@ mod tests {
                 total: bytes.len() as u64,
                 data,
                 decoded: HashMap::new(),
+                charged: Default::default(),
+                budget: aperture_budget::MemoryBudget::unlimited(),
             },
         )
     }

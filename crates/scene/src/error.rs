@@ -190,4 +190,13 @@ pub enum Error {
         /// The decoder's error.
         source: image::ImageError,
     },
+    /// Decoding would take more memory than the budget ([`crate::LoadOptions::memory`]: the
+    /// machine's memory unless `--max-memory` says otherwise).
+    #[error("{at}: {source}")]
+    OverBudget {
+        /// What was being decoded (`images[3]`, `textures`, `meshes[0].primitives[1]...`).
+        at: String,
+        /// The sizes.
+        source: aperture_budget::OverBudget,
+    },
 }

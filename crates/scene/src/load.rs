@@ -38,14 +38,55 @@ pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Resul
     Animated::load_bytes(bytes, base_dir, options)?.into_scene(options.time)
 }
 
+/// A node's local transform as the file stores it (checked finite, with a non-zero rotation),
+/// widened to f64 when used: 68 bytes a node rather than the 176 of the f64 matrix and its
+/// decomposition (two million nodes: 216 MB).
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum LocalTransform {
+    /// `matrix`, column-major.
+    Matrix([[f32; 4]; 4]),
+    /// `translation`, `rotation`, `scale`.
+    Trs([f32; 3], [f32; 4], [f32; 3]),
+}
+
+impl LocalTransform {
+    /// The local transform in f64. The file's f32 values are widened so that composing a deep
+    /// hierarchy rounds once, at the end, relative to the world origin.
+    pub fn local(&self) -> DAffine3 {
+        let m = match self {
+            LocalTransform::Matrix(matrix) => {
+                DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from)))
+            }
+            LocalTransform::Trs(translation, rotation, scale) => {
+                DMat4::from_scale_rotation_translation(
+                    DVec3::from_array(scale.map(f64::from)),
+                    DQuat::from_array(rotation.map(f64::from)).normalize(),
+                    DVec3::from_array(translation.map(f64::from)),
+                )
+            }
+        };
+        DAffine3::from_mat4(m)
+    }
+
+    /// The same as scale, rotation, translation (decomposed from a matrix), which animation
+    /// channels replace component by component.
+    pub fn trs(&self) -> (DVec3, DQuat, DVec3) {
+        match self {
+            LocalTransform::Trs(translation, rotation, scale) => (
+                DVec3::from_array(scale.map(f64::from)),
+                DQuat::from_array(rotation.map(f64::from)).normalize(),
+                DVec3::from_array(translation.map(f64::from)),
+            ),
+            LocalTransform::Matrix(_) => self.local().to_scale_rotation_translation(),
+        }
+    }
+}
+
 /// A node as stored: what posing needs of it.
 #[derive(Debug, Clone)]
 pub(crate) struct NodeData {
     /// Local transform as stored.
-    pub local: DAffine3,
-    /// The same as scale, rotation, translation (decomposed from a matrix), which animation
-    /// channels replace component by component.
-    pub trs: (DVec3, DQuat, DVec3),
+    pub transform: LocalTransform,
     pub mesh: Option<usize>,
     pub skin: Option<usize>,
     pub camera: Option<usize>,
@@ -75,6 +116,7 @@ pub(crate) fn load_buffers(
     root: &Value,
     bin: Option<&[u8]>,
     base_dir: &Path,
+    budget: &aperture_budget::MemoryBudget,
 ) -> Result<Buffers, Error> {
     let mut data = Vec::with_capacity(doc.buffers().len());
     for b in doc.buffers() {
@@ -110,6 +152,8 @@ pub(crate) fn load_buffers(
         data,
         total,
         decoded: HashMap::new(),
+        charged: Default::default(),
+        budget: *budget,
     })
 }
 
@@ -123,15 +167,13 @@ fn finite(at: impl FnOnce() -> String, values: &[f32]) -> Result<(), Error> {
     }
 }
 
-/// A node's local transform, checked for NaN and infinity. The file's f32 values are widened to
-/// f64 so that composing a deep hierarchy rounds once, at the end, relative to the world origin.
-fn local_transform(node: &gltf::Node<'_>) -> Result<DAffine3, Error> {
+/// A node's local transform, checked for NaN, infinity and a zero rotation.
+fn local_transform(node: &gltf::Node<'_>) -> Result<LocalTransform, Error> {
     let i = node.index();
-    let m = match node.transform() {
+    Ok(match node.transform() {
         gltf::scene::Transform::Matrix { matrix } => {
-            let flat = matrix.as_flattened();
-            finite(|| format!("nodes[{i}].matrix"), flat)?;
-            DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from)))
+            finite(|| format!("nodes[{i}].matrix"), matrix.as_flattened())?;
+            LocalTransform::Matrix(matrix)
         }
         gltf::scene::Transform::Decomposed {
             translation,
@@ -142,23 +184,15 @@ fn local_transform(node: &gltf::Node<'_>) -> Result<DAffine3, Error> {
             finite(|| format!("nodes[{i}].rotation"), &rotation)?;
             finite(|| format!("nodes[{i}].scale"), &scale)?;
             // Exporters write slightly denormalised quaternions; zero cannot be normalised.
-            let q = DQuat::from_array(rotation.map(f64::from));
-            let q = if q.length_squared() > 0.0 {
-                q.normalize()
-            } else {
+            if DQuat::from_array(rotation.map(f64::from)).length_squared() <= 0.0 {
                 return Err(Error::NonFinite {
                     at: format!("nodes[{i}].rotation"),
                     value: "zero quaternion".into(),
                 });
-            };
-            DMat4::from_scale_rotation_translation(
-                DVec3::from_array(scale.map(f64::from)),
-                q,
-                DVec3::from_array(translation.map(f64::from)),
-            )
+            }
+            LocalTransform::Trs(translation, rotation, scale)
         }
-    };
-    Ok(DAffine3::from_mat4(m))
+    })
 }
 
 /// `m` if every entry is finite: each node's values are, but their composition may overflow
@@ -321,19 +355,7 @@ pub(crate) fn node_graph(doc: &gltf::Document, buffers: &Buffers) -> Result<Node
     let mut nodes = Vec::with_capacity(n);
     let mut children = Vec::with_capacity(n);
     for node in doc.nodes() {
-        let local = local_transform(&node)?;
-        let trs = match node.transform() {
-            gltf::scene::Transform::Decomposed {
-                translation,
-                rotation,
-                scale,
-            } => (
-                DVec3::from_array(scale.map(f64::from)),
-                DQuat::from_array(rotation.map(f64::from)).normalize(),
-                DVec3::from_array(translation.map(f64::from)),
-            ),
-            gltf::scene::Transform::Matrix { .. } => local.to_scale_rotation_translation(),
-        };
+        let transform = local_transform(&node)?;
         for c in node.children() {
             if c.index() == node.index() {
                 return Err(Error::NodeGraph {
@@ -356,8 +378,7 @@ pub(crate) fn node_graph(doc: &gltf::Document, buffers: &Buffers) -> Result<Node
             _ => None,
         };
         nodes.push(NodeData {
-            local,
-            trs,
+            transform,
             mesh: node.mesh().map(|m| m.index()),
             skin: node.skin().map(|s| s.index()),
             camera: node.camera().map(|c| c.index()),

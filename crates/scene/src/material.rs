@@ -6,7 +6,6 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use glam::{Vec2, Vec3, Vec4};
-use rayon::prelude::*;
 use serde_json::Value;
 
 use crate::accessor::Buffers;
@@ -239,6 +238,7 @@ impl Materials {
         buffers: &Buffers,
         base_dir: &Path,
         skip: bool,
+        budget: &aperture_budget::MemoryBudget,
     ) -> Result<Vec<Texture>, Error> {
         let sampler_of = |s: Option<usize>| {
             s.and_then(|i| doc.samplers().nth(i))
@@ -292,15 +292,15 @@ impl Materials {
         let mut images: Vec<usize> = self.keys.iter().map(|k| k.image).collect();
         images.sort_unstable();
         images.dedup();
-        let decoded: Vec<(u32, u32, Texels)> = images
-            .par_iter()
-            .map(|&i| decode_image(doc, buffers, base_dir, i))
-            .collect::<Result<_, _>>()?;
+        let mut uses_left = vec![0usize; images.len()];
+        for k in &self.keys {
+            if let Ok(s) = images.binary_search(&k.image) {
+                uses_left[s] += 1;
+            }
+        }
+        let decoded =
+            crate::texels::decode_images(doc, buffers, base_dir, &images, &uses_left, budget)?;
         let mut slot: Vec<Option<(u32, u32, Texels)>> = decoded.into_iter().map(Some).collect();
-        let mut uses_left: Vec<usize> = images
-            .iter()
-            .map(|i| self.keys.iter().filter(|k| k.image == *i).count())
-            .collect();
         let mut out = Vec::with_capacity(self.keys.len());
         for k in &self.keys {
             let Ok(s) = images.binary_search(&k.image) else {
@@ -329,77 +329,4 @@ impl Materials {
         }
         Ok(out)
     }
-}
-
-/// Reads and decodes one image to RGBA texels (8-bit stays 8-bit; 16-bit and float become f32).
-fn decode_image(
-    doc: &gltf::Document,
-    buffers: &Buffers,
-    base_dir: &Path,
-    index: usize,
-) -> Result<(u32, u32, Texels), Error> {
-    let at = format!("images[{index}]");
-    let image = doc.images().nth(index).ok_or_else(|| Error::Invalid {
-        at: at.clone(),
-        reason: "no such image".into(),
-    })?;
-    let owned;
-    let bytes: &[u8] = match image.source() {
-        gltf::image::Source::Uri { uri, .. } => {
-            owned = crate::uri::load(base_dir, uri, &format!("{at}.uri"))?;
-            &owned
-        }
-        gltf::image::Source::View { view, .. } => {
-            let buffer = buffers
-                .data
-                .get(view.buffer().index())
-                .ok_or_else(|| Error::Invalid {
-                    at: format!("bufferViews[{}]", view.index()),
-                    reason: "buffer missing".into(),
-                })?;
-            let end = view.offset() as u64 + view.length() as u64;
-            if end > buffer.len() as u64 {
-                return Err(Error::OutOfBounds {
-                    at: format!("{at}.bufferView (bufferViews[{}])", view.index()),
-                    needed: end,
-                    available: buffer.len() as u64,
-                });
-            }
-            &buffer[view.offset()..view.offset() + view.length()]
-        }
-    };
-    let img = image::load_from_memory(bytes).map_err(|source| Error::Image {
-        image: index,
-        source,
-    })?;
-    let (w, h) = (img.width(), img.height());
-    if w == 0 || h == 0 {
-        return Err(Error::Invalid {
-            at,
-            reason: "image has no texels".into(),
-        });
-    }
-    use image::DynamicImage as D;
-    let texels = match img {
-        D::ImageLuma16(_)
-        | D::ImageLumaA16(_)
-        | D::ImageRgb16(_)
-        | D::ImageRgba16(_)
-        | D::ImageRgb32F(_)
-        | D::ImageRgba32F(_) => Texels::Rgba32F(
-            img.into_rgba32f()
-                .into_raw()
-                .chunks_exact(4)
-                .map(|c| [c[0], c[1], c[2], c[3]])
-                .collect(),
-        ),
-        _ => Texels::Rgba8(
-            img.into_rgba8()
-                .into_raw()
-                .chunks_exact(4)
-                .map(|c| [c[0], c[1], c[2], c[3]])
-                .collect(),
-        ),
-    };
-    Ok((w, h, texels))
 }

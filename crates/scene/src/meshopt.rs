@@ -284,6 +284,12 @@ fn users(root: &Value, view: usize) -> String {
 /// Decodes every compressed buffer view of `root` into `buffers.decoded`.
 pub(crate) fn decode_views(root: &Value, buffers: &mut Buffers) -> Result<(), Error> {
     let views = root.get("bufferViews").and_then(Value::as_array);
+    // Many views may decode the same compressed bytes: the total, too, is held to
+    // MAX_EXPANSION times the file's buffers.
+    let cap = MAX_EXPANSION
+        .saturating_mul(buffers.total)
+        .saturating_add(SLACK);
+    let mut total = 0u64;
     for (i, view) in views.into_iter().flatten().enumerate() {
         let Some(ext) = view
             .get("extensions")
@@ -291,12 +297,27 @@ pub(crate) fn decode_views(root: &Value, buffers: &mut Buffers) -> Result<(), Er
         else {
             continue;
         };
-        let at = format!(
-            "bufferViews[{i}].extensions.EXT_meshopt_compression{}",
-            users(root, i)
-        );
         let length = view.get("byteLength").and_then(Value::as_u64).unwrap_or(0);
-        let bytes = decode_view(ext, length, buffers, &at)?;
+        let at = format!("bufferViews[{i}].extensions.EXT_meshopt_compression");
+        // The primitives reading a view are named only in errors: finding them scans every
+        // accessor and primitive, which for every view of a large file would be quadratic.
+        let with_users = || format!("{at}{}", users(root, i));
+        total = total.saturating_add(length);
+        if total > cap {
+            return Err(compressed(
+                &with_users(),
+                format!(
+                    "the compressed views decode to {total} bytes so far, more than \
+                     {MAX_EXPANSION} times the file's {} buffer bytes",
+                    buffers.total
+                ),
+            ));
+        }
+        buffers.charge(&at, length)?;
+        let bytes = match decode_view(ext, length, buffers, &at) {
+            Ok(b) => b,
+            Err(_) => decode_view(ext, length, buffers, &with_users())?,
+        };
         buffers.decoded.insert(i, bytes);
     }
     Ok(())

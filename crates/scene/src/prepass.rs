@@ -40,7 +40,8 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
 /// The validated document plus what the pre-pass removed.
 pub(crate) struct Prepared {
     pub document: gltf::Document,
-    /// The file's JSON as written (animations, pointers and extension objects are read from it).
+    /// The file's JSON as written (animations, pointers and extension objects are read from it),
+    /// except that `nodes` holds one `null` per node (see `COUNTED_ONLY`).
     pub root: Value,
     pub skipped: Vec<String>,
     /// Extensions the file uses that we ignore (allowed: they are not required).
@@ -187,15 +188,50 @@ fn validate(json_root: gltf::json::Root) -> Result<gltf::Document, Error> {
     Ok(gltf::Document::from_json_without_validation(json_root))
 }
 
+/// Top-level keys whose values the loader never reads as JSON trees once the typed document
+/// exists: only their element counts are kept (for `KHR_animation_pointer` indices). A file of
+/// two million nodes would otherwise hold each node twice as a `serde_json::Value` (about
+/// 800 bytes each) beside its typed form.
+const COUNTED_ONLY: &[&str] = &["nodes"];
+
+/// Top-level keys the checks above rewrite (image MIME types, `EXT_texture_webp` sources): the
+/// typed parser reads these from the kept tree, every other key from the file's own text.
+const REWRITTEN: &[&str] = &["images", "textures"];
+
 /// Parses, checks and cleans the JSON, then hands it to the `gltf` crate for validation.
+///
+/// The document is split into its top-level values without parsing them (`RawValue`s borrowed
+/// from `json`); the kept tree holds every value but the [`COUNTED_ONLY`] ones, and the typed
+/// parser reads the file's own text again, less the values it must not see, so no value is
+/// ever held as a tree twice.
 pub(crate) fn prepare(json: &[u8]) -> Result<Prepared, Error> {
-    let mut root: Value = serde_json::from_slice(json).map_err(|source| Error::Json { source })?;
-    if !root.is_object() {
-        return Err(Error::Invalid {
-            at: "(root)".into(),
-            reason: "the document is not a JSON object".into(),
-        });
+    use serde_json::value::RawValue;
+    use std::collections::BTreeMap;
+    let top: BTreeMap<String, &RawValue> = match serde_json::from_slice(json) {
+        Ok(top) => top,
+        Err(source) => {
+            return Err(match serde_json::from_slice::<&RawValue>(json) {
+                Ok(_) => Error::Invalid {
+                    at: "(root)".into(),
+                    reason: "the document is not a JSON object".into(),
+                },
+                Err(_) => Error::Json { source },
+            })
+        }
+    };
+    let mut kept = serde_json::Map::new();
+    for (key, raw) in &top {
+        let counted = COUNTED_ONLY
+            .contains(&key.as_str())
+            .then(|| serde_json::from_str::<Vec<&RawValue>>(raw.get()).ok())
+            .flatten();
+        let value = match counted {
+            Some(items) => Value::Array(vec![Value::Null; items.len()]),
+            None => serde_json::from_str(raw.get()).map_err(|source| Error::Json { source })?,
+        };
+        kept.insert(key.clone(), value);
     }
+    let mut root = Value::Object(kept);
     check_required(&root)?;
 
     let ignored_extensions = root
@@ -207,25 +243,40 @@ pub(crate) fn prepare(json: &[u8]) -> Result<Prepared, Error> {
         .filter(|e| !SUPPORTED_EXTENSIONS.contains(e))
         .map(str::to_owned)
         .collect();
-    let skipped = Vec::new();
-    let kept = root.clone();
-    if let Some(obj) = root.as_object_mut() {
-        obj.remove("animations");
-        // Checked above; the gltf crate's own list lacks KHR_mesh_quantization and
-        // EXT_mesh_gpu_instancing and would refuse them.
-        obj.remove("extensionsRequired");
-    }
-
     check_position_indices(&root)?;
     check_shapes_the_typed_api_assumes(&mut root)?;
     use_webp_sources(&mut root);
+
+    // The typed parser sees the file less its animations (read from the kept JSON instead) and
+    // extensionsRequired (checked above; the gltf crate's own list lacks KHR_mesh_quantization
+    // and EXT_mesh_gpu_instancing and would refuse them), with the images and textures as rewritten above.
+    let mut text = String::with_capacity(json.len() + 2);
+    text.push('{');
+    for (key, raw) in &top {
+        if key == "animations" || key == "extensionsRequired" {
+            continue;
+        }
+        if text.len() > 1 {
+            text.push(',');
+        }
+        text.push_str(&Value::from(key.as_str()).to_string());
+        text.push(':');
+        match root.get(key.as_str()) {
+            Some(checked) if REWRITTEN.contains(&key.as_str()) => {
+                text.push_str(&checked.to_string())
+            }
+            _ => text.push_str(raw.get()),
+        }
+    }
+    text.push('}');
     let json_root: gltf::json::Root =
-        serde_json::from_value(root).map_err(|source| Error::Json { source })?;
+        serde_json::from_str(&text).map_err(|source| Error::Json { source })?;
+    drop(text);
     let document = validate(json_root)?;
     Ok(Prepared {
         document,
-        root: kept,
-        skipped,
+        root,
+        skipped: Vec::new(),
         ignored_extensions,
     })
 }

@@ -537,6 +537,9 @@ pub struct LoadOptions {
     /// `KHR_materials_variants`: the variant whose materials to draw (`--variant`), by name
     /// or index written as digits; `None` draws the default materials.
     pub variant: Option<String>,
+    /// The most memory decoded textures and geometry may take, checked before they are
+    /// allocated: the machine's memory by default, `--max-memory` on the command line.
+    pub memory: aperture_budget::MemoryBudget,
 }
 
 /// An axis-aligned box.

@@ -32,11 +32,15 @@ pub(super) fn walk_header(bytes: &[u8], mut at: usize) -> Option<(Vec<Record>, u
 }
 
 fn read_i32(bytes: &[u8], at: usize) -> Option<i32> {
-    Some(i32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?))
+    Some(i32::from_le_bytes(
+        bytes.get(at..at.checked_add(4)?)?.try_into().ok()?,
+    ))
 }
 
 fn read_u64(bytes: &[u8], at: usize) -> Option<u64> {
-    Some(u64::from_le_bytes(bytes.get(at..at + 8)?.try_into().ok()?))
+    Some(u64::from_le_bytes(
+        bytes.get(at..at.checked_add(8)?)?.try_into().ok()?,
+    ))
 }
 
 /// Position after all headers (magic and version take 8 bytes; a multi-part file ends its
@@ -61,34 +65,86 @@ fn is_dwa(header: &Header) -> bool {
     )
 }
 
-/// A chunk: (part index, first row, data start, data length).
-fn parse_chunk(
+/// A chunk's header: (part index, first row, data start, claimed data length).
+fn chunk_header(
     bytes: &[u8],
     mut at: usize,
     meta: &MetaData,
     multipart: bool,
 ) -> Option<(usize, i32, usize, usize)> {
+    // `at` comes from the file's offset table: any value, so every step is checked.
     let part = if multipart {
-        at += 4;
-        usize::try_from(read_i32(bytes, at - 4)?).ok()?
+        let part = usize::try_from(read_i32(bytes, at)?).ok()?;
+        at = at.checked_add(4)?;
+        part
     } else {
         0
     };
     let header = meta.headers.get(part)?;
     let y = match header.blocks {
         BlockDescription::ScanLines => {
-            at += 4;
-            read_i32(bytes, at - 4)?
+            let y = read_i32(bytes, at)?;
+            at = at.checked_add(4)?;
+            y
         }
         // Tile x, y, level x, level y; the row is not needed (tiled DWA is refused).
         BlockDescription::Tiles(_) => {
-            at += 16;
+            at = at.checked_add(16)?;
             0
         }
     };
     let len = usize::try_from(read_i32(bytes, at)?).ok()?;
-    let start = at + 4;
+    let start = at.checked_add(4)?;
+    Some((part, y, start, len))
+}
+
+/// A chunk that lies within the file: (part index, first row, data start, data length).
+fn parse_chunk(
+    bytes: &[u8],
+    at: usize,
+    meta: &MetaData,
+    multipart: bool,
+) -> Option<(usize, i32, usize, usize)> {
+    let (part, y, start, len) = chunk_header(bytes, at, meta, multipart)?;
     (start.checked_add(len)? <= bytes.len()).then_some((part, y, start, len))
+}
+
+/// The `exr` decoder allocates a block's data by the size the block claims, before reading
+/// it: a 400-byte file whose block claims 2 GB costs a 2 GB allocation (and seconds to clear
+/// it). Every block the offset table points at (and that lies in the file) may claim at most
+/// the bytes that follow it; scan-line and tiled flat parts (deep parts are not read).
+pub(super) fn check_chunk_sizes(bytes: &[u8], meta: &MetaData) -> Result<(), String> {
+    if meta.headers.iter().any(|h| h.deep) {
+        return Ok(());
+    }
+    let multipart = meta.requirements.has_multiple_layers;
+    let Some(tables) = headers_end(bytes, multipart) else {
+        return Ok(());
+    };
+    // The header's chunk count is the file's claim (billions, for a huge claimed image); the
+    // table cannot hold more entries than the file has bytes for.
+    let total: usize = meta.headers.iter().map(|h| h.chunk_count).sum();
+    let total = total.min(bytes.len().saturating_sub(tables) / 8);
+    for i in 0..total {
+        let Some(offset) = tables
+            .checked_add(i.saturating_mul(8))
+            .and_then(|at| read_u64(bytes, at))
+            .and_then(|o| usize::try_from(o).ok())
+        else {
+            continue;
+        };
+        let Some((_, _, start, len)) = chunk_header(bytes, offset, meta, multipart) else {
+            continue;
+        };
+        let available = bytes.len().saturating_sub(start);
+        if len > available {
+            return Err(format!(
+                "the block at byte {offset} claims {len} bytes, but the file has {available} \
+                 after it"
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// What is wrong with the DWA blocks, if anything.
@@ -124,9 +180,10 @@ pub(super) fn check_dwa_blocks(bytes: &[u8], meta: &MetaData) -> Result<(), DwaP
         return Ok(());
     };
     let total: usize = meta.headers.iter().map(|h| h.chunk_count).sum();
+    let total = total.min(bytes.len().saturating_sub(tables) / 8);
 
     let mut positions: Vec<usize> = (0..total)
-        .filter_map(|i| read_u64(bytes, tables + 8 * i))
+        .filter_map(|i| read_u64(bytes, tables.checked_add(i.checked_mul(8)?)?))
         .filter_map(|offset| usize::try_from(offset).ok())
         .collect();
     let mut at = tables.saturating_add(total.saturating_mul(8));

@@ -15,9 +15,7 @@ mod guard;
 mod read;
 mod write;
 
-#[cfg(test)]
-use read::decode_exr;
-pub use read::{read_exr, read_exr_header, ExrHeader};
+pub use read::{decode_exr, decode_exr_within, read_exr, read_exr_header, ExrHeader};
 pub use write::{
     encode_exr, write_exr, write_exr_streamed, ChannelSpec, ExrLayout, LateValues, RowWriter,
 };

@@ -142,12 +142,18 @@ pub fn read_exr(path: &Path) -> Result<Image, Error> {
 }
 
 /// Decodes EXR bytes; see [`read_exr`]. `path` only names the file in errors.
-pub(crate) fn decode_exr(bytes: &[u8], path: &Path) -> Result<Image, Error> {
+pub fn decode_exr(bytes: &[u8], path: &Path) -> Result<Image, Error> {
+    decode_exr_within(bytes, path, u64::MAX)
+}
+
+/// [`decode_exr`] with the decoded samples also held to `max_bytes` (environment maps within
+/// the render's memory budget; the fuzz targets within theirs).
+pub fn decode_exr_within(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, Error> {
     // The `exr` decoder can panic on some damaged data (seen: an integer overflow in its B44
     // decompressor), so a panic is turned into an error: a damaged file must not bring down
     // the caller. Nothing shared is mutated inside, so unwinding leaves no broken state.
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        decode_exr_inner(bytes, path)
+        decode_exr_inner(bytes, path, max_bytes)
     }))
     .unwrap_or_else(|panic| {
         let message = panic
@@ -162,7 +168,7 @@ pub(crate) fn decode_exr(bytes: &[u8], path: &Path) -> Result<Image, Error> {
     })
 }
 
-fn decode_exr_inner(bytes: &[u8], path: &Path) -> Result<Image, Error> {
+fn decode_exr_inner(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, Error> {
     let exr_error = |e: ::exr::error::Error| Error::Exr {
         path: path.to_path_buf(),
         message: e.to_string(),
@@ -183,7 +189,11 @@ fn decode_exr_inner(bytes: &[u8], path: &Path) -> Result<Image, Error> {
             })
         }
     }
-    let limit = (1u64 << 30).max(4096 * bytes.len() as u64);
+    guard::check_chunk_sizes(bytes, &meta).map_err(|message| Error::Exr {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    let limit = (1u64 << 30).max(4096 * bytes.len() as u64).min(max_bytes);
     let mut decoded = 0u64;
     for header in &meta.headers {
         let samples = (header.layer_size.width() as u64)

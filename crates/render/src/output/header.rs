@@ -24,6 +24,9 @@ pub mod late {
     pub const DROPPED: &str = "aperture:droppedSamples";
     /// Mean samples per pixel (f32; adaptive renders).
     pub const MEAN_SPP: &str = "aperture:meanSpp";
+    /// 1 when the render was interrupted and the file holds the samples taken so far, 0 when
+    /// it completed (i32; written with `--save-partial` only).
+    pub const INTERRUPTED: &str = "aperture:interrupted";
 }
 
 /// Header keys that tell how parts of a render split across machines fit together (SPEC §8);

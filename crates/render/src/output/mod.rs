@@ -35,6 +35,13 @@ pub enum OutputError {
     /// The image could not be written.
     #[error(transparent)]
     Image(#[from] aperture_imageio::Error),
+    /// The render was cancelled ([`RenderOptions::cancel`]) and nothing was written
+    /// ([`ExrOptions::save_partial`] writes what was rendered instead).
+    #[error("interrupted after {samples} samples: nothing written")]
+    Interrupted {
+        /// Samples taken before the render stopped.
+        samples: u64,
+    },
 }
 
 /// How an EXR render is written.
@@ -52,6 +59,10 @@ pub struct ExrOptions {
     /// Most bytes the sums of one band of rows may take ([`BAND_BYTES`] by default): lower
     /// it to render in more, smaller bands with less memory. The pixels do not change.
     pub band_bytes: usize,
+    /// When the render is cancelled, write the samples taken so far (each pixel's count in
+    /// `Debug Sample Count`, `aperture:interrupted` = 1 in the header) instead of nothing.
+    /// Ask for [`Pass::SampleCount`] in the options' passes, so the file has the counts.
+    pub save_partial: bool,
 }
 
 impl Default for ExrOptions {
@@ -61,6 +72,7 @@ impl Default for ExrOptions {
             region: None,
             tile: None,
             band_bytes: BAND_BYTES,
+            save_partial: false,
         }
     }
 }
@@ -122,7 +134,7 @@ pub fn render_exr(
         ..opts.clone()
     };
     let channels = channels::channels(passes, exr.half);
-    let layout = ExrLayout {
+    let mut layout = ExrLayout {
         width: window.width,
         height: window.height,
         placement: placement(window, whole),
@@ -133,6 +145,10 @@ pub fn render_exr(
         .concat(),
         channels,
     };
+    if exr.save_partial {
+        let flag = header::late::INTERRUPTED.to_string();
+        layout.metadata.push((flag, MetaValue::Int(0)));
+    }
     let bpp = film_bytes_per_pixel(passes, opts.adaptive.is_some(), layout.channels.len());
     let bands = bands(
         window,
@@ -168,7 +184,20 @@ pub fn render_exr(
             summary.dropped += film.dropped_samples();
             summary.half_clamped += clamped;
         }
-        Ok(late_values(&summary, &opts))
+        if opts.cancel.is_cancelled() && !exr.save_partial {
+            return Err(OutputError::Interrupted {
+                samples: summary.samples,
+            });
+        }
+        let mut late = late_values(&summary, &opts);
+        if exr.save_partial {
+            let interrupted = i32::from(opts.cancel.is_cancelled());
+            late.push((
+                header::late::INTERRUPTED.to_string(),
+                MetaValue::Int(interrupted),
+            ));
+        }
+        Ok(late)
     })?;
     Ok(summary)
 }
@@ -247,6 +276,11 @@ pub fn render_png(
     };
     let t0 = Instant::now();
     let film = crate::render(scene, accel, &opts, progress)?;
+    if opts.cancel.is_cancelled() {
+        return Err(OutputError::Interrupted {
+            samples: film.total_samples(),
+        });
+    }
     let render_secs = t0.elapsed().as_secs_f64();
     let mut image = Image::new(film.width(), film.height());
     image.rgba = film.to_rgba();
