@@ -15,8 +15,8 @@ use aperture_render::output;
 use aperture_render::{
     build_accel, render, test_scenes, EnvImage, EnvSampling, Environment, PassSet, RenderOptions,
 };
-use aperture_scene::{Dof, Light, LightKind, LoadOptions, Material, Scene};
-use glam::{Affine3A, Vec3};
+use aperture_scene::{LoadOptions, Scene};
+use glam::Vec3;
 use std::sync::Arc;
 
 /// FNV-1a over bytes.
@@ -83,78 +83,12 @@ fn sky() -> Environment {
     }))
 }
 
-/// A matte ground, a glossy dielectric, a rough gold and a mirror ball, an emitter and a
-/// point light, through a lens.
-fn balls() -> Scene {
-    let dof = Dof {
-        enabled: true,
-        aperture_radius: 0.05,
-        focus_distance: 6.0,
-        ..Dof::default()
-    };
-    let camera =
-        test_scenes::look_at_camera(Vec3::new(0.0, 1.5, 6.0), Vec3::new(0.0, 0.8, 0.0), 0.7, dof);
-    let glossy = Material {
-        base_color_factor: glam::Vec4::new(0.2, 0.4, 0.8, 1.0),
-        metallic_factor: 0.0,
-        roughness_factor: 0.3,
-        ..Material::default()
-    };
-    let gold = Material {
-        base_color_factor: glam::Vec4::new(1.0, 0.8, 0.3, 1.0),
-        metallic_factor: 1.0,
-        roughness_factor: 0.5,
-        ..Material::default()
-    };
-    let mirror = Material {
-        metallic_factor: 1.0,
-        roughness_factor: 0.05,
-        ..Material::default()
-    };
-    let ground = test_scenes::matte(Vec3::new(0.7, 0.6, 0.5));
-    let lamp = test_scenes::emitter(Vec3::new(6.0, 5.0, 4.0));
-    let ball = |m: u32, x: f32, r: f32| {
-        (
-            test_scenes::icosphere(3, m),
-            Affine3A::from_scale_rotation_translation(
-                Vec3::splat(r),
-                glam::Quat::IDENTITY,
-                Vec3::new(x, r, 0.0),
-            ),
-        )
-    };
-    let mut s = test_scenes::scene(
-        vec![
-            (test_scenes::quad(8.0, 0), Affine3A::IDENTITY),
-            ball(1, -1.3, 0.6),
-            ball(2, 0.0, 0.7),
-            ball(3, 1.3, 0.5),
-            ball(4, 0.4, 0.15),
-        ],
-        vec![ground, glossy, gold, mirror, lamp],
-        camera,
-    );
-    s.instances[4].world_from_object = Affine3A::from_scale_rotation_translation(
-        Vec3::splat(0.15),
-        glam::Quat::IDENTITY,
-        Vec3::new(0.5, 1.9, 0.8),
-    );
-    s.lights.push(Light {
-        name: None,
-        kind: LightKind::Point,
-        position: Vec3::new(2.0, 4.0, 3.0),
-        direction: Vec3::NEG_Y,
-        intensity: Vec3::splat(20.0),
-    });
-    s
-}
-
 /// `(scene, hash with a constant environment, hash with the sky)` as rendered at 90c6b3f.
 const BALLS: (u64, u64) = (0x333991e5e9413003, 0x8e02a60ffafe868e);
 
 #[test]
 fn opaque_scene_renders_as_before_the_extended_material() {
-    let s = balls();
+    let s = test_scenes::balls();
     let constant = render_hash(&s, &opts(Environment::Constant(Vec3::splat(0.3))));
     let image = render_hash(&s, &opts(sky()));
     println!("balls: constant {constant:#018x}, sky {image:#018x}");

@@ -6,6 +6,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
 use aperture_scene::{load, Error, LoadOptions};
+use aperture_tests::meshopt_writer::join_glb as glb;
 use serde_json::{json, Value};
 
 /// A valid one-triangle scene: 3 float positions (36 bytes) then 3 u16 indices (6 bytes + 2 pad).
@@ -45,28 +46,6 @@ fn triangle_json(uri: Option<&str>) -> Value {
         ],
         "buffers": [buffer]
     })
-}
-
-fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
-    let mut j = serde_json::to_vec(json).unwrap();
-    while j.len() % 4 != 0 {
-        j.push(b' ');
-    }
-    let mut b = bin.to_vec();
-    while b.len() % 4 != 0 {
-        b.push(0);
-    }
-    let mut out = Vec::new();
-    out.extend(b"glTF");
-    out.extend(2u32.to_le_bytes());
-    out.extend(((12 + 8 + j.len() + 8 + b.len()) as u32).to_le_bytes());
-    out.extend((j.len() as u32).to_le_bytes());
-    out.extend(0x4E4F_534Au32.to_le_bytes());
-    out.extend(j);
-    out.extend((b.len() as u32).to_le_bytes());
-    out.extend(0x004E_4942u32.to_le_bytes());
-    out.extend(b);
-    out
 }
 
 /// One damaged input: the files to write, the one to load, and what the error must be.

@@ -48,6 +48,7 @@ import sys
 import tempfile
 
 from addon_zip import addon_zip
+import cycles_settings
 from checks import check, record, summary
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -436,32 +437,10 @@ def test_info_rules(binary, scene_path, cams):
 
 def setup_cycles(spp, seed):
     sc = bpy.context.scene
-    sc.render.engine = "CYCLES"
-    cy = sc.cycles
-    cy.device = "CPU"
-    cy.samples = spp
-    cy.use_adaptive_sampling = False
-    cy.use_denoising = False
-    cy.sample_clamp_direct = 0.0
-    cy.sample_clamp_indirect = 0.0
-    cy.pixel_filter_type = "BOX"
-    cy.filter_width = 1.0
-    cy.seed = seed
-    cy.use_animated_seed = False
-    cy.blur_glossy = 0.0
-    # Unbiased paths of up to 12 bounces of any kind, as aperture's default --max-bounces 12
-    # (Cycles' defaults stop diffuse paths after 4 bounces and cull dim lights).
-    cy.max_bounces = 12
-    cy.diffuse_bounces = 12
-    cy.glossy_bounces = 12
-    cy.transmission_bounces = 12
-    cy.light_sampling_threshold = 0.0
+    cycles_settings.unbiased(sc, spp, seed)
     sc.world = None  # black, as glTF has no environment
-    sc.render.film_transparent = False
     sc.render.use_persistent_data = False
     sc.render.threads_mode = "AUTO"
-    sc.render.image_settings.file_format = "OPEN_EXR"
-    sc.render.image_settings.color_depth = "32"
     sc.render.image_settings.exr_codec = "ZIP"
 
 

@@ -37,10 +37,11 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
+import cycles_settings  # noqa: E402
+from checks import check, record, summary  # noqa: E402
 
 ARGS = None
 WORK = None
-RESULTS = []
 WIDTH, HEIGHT = 160, 120
 WORLD = (0.6, 0.7, 0.9)
 
@@ -51,17 +52,6 @@ SPHERES = [
     ("Plastic", (0.55, 0.0, 0.5), 0.5, (0.1, 0.3, 0.7), 0.0, 0.4),
     ("GlossyWhite", (1.65, 0.0, 0.5), 0.5, (0.9, 0.9, 0.9), 0.0, 0.1),
 ]
-
-
-def record(name, ok, detail):
-    status = {True: "PASS", False: "FAIL", None: "SKIP"}[ok]
-    RESULTS.append((name, status, detail))
-    print(f"{status} {name}: {detail}", flush=True)
-
-
-def check(name, cond, detail):
-    record(name, bool(cond), detail)
-    return bool(cond)
 
 
 def principled(name, colour, metallic=0.0, roughness=1.0, transmission=0.0, matte=False):
@@ -145,35 +135,12 @@ def export(path):
 
 def setup_cycles(spp, seed):
     sc = bpy.context.scene
-    sc.render.engine = "CYCLES"
-    cy = sc.cycles
-    cy.device = "CPU"
-    cy.samples = spp
-    cy.use_adaptive_sampling = False
-    cy.use_denoising = False
-    cy.sample_clamp_direct = 0.0
-    cy.sample_clamp_indirect = 0.0
-    cy.pixel_filter_type = "BOX"
-    cy.filter_width = 1.0
-    cy.seed = seed
-    cy.use_animated_seed = False
-    cy.blur_glossy = 0.0
-    cy.caustics_reflective = True
-    cy.caustics_refractive = True
-    # Up to 12 bounces of any kind, as aperture's default --max-bounces 12.
-    cy.max_bounces = 12
-    cy.diffuse_bounces = 12
-    cy.glossy_bounces = 12
-    cy.transmission_bounces = 12
-    cy.light_sampling_threshold = 0.0
+    cycles_settings.unbiased(sc, spp, seed)
     world = bpy.data.worlds.new("World")
     world.use_nodes = True
     world.node_tree.nodes["Background"].inputs["Color"].default_value = (*WORLD, 1.0)
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 1.0
     sc.world = world
-    sc.render.film_transparent = False
-    sc.render.image_settings.file_format = "OPEN_EXR"
-    sc.render.image_settings.color_depth = "32"
 
 
 def cycles_of_export(gltf_path, out_path, spp, seed):
@@ -334,11 +301,7 @@ def main():
     finally:
         if not ARGS.out:
             shutil.rmtree(WORK, ignore_errors=True)
-    passed = sum(1 for r in RESULTS if r[1] == "PASS")
-    failed = sum(1 for r in RESULTS if r[1] == "FAIL")
-    skipped = sum(1 for r in RESULTS if r[1] == "SKIP")
-    print(f"{passed} passed, {failed} failed, {skipped} skipped")
-    return 1 if failed else 0
+    return summary()
 
 
 if __name__ == "__main__":

@@ -51,33 +51,8 @@ PASS_SPP = 256
 # Must equal aperture's metrics::RELATIVE_MSE_EPSILON.
 RELATIVE_MSE_EPSILON = 1e-2
 
-SEGMENTS, RINGS = 96, 48
-
-
-def sphere_mesh(segments=SEGMENTS, rings=RINGS):
-    """Unit UV sphere: smooth normals, counter-clockwise seen from outside, no degenerate
-    triangles at the poles."""
-    pos, nrm, idx = [], [], []
-    for j in range(rings + 1):
-        theta = math.pi * j / rings
-        for i in range(segments + 1):
-            phi = 2.0 * math.pi * i / segments
-            p = (math.sin(theta) * math.cos(phi), math.cos(theta), -math.sin(theta) * math.sin(phi))
-            pos.append(p)
-            nrm.append(p)
-    row = segments + 1
-    for j in range(rings):
-        for i in range(segments):
-            a, b = j * row + i, j * row + i + 1
-            c, d = (j + 1) * row + i, (j + 1) * row + i + 1
-            if j != 0:
-                idx += [a, c, b]
-            if j != rings - 1:
-                idx += [b, c, d]
-    return pos, nrm, idx
-
-
-SPHERE_POS, SPHERE_NRM, SPHERE_IDX = sphere_mesh()
+# The same 96 x 48 UV sphere as the reference scenes.
+SPHERE_POS, SPHERE_NRM, SPHERE_IDX = mr.SPHERE_POS, mr.SPHERE_NRM, mr.SPHERE_IDX
 mr.check_winding(SPHERE_POS, SPHERE_IDX, SPHERE_NRM)
 
 

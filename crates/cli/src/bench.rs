@@ -13,7 +13,7 @@
 //! are required, `config`, `spp`, `mean_spp`, `rmse`, `mae` and `flip` are read when present
 //! (empty = unknown), any other column is ignored.
 
-use crate::render_cmd::TracingArgs;
+use crate::render_args::TracingArgs;
 use anyhow::{bail, Context as _};
 use aperture_imageio::{metrics, Image};
 use aperture_render::{AdaptiveOptions, RenderOptions, SamplerKind};
@@ -721,7 +721,7 @@ fn draw_plot<DB: plotters::prelude::DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render_cmd::FilterArg;
+    use crate::render_args::FilterArg;
     use clap::Parser as _;
 
     fn parse(args: &[&str]) -> Result<BenchArgs, clap::Error> {

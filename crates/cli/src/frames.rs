@@ -2,7 +2,7 @@
 //! `aperture_render::sequence::render_sequence` and prints a line per frame with an overall ETA.
 
 use crate::progress::Progress;
-use crate::render_cmd::{RenderArgs, ViewArg};
+use crate::render_args::RenderArgs;
 use aperture_accel::BvhQuality;
 use aperture_render::sequence::{self, FrameFormat, FrameRange, FrameReport, Sequence};
 use aperture_render::RenderOptions;
@@ -24,14 +24,7 @@ pub fn run(
         .is_some_and(|e| e.eq_ignore_ascii_case("png"));
     let format = if png {
         FrameFormat::Png {
-            png: aperture_imageio::PngOptions {
-                exposure: args.exposure,
-                view: match args.view {
-                    ViewArg::Standard => aperture_imageio::ViewTransform::Standard,
-                    ViewArg::Agx => aperture_imageio::ViewTransform::AgX,
-                },
-                ..Default::default()
-            },
+            png: crate::render_cmd::png_options(args),
             transparent: args.transparent,
         }
     } else {
@@ -117,7 +110,7 @@ fn clock(secs: f64) -> String {
 
 #[cfg(test)]
 mod tests {
-    use crate::render_cmd::RenderArgs;
+    use crate::render_args::RenderArgs;
     use clap::Parser as _;
 
     fn args(scene: &std::path::Path, out: &std::path::Path, extra: &[&str]) -> RenderArgs {

@@ -7,6 +7,7 @@ mod interrupt;
 mod material_args;
 mod merge_cmd;
 mod progress;
+mod render_args;
 mod render_cmd;
 mod split_args;
 mod time_args;
@@ -26,7 +27,7 @@ pub(crate) enum Command {
     /// Print what a scene contains and how its cameras resolve.
     Info(info::InfoArgs),
     /// Render a scene to EXR or PNG.
-    Render(render_cmd::RenderArgs),
+    Render(render_args::RenderArgs),
     /// Put the parts of a render split across machines (tiles, sample batches) together.
     Merge(merge_cmd::MergeArgs),
     /// Error against time per sampler configuration: CSV, log-log plot and table.

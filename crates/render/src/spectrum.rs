@@ -28,7 +28,7 @@ fn xyz(lambda: f32) -> Vec3 {
 }
 
 /// XYZ to linear Rec.709.
-const XYZ_TO_REC709: Mat3 = Mat3::from_cols_array(&[
+pub(crate) const XYZ_TO_REC709: Mat3 = Mat3::from_cols_array(&[
     3.240_454_2,
     -0.969_266,
     0.055_643_4,

@@ -254,11 +254,8 @@ pub fn bokeh(size: f32, z: f32, yfov: f32, dof: Dof, radiance: f32) -> Scene {
 }
 
 /// A matte ground, a glossy dielectric ball, a rough gold ball, a mirror ball, an emitter and a
-/// point light, seen through a lens (render it under a grey sky): every kind of pass, and
-/// silhouettes against the background for Cryptomatte. Its nodes are named (Ground, Blue, Gold,
-/// Mirror, Lamp), and so are its materials (Ground, Glossy, Gold, Mirror, Lamp). The camera sees sky
-/// above the horizon, so silhouettes against the background exist.
-pub fn passes() -> Scene {
+/// point light, seen through a lens; nothing named (see [`passes`] for the named scene).
+pub fn balls() -> Scene {
     let dof = Dof {
         enabled: true,
         aperture_radius: 0.05,
@@ -267,29 +264,24 @@ pub fn passes() -> Scene {
     };
     let camera = look_at_camera(Vec3::new(0.0, 1.5, 6.0), Vec3::new(0.0, 0.8, 0.0), 0.7, dof);
     let glossy = Material {
-        name: Some("Glossy".into()),
         base_color_factor: glam::Vec4::new(0.2, 0.4, 0.8, 1.0),
         metallic_factor: 0.0,
         roughness_factor: 0.3,
         ..Material::default()
     };
     let gold = Material {
-        name: Some("Gold".into()),
         base_color_factor: glam::Vec4::new(1.0, 0.8, 0.3, 1.0),
         metallic_factor: 1.0,
         roughness_factor: 0.5,
         ..Material::default()
     };
     let mirror = Material {
-        name: Some("Mirror".into()),
         metallic_factor: 1.0,
         roughness_factor: 0.05,
         ..Material::default()
     };
-    let mut ground = matte(Vec3::new(0.7, 0.6, 0.5));
-    ground.name = Some("Ground".into());
-    let mut lamp = emitter(Vec3::new(6.0, 5.0, 4.0));
-    lamp.name = Some("Lamp".into());
+    let ground = matte(Vec3::new(0.7, 0.6, 0.5));
+    let lamp = emitter(Vec3::new(6.0, 5.0, 4.0));
     let ball = |m: u32, x: f32, r: f32| {
         (
             icosphere(3, m),
@@ -323,6 +315,20 @@ pub fn passes() -> Scene {
         direction: Vec3::NEG_Y,
         intensity: Vec3::splat(20.0),
     });
+    s
+}
+
+/// A matte ground, a glossy dielectric ball, a rough gold ball, a mirror ball, an emitter and a
+/// point light, seen through a lens (render it under a grey sky): every kind of pass, and
+/// silhouettes against the background for Cryptomatte. Its nodes are named (Ground, Blue, Gold,
+/// Mirror, Lamp), and so are its materials (Ground, Glossy, Gold, Mirror, Lamp). The camera sees sky
+/// above the horizon, so silhouettes against the background exist.
+pub fn passes() -> Scene {
+    let mut s = balls();
+    let names = ["Ground", "Glossy", "Gold", "Mirror", "Lamp"];
+    for (material, name) in s.materials.iter_mut().zip(names) {
+        material.name = Some(name.into());
+    }
     s.node_names = ["Ground", "Blue", "Gold", "Mirror", "Lamp"]
         .map(|n| Some(n.to_string()))
         .into();

@@ -62,16 +62,7 @@ impl Drop for Scratch {
 
 /// Renders the demo scene on this machine with `args` into `out` and reads it back.
 pub fn local_render(out: &Path, args: &[&str]) -> Image {
-    let status = Command::new(aperture())
-        .arg("render")
-        .arg(demo_scene())
-        .arg("-o")
-        .arg(out)
-        .arg("--quiet")
-        .args(args)
-        .status()
-        .unwrap();
-    assert!(status.success(), "local render {args:?}");
+    local_render_of(&demo_scene(), out, args);
     read_exr(out).unwrap()
 }
 

@@ -3,7 +3,8 @@
 //! `KHR_materials_iridescence` (Belcour & Barla 2017, as the extension's implementation notes
 //! write it).
 
-use glam::{Mat3, Vec3};
+use crate::spectrum::XYZ_TO_REC709;
+use glam::Vec3;
 use std::f32::consts::PI;
 
 /// Schlick's weight `(1 − cos)⁵`.
@@ -50,19 +51,6 @@ pub(crate) fn refract(wi: Vec3, m: Vec3, eta: f32) -> Option<Vec3> {
     let cos_t = (1.0 - sin2_t).sqrt();
     Some(-wi / eta + (cos_i / eta - cos_t) * m)
 }
-
-/// XYZ to linear Rec.709 (the matrix the iridescence extension gives).
-const XYZ_TO_REC709: Mat3 = Mat3::from_cols_array(&[
-    3.240_454_2,
-    -0.969_266,
-    0.055_643_4,
-    -1.537_138_5,
-    1.876_010_8,
-    -0.204_025_9,
-    -0.498_531_4,
-    0.041_556,
-    1.057_225_2,
-]);
 
 /// The spectral sensitivity of the thin-film phase term, integrated against the colour
 /// matching functions in Fourier space (the extension's `evalSensitivity`).
