@@ -21,7 +21,7 @@ use crate::bsdf::{Interface, LobeSplit};
 use crate::environment::EnvLight;
 use crate::lights::EmissiveLights;
 use crate::media::{Crossing, Medium, MediumStack};
-use crate::sampler::SampleStream;
+use crate::sampler::{BounceSample, SampleStream};
 use crate::spectrum;
 use crate::surface::{shading_frame, view_normal, Geometry, SurfaceKind};
 use crate::warp::power_heuristic;
@@ -251,76 +251,95 @@ impl Integrator<'_> {
             self.direct_emissive(&v, w.beta, &bs, &mut path);
             self.direct_environment(&v, w.beta, stream, &mut path);
 
-            let Some(sample) = bsdf.sample(wo_l, bs.lobe, bs.bsdf) else {
+            if !self.continue_path(&v, &bs, medium, entering, &mut w, &mut path) {
                 break;
-            };
-            let wi = frame.to_world(sample.wi);
-            let side = wi.dot(ng);
-            // Which side of the surface the path continues on is the geometric normal's call:
-            // the shading normal may put a sampled direction on the other side than its lobe
-            // meant. A surface that only reflects ends such a path (light would leak through
-            // it); through one that transmits, the path goes on where the direction points,
-            // crossing into the medium behind only if it does cross (as Mitsuba decides).
-            let transmitted = side < 0.0;
-            if side == 0.0 || (transmitted && !bsdf.transmits()) {
-                break;
-            }
-            let straight = sample.delta.is_some_and(|d| d.straight);
-            let internal = sample.delta.is_some_and(|d| d.internal);
-            if AOV && path.light_passes && w.scatter == 0 {
-                path.first_split = match sample.delta {
-                    Some(d) => LobeSplit::pure(d.lobe),
-                    None => bsdf.lobe_split(wo_l, sample.wi),
-                };
-            }
-            if transmitted {
-                if let Some(m) = medium {
-                    w.media.cross(&m, entering);
-                }
-            }
-            w.beta *= sample.weight();
-            if !straight {
-                // Light sampling covers the far side only where `two_sided` says so: an
-                // emitter met through a refractive boundary was found by this sample alone.
-                let unsampled = sample.delta.is_some() || (transmitted && !v.two_sided);
-                w.arrival = Arrival {
-                    p: s.p,
-                    pdf: if unsampled { f32::INFINITY } else { sample.pdf },
-                };
-            }
-            if w.vertex >= RR_START {
-                // Survive with probability q and divide by it: unbiased.
-                let q = w.beta.max_element().min(1.0);
-                if bs.rr >= q || q.is_nan() {
-                    break;
-                }
-                w.beta /= q;
-            }
-            if w.beta == Vec3::ZERO {
-                break;
-            }
-            let o = if transmitted {
-                v.spawn.origin(-ng)
-            } else {
-                v.p_out
-            };
-            w.ray = Ray::new(o, wi);
-            w.vertex += 1;
-            // A straight pass through a pane is a scattering only as the camera's first hit
-            // (so what is seen through glass fills the Transmission passes, as in Cycles).
-            // Total internal reflection is no choice of the light's: it does not count
-            // against `max_bounces` (a glass wall guiding light would go dark at the limit),
-            // but a path takes at most `MAX_INTERNAL` of them.
-            if internal {
-                w.internal += 1;
-                if w.internal > MAX_INTERNAL {
-                    break;
-                }
-            } else if !straight || w.scatter == 0 {
-                w.scatter += 1;
             }
         }
         (path.l, covered)
+    }
+
+    /// Samples the BSDF at `v` and moves the walk on to its next ray (through `medium` when it
+    /// crosses into it); false ends the path.
+    #[inline(always)]
+    fn continue_path<const AOV: bool>(
+        &self,
+        v: &direct::Vertex,
+        bs: &BounceSample,
+        medium: Option<Medium>,
+        entering: bool,
+        w: &mut Walk,
+        path: &mut PathState<AOV>,
+    ) -> bool {
+        let bsdf = v.bsdf;
+        let Some(sample) = bsdf.sample(v.wo_l, bs.lobe, bs.bsdf) else {
+            return false;
+        };
+        let wi = v.frame.to_world(sample.wi);
+        let side = wi.dot(v.ng);
+        // Which side of the surface the path continues on is the geometric normal's call:
+        // the shading normal may put a sampled direction on the other side than its lobe
+        // meant. A surface that only reflects ends such a path (light would leak through
+        // it); through one that transmits, the path goes on where the direction points,
+        // crossing into the medium behind only if it does cross (as Mitsuba decides).
+        let transmitted = side < 0.0;
+        if side == 0.0 || (transmitted && !bsdf.transmits()) {
+            return false;
+        }
+        let straight = sample.delta.is_some_and(|d| d.straight);
+        let internal = sample.delta.is_some_and(|d| d.internal);
+        if AOV && path.light_passes && w.scatter == 0 {
+            path.first_split = match sample.delta {
+                Some(d) => LobeSplit::pure(d.lobe),
+                None => bsdf.lobe_split(v.wo_l, sample.wi),
+            };
+        }
+        if transmitted {
+            if let Some(m) = medium {
+                w.media.cross(&m, entering);
+            }
+        }
+        w.beta *= sample.weight();
+        if !straight {
+            // Light sampling covers the far side only where `two_sided` says so: an
+            // emitter met through a refractive boundary was found by this sample alone.
+            let unsampled = sample.delta.is_some() || (transmitted && !v.two_sided);
+            w.arrival = Arrival {
+                p: v.p,
+                pdf: if unsampled { f32::INFINITY } else { sample.pdf },
+            };
+        }
+        if w.vertex >= RR_START {
+            // Survive with probability q and divide by it: unbiased.
+            let q = w.beta.max_element().min(1.0);
+            if bs.rr >= q || q.is_nan() {
+                return false;
+            }
+            w.beta /= q;
+        }
+        if w.beta == Vec3::ZERO {
+            return false;
+        }
+        let o = if transmitted {
+            v.spawn.origin(-v.ng)
+        } else {
+            v.p_out
+        };
+        w.ray = Ray::new(o, wi);
+        w.vertex += 1;
+        // A straight pass through a pane is a scattering only as the camera's first hit
+        // (so what is seen through glass fills the Transmission passes, as in Cycles).
+        // Total internal reflection is no choice of the light's: it does not count
+        // against `max_bounces` (a glass wall guiding light would go dark at the limit),
+        // but a path takes at most `MAX_INTERNAL` of them.
+        if internal {
+            w.internal += 1;
+            if w.internal > MAX_INTERNAL {
+                return false;
+            }
+        } else if !straight || w.scatter == 0 {
+            w.scatter += 1;
+        }
+        true
     }
 
     /// The MIS weight of an emitter at `s` found by a path that arrived as `arrival` says.
