@@ -168,6 +168,14 @@ pub fn decode_exr_within(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Im
     })
 }
 
+/// A channel's samples: the part it came from, its values, its type in the file.
+type Channel = (usize, Vec<f32>, SampleType);
+
+/// Every part of a file at its largest resolution level, every channel flat.
+type FlatImage = ::exr::image::Image<
+    ::exr::prelude::SmallVec<[::exr::image::Layer<::exr::image::AnyChannels<FlatSamples>>; 2]>,
+>;
+
 fn decode_exr_inner(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, Error> {
     let exr_error = |e: ::exr::error::Error| Error::Exr {
         path: path.to_path_buf(),
@@ -177,36 +185,7 @@ fn decode_exr_inner(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, 
         path: path.to_path_buf(),
         what,
     };
-
-    let meta = MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(exr_error)?;
-    match guard::check_dwa_blocks(bytes, &meta) {
-        Ok(()) => {}
-        Err(guard::DwaProblem::Unsupported(what)) => return Err(unsupported(what)),
-        Err(guard::DwaProblem::Damaged(message)) => {
-            return Err(Error::Exr {
-                path: path.to_path_buf(),
-                message,
-            })
-        }
-    }
-    guard::check_chunk_sizes(bytes, &meta).map_err(|message| Error::Exr {
-        path: path.to_path_buf(),
-        message,
-    })?;
-    let limit = (1u64 << 30).max(4096 * bytes.len() as u64).min(max_bytes);
-    let mut decoded = 0u64;
-    for header in &meta.headers {
-        let samples = (header.layer_size.width() as u64)
-            .saturating_mul(header.layer_size.height() as u64)
-            .saturating_mul(header.channels.list.len() as u64);
-        decoded = decoded.saturating_add(samples.saturating_mul(4));
-    }
-    if decoded > limit {
-        return Err(unsupported(format!(
-            "{decoded} bytes of samples from a {}-byte file",
-            bytes.len()
-        )));
-    }
+    check_before_decoding(bytes, path, max_bytes)?;
 
     // Sequential decoding: reading is not the renderer's hot path, and it keeps a damaged
     // file's error on this thread.
@@ -226,56 +205,8 @@ fn decode_exr_inner(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, 
         .ok_or_else(|| unsupported("no parts".into()))?;
     let (size, position) = (first.size, first.attributes.layer_position);
     let pixels = size.area();
-
-    // Every channel of every part, by full name.
-    let mut channels: BTreeMap<String, (usize, Vec<f32>, SampleType)> = BTreeMap::new();
-    for (part_index, part) in image.layer_data.iter().enumerate() {
-        if part.size != size || part.attributes.layer_position != position {
-            return Err(unsupported("parts with different data windows".into()));
-        }
-        let prefix = match &part.attributes.layer_name {
-            Some(name) if !name.as_slice().is_empty() => format!("{}.", string(name.as_slice())),
-            _ => String::new(),
-        };
-        for channel in &part.channel_data.list {
-            let full = format!("{prefix}{}", string(channel.name.as_slice()));
-            let (samples, kind): (Vec<f32>, _) = match &channel.sample_data {
-                FlatSamples::F16(v) => (v.iter().map(|h| h.to_f32()).collect(), SampleType::F16),
-                FlatSamples::F32(v) => (v.clone(), SampleType::F32),
-                FlatSamples::U32(v) => (v.iter().map(|&u| u as f32).collect(), SampleType::F32),
-            };
-            if samples.len() != pixels {
-                return Err(unsupported(format!("subsampled channel `{full}`")));
-            }
-            channels.insert(full, (part_index, samples, kind));
-        }
-    }
-
-    let has = |name: &str| channels.contains_key(name);
-    let beauty_prefix = if has("R") && has("G") && has("B") {
-        Some(String::new())
-    } else if has("Y") {
-        None
-    } else {
-        let prefixes: Vec<String> = channels
-            .keys()
-            .filter_map(|k| k.strip_suffix(".R").map(|p| format!("{p}.")))
-            .filter(|p| has(&format!("{p}G")) && has(&format!("{p}B")))
-            .collect();
-        let chosen = prefixes
-            .iter()
-            .find(|p| p.ends_with("Combined."))
-            .or(prefixes.first());
-        match chosen {
-            Some(p) => Some(p.clone()),
-            None => {
-                return Err(Error::NoBeauty {
-                    path: path.to_path_buf(),
-                    channels: channels.keys().cloned().collect::<Vec<_>>().join(", "),
-                })
-            }
-        }
-    };
+    let mut channels = channels_by_name(&image, path)?;
+    let beauty_prefix = beauty_prefix(&channels, path)?;
 
     let mut take = |name: &str| channels.remove(name);
     let (rgb, alpha, beauty_part, beauty_type) = match &beauty_prefix {
@@ -308,6 +239,155 @@ fn decode_exr_inner(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, 
         })
         .collect();
 
+    let layers = group_layers(channels, pixels);
+
+    let metadata = metadata(&image, beauty_part);
+
+    let too_big = || unsupported("image larger than u32".into());
+    let (width, height) = (
+        u32::try_from(size.width()).map_err(|_| too_big())?,
+        u32::try_from(size.height()).map_err(|_| too_big())?,
+    );
+    let display = image.attributes.display_window;
+    let placement = placement(display, position, width, height);
+    Ok(Image {
+        width,
+        height,
+        rgba,
+        beauty_type,
+        layers,
+        metadata,
+        placement,
+    })
+}
+
+/// The beauty part's attributes and the file's shared ones, sorted by name.
+fn metadata(image: &FlatImage, beauty_part: usize) -> Vec<(String, crate::MetaValue)> {
+    let mut metadata = get_attributes(&image.layer_data[beauty_part].attributes);
+    for (name, value) in &image.attributes.other {
+        if let Some(value) = meta_value(value) {
+            metadata.push((string(name.as_slice()), value));
+        }
+    }
+    metadata.extend(chromaticities(&image.attributes));
+    metadata.sort_by(|a, b| a.0.cmp(&b.0));
+    metadata
+}
+
+/// The checks that keep a damaged or hostile file from costing more than it is worth, before
+/// the `exr` crate decodes it: DWA blocks, chunk sizes against the file, and the decoded size
+/// against `max_bytes` (and against 4,096 bytes of samples per byte of file, at least 1 GiB).
+fn check_before_decoding(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<(), Error> {
+    let exr_error = |e: ::exr::error::Error| Error::Exr {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    let unsupported = |what: String| Error::UnsupportedExr {
+        path: path.to_path_buf(),
+        what,
+    };
+    let meta = MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(exr_error)?;
+    match guard::check_dwa_blocks(bytes, &meta) {
+        Ok(()) => {}
+        Err(guard::DwaProblem::Unsupported(what)) => return Err(unsupported(what)),
+        Err(guard::DwaProblem::Damaged(message)) => {
+            return Err(Error::Exr {
+                path: path.to_path_buf(),
+                message,
+            })
+        }
+    }
+    guard::check_chunk_sizes(bytes, &meta).map_err(|message| Error::Exr {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    let limit = (1u64 << 30).max(4096 * bytes.len() as u64).min(max_bytes);
+    let mut decoded = 0u64;
+    for header in &meta.headers {
+        let samples = (header.layer_size.width() as u64)
+            .saturating_mul(header.layer_size.height() as u64)
+            .saturating_mul(header.channels.list.len() as u64);
+        decoded = decoded.saturating_add(samples.saturating_mul(4));
+    }
+    if decoded > limit {
+        return Err(unsupported(format!(
+            "{decoded} bytes of samples from a {}-byte file",
+            bytes.len()
+        )));
+    }
+    Ok(())
+}
+
+/// Every channel of every part, by full name (`layer.channel`), as f32 samples.
+fn channels_by_name(image: &FlatImage, path: &Path) -> Result<BTreeMap<String, Channel>, Error> {
+    let unsupported = |what: String| Error::UnsupportedExr {
+        path: path.to_path_buf(),
+        what,
+    };
+    let first = &image.layer_data[0];
+    let (size, position) = (first.size, first.attributes.layer_position);
+    let pixels = size.area();
+    let mut channels: BTreeMap<String, Channel> = BTreeMap::new();
+    for (part_index, part) in image.layer_data.iter().enumerate() {
+        if part.size != size || part.attributes.layer_position != position {
+            return Err(unsupported("parts with different data windows".into()));
+        }
+        let prefix = match &part.attributes.layer_name {
+            Some(name) if !name.as_slice().is_empty() => format!("{}.", string(name.as_slice())),
+            _ => String::new(),
+        };
+        for channel in &part.channel_data.list {
+            let full = format!("{prefix}{}", string(channel.name.as_slice()));
+            let (samples, kind): (Vec<f32>, _) = match &channel.sample_data {
+                FlatSamples::F16(v) => (v.iter().map(|h| h.to_f32()).collect(), SampleType::F16),
+                FlatSamples::F32(v) => (v.clone(), SampleType::F32),
+                FlatSamples::U32(v) => (v.iter().map(|&u| u as f32).collect(), SampleType::F32),
+            };
+            if samples.len() != pixels {
+                return Err(unsupported(format!("subsampled channel `{full}`")));
+            }
+            channels.insert(full, (part_index, samples, kind));
+        }
+    }
+    Ok(channels)
+}
+
+/// The beauty's channel prefix: `""` for unprefixed `R,G,B`, `None` for luminance `Y`, else a
+/// layer with `R,G,B` (`*.Combined.` first, as Blender's multilayer files name it).
+fn beauty_prefix(
+    channels: &BTreeMap<String, Channel>,
+    path: &Path,
+) -> Result<Option<String>, Error> {
+    let has = |name: &str| channels.contains_key(name);
+    Ok(if has("R") && has("G") && has("B") {
+        Some(String::new())
+    } else if has("Y") {
+        None
+    } else {
+        let prefixes: Vec<String> = channels
+            .keys()
+            .filter_map(|k| k.strip_suffix(".R").map(|p| format!("{p}.")))
+            .filter(|p| has(&format!("{p}G")) && has(&format!("{p}B")))
+            .collect();
+        let chosen = prefixes
+            .iter()
+            .find(|p| p.ends_with("Combined."))
+            .or(prefixes.first());
+        match chosen {
+            Some(p) => Some(p.clone()),
+            None => {
+                return Err(Error::NoBeauty {
+                    path: path.to_path_buf(),
+                    channels: channels.keys().cloned().collect::<Vec<_>>().join(", "),
+                })
+            }
+        }
+    })
+}
+
+/// The channels left after the beauty, grouped into layers by the name before their last dot,
+/// interleaved per pixel in conventional channel order.
+fn group_layers(channels: BTreeMap<String, Channel>, pixels: usize) -> Vec<Layer> {
     let mut grouped: BTreeMap<String, Vec<(String, Vec<f32>, SampleType)>> = BTreeMap::new();
     for (full, (_, samples, kind)) in channels {
         let (layer, channel) = match full.rfind('.') {
@@ -319,7 +399,7 @@ fn decode_exr_inner(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, 
             .or_default()
             .push((channel, samples, kind));
     }
-    let layers = grouped
+    grouped
         .into_iter()
         .map(|(name, mut list)| {
             list.sort_by(|a, b| {
@@ -347,33 +427,7 @@ fn decode_exr_inner(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, 
                 sample_type,
             }
         })
-        .collect();
-
-    let mut metadata = get_attributes(&image.layer_data[beauty_part].attributes);
-    for (name, value) in &image.attributes.other {
-        if let Some(value) = meta_value(value) {
-            metadata.push((string(name.as_slice()), value));
-        }
-    }
-    metadata.extend(chromaticities(&image.attributes));
-    metadata.sort_by(|a, b| a.0.cmp(&b.0));
-
-    let too_big = || unsupported("image larger than u32".into());
-    let (width, height) = (
-        u32::try_from(size.width()).map_err(|_| too_big())?,
-        u32::try_from(size.height()).map_err(|_| too_big())?,
-    );
-    let display = image.attributes.display_window;
-    let placement = placement(display, position, width, height);
-    Ok(Image {
-        width,
-        height,
-        rgba,
-        beauty_type,
-        layers,
-        metadata,
-        placement,
-    })
+        .collect()
 }
 
 /// Conventional channel order within a layer, so `R,G,B` does not come back as `B,G,R`.
