@@ -7,26 +7,25 @@
 //! once, at load, and come first in every posed [`Scene::meshes`], identical at every time; the
 //! meshes deformed per pose follow them.
 
+mod pose;
+
 use std::collections::HashMap;
 use std::path::Path;
 
 use serde_json::Value;
 
-use glam::{Affine3A, DAffine3, DQuat, DVec3, Vec3};
+use glam::{DAffine3, DQuat, DVec3, Vec3};
 
 use crate::animation::{self, AnimationInfo, Animations, NodeProperty, Target};
 use crate::camera::{self, CameraData};
-use crate::dof::NodeInfo;
-use crate::load::{
-    finite_world, load_buffers, node_graph, recentre, to_f32, world_origin, NodeData, NodeGraph,
-};
+use crate::load::{load_buffers, node_graph, recentre, NodeGraph};
 use crate::material::Materials;
 use crate::mesh::LoadedMesh;
-use crate::pointer::{self, CameraProperty, LightProperty, Pointer};
+use crate::pointer::Pointer;
 use crate::skin::Skin;
 use crate::{
-    glb, mesh, morph, prepass, skin, Error, Instance, Light, LightKind, LoadOptions, Material,
-    Mesh, Projection, Scene, SceneStats, Texture,
+    glb, mesh, morph, prepass, skin, Error, LightKind, LoadOptions, Material, Mesh, Scene,
+    SceneStats, Texture,
 };
 
 /// Watts per lumen at 555 nm: Blender's importer divides candela and lux by it (SPEC §4).
@@ -479,255 +478,6 @@ impl Animated {
         };
         skin::refresh_flat_normals(&mut m, &lm.flat);
         Ok((m, centre))
-    }
-
-    /// The scene at `time`, with the static meshes and textures given.
-    fn build(
-        &self,
-        time: Option<f32>,
-        static_meshes: Vec<Mesh>,
-        textures: Vec<Texture>,
-    ) -> Result<Scene, Error> {
-        let pose = self.pose(time);
-        let mut stats = self.stats.clone();
-        stats.time = time;
-        let mut out = Scene {
-            meshes: static_meshes,
-            textures,
-            ..Scene::default()
-        };
-        let mut placed: Vec<(u32, DAffine3, u32)> = Vec::new();
-        let mut light_positions: Vec<(usize, DVec3)> = Vec::new();
-        let mut light_data = self.lights.clone();
-        let mut camera_data = self.cameras.clone();
-        let mut materials = self.materials.clone();
-        self.apply_pointers(&pose, &mut light_data, &mut camera_data, &mut materials)?;
-        for &ni in &self.order {
-            let node = &self.graph.nodes[ni];
-            let world = pose.world[ni];
-            if let Some(mi) = node.mesh {
-                let (mesh, world_from_mesh) = match self.shapes.get(&ni) {
-                    Some(Shape::Static {
-                        mesh,
-                        offset,
-                        world_space,
-                    }) => (
-                        *mesh,
-                        if *world_space {
-                            DAffine3::from_translation(*offset)
-                        } else {
-                            world * DAffine3::from_translation(*offset)
-                        },
-                    ),
-                    Some(Shape::Deforming) => {
-                        let (m, centre) = self.deform(ni, mi, &pose)?;
-                        out.meshes.push(m);
-                        let i = (out.meshes.len() - 1) as u32;
-                        (
-                            i,
-                            match centre {
-                                Some(c) => DAffine3::from_translation(c),
-                                None => world,
-                            },
-                        )
-                    }
-                    None => continue,
-                };
-                match &node.instances {
-                    Some(locals)
-                        if !matches!(
-                            self.shapes.get(&ni),
-                            Some(Shape::Static {
-                                world_space: true,
-                                ..
-                            })
-                        ) =>
-                    {
-                        let offset = world.inverse() * world_from_mesh;
-                        for local in locals {
-                            placed.push((mesh, world * *local * offset, ni as u32));
-                        }
-                    }
-                    _ => placed.push((mesh, world_from_mesh, ni as u32)),
-                }
-            }
-            if let Some(li) = node.light {
-                let Some(light) = light_data.get(li) else {
-                    continue;
-                };
-                let intensity = light.color * light.intensity / LUMENS_PER_WATT;
-                if !intensity.is_finite() {
-                    return Err(Error::NonFinite {
-                        at: format!("KHR_lights_punctual.lights[{li}]"),
-                        value: format!("{intensity:?}"),
-                    });
-                }
-                light_positions.push((ni, world.translation));
-                out.lights.push(Light {
-                    name: light.name.clone(),
-                    kind: light.kind,
-                    position: Vec3::ZERO,
-                    direction: world
-                        .transform_vector3(DVec3::NEG_Z)
-                        .as_vec3()
-                        .try_normalize()
-                        .unwrap_or(Vec3::NEG_Z),
-                    intensity,
-                });
-            }
-        }
-
-        let origin = world_origin(&out.meshes, &placed, &mut stats);
-        out.world_origin = origin;
-        let relative = |m: DAffine3| DAffine3 {
-            matrix3: m.matrix3,
-            translation: m.translation - origin,
-        };
-        out.instances = placed
-            .iter()
-            .map(|&(mesh, world, node)| {
-                Ok(Instance {
-                    mesh,
-                    world_from_object: finite_world(node as usize, to_f32(relative(world)))?,
-                    node,
-                })
-            })
-            .collect::<Result<_, Error>>()?;
-        for (light, &(node, p)) in out.lights.iter_mut().zip(&light_positions) {
-            let position = (p - origin).as_vec3();
-            finite_world(node, Affine3A::from_translation(position))?;
-            light.position = position;
-        }
-        // Every node's origin (a focus object may be any node); whole transforms only for the
-        // camera nodes that need them (48 bytes a node less for large scenes).
-        let world_from_node = |ni: usize| to_f32(relative(pose.world[ni]));
-        let origins: Vec<Vec3> = (0..pose.world.len())
-            .map(|ni| Vec3::from(world_from_node(ni).translation))
-            .collect();
-        let info = NodeInfo {
-            names: &self.graph.names,
-            origins: &origins,
-        };
-        for &ni in &self.order {
-            let node = &self.graph.nodes[ni];
-            let Some(ci) = node.camera else { continue };
-            let Some(data) = camera_data.get(ci) else {
-                continue;
-            };
-            let world = finite_world(ni, world_from_node(ni))?;
-            let at = camera::CameraNode {
-                camera: ci,
-                node: ni,
-                name: self.graph.names[ni].as_deref(),
-                extras: node.extras.as_ref(),
-            };
-            out.cameras
-                .push(camera::camera(data, &at, world, &info, &self.options)?);
-        }
-        out.materials = materials;
-        if out.cameras.is_empty() {
-            out.cameras
-                .push(camera::automatic_camera(&out, &info, &self.options)?);
-        }
-        if self.draws_nothing && out.instances.is_empty() {
-            stats
-                .warnings
-                .push("the selected scene draws no mesh".into());
-        }
-        out.stats = stats;
-        out.node_names = self.graph.names.clone();
-        out.source_hash = self.source_hash;
-        Ok(out)
-    }
-
-    /// Sets what `KHR_animation_pointer` channels animate at this pose.
-    fn apply_pointers(
-        &self,
-        pose: &Pose,
-        lights: &mut [LightData],
-        cameras: &mut [CameraData],
-        materials: &mut [Material],
-    ) -> Result<(), Error> {
-        for (p, v) in &pose.pointers {
-            let f = |k: usize| v.get(k).copied().unwrap_or(0.0) as f32;
-            match p {
-                Pointer::Camera(i, prop) => {
-                    let Some(c) = cameras.get_mut(*i) else {
-                        continue;
-                    };
-                    match (prop, &mut c.projection) {
-                        (CameraProperty::Yfov, Projection::Perspective { yfov, .. }) => {
-                            camera::check_yfov(
-                                f(0),
-                                &format!("cameras[{i}].perspective.yfov (animated)"),
-                            )?;
-                            *yfov = f(0);
-                        }
-                        (CameraProperty::Xmag, Projection::Orthographic { xmag, .. }) => {
-                            *xmag = f(0)
-                        }
-                        (CameraProperty::Ymag, Projection::Orthographic { ymag, .. }) => {
-                            *ymag = f(0)
-                        }
-                        _ => {}
-                    }
-                }
-                Pointer::CameraExtra(i, key) => {
-                    if let Some(c) = cameras.get_mut(*i) {
-                        pointer::apply_camera_extra(&mut c.extras, key, v[0]);
-                    }
-                }
-                Pointer::Light(i, prop) => {
-                    let Some(l) = lights.get_mut(*i) else {
-                        continue;
-                    };
-                    match prop {
-                        LightProperty::Color => l.color = Vec3::new(f(0), f(1), f(2)),
-                        LightProperty::Intensity => l.intensity = f(0),
-                        LightProperty::InnerCone | LightProperty::OuterCone => {
-                            if let LightKind::Spot {
-                                inner_cone,
-                                outer_cone,
-                            } = &mut l.kind
-                            {
-                                if *prop == LightProperty::InnerCone {
-                                    *inner_cone = f(0);
-                                } else {
-                                    *outer_cone = f(0);
-                                }
-                            }
-                        }
-                        LightProperty::Range => {}
-                    }
-                }
-                Pointer::Material(i, prop) => {
-                    if let Some(&ours) = self.material_index.get(i) {
-                        if let Some(m) = materials.get_mut(ours as usize) {
-                            pointer::apply_material(m, *prop, v);
-                        }
-                    }
-                }
-                Pointer::Node(..) | Pointer::MeshWeights(_) => {}
-            }
-        }
-        Ok(())
-    }
-}
-
-impl Pose {
-    /// Morph weights of node `ni` drawing mesh `mi`: animated node weights, else `node.weights`,
-    /// else animated mesh weights, else `mesh.weights`.
-    fn weights(&self, ni: usize, mi: usize, node: &NodeData, lm: &LoadedMesh) -> Vec<f32> {
-        if let Some(w) = self.node_weights.get(&ni) {
-            return w.clone();
-        }
-        if let Some(w) = &node.weights {
-            return w.clone();
-        }
-        if let Some(w) = self.mesh_weights.get(&mi) {
-            return w.clone();
-        }
-        lm.weights.clone()
     }
 }
 
