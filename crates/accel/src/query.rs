@@ -1,0 +1,320 @@
+//! The queries: closest hit and occlusion for one ray, a batch or many rays (on rayon's
+//! threads), brute force for tests, and triangle lookup.
+
+use crate::node::BoxRay;
+use crate::triangle::TriRay;
+use crate::walk::*;
+use crate::{Accel, AccelStats, Blas, Entry, Hit, Ray, FLATTENED};
+use glam::Vec3;
+use rayon::prelude::*;
+use std::mem::MaybeUninit;
+
+impl Accel {
+    /// Build statistics.
+    pub fn stats(&self) -> AccelStats {
+        self.stats
+    }
+
+    /// The closest hit in `[ray.tmin, ray.tmax]`, if any.
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is set only when `detect_avx2` found every feature it enables.
+            return unsafe { self.intersect_avx2(ray) };
+        }
+        self.intersect_impl::<false>(ray)
+    }
+
+    /// True when anything lies in `[ray.tmin, ray.tmax]`.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: as in `intersect`.
+            return unsafe { self.occluded_avx2(ray) };
+        }
+        self.occluded_impl::<false>(ray)
+    }
+
+    /// The whole query compiled for AVX2: the per-ray setup (reciprocals, shear, stack) and the
+    /// traversal become one function, without a call boundary between them where the traversal
+    /// had to spill its ray constants (about 60 instructions per ray).
+    ///
+    /// # Safety
+    /// The CPU must support every feature enabled here (checked by `detect_avx2`).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
+    unsafe fn intersect_avx2(&self, ray: &Ray) -> Option<Hit> {
+        self.intersect_impl::<true>(ray)
+    }
+
+    /// [`Accel::intersect_avx2`] for occlusion.
+    ///
+    /// # Safety
+    /// As for [`Accel::intersect_avx2`].
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
+    unsafe fn occluded_avx2(&self, ray: &Ray) -> bool {
+        self.occluded_impl::<true>(ray)
+    }
+
+    #[inline(always)]
+    pub(crate) fn intersect_impl<const AVX2: bool>(&self, ray: &Ray) -> Option<Hit> {
+        let mut tmax = ray.tmax;
+        let mut inline: InlineStack = [MaybeUninit::uninit(); INLINE_STACK];
+        let mut heap = Vec::new();
+        let blas_stack = stack_for(self.max_blas_depth, &mut inline, &mut heap);
+        let mut leaf = EntriesClosest::<AVX2> {
+            accel: self,
+            ray,
+            stack: blas_stack,
+            best: None,
+        };
+        self.for_entries::<AVX2>(ray, &mut tmax, &mut leaf);
+        leaf.best
+    }
+
+    #[inline(always)]
+    pub(crate) fn occluded_impl<const AVX2: bool>(&self, ray: &Ray) -> bool {
+        let mut inline: InlineStack = [MaybeUninit::uninit(); INLINE_STACK];
+        let mut heap = Vec::new();
+        let blas_stack = stack_for(self.max_blas_depth, &mut inline, &mut heap);
+        let mut tmax = ray.tmax;
+        let leaf = EntriesAny::<AVX2> {
+            accel: self,
+            ray,
+            stack: blas_stack,
+        };
+        self.for_entries::<AVX2>(ray, &mut tmax, leaf)
+    }
+
+    /// [`Accel::intersect`] for each of `rays` on the calling thread, into `out` (one result per
+    /// ray; extra slots on either side are left alone). The results are exactly `intersect`'s,
+    /// ray by ray; the walks of [`BATCH_LANES`] rays are interleaved, which is faster than a loop
+    /// of `intersect` calls (figures in `BENCHMARKS.md`).
+    pub fn intersect_batch(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is set only when `detect_avx2` found every feature it enables.
+            return unsafe { self.intersect_batch_avx2(rays, out) };
+        }
+        self.batch_impl::<false, ClosestLeaf>(rays, out)
+    }
+
+    /// [`Accel::occluded`] for each of `rays` on the calling thread, interleaved as
+    /// [`Accel::intersect_batch`].
+    pub fn occluded_batch(&self, rays: &[Ray], out: &mut [bool]) {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: as in `intersect_batch`.
+            return unsafe { self.occluded_batch_avx2(rays, out) };
+        }
+        self.batch_impl::<false, AnyLeaf>(rays, out)
+    }
+
+    /// [`Accel::intersect_batch`] compiled for AVX2.
+    ///
+    /// # Safety
+    /// As for [`Accel::intersect_avx2`].
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
+    unsafe fn intersect_batch_avx2(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        self.batch_impl::<true, ClosestLeaf>(rays, out)
+    }
+
+    /// [`Accel::occluded_batch`] compiled for AVX2.
+    ///
+    /// # Safety
+    /// As for [`Accel::intersect_avx2`].
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
+    unsafe fn occluded_batch_avx2(&self, rays: &[Ray], out: &mut [bool]) {
+        self.batch_impl::<true, AnyLeaf>(rays, out)
+    }
+
+    /// The one bottom-level tree every ray walks, when interleaving applies: a scene of one
+    /// entry whose stack fits inline. Other scenes (instanced, or degenerate depths) go ray by
+    /// ray.
+    fn single_entry(&self) -> Option<(&Entry, &Blas)> {
+        match self.entries.as_slice() {
+            [entry] if self.max_blas_depth < INLINE_STACK => self
+                .blases
+                .get(entry.blas as usize)
+                .filter(|b| !b.nodes.is_empty())
+                .map(|b| (entry, b)),
+            _ => None,
+        }
+    }
+
+    /// The batch queries: [`interleave`]d walks of `rays` with leaves of type `L`, one answer per
+    /// ray into `out`; ray by ray (`L::one`) where interleaving does not apply.
+    #[inline(always)]
+    fn batch_impl<'s, const AVX2: bool, L: BlasLeaf<'s>>(
+        &'s self,
+        rays: &[Ray],
+        out: &mut [L::Answer],
+    ) {
+        let n = rays.len().min(out.len());
+        let (rays, out) = (&rays[..n], &mut out[..n]);
+        let Some((entry, blas)) = self.single_entry() else {
+            for (r, o) in rays.iter().zip(out.iter_mut()) {
+                *o = L::one::<AVX2>(self, r);
+            }
+            return;
+        };
+        interleave::<AVX2, L>(
+            &blas.nodes,
+            n,
+            |i| {
+                let ray = &rays[i];
+                let (br, leaf) = Self::walk_start::<L>(entry, blas, ray);
+                (br, ray.tmax, leaf)
+            },
+            |i, leaf, stopped| out[i] = leaf.answer(blas, entry, stopped),
+        );
+    }
+
+    /// [`Accel::intersect`] for many rays, in parallel on the current rayon pool, each thread
+    /// running [`Accel::intersect_batch`] on runs of 256 rays. `out` receives one result per ray
+    /// (extra slots on either side are left alone).
+    pub fn intersect_many(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        rays.par_chunks(256)
+            .zip(out.par_chunks_mut(256))
+            .for_each(|(r, o)| self.intersect_batch(r, o));
+    }
+
+    /// [`Accel::occluded`] for many rays, in parallel on the current rayon pool (through
+    /// [`Accel::occluded_batch`], as [`Accel::intersect_many`]).
+    pub fn occluded_many(&self, rays: &[Ray], out: &mut [bool]) {
+        rays.par_chunks(256)
+            .zip(out.par_chunks_mut(256))
+            .for_each(|(r, o)| self.occluded_batch(r, o));
+    }
+
+    /// Visits (`leaf.visit(entry index, &mut tmax)`) the top-level entries whose bounds the ray
+    /// may cross.
+    #[inline(always)]
+    fn for_entries<const AVX2: bool>(
+        &self,
+        ray: &Ray,
+        tmax: &mut f32,
+        mut leaf: impl Leaf,
+    ) -> bool {
+        match self.entries.len() {
+            0 => false,
+            // One entry (a scene without shared meshes): no top-level walk.
+            1 => leaf.visit(0, tmax),
+            _ => {
+                let r = BoxRay::new(ray.origin, ray.dir, ray.tmin, self.tlas_bounds);
+                let mut inline: InlineStack = [MaybeUninit::uninit(); INLINE_STACK];
+                let mut heap = Vec::new();
+                let stack = stack_for(self.tlas_depth, &mut inline, &mut heap);
+                traverse::<AVX2>(&self.tlas, &r, tmax, stack, leaf)
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn object_ray(entry: &Entry, ray: &Ray) -> (Vec3, Vec3) {
+        if entry.identity {
+            (ray.origin, ray.dir)
+        } else {
+            (
+                entry.object_from_world.transform_point3(ray.origin),
+                entry.object_from_world.transform_vector3(ray.dir),
+            )
+        }
+    }
+
+    #[inline(always)]
+    pub(crate) fn make_hit(
+        blas: &Blas,
+        entry: &Entry,
+        i: usize,
+        (t, u, v): (f32, f32, f32),
+    ) -> Hit {
+        let instance = if entry.instance == FLATTENED {
+            blas.tri_instance.get(i).copied().unwrap_or(FLATTENED)
+        } else {
+            entry.instance
+        };
+        Hit {
+            t,
+            instance,
+            triangle: blas.tris[i].prim,
+            u,
+            v,
+        }
+    }
+
+    /// Walks the bottom-level tree of `entry` for `ray` (moved into its space) with a leaf of
+    /// type `L`: `L`'s answer, or `None` for an entry without a tree.
+    #[inline(always)]
+    pub(crate) fn walk_entry<'s, const AVX2: bool, L: BlasLeaf<'s>>(
+        &'s self,
+        entry: &Entry,
+        ray: &Ray,
+        tmax: &mut f32,
+        stack: &mut [MaybeUninit<Group>],
+    ) -> Option<L::Answer> {
+        let blas = self.blases.get(entry.blas as usize)?;
+        let (br, mut leaf) = Self::walk_start::<L>(entry, blas, ray);
+        let stopped = traverse::<AVX2>(&blas.nodes, &br, tmax, stack, &mut leaf);
+        Some(leaf.answer(blas, entry, stopped))
+    }
+
+    /// What a walk of `blas` (drawn by `entry`) for `ray` starts from: the ray in the tree's
+    /// space prepared for box tests, and a fresh leaf with its triangle-test constants.
+    #[inline(always)]
+    fn walk_start<'s, L: BlasLeaf<'s>>(entry: &Entry, blas: &'s Blas, ray: &Ray) -> (BoxRay, L) {
+        let (o, d) = Self::object_ray(entry, ray);
+        (
+            BoxRay::new(o, d, ray.tmin, blas.box_bounds),
+            L::start(&blas.tris, TriRay::new(o, d), ray.tmin),
+        )
+    }
+
+    /// The closest hit by testing every triangle of every instance, with the same ray transform
+    /// and triangle test as [`Accel::intersect`]. Slow: a reference for tests and debugging.
+    pub fn intersect_brute_force(&self, ray: &Ray) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        let mut tmax = ray.tmax;
+        for entry in &self.entries {
+            let Some(blas) = self.blases.get(entry.blas as usize) else {
+                continue;
+            };
+            let (o, d) = Self::object_ray(entry, ray);
+            let tr = TriRay::new(o, d);
+            for (i, tri) in blas.tris.iter().enumerate() {
+                if let Some(h) =
+                    crate::triangle::intersect(&tr, tri.p[0], tri.p[1], tri.p[2], ray.tmin, tmax)
+                {
+                    tmax = h.0;
+                    best = Some(Self::make_hit(blas, entry, i, h));
+                }
+            }
+        }
+        best
+    }
+
+    /// The world-space vertices of `triangle` of `instance` as the structure stores them (for
+    /// flattened meshes these are the exact world positions the intersection used).
+    /// `None` if that triangle was left out or does not exist.
+    pub fn triangle_world(&self, instance: u32, triangle: u32) -> Option<[Vec3; 3]> {
+        for entry in &self.entries {
+            let Some(blas) = self.blases.get(entry.blas as usize) else {
+                continue;
+            };
+            if entry.instance == FLATTENED {
+                let i = (0..blas.tris.len())
+                    .find(|&i| blas.tri_instance[i] == instance && blas.tris[i].prim == triangle)?;
+                return Some(blas.tris[i].p);
+            }
+            if entry.instance == instance {
+                let world_from_object = entry.object_from_world.inverse();
+                let t = blas.tris.iter().find(|t| t.prim == triangle)?;
+                return Some(t.p.map(|p| world_from_object.transform_point3(p)));
+            }
+        }
+        None
+    }
+}
