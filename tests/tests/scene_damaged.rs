@@ -189,9 +189,9 @@ fn cases() -> Vec<Case> {
         ),
         gltf_case(
             "unsupported required extension",
-            |j| j["extensionsRequired"] = json!(["KHR_texture_basisu"]),
+            |j| j["extensionsRequired"] = json!(["EXT_lights_image_based"]),
             |e| matches!(e, Error::UnsupportedExtension { .. }),
-            "KHR_texture_basisu",
+            "EXT_lights_image_based",
         ),
         Case {
             kind: "missing buffer file",

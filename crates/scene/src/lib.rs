@@ -36,6 +36,7 @@
 mod accessor;
 mod animated;
 mod animation;
+mod basis;
 mod camera;
 mod dof;
 mod draco;

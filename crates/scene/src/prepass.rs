@@ -35,6 +35,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_variants",
     "KHR_materials_pbrSpecularGlossiness",
     "EXT_texture_webp",
+    "KHR_texture_basisu",
 ];
 
 /// The validated document plus what the pre-pass removed.
@@ -145,16 +146,23 @@ fn check_shapes_the_typed_api_assumes(root: &mut Value) -> Result<(), Error> {
 /// `EXT_texture_webp`: a texture's WebP image replaces its core `source` (which is a fallback
 /// for viewers without WebP, and absent when the file requires the extension, as Blender writes
 /// it). Both show the same picture; we decode WebP.
-fn use_webp_sources(root: &mut Value) {
+///
+/// `KHR_texture_basisu`: its KTX2 image is used only where the texture has no core `source`.
+/// Where it has one, that image is the original the KTX2 was encoded from (Basis Universal is
+/// lossy), so it is the more accurate of the two.
+fn use_extension_sources(root: &mut Value) {
     let textures = root.get_mut("textures").and_then(Value::as_array_mut);
     for tex in textures.into_iter().flatten() {
-        let webp = tex
-            .get("extensions")
-            .and_then(|e| e.get("EXT_texture_webp"))
-            .and_then(|w| w.get("source"))
-            .filter(|s| s.is_u64())
-            .cloned();
-        if let (Some(source), Some(obj)) = (webp, tex.as_object_mut()) {
+        let source_of = |name: &str| {
+            tex.get("extensions")
+                .and_then(|e| e.get(name))
+                .and_then(|w| w.get("source"))
+                .filter(|s| s.is_u64())
+                .cloned()
+        };
+        let webp = source_of("EXT_texture_webp");
+        let basisu = source_of("KHR_texture_basisu").filter(|_| tex.get("source").is_none());
+        if let (Some(source), Some(obj)) = (webp.or(basisu), tex.as_object_mut()) {
             obj.insert("source".into(), source);
         }
     }
@@ -245,7 +253,7 @@ pub(crate) fn prepare(json: &[u8]) -> Result<Prepared, Error> {
         .collect();
     check_position_indices(&root)?;
     check_shapes_the_typed_api_assumes(&mut root)?;
-    use_webp_sources(&mut root);
+    use_extension_sources(&mut root);
 
     // The typed parser sees the file less its animations (read from the kept JSON instead) and
     // extensionsRequired (checked above; the gltf crate's own list lacks KHR_mesh_quantization
@@ -287,18 +295,18 @@ mod tests {
 
     #[test]
     fn unsupported_required_extension_is_named() {
-        let e = prepare(br#"{"asset":{"version":"2.0"},"extensionsRequired":["KHR_lights_punctual","KHR_texture_basisu"]}"#)
+        let e = prepare(br#"{"asset":{"version":"2.0"},"extensionsRequired":["KHR_lights_punctual","EXT_lights_image_based"]}"#)
             .err()
             .unwrap();
-        assert!(e.to_string().contains("KHR_texture_basisu"), "{e}");
+        assert!(e.to_string().contains("EXT_lights_image_based"), "{e}");
         assert!(matches!(e, Error::UnsupportedExtension { index: 1, .. }));
     }
 
     #[test]
     fn used_only_extensions_are_ignored_and_required_supported_ones_pass() {
-        let p = prepare(br#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_texture_basisu","EXT_mesh_gpu_instancing"],"extensionsRequired":["EXT_mesh_gpu_instancing","KHR_mesh_quantization"]}"#)
+        let p = prepare(br#"{"asset":{"version":"2.0"},"extensionsUsed":["EXT_lights_image_based","EXT_mesh_gpu_instancing"],"extensionsRequired":["EXT_mesh_gpu_instancing","KHR_mesh_quantization"]}"#)
             .unwrap();
-        assert_eq!(p.ignored_extensions, ["KHR_texture_basisu"]);
+        assert_eq!(p.ignored_extensions, ["EXT_lights_image_based"]);
     }
 
     #[test]
@@ -327,6 +335,20 @@ mod tests {
         .unwrap();
         let sources: Vec<usize> = p.document.textures().map(|t| t.source().index()).collect();
         assert_eq!(sources, [1, 1, 0]);
+    }
+
+    #[test]
+    fn basisu_sources_stand_in_only_for_a_missing_source() {
+        let p = prepare(
+            br#"{"asset":{"version":"2.0"},"extensionsRequired":["KHR_texture_basisu"],
+            "images":[{"uri":"a.png"},{"uri":"b.ktx2","mimeType":"image/ktx2"}],
+            "textures":[{"extensions":{"KHR_texture_basisu":{"source":1}}},
+                        {"source":0,"extensions":{"KHR_texture_basisu":{"source":1}}}]}"#,
+        )
+        .unwrap();
+        let sources: Vec<usize> = p.document.textures().map(|t| t.source().index()).collect();
+        assert_eq!(sources, [1, 0]);
+        assert!(p.ignored_extensions.is_empty());
     }
 
     #[test]

@@ -59,6 +59,22 @@ fn decoder(bytes: &[u8], image: usize) -> Result<impl image::ImageDecoder + '_, 
 const MAX_RATIO: u64 = 1100;
 
 fn header(bytes: &[u8], image: usize) -> Result<Header, Error> {
+    if crate::basis::is_ktx2(bytes) {
+        let (width, height) = crate::basis::dimensions(bytes, image)?;
+        if width == 0 || height == 0 {
+            return Err(Error::Invalid {
+                at: format!("images[{image}]"),
+                reason: "image has no texels".into(),
+            });
+        }
+        // The transcoder's RGBA8 output, then the texels built from it.
+        return Ok(Header {
+            width,
+            height,
+            native: 4,
+            stored: 4,
+        });
+    }
     let format = image::ImageReader::new(Cursor::new(bytes))
         .with_guessed_format()
         .ok()
@@ -107,7 +123,7 @@ fn wide(ct: image::ColorType) -> bool {
 
 /// Decodes one image's bytes to RGBA texels (8-bit stays 8-bit; 16-bit and float become f32),
 /// refusing an image whose decoding would take more than `max_bytes`. `image` (its index in
-/// the glTF file) only names it in errors. PNG, JPEG and WebP are read.
+/// the glTF file) only names it in errors. PNG, JPEG, WebP and KTX2 (Basis Universal) are read.
 pub fn decode_texture(
     bytes: &[u8],
     image: usize,
@@ -141,6 +157,10 @@ fn decode_checked(bytes: &[u8], image: usize, h: Header) -> Result<(u32, u32, Te
 }
 
 fn decode_unguarded(bytes: &[u8], image: usize, h: Header) -> Result<(u32, u32, Texels), Error> {
+    if crate::basis::is_ktx2(bytes) {
+        let (width, height, texels) = crate::basis::decode(bytes, image)?;
+        return Ok((width, height, Texels::Rgba8(texels)));
+    }
     let mut d = decoder(bytes, image)?;
     // The decoder may allocate what its header claims (and a little for its own state), not
     // more: a header that lies cannot grow it.
