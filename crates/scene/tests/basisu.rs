@@ -143,7 +143,7 @@ fn a_ktx2_texture_is_held_to_the_budget() {
             } else {
                 state as usize % d.len()
             };
-            d[at] ^= 1 << (state >> 40) % 8;
+            d[at] ^= 1 << ((state >> 40) % 8);
         }
         if let Err(e) = decode_texture(&d, 9, 64 << 20) {
             assert!(e.to_string().contains("images[9]"), "{round}: {e}");
