@@ -12,7 +12,7 @@ use aperture_render::raybench::{
     TimingOptions,
 };
 use aperture_render::Camera;
-use aperture_scene::LoadOptions;
+use aperture_scene::{DofOverrides, LoadOptions};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -33,6 +33,13 @@ pub struct BenchRaysArgs {
     /// The camera, by name or index [default: the first].
     #[arg(long)]
     pub camera: Option<String>,
+    /// Lens radius in scene units, overriding the file's (and turning depth of field on): for
+    /// scenes whose camera is a pinhole, whose lens samples would all start at one point.
+    #[arg(long, value_parser = non_negative_f32)]
+    pub aperture_radius: Option<f32>,
+    /// Focus distance in scene units, overriding the file's.
+    #[arg(long, value_parser = positive_f32)]
+    pub focus_distance: Option<f32>,
     /// Seed of the sample values and of the random order.
     #[arg(long, default_value_t = 0)]
     pub seed: u32,
@@ -61,6 +68,20 @@ pub struct BenchRaysArgs {
     pub output: Option<PathBuf>,
 }
 
+fn non_negative_f32(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("{s:?} is not a number ≥ 0")),
+    }
+}
+
+fn positive_f32(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("{s:?} is not a positive number")),
+    }
+}
+
 fn parse_quality(s: &str) -> Result<BvhQuality, String> {
     s.parse()
         .map_err(|e: aperture_accel::ParseBvhQualityError| e.to_string())
@@ -68,7 +89,15 @@ fn parse_quality(s: &str) -> Result<BvhQuality, String> {
 
 /// Runs `aperture bench-rays`.
 pub fn run(args: BenchRaysArgs) -> anyhow::Result<()> {
-    let scene = aperture_scene::load(&args.scene, &LoadOptions::default())
+    let load = LoadOptions {
+        dof_overrides: DofOverrides {
+            aperture_radius: args.aperture_radius,
+            focus_distance: args.focus_distance,
+            ..DofOverrides::default()
+        },
+        ..LoadOptions::default()
+    };
+    let scene = aperture_scene::load(&args.scene, &load)
         .with_context(|| format!("loading {}", args.scene.display()))?;
     let mut sets = Vec::new();
     if !args.no_generated {
@@ -130,6 +159,13 @@ fn generated_sets(
         .height
         .unwrap_or_else(|| aperture_render::default_height(cam, args.width));
     let camera = Camera::new(cam, args.width, height);
+    if camera.aperture.radius() == 0.0 {
+        eprintln!(
+            "warning: camera {:?} is a pinhole (depth of field off): its lens samples all start \
+             at its centre; --aperture-radius R gives it a lens",
+            cam.name
+        );
+    }
     // One structure finds the first hits; every preset then times the same rays.
     let accel = aperture_render::build_accel(scene, BvhQuality::Medium);
     let opts = RaySetOptions {
