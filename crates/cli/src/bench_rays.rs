@@ -8,8 +8,8 @@ use crate::plot::{load_font, write_png, PALETTE};
 use anyhow::{bail, Context as _};
 use aperture_accel::BvhQuality;
 use aperture_render::raybench::{
-    generate_sets, load_set, save_sets, time_sets, Mode, QualityRun, RaySet, RaySetOptions, Timing,
-    TimingOptions,
+    estimated_bytes, generate_sets, load_set, save_sets, time_sets, Mode, QualityRun, RaySet,
+    RaySetOptions, Timing, TimingOptions,
 };
 use aperture_render::Camera;
 use aperture_scene::{DofOverrides, LoadOptions};
@@ -104,6 +104,7 @@ pub fn run(args: BenchRaysArgs) -> anyhow::Result<()> {
         sets = generated_sets(&args, &scene)?;
     }
     for path in &args.rays {
+        check_ray_file_fits(path)?;
         sets.push(load_set(path)?);
     }
     if sets.is_empty() {
@@ -143,6 +144,20 @@ pub fn run(args: BenchRaysArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Refuses a ray file whose rays (read, then timed with their answers) would not fit in memory.
+fn check_ray_file_fits(path: &Path) -> anyhow::Result<()> {
+    // Missing files are reported by the reader, naming the file.
+    let Ok(meta) = std::fs::metadata(path) else {
+        return Ok(());
+    };
+    let rays = meta.len() / 24;
+    // The file's bytes, the rays, then one closest-hit answer and one occlusion answer each.
+    let needed = meta.len().saturating_add(rays.saturating_mul(32 + 24 + 1));
+    aperture_budget::MemoryBudget::from_system()
+        .check(&format!("timing the rays of {}", path.display()), needed)?;
+    Ok(())
+}
+
 /// The four generated sets for the arguments' camera and image, saved when asked.
 fn generated_sets(
     args: &BenchRaysArgs,
@@ -172,6 +187,14 @@ fn generated_sets(
         lens_samples: args.lens_samples,
         seed: args.seed,
     };
+    aperture_budget::MemoryBudget::from_system().check_with_hint(
+        &format!(
+            "the ray sets of a {}x{height} image with {} lens samples",
+            args.width, args.lens_samples
+        ),
+        estimated_bytes(&camera, &opts),
+        "; lower --width, --height or --lens-samples",
+    )?;
     let sets = generate_sets(scene, &accel, &camera, &opts);
     eprintln!(
         "{}x{height}, {} lens samples: {}",

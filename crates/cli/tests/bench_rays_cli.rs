@@ -173,6 +173,27 @@ fn a_truncated_ray_file_is_an_error_naming_it() {
     assert!(stderr(&o).contains("30 bytes"), "{}", stderr(&o));
 }
 
+#[test]
+fn ray_sets_larger_than_memory_are_refused_before_allocating() {
+    let dir = Scratch::new("bench-rays-huge");
+    let scene = common::demo_scene();
+    let o = aperture(
+        &[
+            "bench-rays",
+            scene.to_str().unwrap(),
+            "--width",
+            "16384",
+            "--height",
+            "16384",
+            "--lens-samples",
+            "65536",
+        ],
+        &dir.0,
+    );
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("lens samples needs"), "{}", stderr(&o));
+}
+
 trait MapInto {
     fn map_into(self) -> (String, String, String, String, String);
 }

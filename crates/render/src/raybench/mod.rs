@@ -19,8 +19,8 @@ mod sets;
 mod timing;
 
 pub use sets::{
-    generate_sets, primary_ray, primary_samples, shadow_target, shuffled, PrimarySample, RaySet,
-    RaySetOptions, BENCH_TILE, SET_NAMES,
+    estimated_bytes, generate_sets, primary_ray, primary_samples, shadow_target, shuffled,
+    PrimarySample, RaySet, RaySetOptions, BENCH_TILE, BYTES_PER_PRIMARY_SAMPLE, SET_NAMES,
 };
 pub use timing::{
     closest_hits, occlusions, time_query, time_sets, Mode, QualityRun, Query, RayBenchError,

@@ -92,6 +92,20 @@ pub fn primary_samples(camera: &Camera, opts: &RaySetOptions) -> Vec<PrimarySamp
     out
 }
 
+/// An upper bound on the bytes one primary sample costs while the sets are made and timed: its
+/// sample, its ray in both orders, its first hit, its bounce and shadow rays, and the answers a
+/// timing writes.
+pub const BYTES_PER_PRIMARY_SAMPLE: u64 = 288;
+
+/// An upper bound on the memory [`generate_sets`] and the timing of its sets take for `camera`'s
+/// image (check it before generating: a large image with many lens samples needs gigabytes).
+pub fn estimated_bytes(camera: &Camera, opts: &RaySetOptions) -> u64 {
+    u64::from(camera.width)
+        .saturating_mul(u64::from(camera.height))
+        .saturating_mul(u64::from(opts.lens_samples))
+        .saturating_mul(BYTES_PER_PRIMARY_SAMPLE)
+}
+
 /// The world-space ray of a primary sample over `[0, ∞)`, `None` where the camera makes none.
 pub fn primary_ray(camera: &Camera, s: &PrimarySample) -> Option<Ray> {
     camera
@@ -224,7 +238,7 @@ fn shadow_rays(accel: &Accel, hits: &[FirstHit], target: Vec3) -> Vec<Ray> {
             let d = target - origin;
             let dist = d.length();
             let dir = d / dist;
-            (dist > 0.0 && dir.is_finite()).then(|| Ray {
+            (dist > 0.0 && dir.is_finite()).then_some(Ray {
                 origin,
                 dir,
                 tmin: 0.0,
