@@ -129,11 +129,8 @@ fn main() {
     println!("{:#?}", accel.stats());
 
     for file in &ray_files {
-        let f = read_f32s(file);
-        let rays: Vec<Ray> = f
-            .chunks_exact(6)
-            .map(|r| Ray::new(Vec3::from_slice(&r[0..3]), Vec3::from_slice(&r[3..6])))
-            .collect();
+        let rays: Vec<Ray> =
+            aperture_accel::read_rays(file.as_ref()).unwrap_or_else(|e| panic!("{e}"));
         let n = rays.len() as f64;
         // One thread, one query at a time (as Embree's rtcIntersect1 loop is measured), or with
         // `--batch` the whole file through the interleaved batch queries.

@@ -14,6 +14,7 @@
 //! - **Batches**: [`Accel::intersect_batch`] and [`Accel::occluded_batch`] answer exactly as the
 //!   one-ray queries but walk [`BATCH_LANES`] rays at once, interleaved, which hides much of
 //!   each walk's load-to-use latency (about 1.35× the rays per second on thin-lens primary rays).
+//! - **Ray files**: [`rayfile`] reads and writes the Embree anchor's raw `.rays` format.
 //!
 //! ```
 //! use aperture_accel::{Accel, BvhQuality, InstanceInput, MeshInput, Ray};
@@ -32,12 +33,14 @@
 mod build;
 mod node;
 mod query;
+pub mod rayfile;
 mod spawn;
 mod triangle;
 mod types;
 mod walk;
 
 pub use build::FrameHints;
+pub use rayfile::{read_rays, write_rays, RayFileError};
 pub use spawn::{offset_ray_origin, SpawnPoint};
 pub use triangle::intersect_triangle;
 pub use types::{AccelStats, BvhQuality, Hit, InstanceInput, MeshInput, ParseBvhQualityError, Ray};

@@ -13,6 +13,7 @@
 //! are required, `config`, `spp`, `mean_spp`, `rmse`, `mae` and `flip` are read when present
 //! (empty = unknown), any other column is ignored.
 
+use crate::plot::{load_font, tick_label, write_png, PALETTE};
 use crate::render_args::TracingArgs;
 use anyhow::{bail, Context as _};
 use aperture_imageio::{metrics, Image};
@@ -569,71 +570,9 @@ fn plot_error_vs_time(series: &Series, title: &str, svg: &Path, png: &Path) -> a
         root.present()
             .map_err(|e| anyhow::anyhow!("writing {}: {e}", svg.display()))?;
     }
-    let mut buf = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, SIZE).into_drawing_area();
-        draw_plot(&root, series, title).map_err(|e| anyhow::anyhow!("plotting: {e}"))?;
-        root.present()
-            .map_err(|e| anyhow::anyhow!("plotting: {e}"))?;
-    }
-    let tmp = png.with_extension("png.tmp");
-    image::save_buffer_with_format(
-        &tmp,
-        &buf,
-        SIZE.0,
-        SIZE.1,
-        image::ColorType::Rgb8,
-        image::ImageFormat::Png,
-    )
-    .with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, png).with_context(|| format!("writing {}", png.display()))
-}
-
-/// Registers a sans-serif TrueType font for bitmap text: `APERTURE_FONT`, else the first of a
-/// few common system fonts. False when none can be read.
-fn load_font() -> bool {
-    static LOADED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *LOADED.get_or_init(|| {
-        let candidates = std::env::var_os("APERTURE_FONT")
-            .map(PathBuf::from)
-            .into_iter()
-            .chain(
-                [
-                    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-                    "/usr/share/fonts/TTF/DejaVuSans.ttf",
-                    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
-                    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
-                    "/System/Library/Fonts/Supplemental/Arial.ttf",
-                    "C:\\Windows\\Fonts\\arial.ttf",
-                ]
-                .map(PathBuf::from),
-            );
-        for path in candidates {
-            if let Ok(bytes) = std::fs::read(&path) {
-                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-                if plotters::style::register_font(
-                    "sans-serif",
-                    plotters::style::FontStyle::Normal,
-                    bytes,
-                )
-                .is_ok()
-                {
-                    return true;
-                }
-            }
-        }
-        false
+    write_png(png, SIZE, |root| {
+        draw_plot(root, series, title).map_err(|e| anyhow::anyhow!("plotting: {e}"))
     })
-}
-
-/// Log-axis tick text: only 1, 2 and 5 times a power of ten, so labels never overlap.
-fn tick_label(v: f64) -> String {
-    let lead = v / 10f64.powf(v.log10().floor());
-    if [1.0, 2.0, 5.0].iter().any(|d| (lead - d).abs() < 1e-6) {
-        format!("{}", (v * 1e6).round() / 1e6)
-    } else {
-        String::new()
-    }
 }
 
 fn draw_plot<DB: plotters::prelude::DrawingBackend>(
@@ -672,15 +611,7 @@ fn draw_plot<DB: plotters::prelude::DrawingBackend>(
         .x_label_formatter(&|v| tick_label(*v))
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .draw()?;
-    let palette = [
-        RGBColor(31, 119, 180),
-        RGBColor(214, 39, 40),
-        RGBColor(44, 160, 44),
-        RGBColor(148, 103, 189),
-        RGBColor(255, 127, 14),
-        RGBColor(140, 86, 75),
-        RGBColor(23, 190, 207),
-    ];
+    let palette = PALETTE;
     let mut extras = 0;
     for (name, p) in series.iter() {
         // A configuration keeps its colour whichever others are plotted; extra series take

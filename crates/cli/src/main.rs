@@ -1,11 +1,13 @@
 //! `aperture`: render glTF scenes with physically based depth of field.
 
 mod bench;
+mod bench_rays;
 mod frames;
 mod info;
 mod interrupt;
 mod material_args;
 mod merge_cmd;
+mod plot;
 mod progress;
 mod render_args;
 mod render_cmd;
@@ -32,6 +34,8 @@ pub(crate) enum Command {
     Merge(merge_cmd::MergeArgs),
     /// Error against time per sampler configuration: CSV, log-log plot and table.
     Bench(bench::BenchArgs),
+    /// Closest-hit and occlusion throughput of each BVH preset on rays from the scene's camera.
+    BenchRays(bench_rays::BenchRaysArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -41,6 +45,7 @@ fn main() -> std::process::ExitCode {
         Command::Render(args) => render_cmd::run(args),
         Command::Merge(args) => merge_cmd::run(args),
         Command::Bench(args) => bench::run(args),
+        Command::BenchRays(args) => bench_rays::run(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

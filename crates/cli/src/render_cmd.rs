@@ -263,13 +263,21 @@ fn load_posed(
 
 /// `--camera` (a name, else an index) as an index into the scene's cameras.
 fn camera_index(args: &RenderArgs, scene: &aperture_scene::Scene) -> usize {
-    let Some(c) = &args.camera else { return 0 };
-    if let Some(i) = scene.cameras.iter().position(|cam| &cam.name == c) {
-        return i;
+    match &args.camera {
+        None => 0,
+        Some(c) => find_camera(c, scene).unwrap_or_else(|e| usage_error(e)),
+    }
+}
+
+/// A camera given by name, else by index, as an index into the scene's cameras; the error
+/// lists the cameras there are.
+pub(crate) fn find_camera(c: &str, scene: &aperture_scene::Scene) -> Result<usize, String> {
+    if let Some(i) = scene.cameras.iter().position(|cam| cam.name == c) {
+        return Ok(i);
     }
     match c.parse::<usize>() {
-        Ok(i) if i < scene.cameras.len() => i,
-        _ => usage_error(format!(
+        Ok(i) if i < scene.cameras.len() => Ok(i),
+        _ => Err(format!(
             "invalid value '{c}' for '--camera': the scene's cameras are {}",
             scene
                 .cameras

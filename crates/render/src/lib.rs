@@ -33,6 +33,7 @@ mod lights;
 mod media;
 pub mod output;
 pub mod passes;
+pub mod raybench;
 mod render;
 pub mod sampler;
 pub mod sequence;
