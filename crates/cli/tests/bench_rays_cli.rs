@@ -4,22 +4,8 @@
 
 mod common;
 
-use common::Scratch;
+use common::{run_in as aperture, stderr, Scratch};
 use std::collections::{BTreeSet, HashMap};
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn aperture(args: &[&str], dir: &Path) -> Output {
-    Command::new(common::aperture())
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 /// The CSV's rows as maps from column name to value.
 fn parse_csv(csv: &str) -> Vec<HashMap<String, String>> {

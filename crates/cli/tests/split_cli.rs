@@ -4,21 +4,7 @@
 
 mod common;
 
-use common::Scratch;
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn aperture(args: &[&str], dir: &Path) -> Output {
-    Command::new(common::aperture())
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{run_in as aperture, stderr, Scratch};
 
 #[test]
 fn parts_rendered_and_merged_by_the_cli_equal_the_whole_render() {

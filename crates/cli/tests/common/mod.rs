@@ -5,7 +5,7 @@
 
 use aperture_imageio::{read_exr, Image};
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, Output};
 
 /// The `aperture` binary cargo built for these tests.
 pub fn aperture() -> PathBuf {
@@ -183,4 +183,18 @@ pub fn local_render_of(scene: &Path, out: &Path, args: &[&str]) {
         .status()
         .unwrap();
     assert!(status.success(), "local render {args:?}");
+}
+
+/// Runs `aperture ARGS` in `dir` and returns what it printed and its status.
+pub fn run_in(args: &[&str], dir: &Path) -> Output {
+    Command::new(aperture())
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// A run's standard error as text.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
 }
