@@ -54,6 +54,47 @@ fn level_size(bytes: &[u8], image: usize) -> Result<(u32, u32), Error> {
     Ok((level.width, level.height))
 }
 
+/// Refuses a level index whose levels claim more uncompressed bytes than a Basis level of their
+/// size can hold: 16 bytes per 4×4 block (UASTC; ETC1S takes less). The transcoder allocates
+/// what a zstd-supercompressed level claims before inflating it, so a damaged length would be
+/// an allocation of terabytes (fuzz target `texture`).
+fn check_level_index(bytes: &[u8], image: usize) -> Result<(), Error> {
+    let u32_at = |o: usize| {
+        bytes
+            .get(o..o + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let u64_at = |o: usize| {
+        bytes
+            .get(o..o + 8)
+            .map(|b| u64::from_le_bytes(b.try_into().unwrap_or_default()))
+    };
+    let truncated = || invalid(image, "KTX2 header truncated".into());
+    let (width, height) = (
+        u32_at(20).ok_or_else(truncated)?,
+        u32_at(24).ok_or_else(truncated)?,
+    );
+    let levels = u32_at(40).ok_or_else(truncated)?.max(1);
+    for level in 0..levels.min(32) {
+        let entry = 80 + 24 * level as usize;
+        let claimed = u64_at(entry + 16).ok_or_else(truncated)?;
+        let blocks = |side: u32| u64::from((side >> level).max(1).div_ceil(4));
+        let most = 16 * blocks(width) * blocks(height.max(1));
+        if claimed > most {
+            return Err(invalid(
+                image,
+                format!(
+                    "KTX2 level {level} claims {claimed} uncompressed bytes; a {}x{} Basis level \
+                     holds at most {most}",
+                    (width >> level).max(1),
+                    (height >> level).max(1)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Transcodes level 0 to RGBA8 texels, rows top to bottom. HDR Basis formats are not glTF
 /// textures (the extension allows ETC1S and UASTC LDR) and are refused.
 pub(crate) fn decode(bytes: &[u8], image: usize) -> Result<(u32, u32, Vec<[u8; 4]>), Error> {
@@ -61,6 +102,7 @@ pub(crate) fn decode(bytes: &[u8], image: usize) -> Result<(u32, u32, Vec<[u8; 4
 }
 
 fn transcode(bytes: &[u8], image: usize) -> Result<(u32, u32, Vec<[u8; 4]>), Error> {
+    check_level_index(bytes, image)?;
     let t = transcoder(bytes, image)?;
     if t.is_video() || t.layer_count() > 1 || t.face_count() > 1 {
         return Err(invalid(
