@@ -109,6 +109,8 @@ const CAUGHT_IN: &[&str] = &[
     "/zune-core-",
     "/png-0.",
     "/image-webp-",
+    "/basisu-0.",
+    "/ruzstd-",
 ];
 
 /// For targets whose readers catch third-party decoders' panics, under libFuzzer, whose panic
@@ -139,7 +141,7 @@ pub fn env(data: &[u8]) {
     let _ = aperture_imageio::decode_env_image(data, Path::new("fuzz.hdr"), MEMORY_BUDGET);
 }
 
-/// `data` as a texture image (PNG, JPEG, WebP), decoded as the loader decodes them.
+/// `data` as a texture image (PNG, JPEG, WebP, KTX2), decoded as the loader decodes them.
 pub fn texture(data: &[u8]) {
     let _ = aperture_scene::decode_texture(data, 0, MEMORY_BUDGET);
 }
