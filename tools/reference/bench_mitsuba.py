@@ -30,7 +30,6 @@ import csv
 import math
 import os
 import statistics
-import struct
 import sys
 import tempfile
 import time
@@ -171,24 +170,6 @@ def write_gltf(path):
 # Mitsuba.
 
 
-def write_ply(path, pos, nrm, idx):
-    """Binary PLY with per-vertex normals, which Mitsuba's `ply` shape interpolates as the
-    glTF NORMAL attribute is."""
-    with open(path, "wb") as f:
-        f.write((
-            "ply\nformat binary_little_endian 1.0\n"
-            f"element vertex {len(pos)}\n"
-            "property float x\nproperty float y\nproperty float z\n"
-            "property float nx\nproperty float ny\nproperty float nz\n"
-            f"element face {len(idx) // 3}\n"
-            "property list uchar int vertex_indices\nend_header\n"
-        ).encode())
-        for p, n in zip(pos, nrm):
-            f.write(struct.pack("<6f", *p, *n))
-        for t in range(0, len(idx), 3):
-            f.write(struct.pack("<B3i", 3, *idx[t : t + 3]))
-
-
 def mitsuba_scene(mi, ply, spp, seed):
     sdef = scene_def()
     # make_reference's dof_area scene (ground, boxes, area light, thin lens), resized, plus the
@@ -268,7 +249,7 @@ def main():
     os.makedirs(args.output, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         ply = os.path.join(tmp, "sphere.ply")
-        write_ply(ply, SPHERE_POS, SPHERE_NRM, SPHERE_IDX)
+        mr.write_ply(ply, SPHERE_POS, SPHERE_NRM, SPHERE_IDX)
         scene = mi.load_dict(mitsuba_scene(mi, ply, 1, 0))
 
         ref_path = os.path.join(args.output, "mitsuba_reference.exr")

@@ -41,13 +41,14 @@ fn guarded<T>(image: usize, f: impl FnOnce() -> Result<T, Error>) -> Result<T, E
     })
 }
 
-/// The size of the KTX2 file's first (largest) level.
+/// The size of the KTX2 file's first (largest) level, after checking what its levels claim
+/// ([`check_level_index`]): the header stage, before any texture is transcoded.
 pub(crate) fn dimensions(bytes: &[u8], image: usize) -> Result<(u32, u32), Error> {
-    guarded(image, || level_size(bytes, image))
+    check_level_index(bytes, image)?;
+    guarded(image, || level_size(&transcoder(bytes, image)?, image))
 }
 
-fn level_size(bytes: &[u8], image: usize) -> Result<(u32, u32), Error> {
-    let t = transcoder(bytes, image)?;
+fn level_size(t: &basisu::Transcoder<'_>, image: usize) -> Result<(u32, u32), Error> {
     let level = t
         .image_level_info(0)
         .map_err(|e| invalid(image, format!("KTX2 level 0: {e:?}")))?;
@@ -95,14 +96,14 @@ fn check_level_index(bytes: &[u8], image: usize) -> Result<(), Error> {
     Ok(())
 }
 
-/// Transcodes level 0 to RGBA8 texels, rows top to bottom. HDR Basis formats are not glTF
-/// textures (the extension allows ETC1S and UASTC LDR) and are refused.
+/// Transcodes level 0 to RGBA8 texels, rows top to bottom, for a file [`dimensions`] accepted.
+/// HDR Basis formats are not glTF textures (the extension allows ETC1S and UASTC LDR) and are
+/// refused.
 pub(crate) fn decode(bytes: &[u8], image: usize) -> Result<(u32, u32, Vec<[u8; 4]>), Error> {
     guarded(image, || transcode(bytes, image))
 }
 
 fn transcode(bytes: &[u8], image: usize) -> Result<(u32, u32, Vec<[u8; 4]>), Error> {
-    check_level_index(bytes, image)?;
     let t = transcoder(bytes, image)?;
     if t.is_video() || t.layer_count() > 1 || t.face_count() > 1 {
         return Err(invalid(
@@ -110,7 +111,7 @@ fn transcode(bytes: &[u8], image: usize) -> Result<(u32, u32, Vec<[u8; 4]>), Err
             "a KTX2 array, cube map or video is not a glTF texture".into(),
         ));
     }
-    let (width, height) = level_size(bytes, image)?;
+    let (width, height) = level_size(&t, image)?;
     let rgba = t
         .transcode(0, basisu::TargetFormat::Rgba32, basisu::DecodeFlags::NONE)
         .map_err(|e| {

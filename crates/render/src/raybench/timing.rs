@@ -58,14 +58,7 @@ impl Mode {
 /// Closest hits of `rays` into `out` (one per ray), on the current rayon pool.
 pub fn closest_hits(accel: &Accel, rays: &[Ray], mode: Mode, out: &mut [Option<Hit>]) {
     match mode {
-        Mode::OneRay => rays
-            .par_chunks(CHUNK)
-            .zip(out.par_chunks_mut(CHUNK))
-            .for_each(|(r, o)| {
-                for (ray, slot) in r.iter().zip(o) {
-                    *slot = accel.intersect(ray);
-                }
-            }),
+        Mode::OneRay => one_ray_at_a_time(rays, out, |r| accel.intersect(r)),
         Mode::Batch => accel.intersect_many(rays, out),
     }
 }
@@ -73,16 +66,20 @@ pub fn closest_hits(accel: &Accel, rays: &[Ray], mode: Mode, out: &mut [Option<H
 /// Occlusion answers of `rays` into `out` (one per ray), on the current rayon pool.
 pub fn occlusions(accel: &Accel, rays: &[Ray], mode: Mode, out: &mut [bool]) {
     match mode {
-        Mode::OneRay => rays
-            .par_chunks(CHUNK)
-            .zip(out.par_chunks_mut(CHUNK))
-            .for_each(|(r, o)| {
-                for (ray, slot) in r.iter().zip(o) {
-                    *slot = accel.occluded(ray);
-                }
-            }),
+        Mode::OneRay => one_ray_at_a_time(rays, out, |r| accel.occluded(r)),
         Mode::Batch => accel.occluded_many(rays, out),
     }
+}
+
+/// `query` of every ray into its slot of `out`, one ray at a time, in chunks on the rayon pool.
+fn one_ray_at_a_time<T: Send>(rays: &[Ray], out: &mut [T], query: impl Fn(&Ray) -> T + Sync) {
+    rays.par_chunks(CHUNK)
+        .zip(out.par_chunks_mut(CHUNK))
+        .for_each(|(r, o)| {
+            for (ray, slot) in r.iter().zip(o) {
+                *slot = query(ray);
+            }
+        });
 }
 
 /// The throughput of one query on one set.
