@@ -176,15 +176,25 @@ type FlatImage = ::exr::image::Image<
     ::exr::prelude::SmallVec<[::exr::image::Layer<::exr::image::AnyChannels<FlatSamples>>; 2]>,
 >;
 
-fn decode_exr_inner(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, Error> {
-    let exr_error = |e: ::exr::error::Error| Error::Exr {
+/// The `exr` crate's error, naming the file.
+fn exr_error(path: &Path) -> impl Fn(::exr::error::Error) -> Error + '_ {
+    move |e| Error::Exr {
         path: path.to_path_buf(),
         message: e.to_string(),
-    };
-    let unsupported = |what: String| Error::UnsupportedExr {
+    }
+}
+
+/// What this reader does not take, naming the file.
+fn unsupported(path: &Path) -> impl Fn(String) -> Error + '_ {
+    move |what| Error::UnsupportedExr {
         path: path.to_path_buf(),
         what,
-    };
+    }
+}
+
+fn decode_exr_inner(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, Error> {
+    let exr_error = exr_error(path);
+    let unsupported = unsupported(path);
     check_before_decoding(bytes, path, max_bytes)?;
 
     // Sequential decoding: reading is not the renderer's hot path, and it keeps a damaged
@@ -278,14 +288,8 @@ fn metadata(image: &FlatImage, beauty_part: usize) -> Vec<(String, crate::MetaVa
 /// the `exr` crate decodes it: DWA blocks, chunk sizes against the file, and the decoded size
 /// against `max_bytes` (and against 4,096 bytes of samples per byte of file, at least 1 GiB).
 fn check_before_decoding(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<(), Error> {
-    let exr_error = |e: ::exr::error::Error| Error::Exr {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    };
-    let unsupported = |what: String| Error::UnsupportedExr {
-        path: path.to_path_buf(),
-        what,
-    };
+    let exr_error = exr_error(path);
+    let unsupported = unsupported(path);
     let meta = MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(exr_error)?;
     match guard::check_dwa_blocks(bytes, &meta) {
         Ok(()) => {}
@@ -320,10 +324,7 @@ fn check_before_decoding(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<()
 
 /// Every channel of every part, by full name (`layer.channel`), as f32 samples.
 fn channels_by_name(image: &FlatImage, path: &Path) -> Result<BTreeMap<String, Channel>, Error> {
-    let unsupported = |what: String| Error::UnsupportedExr {
-        path: path.to_path_buf(),
-        what,
-    };
+    let unsupported = unsupported(path);
     let first = &image.layer_data[0];
     let (size, position) = (first.size, first.attributes.layer_position);
     let pixels = size.area();
