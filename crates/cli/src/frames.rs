@@ -9,34 +9,16 @@ use aperture_render::RenderOptions;
 use aperture_scene::Animated;
 use std::time::Instant;
 
-/// Renders the frames of `--frames` with the options of one frame.
+/// Renders the frames of `--frames` with the options and output format of one frame.
 pub fn run(
     args: &RenderArgs,
     animated: &Animated,
     frames: FrameRange,
+    format: FrameFormat,
     opts: &RenderOptions,
     quality: BvhQuality,
     pool: &rayon::ThreadPool,
 ) -> anyhow::Result<()> {
-    let png = args
-        .output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
-    let format = if png {
-        FrameFormat::Png {
-            png: crate::render_cmd::png_options(args),
-            transparent: args.transparent,
-        }
-    } else {
-        // --region/--tile apply to every frame (checked against the image by the caller).
-        let part = args.split.window(opts.width, opts.height).ok().flatten();
-        FrameFormat::Exr(aperture_render::output::ExrOptions {
-            half: args.half,
-            region: part.map(|p| p.window),
-            tile: part.and_then(|p| p.tile),
-            ..Default::default()
-        })
-    };
     let seq = Sequence {
         animated,
         frames,

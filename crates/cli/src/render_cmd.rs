@@ -137,16 +137,24 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         pool = pool.num_threads(t as usize);
     }
     let pool = pool.build().context("starting worker threads")?;
-    if let Some(frames) = args.frames {
-        return crate::frames::run(&args, &animated, frames, &opts, quality, &pool);
-    }
-    let hints = aperture_render::sequence::SceneHints::new(&animated, &scene);
-    drop(animated);
+    // --region/--tile apply to every frame of a sequence too.
     let exr = aperture_render::output::ExrOptions {
         region: part.map(|p| p.window),
         tile: part.and_then(|p| p.tile),
         ..exr
     };
+    if let Some(frames) = args.frames {
+        let format = match png_out {
+            true => aperture_render::sequence::FrameFormat::Png {
+                png: png_options(&args),
+                transparent: args.transparent,
+            },
+            false => aperture_render::sequence::FrameFormat::Exr(exr),
+        };
+        return crate::frames::run(&args, &animated, frames, format, &opts, quality, &pool);
+    }
+    let hints = aperture_render::sequence::SceneHints::new(&animated, &scene);
+    drop(animated);
     let (summary, load_secs) = pool.install(|| -> anyhow::Result<_> {
         // The same structure a sequence builds for this frame, so their images agree bit for bit.
         let accel = aperture_render::sequence::build_frame_accel(&scene, quality, &hints, None);
@@ -397,7 +405,7 @@ fn environment(args: &RenderArgs, max_bytes: u64) -> anyhow::Result<Environment>
 }
 
 /// `--exposure`, `--view`.
-pub(crate) fn png_options(args: &RenderArgs) -> aperture_imageio::PngOptions {
+fn png_options(args: &RenderArgs) -> aperture_imageio::PngOptions {
     aperture_imageio::PngOptions {
         exposure: args.exposure,
         view: match args.view {
