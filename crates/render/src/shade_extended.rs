@@ -170,7 +170,7 @@ impl Geometry<'_> {
         let mut shading = self.shade(s);
         let wo = -dir;
         let ng = if s.ng.dot(wo) < 0.0 { -s.ng } else { s.ng };
-        let ns = crate::surface::view_normal(s, &shading, wo);
+        let ns = crate::surface::view_normal(s, &shading, ng, wo);
         let Some(mut bsdf) = shading.bsdf.take() else {
             return Vec3::splat(free);
         };

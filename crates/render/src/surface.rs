@@ -65,10 +65,10 @@ pub(crate) struct Shading {
     pub tangent: Option<Vec3>,
 }
 
-/// The shading normal at `s` seen from `wo` (world, unit): the mapped normal turned to the
-/// viewer's side with the vertex normal (both sides are shaded) and bent just above the view.
-pub(crate) fn view_normal(s: &Surface, shading: &Shading, wo: Vec3) -> Vec3 {
-    let ng = if s.ng.dot(wo) < 0.0 { -s.ng } else { s.ng };
+/// The shading normal at `s` seen from `wo` (world, unit), `ng` being the geometric normal
+/// on the viewer's side: the mapped normal turned to that side with the vertex normal (both
+/// sides are shaded) and bent just above the view.
+pub(crate) fn view_normal(s: &Surface, shading: &Shading, ng: Vec3, wo: Vec3) -> Vec3 {
     let ns = if s.ns.dot(ng) < 0.0 {
         -shading.normal
     } else {

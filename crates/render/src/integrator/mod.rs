@@ -186,7 +186,7 @@ impl Integrator<'_> {
             let wo = -w.ray.dir;
             let ng = if s.ng.dot(wo) < 0.0 { -s.ng } else { s.ng };
             let shading = self.geom.shade(&s);
-            let ns = view_normal(&s, &shading, wo);
+            let ns = view_normal(&s, &shading, ng, wo);
             if AOV && w.vertex == 0 {
                 path.aov.normal = ns;
                 path.aov.instance = hit.instance;
