@@ -110,12 +110,7 @@ def write_gltf(path):
         meshes.append({"name": oname, "primitives": [{"attributes": attrs, "indices": ind, "material": len(materials) - 1}]})
         nodes.append({"name": oname, "mesh": len(meshes) - 1, "matrix": mr.column_major(matrix)})
 
-    def diffuse(oname, rgb):
-        return {
-            "name": oname,
-            "pbrMetallicRoughness": {"baseColorFactor": [*rgb, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0},
-            "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}},
-        }
+    diffuse = mr.gltf_diffuse
 
     for oname, shape, matrix, albedo in mr.base_objects():
         add_object(oname, shape, matrix, diffuse(oname, albedo))
@@ -123,16 +118,8 @@ def write_gltf(path):
         add_object(oname, "sphere", mr.trs(centre, s=(radius, radius, radius)), diffuse(oname, albedo))
 
     area = sdef["area"]
-    rad = area["radiance"]
-    strength = max(rad)
-    add_object("area_light", "quad", area["matrix"], {
-        "name": "area_light",
-        "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0.0, "roughnessFactor": 1.0},
-        "emissiveFactor": [c / strength for c in rad],
-        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": strength}},
-    })
+    add_object("area_light", "quad", area["matrix"], mr.gltf_emissive("area_light", area["radiance"]))
     point = sdef["point"]
-    peak = max(point["intensity"])
     nodes.append({
         "name": "point_light",
         "translation": list(point["position"]),
@@ -148,13 +135,7 @@ def write_gltf(path):
     doc = {
         "asset": {"version": "2.0", "generator": "aperture tools/reference/bench_mitsuba.py"},
         "extensionsUsed": ["KHR_materials_specular", "KHR_materials_emissive_strength", "KHR_lights_punctual"],
-        "extensions": {"KHR_lights_punctual": {"lights": [{
-            "name": "point",
-            "type": "point",
-            "color": [c / peak for c in point["intensity"]],
-            # candela = 683 x W/sr (SPEC section 4).
-            "intensity": peak * mr.LUMENS_PER_WATT,
-        }]}},
+        "extensions": {"KHR_lights_punctual": {"lights": [mr.gltf_point_light("point", point["intensity"])]}},
         "scene": 0,
         "scenes": [{"name": "dof_spheres", "nodes": list(range(len(nodes)))}],
         "nodes": nodes,

@@ -273,22 +273,30 @@ SPHERE_POS, SPHERE_NRM, SPHERE_IDX = uv_sphere()
 check_winding(SPHERE_POS, SPHERE_IDX, SPHERE_NRM)
 
 
-def write_ply(path, pos, nrm, idx):
+def write_ply(path, pos, nrm, idx, uv=None):
     """Binary PLY with per-vertex normals, which Mitsuba's `ply` shape interpolates as the glTF
-    NORMAL attribute is."""
+    NORMAL attribute is, and optionally texture coordinates `uv` (glTF's TEXCOORD_0, written
+    unchanged as `u`, `v`). Sequences or NumPy arrays."""
+    pos, nrm = np.asarray(pos, np.float32).reshape(-1, 3), np.asarray(nrm, np.float32).reshape(-1, 3)
+    fields = [("p", "<f4", 3), ("n", "<f4", 3)] + ([("uv", "<f4", 2)] if uv is not None else [])
+    verts = np.empty(len(pos), dtype=[(n, t, (k,)) for n, t, k in fields])
+    verts["p"], verts["n"] = pos, nrm
+    if uv is not None:
+        verts["uv"] = np.asarray(uv, np.float32).reshape(-1, 2)
+    faces = np.empty(len(idx) // 3, dtype=[("k", "u1"), ("i", "<i4", (3,))])
+    faces["k"], faces["i"] = 3, np.asarray(idx, np.int64).reshape(-1, 3)
     with open(path, "wb") as f:
         f.write((
             "ply\nformat binary_little_endian 1.0\n"
             f"element vertex {len(pos)}\n"
             "property float x\nproperty float y\nproperty float z\n"
             "property float nx\nproperty float ny\nproperty float nz\n"
-            f"element face {len(idx) // 3}\n"
+            + ("property float u\nproperty float v\n" if uv is not None else "")
+            + f"element face {len(idx) // 3}\n"
             "property list uchar int vertex_indices\nend_header\n"
         ).encode())
-        for p, n in zip(pos, nrm):
-            f.write(struct.pack("<6f", *p, *n))
-        for t in range(0, len(idx), 3):
-            f.write(struct.pack("<B3i", 3, *idx[t : t + 3]))
+        f.write(verts.tobytes())
+        f.write(faces.tobytes())
 
 
 def glass_objects():
@@ -350,6 +358,34 @@ def write_json(path, doc):
         f.write("\n")
 
 
+def gltf_diffuse(name, rgb):
+    """A glTF material that is Lambertian even without --override-material diffuse:
+    metallicFactor 0 and KHR_materials_specular factor 0."""
+    return {
+        "name": name,
+        "pbrMetallicRoughness": {"baseColorFactor": [*rgb, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0},
+        "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}},
+    }
+
+
+def gltf_emissive(name, radiance):
+    """A black emitter of `radiance` (emissiveFactor x KHR_materials_emissive_strength; no 683)."""
+    strength = max(radiance)
+    return {
+        "name": name,
+        "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0.0, "roughnessFactor": 1.0},
+        "emissiveFactor": [c / strength for c in radiance],
+        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": strength}},
+    }
+
+
+def gltf_point_light(name, intensity):
+    """A KHR_lights_punctual point light of `intensity` W/sr: candela = 683 x W/sr (SPEC section 4)."""
+    peak = max(intensity)
+    return {"name": name, "type": "point", "color": [c / peak for c in intensity],
+            "intensity": peak * LUMENS_PER_WATT}
+
+
 def write_gltf(name, sdef, path):
     buf, views, accessors, add = gltf_buffers()
 
@@ -382,14 +418,7 @@ def write_gltf(name, sdef, path):
         meshes.append({"name": oname, "primitives": [{"attributes": attrs, "indices": ind, "material": len(materials) - 1}]})
         nodes.append({"name": oname, "mesh": len(meshes) - 1, "matrix": column_major(matrix)})
 
-    def diffuse(oname, rgb):
-        # metallicFactor 0 and KHR_materials_specular factor 0: Lambertian even without
-        # --override-material diffuse.
-        return {
-            "name": oname,
-            "pbrMetallicRoughness": {"baseColorFactor": [*rgb, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0},
-            "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}},
-        }
+    diffuse = gltf_diffuse
 
     ext_used = ["KHR_materials_specular"]
     extensions = {}
@@ -430,28 +459,10 @@ def write_gltf(name, sdef, path):
             add_object(oname, shape, matrix, diffuse(oname, albedo))
     light = sdef["light"]
     if light and light["kind"] == "area":
-        rad = light["radiance"]
-        strength = max(rad)
-        mat = {
-            "name": "area_light",
-            "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0.0, "roughnessFactor": 1.0},
-            "emissiveFactor": [c / strength for c in rad],
-            "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": strength}},
-        }
-        add_object("area_light", "quad", light["matrix"], mat)
+        add_object("area_light", "quad", light["matrix"], gltf_emissive("area_light", light["radiance"]))
         ext_used.append("KHR_materials_emissive_strength")
     elif light and light["kind"] == "point":
-        inten = light["intensity"]
-        peak = max(inten)
-        extensions["KHR_lights_punctual"] = {
-            "lights": [{
-                "name": "point",
-                "type": "point",
-                "color": [c / peak for c in inten],
-                # candela = 683 x W/sr (SPEC section 4).
-                "intensity": peak * LUMENS_PER_WATT,
-            }]
-        }
+        extensions["KHR_lights_punctual"] = {"lights": [gltf_point_light("point", light["intensity"])]}
         nodes.append({
             "name": "point_light",
             "translation": list(light["position"]),
@@ -489,33 +500,42 @@ def write_gltf(name, sdef, path):
 # Mitsuba scene and render.
 
 
+def mitsuba_sensor(mi, look, yfov_deg, dof, size, spp, seed):
+    """Mitsuba's camera for a glTF camera at `look` = (eye, target, up) with vertical field of
+    view `yfov_deg`, thin lens `dof` ({aperture_radius, focus_distance}) or pinhole (None),
+    `size` = (width, height), an `independent` sampler and a 1-pixel box filter.
+    Mitsuba's camera frame looks down +Z with +X left; look_at with the same eye, target and up
+    as the glTF camera therefore gives the same (unmirrored) image."""
+    eye, target, up = look
+    sensor = {
+        "type": "thinlens" if dof else "perspective",
+        "fov": yfov_deg,
+        "fov_axis": "y",
+        "to_world": mi.ScalarTransform4f().look_at(origin=list(eye), target=list(target), up=list(up)),
+        "near_clip": 0.01,
+        "sampler": {"type": "independent", "sample_count": spp, "seed": seed},
+        "film": {
+            "type": "hdrfilm",
+            "width": size[0],
+            "height": size[1],
+            "pixel_format": "rgb",
+            "component_format": "float32",
+            "rfilter": {"type": "box"},
+        },
+    }
+    if dof:
+        sensor["aperture_radius"] = dof["aperture_radius"]
+        sensor["focus_distance"] = dof["focus_distance"]
+    return sensor
+
+
 def mitsuba_scene(mi, sdef, spp, seed, tmp=None):
     T = mi.ScalarTransform4f
 
     def twosided(rgb):
         return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(rgb)}}}
 
-    # Mitsuba's camera frame looks down +Z with +X left; look_at with the same eye, target
-    # and up as the glTF camera therefore gives the same (unmirrored) image.
-    sensor = {
-        "type": "thinlens" if sdef["dof"] else "perspective",
-        "fov": YFOV_DEG,
-        "fov_axis": "y",
-        "to_world": T().look_at(origin=list(EYE), target=list(TARGET), up=list(UP)),
-        "near_clip": 0.01,
-        "sampler": {"type": "independent", "sample_count": spp, "seed": seed},
-        "film": {
-            "type": "hdrfilm",
-            "width": WIDTH,
-            "height": HEIGHT,
-            "pixel_format": "rgb",
-            "component_format": "float32",
-            "rfilter": {"type": "box"},
-        },
-    }
-    if sdef["dof"]:
-        sensor["aperture_radius"] = sdef["dof"]["aperture_radius"]
-        sensor["focus_distance"] = sdef["dof"]["focus_distance"]
+    sensor = mitsuba_sensor(mi, (EYE, TARGET, UP), YFOV_DEG, sdef["dof"], (WIDTH, HEIGHT), spp, seed)
 
     glass = sdef.get("glass")
     scene = {
