@@ -202,6 +202,20 @@ def metrics(img, ref):
     }
 
 
+def write_series_csv(path, rows):
+    """Rows (dicts) in the columns of `aperture bench`'s results.csv, plus first_call_seconds."""
+    cols = ["config", "spp", "width", "height", "threads", "seconds", "samples", "mean_spp",
+            "rmse", "rel_mse", "mae", "first_call_seconds"]
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(cols)
+        for r in rows:
+            w.writerow([r["config"], r["spp"], r["width"], r["height"], r["threads"],
+                        f"{r['seconds']:.6f}", r["samples"], f"{r['mean_spp']:.3f}",
+                        f"{r['rmse']:.6e}", f"{r['rel_mse']:.6e}", f"{r['mae']:.6e}",
+                        f"{r['first_call_seconds']:.6f}"])
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--spp", default="1,2,4,8,16,32,64,128", help="sample budgets, comma separated")
@@ -261,16 +275,7 @@ def main():
                   f"(of {['%.3f' % t for t in times]}), relMSE {m['rel_mse']:.3e}", flush=True)
 
     out = os.path.join(args.output, f"{args.label}.csv")
-    cols = ["config", "spp", "width", "height", "threads", "seconds", "samples", "mean_spp",
-            "rmse", "rel_mse", "mae", "first_call_seconds"]
-    with open(out, "w", newline="") as f:
-        w = csv.writer(f, lineterminator="\n")
-        w.writerow(cols)
-        for r in rows:
-            w.writerow([r["config"], r["spp"], r["width"], r["height"], r["threads"],
-                        f"{r['seconds']:.6f}", r["samples"], f"{r['mean_spp']:.3f}",
-                        f"{r['rmse']:.6e}", f"{r['rel_mse']:.6e}", f"{r['mae']:.6e}",
-                        f"{r['first_call_seconds']:.6f}"])
+    write_series_csv(out, rows)
     print(f"wrote {out} (Mitsuba {mi.__version__} {args.variant}, {args.threads} threads)")
 
 
