@@ -6,8 +6,8 @@ albedo or a base-colour texture, emissive quads, point lights, a constant enviro
 thin-lens camera). From that one definition the script writes
 
 * the glTF for aperture (``assets/bench/outdoor_dof.gltf``, small, committed; the others into
-  ``OUT/scenes/``: the 560 k-triangle interior is generated, the helmet is a derived file that
-  points at the sample's own textures),
+  ``OUT/scenes/``: the 560 k-triangle interior is generated, the helmet is a derived file with
+  copies of its base-colour textures),
 * the Mitsuba 3 scene (PLY meshes in ``OUT/scenes/ply/``, built with ``make_reference``'s
   sensor and conventions),
 * the Cycles scene: Blender imports the same glTF, then the materials become Diffuse BSDFs (of
@@ -198,7 +198,8 @@ def flight_helmet():
     normals, TEXCOORD_0 and the base-colour texture (sRGB, bilinear) of each material, as a
     two-sided Lambertian; normal maps (Mitsuba's `normalmap` builds its own tangent frame),
     occlusion/metal-rough maps and the lenses' alpha blending are dropped. The derived glTF
-    points at the sample's PNG files; nothing of the sample is copied."""
+    is written to OUT/scenes/ with copies of the five base-colour PNGs; nothing goes into the
+    repository."""
     with open(HELMET) as f:
         doc = json.load(f)
     with open(os.path.join(os.path.dirname(HELMET), doc["buffers"][0]["uri"]), "rb") as f:
@@ -228,8 +229,19 @@ def scene_def(name):
 # glTF for aperture (and for Blender's importer).
 
 
+def local_texture(path, gltf_dir):
+    """A copy of a texture in `gltf_dir`/textures/ (aperture refuses URIs that leave the scene's
+    folder), as the URI to write."""
+    import shutil
+    dst = os.path.join(gltf_dir, "textures", os.path.basename(path))
+    os.makedirs(os.path.dirname(dst), exist_ok=True)
+    if not os.path.exists(dst):
+        shutil.copyfile(path, dst)
+    return "textures/" + os.path.basename(path)
+
+
 def gltf_materials(scene, gltf_dir):
-    """One material per object; images referenced by a path relative to the glTF file."""
+    """One material per object; images copied beside the glTF file."""
     materials, images = [], []
     for o in scene["objects"]:
         if o["emission"]:
@@ -238,7 +250,7 @@ def gltf_materials(scene, gltf_dir):
         else:
             mat = mr.gltf_diffuse(o["name"], o["albedo"])
         if o["texture"]:
-            uri = os.path.relpath(o["texture"], gltf_dir).replace(os.sep, "/")
+            uri = local_texture(o["texture"], gltf_dir)
             if uri not in images:
                 images.append(uri)
             mat["pbrMetallicRoughness"]["baseColorTexture"] = {"index": images.index(uri)}
@@ -442,14 +454,18 @@ def cycles_renderer(scene, gltf, size, threads, tmp):
     from exr_beauty import read_beauty
 
     sc = cycles_load(scene, gltf, size, threads)
-    sc.render.filepath = os.path.join(tmp, "cycles.exr")
 
     def render(spp, seed):
         sc.cycles.samples, sc.cycles.seed = spp, seed
+        # A new output path each time: else a persistent session renders with the old samples
+        # and seed (sc.update_tag() also works, but re-syncs more: +0.15 s on the interior).
+        sc.render.filepath = os.path.join(tmp, f"cycles_{spp}_{seed}.exr")
         t0 = time.perf_counter()
         bpy.ops.render.render(write_still=True)
         secs = time.perf_counter() - t0
-        return read_beauty(sc.render.filepath), secs
+        img = read_beauty(sc.render.filepath)
+        os.remove(sc.render.filepath)
+        return img, secs
 
     return render
 
@@ -551,6 +567,8 @@ def series(render, label, args, size):
         for r in range(args.repeats):
             img, secs = render(spp, 2 + r)
             times.append(secs)
+            if sum(times) > args.repeat_seconds:
+                break
         row = {"config": label, "spp": spp, "width": size[0], "height": size[1], "threads": args.threads,
                "seconds": statistics.median(times), "samples": spp * size[0] * size[1], "mean_spp": float(spp),
                **bm.metrics(img, ref), "first_call_seconds": first}
@@ -611,6 +629,12 @@ def reference_check(name, d, refs):
     print(f"  {os.path.join(d, 'references.png')}: {', '.join(refs)}, left to right (x{scale:.2f})")
 
 
+def ceil2(x):
+    """`x` rounded up to two significant digits (a target never below k x the noise)."""
+    e = 10.0 ** (math.floor(math.log10(x)) - 1)
+    return math.ceil(x / e - 1e-9) * e
+
+
 def summarize_scene(name, out, multiples, explicit):
     d = os.path.join(out, name)
     rows = {r: read_rows(os.path.join(d, f"{r}.csv")) for r in RENDERERS if os.path.exists(os.path.join(d, f"{r}.csv"))}
@@ -621,7 +645,7 @@ def summarize_scene(name, out, multiples, explicit):
     print(f"\n== {name} ({w}x{h})")
     reference_check(name, d, refs)
     worst = max(m["noise_rmse"] for m in refs.values())
-    targets = explicit or [float(f"{k * worst:.2g}") for k in multiples]
+    targets = explicit or [ceil2(k * worst) for k in multiples]
     head = "".join(f" {r + ' s':>11}" for r in rows) + "".join(f" {'ap/' + r[:3]:>7}" for r in rows if r != "aperture")
     print(f"  {'RMSE target':>11} {'worst ref/target':>16}{head}")
     for t in targets:
@@ -685,7 +709,8 @@ def run_all(args):
             print(f"== {name}: {renderer} ({time.time() - t0:.0f} s so far)", flush=True)
             cmd = [python[renderer], os.path.abspath(__file__), "series", "--renderer", renderer, "--scene", name,
                    "-o", args.output, "--spp", args.spp, "--reference-spp", str(args.reference_spp),
-                   "--repeats", str(args.repeats), "--threads", str(args.threads), "--size", args.size,
+                   "--repeats", str(args.repeats), "--repeat-seconds", str(args.repeat_seconds),
+                   "--threads", str(args.threads), "--size", args.size,
                    "--aperture", args.aperture, "--variant", args.variant]
             subprocess.run(cmd, check=True)
     print(f"== all series in {time.time() - t0:.0f} s")
@@ -701,6 +726,8 @@ def parser():
     ap.add_argument("--spp", default="1,2,4,8,16,32,64,128", help="budgets, comma separated")
     ap.add_argument("--reference-spp", type=int, default=1024, help="per renderer, two halves")
     ap.add_argument("--repeats", type=int, default=3, help="timed renders per budget (median), after a first call")
+    ap.add_argument("--repeat-seconds", type=float, default=10.0,
+                    help="stop repeating a budget once its timed renders add up to this")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--size", default=f"{WIDTH}x{HEIGHT}", help="WxH (smaller for smoke runs)")
     ap.add_argument("--aperture", default=os.path.join(REPO, "target", "release", "aperture"))
