@@ -519,9 +519,11 @@ def read_exr_rgb(path):
         return read_beauty(path)
 
 
-def aperture_renderer(scene, gltf, binary, size, threads, tmp):
+def aperture_renderer(scene, gltf, binary, size, threads, tmp, bvh="medium"):
     """aperture: one `aperture render` process per render; the seconds are the render time the
-    EXR header records (the traced image only: scene loading and BVH build excluded)."""
+    EXR header records (the traced image only: scene loading and BVH build excluded). The BVH
+    quality is fixed (`aperture bench`'s default, medium) rather than `render`'s automatic
+    choice, which picks a faster build, slower traversal for small budgets."""
     env = ["--env", ",".join(repr(float(c)) for c in scene["env"])] if scene["env"] else []
 
     def render(spp, seed):
@@ -529,7 +531,7 @@ def aperture_renderer(scene, gltf, binary, size, threads, tmp):
         cmd = [binary, "render", gltf, "-o", exr, "--width", str(size[0]), "--height", str(size[1]),
                "--spp", str(spp), "--seed", str(seed), "--threads", str(threads),
                "--max-bounces", str(MAX_BOUNCES), "--filter", "box", "--override-material", "diffuse",
-               "--quiet", *env]
+               "--bvh-quality", bvh, "--quiet", *env]
         subprocess.run(cmd, check=True)
         return read_exr_rgb(exr), exr_render_time(exr)
 
@@ -694,7 +696,7 @@ def run_series(args):
         elif args.renderer == "cycles":
             render = cycles_renderer(scene, gltf, size, args.threads, tmp)
         else:
-            render = aperture_renderer(scene, gltf, args.aperture, size, args.threads, tmp)
+            render = aperture_renderer(scene, gltf, args.aperture, size, args.threads, tmp, args.bvh_quality)
         series(render, args.renderer, args, size)
 
 
@@ -711,7 +713,7 @@ def run_all(args):
                    "-o", args.output, "--spp", args.spp, "--reference-spp", str(args.reference_spp),
                    "--repeats", str(args.repeats), "--repeat-seconds", str(args.repeat_seconds),
                    "--threads", str(args.threads), "--size", args.size,
-                   "--aperture", args.aperture, "--variant", args.variant]
+                   "--aperture", args.aperture, "--variant", args.variant, "--bvh-quality", args.bvh_quality]
             subprocess.run(cmd, check=True)
     print(f"== all series in {time.time() - t0:.0f} s")
     summary(args)
@@ -732,6 +734,7 @@ def parser():
     ap.add_argument("--size", default=f"{WIDTH}x{HEIGHT}", help="WxH (smaller for smoke runs)")
     ap.add_argument("--aperture", default=os.path.join(REPO, "target", "release", "aperture"))
     ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant")
+    ap.add_argument("--bvh-quality", default="medium", help="aperture's --bvh-quality (bench's default)")
     ap.add_argument("--mitsuba-python", default=MITSUBA_PY)
     ap.add_argument("--blender-python", default=BPY_PY)
     ap.add_argument("--target-multiples", default="4,8,16",
