@@ -65,15 +65,7 @@ impl SamplerKind {
                 let (set, seed) = sobol_set(pixel_seed, set);
                 sobol_burley::sample_4d(index, set, seed)
             }
-            Self::Random => {
-                let (a, b) = random_words(pixel_seed, index, set);
-                [
-                    u32_to_unit(a as u32),
-                    u32_to_unit((a >> 32) as u32),
-                    u32_to_unit(b as u32),
-                    u32_to_unit((b >> 32) as u32),
-                ]
-            }
+            Self::Random => random_4d(pixel_seed, index, set),
         }
     }
 
@@ -94,6 +86,44 @@ impl SamplerKind {
             }
         }
     }
+}
+
+/// The random sampler's four values of one dimension set.
+#[inline]
+fn random_4d(pixel_seed: u32, index: u32, set: u32) -> [f32; 4] {
+    let (a, b) = random_words(pixel_seed, index, set);
+    [
+        u32_to_unit(a as u32),
+        u32_to_unit((a >> 32) as u32),
+        u32_to_unit(b as u32),
+        u32_to_unit((b >> 32) as u32),
+    ]
+}
+
+/// `sobol_burley::sample_4d(index, set, seed)` with its first step, the Owen shuffle of the
+/// sample index (`shuffled_rev`, which depends on the index and seed only), done by the
+/// caller: a path draws up to 14 sets of one sample under one seed, so the shuffle is done once
+/// per sample instead of once per set. Same operations in the same order, so the same bits
+/// (`cached_shuffle_matches_the_crate` checks it).
+#[inline]
+fn sobol_4d_shuffled(shuffled_rev: u32, set: u32, seed: u32) -> [f32; 4] {
+    use sobol_burley::parts::{hash_int4, owen_scramble_int4_rev, sobol_int4_rev, Int4};
+    let sobol = sobol_int4_rev(shuffled_rev, set);
+    let scramble = {
+        let seed: Int4 = [seed.wrapping_mul(0x9c8f_2d3b); 4].into();
+        let ds: Int4 = [set; 4].into();
+        seed ^ ds ^ [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8].into()
+    };
+    owen_scramble_int4_rev(sobol, hash_int4(scramble))
+        .reverse_bits()
+        .to_f32_norm()
+}
+
+/// The Owen-shuffled, bit-reversed sample index of `sobol_burley::sample_4d` for `seed`.
+#[inline]
+fn sobol_shuffle(index: u32, seed: u32) -> u32 {
+    use sobol_burley::parts::{hash, owen_scramble_rev};
+    owen_scramble_rev(index.reverse_bits(), hash(seed ^ 0x79c6_8e4a))
 }
 
 /// The table set and scramble seed of dimension set `set`.
@@ -122,6 +152,8 @@ pub struct SampleStream {
     kind: SamplerKind,
     pixel_seed: u32,
     index: u32,
+    /// [`sobol_shuffle`] of (index, pixel seed): shared by every table set of the sample.
+    shuffled_rev: u32,
 }
 
 /// The values one path vertex draws.
@@ -144,10 +176,23 @@ pub struct BounceSample {
 impl SampleStream {
     /// The stream of sample `index` in the pixel `(x, y)`.
     pub fn new(kind: SamplerKind, x: u32, y: u32, index: u32, seed: u32) -> Self {
+        let pixel_seed = pixel_seed(x, y, seed);
         Self {
             kind,
-            pixel_seed: pixel_seed(x, y, seed),
+            pixel_seed,
             index,
+            shuffled_rev: sobol_shuffle(index, pixel_seed),
+        }
+    }
+
+    /// [`SamplerKind::sample_4d`] of this sample, the shuffle reused for the table sets.
+    #[inline]
+    fn set_4d(&self, set: u32) -> [f32; 4] {
+        match self.kind {
+            SamplerKind::Sobol if set < SOBOL_SETS => {
+                sobol_4d_shuffled(self.shuffled_rev, set, self.pixel_seed)
+            }
+            kind => kind.sample_4d(self.pixel_seed, self.index, set),
         }
     }
 
@@ -158,14 +203,14 @@ impl SampleStream {
 
     /// The camera's 4-D point: pixel pair (dimensions 0–1), lens pair (dimensions 2–3).
     pub fn camera(&self) -> [f32; 4] {
-        self.kind.sample_4d(self.pixel_seed, self.index, 0)
+        self.set_4d(0)
     }
 
     /// The values of path vertex `k` (0 = the camera ray's hit): dimension sets `1 + 2k` and
     /// `2 + 2k`, so no two vertices share a dimension.
     pub fn bounce(&self, k: u32) -> BounceSample {
-        let a = self.kind.sample_4d(self.pixel_seed, self.index, 1 + 2 * k);
-        let b = self.kind.sample_4d(self.pixel_seed, self.index, 2 + 2 * k);
+        let a = self.set_4d(1 + 2 * k);
+        let b = self.set_4d(2 + 2 * k);
         BounceSample {
             lobe: a[0],
             bsdf: [a[1], a[2]],
@@ -231,6 +276,27 @@ mod tests {
             for set in [0, 3, 70] {
                 let a = kind.sample_4d(99, 7, set);
                 assert_eq!(kind.sample_2d(99, 7, set), [a[0], a[1]]);
+            }
+        }
+    }
+
+    #[test]
+    fn cached_shuffle_matches_the_crate() {
+        for (x, y, seed) in [(0, 0, 0), (3, 7, 11), (319, 239, 1234)] {
+            for index in [0, 1, 5, 63, 1000, MAX_SPP - 1] {
+                let s = SampleStream::new(SamplerKind::Sobol, x, y, index, seed);
+                let ps = pixel_seed(x, y, seed);
+                assert_eq!(s.camera(), sobol_burley::sample_4d(index, 0, ps));
+                for k in [0, 5, 31, 40] {
+                    let b = s.bounce(k);
+                    let (sa, sb) = (1 + 2 * k, 2 + 2 * k);
+                    let want_a = SamplerKind::Sobol.sample_4d(ps, index, sa);
+                    let want_b = SamplerKind::Sobol.sample_4d(ps, index, sb);
+                    let got_a = [b.lobe, b.bsdf[0], b.bsdf[1], b.rr];
+                    let got_b = [b.light_pick, b.light[0], b.light[1], b.alpha];
+                    assert_eq!(got_a.map(f32::to_bits), want_a.map(f32::to_bits));
+                    assert_eq!(got_b.map(f32::to_bits), want_b.map(f32::to_bits));
+                }
             }
         }
     }
