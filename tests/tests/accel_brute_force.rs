@@ -2,7 +2,8 @@
 //! test), for flattened and instanced scenes, closest hit and occlusion; and every reported hit
 //! lies on the triangle it names (checked against the input meshes, independently of the BVH).
 //! The batch queries (interleaved walks) answer exactly as the one-ray queries, so brute force
-//! checks them too.
+//! checks them too. Scenes with instances
+//! are checked both kept instanced and flattened into one world-space BVH.
 
 #[path = "accel_util.rs"]
 mod util;
@@ -165,6 +166,12 @@ fn instanced_meshes_with_mirrors_and_single_use_meshes() {
     assert_eq!(s.drawn_triangles, 75 * 320 + 75 * 300 + 2000);
     let rays = random_rays(&mut rng, 3000, lo, hi);
     assert_mixed(check(&scene, &accel, &rays), rays.len());
+    // Built as `Accel::build` does, this small scene is one world-space BVH.
+    let flat = scene.build_flattened(BvhQuality::default());
+    assert_eq!(flat.stats().flattened_instances, 151);
+    assert_eq!(flat.stats().blas_count, 1);
+    assert_eq!(flat.stats().tlas_entries, 1);
+    assert_mixed(check(&scene, &flat, &rays), rays.len());
 }
 
 #[test]
@@ -211,6 +218,9 @@ fn simple_instancing_shape_cube_grid() {
     let mut rng = Rng(3);
     let rays = random_rays(&mut rng, 3000, Vec3::splat(-1.0), Vec3::splat(5.0));
     assert_mixed(check(&scene, &accel, &rays), rays.len());
+    let flat = scene.build_flattened(BvhQuality::default());
+    assert_eq!(flat.stats().flattened_instances, 125);
+    assert_mixed(check(&scene, &flat, &rays), rays.len());
     // Axis-aligned rays along the grid lines and through the gaps (zero direction components).
     let mut hits = 0;
     for i in 0..200 {

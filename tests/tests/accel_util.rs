@@ -2,7 +2,7 @@
 //! test target it holds no tests).
 #![allow(dead_code)]
 
-use aperture_accel::{Accel, BvhQuality, InstanceInput, MeshInput, Ray};
+use aperture_accel::{Accel, BvhQuality, FrameHints, InstanceInput, MeshInput, Ray};
 use glam::{Affine3A, Quat, Vec3};
 
 /// A small deterministic generator (SplitMix64), so failures reproduce.
@@ -94,17 +94,30 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Builds the structure.
+    /// Builds the structure with shared meshes kept instanced (a top level over object-space
+    /// BVHs), whatever the scene's size: the two-level walk these tests are about.
     pub fn build(&self, quality: BvhQuality) -> Accel {
-        let inputs: Vec<MeshInput> = self
-            .meshes
+        let keep = FrameHints {
+            flatten_shared_up_to: 0,
+            ..FrameHints::STILL
+        };
+        Accel::build_frame(&self.inputs(), &self.instances, quality, keep, None)
+    }
+
+    /// Builds the structure as [`Accel::build`] does: a scene this small has every instance
+    /// flattened into one world-space BVH.
+    pub fn build_flattened(&self, quality: BvhQuality) -> Accel {
+        Accel::build(&self.inputs(), &self.instances, quality)
+    }
+
+    fn inputs(&self) -> Vec<MeshInput<'_>> {
+        self.meshes
             .iter()
             .map(|(p, i)| MeshInput {
                 positions: p,
                 indices: i,
             })
-            .collect();
-        Accel::build(&inputs, &self.instances, quality)
+            .collect()
     }
 
     /// World-space vertices of a triangle as given (independent of the structure).

@@ -214,13 +214,24 @@ pub struct FrameHints<'a> {
     /// in every frame, and their bottom-level BVHs are reused. `usize::MAX` (as
     /// [`FrameHints::STILL`]): nothing deforms and nothing is reused.
     pub deforming_from: usize,
+    /// When the still instances draw at most this many triangles in all (each instance
+    /// counted), every one of them goes into the world-space BVH, shared meshes too: one level
+    /// to walk, no per-instance ray transform, and the interleaved queries apply. Above it, a
+    /// mesh drawn more than once keeps one object-space BVH (memory bounded by the unique
+    /// triangles). [`FLATTEN_SHARED_LIMIT`] by default; 0 keeps every shared mesh instanced.
+    pub flatten_shared_up_to: usize,
 }
+
+/// The default of [`FrameHints::flatten_shared_up_to`]: 2^20 drawn triangles, so flattening
+/// costs at most about 60 MB (a triangle takes about 60 bytes with its share of the nodes).
+pub const FLATTEN_SHARED_LIMIT: usize = 1 << 20;
 
 impl FrameHints<'_> {
     /// A still scene: no instance moves, no mesh deforms (what [`Accel::build`] assumes).
     pub const STILL: FrameHints<'static> = FrameHints {
         moving: &[],
         deforming_from: usize::MAX,
+        flatten_shared_up_to: FLATTEN_SHARED_LIMIT,
     };
 }
 
@@ -363,11 +374,17 @@ impl Accel {
                 _ => stats.skipped_instances += 1,
             }
         }
-        let flattened = |id: u32, m: usize| {
-            uses[m] == 1
-                && !hints.moving.get(id as usize).copied().unwrap_or(false)
-                && m < hints.deforming_from
+        let is_static = |id: u32, m: usize| {
+            !hints.moving.get(id as usize).copied().unwrap_or(false) && m < hints.deforming_from
         };
+        // Small scenes flatten their shared meshes too (`FrameHints::flatten_shared_up_to`).
+        let static_drawn: usize = usable
+            .iter()
+            .filter(|(id, inst, _)| is_static(*id, inst.mesh as usize))
+            .map(|(_, inst, _)| meshes[inst.mesh as usize].indices.len())
+            .sum();
+        let flatten_all = static_drawn <= hints.flatten_shared_up_to;
+        let flattened = |id: u32, m: usize| (uses[m] == 1 || flatten_all) && is_static(id, m);
         let flat: Vec<(u32, InstanceInput)> = usable
             .iter()
             .filter(|(id, inst, _)| flattened(*id, inst.mesh as usize))

@@ -2,7 +2,8 @@
 //!
 //! - **Build**: obvhs (PLOC, reinsertion, conversion to its compressed 8-wide CWBVH). A mesh drawn
 //!   by several instances gets one bottom-level BVH in object space, stored once; meshes drawn
-//!   once are flattened into one world-space BVH; a top-level obvhs BVH over instance bounds
+//!   once are flattened into one world-space BVH (and shared meshes too, in scenes drawing at
+//!   most [`FLATTEN_SHARED_LIMIT`] triangles); a top-level obvhs BVH over instance bounds
 //!   joins them. Triangles are stored in BVH order with their original index.
 //! - **Traversal** is ours (obvhs' node layout and child ordering): the box test honours
 //!   `tmin`/`tmax` and is widened by a bound on every rounding error involved, and the stack is
@@ -39,7 +40,7 @@ mod triangle;
 mod types;
 mod walk;
 
-pub use build::FrameHints;
+pub use build::{FrameHints, FLATTEN_SHARED_LIMIT};
 pub use rayfile::{read_rays, write_rays, RayFileError};
 pub use spawn::{offset_ray_origin, SpawnPoint};
 pub use triangle::intersect_triangle;

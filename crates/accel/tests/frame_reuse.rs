@@ -78,6 +78,7 @@ fn build(t: f32, previous: Option<Accel>) -> Accel {
     let hints = FrameHints {
         moving: &[false, true, false, true, false],
         deforming_from: 3,
+        ..FrameHints::STILL
     };
     Accel::build_frame(&inputs, &instances, BvhQuality::Medium, hints, previous)
 }
@@ -125,19 +126,33 @@ fn reused_frames_answer_like_fresh_builds() {
 fn still_scenes_flatten_as_before_and_moving_instances_do_not() {
     let (meshes, instances) = frame(0.0);
     let inputs = inputs(&meshes);
+    // A scene this small flattens its shared mesh 0 too: one world-space BVH holds all five.
     let still = Accel::build(&inputs, &instances, BvhQuality::Medium);
-    // Meshes 1, 2 and 3 are drawn once: one world-space BVH holds them; mesh 0 has its own.
-    assert_eq!(still.stats().flattened_instances, 3);
-    assert_eq!(still.stats().blas_count, 2);
+    assert_eq!(still.stats().flattened_instances, 5);
+    assert_eq!(still.stats().blas_count, 1);
+    // Keeping shared meshes instanced: meshes 1, 2 and 3 are drawn once and flattened; mesh 0
+    // has its own BVH.
+    let keep = FrameHints {
+        flatten_shared_up_to: 0,
+        ..FrameHints::STILL
+    };
+    let instanced = Accel::build_frame(&inputs, &instances, BvhQuality::Medium, keep, None);
+    assert_eq!(instanced.stats().flattened_instances, 3);
+    assert_eq!(instanced.stats().blas_count, 2);
     let framed = build(0.0, None);
-    // Only mesh 1's still instance is flattened; meshes 0, 2 and 3 get their own BVHs.
-    assert_eq!(framed.stats().flattened_instances, 1);
+    // The still instances of static meshes (mesh 0's first, mesh 1's) are flattened; mesh 0's
+    // moving instance and meshes 2 and 3 get BVHs of their own.
+    assert_eq!(framed.stats().flattened_instances, 2);
     assert_eq!(framed.stats().blas_count, 4);
+    let mut hits = 0;
     for ray in rays() {
-        let (a, b) = (still.intersect(&ray), framed.intersect(&ray));
+        let a = still.intersect(&ray).map(|h| (h.instance, h.triangle));
         assert_eq!(
-            a.map(|h| (h.instance, h.triangle)),
-            b.map(|h| (h.instance, h.triangle))
+            a,
+            instanced.intersect(&ray).map(|h| (h.instance, h.triangle))
         );
+        assert_eq!(a, framed.intersect(&ray).map(|h| (h.instance, h.triangle)));
+        hits += usize::from(a.is_some());
     }
+    assert!(hits > 1000, "{hits}");
 }

@@ -152,6 +152,7 @@ pub fn build_frame_accel(
     let frame = FrameHints {
         moving: &hints.moving,
         deforming_from: hints.deforming_from,
+        ..FrameHints::STILL
     };
     Accel::build_frame(&meshes, &instances, quality, frame, previous)
 }
