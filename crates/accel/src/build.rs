@@ -327,6 +327,66 @@ fn magnitude(mesh: &MeshInput<'_>, m: &Affine3A) -> f32 {
     m.translation.abs().max_element() + norm * obj
 }
 
+/// Where each instance goes: the usable ones (a mesh that exists, an invertible transform),
+/// how often each mesh is drawn, which instances the world-space BVH holds, and which meshes
+/// need a BVH of their own.
+struct Placement {
+    usable: Vec<(u32, InstanceInput, Affine3A)>,
+    uses: Vec<u32>,
+    flat: Vec<(u32, InstanceInput)>,
+    own_blas: Vec<bool>,
+    skipped: usize,
+}
+
+/// Flattens what neither moves nor deforms and is drawn once, or, in scenes drawing at most
+/// `hints.flatten_shared_up_to` still triangles, everything that neither moves nor deforms.
+fn placement(
+    meshes: &[MeshInput<'_>],
+    instances: &[InstanceInput],
+    hints: &FrameHints<'_>,
+) -> Placement {
+    let mut usable: Vec<(u32, InstanceInput, Affine3A)> = Vec::with_capacity(instances.len());
+    let mut uses = vec![0u32; meshes.len()];
+    let mut skipped = 0;
+    for (i, inst) in instances.iter().enumerate() {
+        let inv = invert(&inst.world_from_object);
+        match (meshes.get(inst.mesh as usize), inv) {
+            (Some(_), Some(inv)) => {
+                uses[inst.mesh as usize] += 1;
+                usable.push((i as u32, *inst, inv));
+            }
+            _ => skipped += 1,
+        }
+    }
+    let is_static = |id: u32, m: usize| {
+        !hints.moving.get(id as usize).copied().unwrap_or(false) && m < hints.deforming_from
+    };
+    let static_drawn: usize = usable
+        .iter()
+        .filter(|(id, inst, _)| is_static(*id, inst.mesh as usize))
+        .map(|(_, inst, _)| meshes[inst.mesh as usize].indices.len())
+        .sum();
+    let flatten_all = static_drawn <= hints.flatten_shared_up_to;
+    let flattened = |id: u32, m: usize| (uses[m] == 1 || flatten_all) && is_static(id, m);
+    let flat: Vec<(u32, InstanceInput)> = usable
+        .iter()
+        .filter(|(id, inst, _)| flattened(*id, inst.mesh as usize))
+        .map(|(id, inst, _)| (*id, *inst))
+        .collect();
+    let mut own_blas = vec![false; meshes.len()];
+    for (id, inst, _) in &usable {
+        let m = inst.mesh as usize;
+        own_blas[m] |= !flattened(*id, m);
+    }
+    Placement {
+        usable,
+        uses,
+        flat,
+        own_blas,
+        skipped,
+    }
+}
+
 /// A bottom-level BVH to make: built from triangles, or taken from the previous frame.
 enum BlasJob {
     Build(Vec<(Tri, u32)>, bool),
@@ -361,40 +421,14 @@ impl Accel {
         let start = std::time::Instant::now();
         let mut stats = AccelStats::default();
 
-        // Usable instances, how often each mesh is drawn, and which are flattened.
-        let mut usable: Vec<(u32, InstanceInput, Affine3A)> = Vec::with_capacity(instances.len());
-        let mut uses = vec![0u32; meshes.len()];
-        for (i, inst) in instances.iter().enumerate() {
-            let inv = invert(&inst.world_from_object);
-            match (meshes.get(inst.mesh as usize), inv) {
-                (Some(_), Some(inv)) => {
-                    uses[inst.mesh as usize] += 1;
-                    usable.push((i as u32, *inst, inv));
-                }
-                _ => stats.skipped_instances += 1,
-            }
-        }
-        let is_static = |id: u32, m: usize| {
-            !hints.moving.get(id as usize).copied().unwrap_or(false) && m < hints.deforming_from
-        };
-        // Small scenes flatten their shared meshes too (`FrameHints::flatten_shared_up_to`).
-        let static_drawn: usize = usable
-            .iter()
-            .filter(|(id, inst, _)| is_static(*id, inst.mesh as usize))
-            .map(|(_, inst, _)| meshes[inst.mesh as usize].indices.len())
-            .sum();
-        let flatten_all = static_drawn <= hints.flatten_shared_up_to;
-        let flattened = |id: u32, m: usize| (uses[m] == 1 || flatten_all) && is_static(id, m);
-        let flat: Vec<(u32, InstanceInput)> = usable
-            .iter()
-            .filter(|(id, inst, _)| flattened(*id, inst.mesh as usize))
-            .map(|(id, inst, _)| (*id, *inst))
-            .collect();
-        let mut own_blas = vec![false; meshes.len()];
-        for (id, inst, _) in &usable {
-            let m = inst.mesh as usize;
-            own_blas[m] |= !flattened(*id, m);
-        }
+        let Placement {
+            usable,
+            uses,
+            flat,
+            own_blas,
+            skipped,
+        } = placement(meshes, instances, &hints);
+        stats.skipped_instances = skipped;
         stats.flattened_instances = flat.len();
 
         // What the previous frame offers: unchanged meshes' BVHs and the world-space BVH.
