@@ -285,9 +285,7 @@ impl Accel {
             let (o, d) = Self::object_ray(entry, ray);
             let tr = TriRay::new(o, d);
             for (i, tri) in blas.tris.iter().enumerate() {
-                if let Some(h) =
-                    crate::triangle::intersect(&tr, tri.p[0], tri.p[1], tri.p[2], ray.tmin, tmax)
-                {
+                if let Some(h) = crate::triangle::intersect(&tr, &tri.p, ray.tmin, tmax) {
                     tmax = h.0;
                     best = Some(Self::make_hit(blas, entry, i, h));
                 }

@@ -83,12 +83,13 @@ fn gamma(n: i32) -> f32 {
 #[inline(always)]
 pub(crate) fn intersect(
     r: &TriRay,
-    p0: Vec3,
-    p1: Vec3,
-    p2: Vec3,
+    p: &[Vec3; 3],
     tmin: f32,
     tmax: f32,
 ) -> Option<(f32, f32, f32)> {
+    // By reference: only the rare `f64` check reads the vertices again, and values would stay
+    // live in registers (or spilled) across the whole test for it.
+    let [p0, p1, p2] = *p;
     let a = r.shear * (Vec3A::from(p0) - r.origin);
     let b = r.shear * (Vec3A::from(p1) - r.origin);
     let c = r.shear * (Vec3A::from(p2) - r.origin);
@@ -128,7 +129,8 @@ pub(crate) fn intersect(
     if !(t >= tmin && t <= tmax) {
         return None;
     }
-    // pbrt-v4: reject hits whose t is not provably positive (they may lie behind the origin).
+    // pbrt-v4: reject hits whose t is not provably positive (they may lie behind the origin),
+    // unless the f64 plane distance proves them in front (`t_in_front_f64`).
     let max_zt = az.abs().max(bz.abs()).max(cz.abs());
     let delta_z = gamma(3) * max_zt;
     let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
@@ -140,9 +142,56 @@ pub(crate) fn intersect(
     let delta_t =
         3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
     if t <= delta_t {
-        return None;
+        return t_in_front_f64(r, p)
+            .filter(|t| *t >= tmin && *t <= tmax)
+            .map(|t| (t, e1 * inv_det, e2 * inv_det));
     }
     Some((t, e1 * inv_det, e2 * inv_det))
+}
+
+/// Where the ray meets the plane of triangle `p`, if provably in front of its origin, decided
+/// in `f64`. pbrt-v4's bound above grows with the triangle's extent seen from the origin: a ray
+/// leaving a concave corner meets the other surface's large triangles a few 1e-5 away, closer
+/// than that bound, and would pass through them (light leaking out of a closed room). In `f64`
+/// the edges of `f32` points are exact, their cross products round once, and the plane distance
+/// `w . n` rounds a few times more: it is known to about 1e-15 of its magnitude, so a margin of
+/// 1e-12 decides its sign beyond doubt; `d . n` (the direction comes back from the shear to
+/// about 2e-7) gets a margin of 1e-5. The `t` returned is then also more accurate than the
+/// `f32` one. Called only for hits the bound would reject, so it costs nothing
+/// measurable.
+#[cold]
+#[inline(never)]
+fn t_in_front_f64(r: &TriRay, p: &[Vec3; 3]) -> Option<f32> {
+    const MARGIN: f64 = 1e-12;
+    let o = Vec3::from(r.origin).as_dvec3();
+    // The direction, from the shear (not stored: a larger `TriRay` made every walk slower):
+    // column `kz` is `(sx, sy, 1)` with `sx = -d[kx] sz`, `sy = -d[ky] sz`, `sz = 1 / d[kz]`, the
+    // others are `e_x` (at `kx`) and `e_y` (at `ky`). Each component is within 2e-7 of the true
+    // one relatively, hence the wider margin on `d . n` below.
+    let cols = [r.shear.x_axis, r.shear.y_axis, r.shear.z_axis];
+    let kz_col = cols
+        .iter()
+        .find(|c| c.z == 1.0)
+        .copied()
+        .unwrap_or(Vec3A::Z);
+    let inv_sz = 1.0 / f64::from(r.sz);
+    let d = glam::DVec3::from_array(cols.map(|c| {
+        if c.z == 1.0 {
+            inv_sz
+        } else if c.x == 1.0 {
+            -f64::from(kz_col.x) * inv_sz
+        } else {
+            -f64::from(kz_col.y) * inv_sz
+        }
+    }));
+    let [a, b, c] = p.map(|v| v.as_dvec3());
+    let n = (b - a).cross(c - a);
+    let w = a - o;
+    // t = (w . n) / (d . n): in front when both have the same sign, each clear of its error.
+    let (num, den) = (w.dot(n), d.dot(n));
+    let (num_mag, den_mag) = (w.abs().dot(n.abs()), d.abs().dot(n.abs()));
+    let sure = num * den > 0.0 && num.abs() > MARGIN * num_mag && den.abs() > 1e-5 * den_mag;
+    sure.then_some((num / den) as f32)
 }
 
 /// Watertight intersection of a ray with one triangle, in the ray's space: `(t, u, v)` with `u`, `v`
@@ -152,7 +201,7 @@ pub(crate) fn intersect(
 /// can compare against brute force with identical arithmetic.
 pub fn intersect_triangle(ray: &crate::Ray, p: [Vec3; 3]) -> Option<(f32, f32, f32)> {
     let r = TriRay::new(ray.origin, ray.dir);
-    intersect(&r, p[0], p[1], p[2], ray.tmin, ray.tmax)
+    intersect(&r, &p, ray.tmin, ray.tmax)
 }
 
 #[cfg(test)]
@@ -298,6 +347,62 @@ mod tests {
             assert!(
                 hits >= 1,
                 "ray through the shared edge at s={s} slipped through"
+            );
+        }
+    }
+
+    /// The two triangles of an 8 m floor quad (y = 0, x and z in [-4, 4]).
+    fn floor() -> [[Vec3; 3]; 2] {
+        let c = |x: f32, z: f32| Vec3::new(x, 0.0, z);
+        [
+            [c(-4.0, -4.0), c(4.0, -4.0), c(4.0, 4.0)],
+            [c(-4.0, -4.0), c(4.0, 4.0), c(-4.0, 4.0)],
+        ]
+    }
+
+    /// A ray leaving a wall just above a large floor, as a bounce off the wall's foot does,
+    /// meets the floor a few 1e-5 away: in front of it beyond doubt, though closer than the
+    /// f32 error bound of a hit on so large a triangle. It must hit (it used to leak out of a
+    /// closed room, BENCHMARKS.md, issue 18 second session).
+    #[test]
+    fn hits_close_to_the_origin_on_large_triangles_count() {
+        let dir = Vec3::new(0.969_221_3, -0.236_580_04, -0.068_116_87);
+        let mut hits = 0;
+        for k in 0..200 {
+            let origin = Vec3::new(
+                -3.25 + k as f32 * 0.01,
+                1.287_460_3e-5,
+                -2.0 + k as f32 * 0.013,
+            );
+            let ray = Ray::new(origin, dir);
+            let h = floor().iter().find_map(|t| intersect_triangle(&ray, *t));
+            let (t, _, _) = h.unwrap_or_else(|| panic!("ray {k} from {origin} leaks through"));
+            // Within a few ulps of the floor's 4 m coordinates.
+            let want = origin.y / -dir.y;
+            assert!((t - want).abs() <= 1e-6, "{t} vs {want}");
+            hits += 1;
+        }
+        assert_eq!(hits, 200);
+    }
+
+    /// A ray never hits the triangle it starts on, nor one it leaves from just in front.
+    #[test]
+    fn rays_leaving_the_plane_still_miss() {
+        let dir = Vec3::new(0.3, 0.8, -0.2);
+        for y in [0.0f32, 1e-7, 1e-5] {
+            let ray = Ray::new(Vec3::new(0.5, y, 0.25), dir);
+            assert!(
+                floor()
+                    .iter()
+                    .all(|t| intersect_triangle(&ray, *t).is_none()),
+                "{y}"
+            );
+            let down = Ray::new(Vec3::new(0.5, -y, 0.25), -dir);
+            assert!(
+                floor()
+                    .iter()
+                    .all(|t| intersect_triangle(&down, *t).is_none()),
+                "{y}"
             );
         }
     }

@@ -115,9 +115,7 @@ impl Leaf for ClosestLeaf<'_> {
     #[inline(always)]
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
         if let Some(tri) = self.tris.get(primitive as usize) {
-            if let Some(h) = crate::triangle::intersect(
-                &self.ray, tri.p[0], tri.p[1], tri.p[2], self.tmin, *tmax,
-            ) {
+            if let Some(h) = crate::triangle::intersect(&self.ray, &tri.p, self.tmin, *tmax) {
                 *tmax = h.0;
                 self.best = Some((primitive as usize, h));
             }
@@ -138,8 +136,7 @@ impl Leaf for AnyLeaf<'_> {
     #[inline(always)]
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
         self.tris.get(primitive as usize).is_some_and(|tri| {
-            crate::triangle::intersect(&self.ray, tri.p[0], tri.p[1], tri.p[2], self.tmin, *tmax)
-                .is_some()
+            crate::triangle::intersect(&self.ray, &tri.p, self.tmin, *tmax).is_some()
         })
     }
 }
