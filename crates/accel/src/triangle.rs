@@ -157,8 +157,8 @@ pub(crate) fn intersect(
 /// `w . n` rounds a few times more: it is known to about 1e-15 of its magnitude, so a margin of
 /// 1e-12 decides its sign beyond doubt; `d . n` (the direction comes back from the shear to
 /// about 2e-7) gets a margin of 1e-5. The `t` returned is then also more accurate than the
-/// `f32` one. Called only for hits the bound would reject, so it costs nothing
-/// measurable.
+/// `f32` one. Called only for hits the bound would reject; that it can be called still costs
+/// about 3 % of a shadow ray's instructions (registers held for it; BENCHMARKS.md).
 #[cold]
 #[inline(never)]
 fn t_in_front_f64(r: &TriRay, p: &[Vec3; 3]) -> Option<f32> {
