@@ -4,6 +4,7 @@
 //! (`aperture_render::raybench`); this file maps the arguments, prints the table and writes
 //! `bench-rays.csv` and `bench-rays.png`.
 
+use crate::number_args::{non_negative_f32, positive_f32};
 use crate::plot::{load_font, write_png, PALETTE};
 use anyhow::{bail, Context as _};
 use aperture_accel::BvhQuality;
@@ -66,20 +67,6 @@ pub struct BenchRaysArgs {
     /// Output folder for bench-rays.csv and bench-rays.png (created if missing).
     #[arg(short, long, value_name = "DIR")]
     pub output: Option<PathBuf>,
-}
-
-fn non_negative_f32(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err(format!("{s:?} is not a number ≥ 0")),
-    }
-}
-
-fn positive_f32(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!("{s:?} is not a positive number")),
-    }
 }
 
 fn parse_quality(s: &str) -> Result<BvhQuality, String> {
@@ -150,7 +137,7 @@ fn check_ray_file_fits(path: &Path) -> anyhow::Result<()> {
     let Ok(meta) = std::fs::metadata(path) else {
         return Ok(());
     };
-    let rays = meta.len() / 24;
+    let rays = meta.len() / aperture_accel::rayfile::RAY_RECORD_BYTES as u64;
     // The file's bytes, the rays, then one closest-hit answer and one occlusion answer each.
     let needed = meta.len().saturating_add(rays.saturating_mul(32 + 24 + 1));
     aperture_budget::MemoryBudget::from_system()

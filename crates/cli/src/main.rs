@@ -7,6 +7,7 @@ mod info;
 mod interrupt;
 mod material_args;
 mod merge_cmd;
+mod number_args;
 mod plot;
 mod progress;
 mod render_args;

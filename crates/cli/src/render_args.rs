@@ -1,6 +1,7 @@
 //! The arguments of `aperture render` (and the tracing options `aperture bench` shares):
 //! their types, value parsers and help texts.
 
+use crate::number_args::{finite_f32, non_negative_f32, positive_f32};
 use aperture_render::PassSet;
 use clap::ValueEnum;
 use glam::Vec3;
@@ -65,33 +66,6 @@ pub enum BvhQualityArg {
     Medium,
     /// Fastest traversal.
     High,
-}
-
-fn positive_f32(s: &str) -> Result<f32, String> {
-    let v: f32 = s.parse().map_err(|e| format!("{e}"))?;
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("must be a finite number > 0, got {s}"))
-    }
-}
-
-fn non_negative_f32(s: &str) -> Result<f32, String> {
-    let v: f32 = s.parse().map_err(|e| format!("{e}"))?;
-    if v.is_finite() && v >= 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("must be a finite number ≥ 0, got {s}"))
-    }
-}
-
-fn finite_f32(s: &str) -> Result<f32, String> {
-    let v: f32 = s.parse().map_err(|e| format!("{e}"))?;
-    if v.is_finite() {
-        Ok(v)
-    } else {
-        Err(format!("must be a finite number, got {s}"))
-    }
 }
 
 fn parse_rgb(s: &str) -> Result<Vec3, String> {

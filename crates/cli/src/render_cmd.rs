@@ -144,12 +144,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         ..exr
     };
     if let Some(frames) = args.frames {
-        let format = match png_out {
-            true => aperture_render::sequence::FrameFormat::Png {
+        let format = if png_out {
+            aperture_render::sequence::FrameFormat::Png {
                 png: png_options(&args),
                 transparent: args.transparent,
-            },
-            false => aperture_render::sequence::FrameFormat::Exr(exr),
+            }
+        } else {
+            aperture_render::sequence::FrameFormat::Exr(exr)
         };
         return crate::frames::run(&args, &animated, frames, format, &opts, quality, &pool);
     }

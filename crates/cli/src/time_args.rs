@@ -1,5 +1,6 @@
 //! `--time`, `--frame`, `--fps` and `--animation` (SPEC §7), shared by `render` and `info`.
 
+use crate::number_args::{finite_f32, positive_f32};
 use aperture_scene::AnimationSelection;
 
 /// When to pose the scene, and which animations to play.
@@ -40,20 +41,6 @@ impl TimeArgs {
                 Err(_) => AnimationSelection::Name(s.clone()),
             },
         }
-    }
-}
-
-fn finite_f32(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        _ => Err(format!("{s} is not a finite number")),
-    }
-}
-
-fn positive_f32(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!("{s} is not a positive number")),
     }
 }
 
