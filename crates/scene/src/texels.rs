@@ -59,22 +59,29 @@ fn decoder(bytes: &[u8], image: usize) -> Result<impl image::ImageDecoder + '_, 
 const MAX_RATIO: u64 = 1100;
 
 fn header(bytes: &[u8], image: usize) -> Result<Header, Error> {
-    if crate::basis::is_ktx2(bytes) {
+    let h = if crate::basis::is_ktx2(bytes) {
         let (width, height) = crate::basis::dimensions(bytes, image)?;
-        if width == 0 || height == 0 {
-            return Err(Error::Invalid {
-                at: format!("images[{image}]"),
-                reason: "image has no texels".into(),
-            });
-        }
         // The transcoder's RGBA8 output, then the texels built from it.
-        return Ok(Header {
+        Header {
             width,
             height,
             native: 4,
             stored: 4,
+        }
+    } else {
+        decoder_header(bytes, image)?
+    };
+    if h.width == 0 || h.height == 0 {
+        return Err(Error::Invalid {
+            at: format!("images[{image}]"),
+            reason: "image has no texels".into(),
         });
     }
+    Ok(h)
+}
+
+/// [`header`] of a PNG, JPEG or WebP file, from its decoder, refusing decompression bombs.
+fn decoder_header(bytes: &[u8], image: usize) -> Result<Header, Error> {
     let format = image::ImageReader::new(Cursor::new(bytes))
         .with_guessed_format()
         .ok()
@@ -95,12 +102,6 @@ fn header(bytes: &[u8], image: usize) -> Result<Header, Error> {
                  a decompression bomb or a truncated file",
                 bytes.len()
             ),
-        });
-    }
-    if width == 0 || height == 0 {
-        return Err(Error::Invalid {
-            at: format!("images[{image}]"),
-            reason: "image has no texels".into(),
         });
     }
     let ct = d.color_type();
