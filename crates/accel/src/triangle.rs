@@ -24,6 +24,8 @@ pub(crate) struct TriRay {
     pub shear: Mat3A,
     /// `1 / dir[kz]`: scales z into units of `t`.
     pub sz: f32,
+    /// The direction, for the `f64` check of hits close to the origin ([`t_in_front_f64`]).
+    pub dir: Vec3A,
 }
 
 impl TriRay {
@@ -44,6 +46,7 @@ impl TriRay {
             origin: origin.into(),
             shear: Mat3A::from_cols(cols[0], cols[1], cols[2]),
             sz,
+            dir: dir.into(),
         }
     }
 }
@@ -153,44 +156,26 @@ pub(crate) fn intersect(
 /// in `f64`. pbrt-v4's bound above grows with the triangle's extent seen from the origin: a ray
 /// leaving a concave corner meets the other surface's large triangles a few 1e-5 away, closer
 /// than that bound, and would pass through them (light leaking out of a closed room). In `f64`
-/// the edges of `f32` points are exact, their cross products round once, and the plane distance
-/// `w . n` rounds a few times more: it is known to about 1e-15 of its magnitude, so a margin of
-/// 1e-12 decides its sign beyond doubt; `d . n` (the direction comes back from the shear to
-/// about 2e-7) gets a margin of 1e-5. The `t` returned is then also more accurate than the
-/// `f32` one. Called only for hits the bound would reject; that it can be called still costs
+/// the edges of `f32` points are exact, their cross products round once, and the two dot
+/// products `w . n`, `d . n` a few times more: both are known to about 1e-15 of their
+/// magnitudes, so a margin of 1e-12 decides their signs beyond doubt. The `t` returned is then
+/// also more accurate than the `f32` one. Called only for hits the bound would reject; that it can be called still costs
 /// about 3 % of a shadow ray's instructions (registers held for it; BENCHMARKS.md).
 #[cold]
 #[inline(never)]
 fn t_in_front_f64(r: &TriRay, p: &[Vec3; 3]) -> Option<f32> {
     const MARGIN: f64 = 1e-12;
-    let o = Vec3::from(r.origin).as_dvec3();
-    // The direction, from the shear (not stored: a larger `TriRay` made every walk slower):
-    // column `kz` is `(sx, sy, 1)` with `sx = -d[kx] sz`, `sy = -d[ky] sz`, `sz = 1 / d[kz]`, the
-    // others are `e_x` (at `kx`) and `e_y` (at `ky`). Each component is within 2e-7 of the true
-    // one relatively, hence the wider margin on `d . n` below.
-    let cols = [r.shear.x_axis, r.shear.y_axis, r.shear.z_axis];
-    let kz_col = cols
-        .iter()
-        .find(|c| c.z == 1.0)
-        .copied()
-        .unwrap_or(Vec3A::Z);
-    let inv_sz = 1.0 / f64::from(r.sz);
-    let d = glam::DVec3::from_array(cols.map(|c| {
-        if c.z == 1.0 {
-            inv_sz
-        } else if c.x == 1.0 {
-            -f64::from(kz_col.x) * inv_sz
-        } else {
-            -f64::from(kz_col.y) * inv_sz
-        }
-    }));
+    let (o, d) = (
+        Vec3::from(r.origin).as_dvec3(),
+        Vec3::from(r.dir).as_dvec3(),
+    );
     let [a, b, c] = p.map(|v| v.as_dvec3());
     let n = (b - a).cross(c - a);
     let w = a - o;
     // t = (w . n) / (d . n): in front when both have the same sign, each clear of its error.
     let (num, den) = (w.dot(n), d.dot(n));
     let (num_mag, den_mag) = (w.abs().dot(n.abs()), d.abs().dot(n.abs()));
-    let sure = num * den > 0.0 && num.abs() > MARGIN * num_mag && den.abs() > 1e-5 * den_mag;
+    let sure = num * den > 0.0 && num.abs() > MARGIN * num_mag && den.abs() > MARGIN * den_mag;
     sure.then_some((num / den) as f32)
 }
 
