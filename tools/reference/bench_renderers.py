@@ -6,6 +6,7 @@ definition) and aperture (one ``aperture render`` process per render)."""
 
 from __future__ import annotations
 
+import importlib.util
 import math
 import os
 import subprocess
@@ -190,19 +191,18 @@ def mitsuba_renderer(scene, out, size, threads, variant):
 
 
 def exr_render_time(path):
-    """aperture's `aperture:renderTime` header attribute (render only: no loading, no BVH)."""
+    """aperture's `aperture:renderTime` header attribute (render only: no loading, no BVH), read
+    with the Blender add-on's EXR module (NumPy only; loaded by path, since its package imports
+    bpy)."""
+    spec = importlib.util.spec_from_file_location(
+        "aperture_exr", os.path.join(REPO, "tools", "blender", "aperture_gltf_dof", "exr.py"))
+    exr = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(exr)
     with open(path, "rb") as f:
-        data = f.read(1 << 16)
-    pos = 8
-    while data[pos] != 0:
-        name_end = data.index(b"\0", pos)
-        type_end = data.index(b"\0", name_end + 1)
-        size = int.from_bytes(data[type_end + 1:type_end + 5], "little")
-        value = data[type_end + 5:type_end + 5 + size]
-        if data[pos:name_end] == b"aperture:renderTime":
-            return float(np.frombuffer(value, "<f4")[0])
-        pos = type_end + 5 + size
-    raise ValueError(f"{path}: no aperture:renderTime")
+        attrs, _ = exr.attributes(f.read())
+    if "aperture:renderTime" not in attrs:
+        raise ValueError(f"{path}: no aperture:renderTime")
+    return float(np.frombuffer(attrs["aperture:renderTime"][1], "<f4")[0])
 
 
 def read_exr_rgb(path):

@@ -385,19 +385,11 @@ def time_to_rmse(rows, target):
 
 def write_png(path, img, scale):
     """sRGB 8-bit PNG of a linear image times `scale`."""
-    import zlib
     v = np.clip(img * scale, 0, 1)
     v = np.where(v <= 0.0031308, 12.92 * v, 1.055 * v ** (1 / 2.4) - 0.055)
     rows = (v * 255 + 0.5).astype(np.uint8)
-    raw = b"".join(b"\0" + r.tobytes() for r in rows)
-
-    def chunk(kind, data):
-        return (len(data).to_bytes(4, "big") + kind + data
-                + (zlib.crc32(kind + data) & 0xFFFFFFFF).to_bytes(4, "big"))
-
-    head = rows.shape[1].to_bytes(4, "big") + rows.shape[0].to_bytes(4, "big") + bytes([8, 2, 0, 0, 0])
     with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", head) + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+        f.write(mr.png_rgb8(rows.shape[1], rows.shape[0], [r.tobytes() for r in rows]))
 
 
 def reference_check(name, d, refs):

@@ -227,23 +227,24 @@ def linear_to_srgb8(c):
     return max(0, min(255, round(v * 255)))
 
 
-def checker_png():
-    """The 2 x 2 checker as an sRGB PNG (texel (0,0) top-left: colours 0 1 / 1 0)."""
+def png_rgb8(width, height, rows):
+    """An 8-bit RGB PNG file's bytes from `height` rows of `3 * width` bytes, top row first."""
     import zlib
-    rows = []
-    for y in range(2):
-        row = b"\x00"
-        for x in range(2):
-            row += bytes(linear_to_srgb8(c) for c in CHECKER[(x + y) % 2])
-        rows.append(row)
-    raw = b"".join(rows)
 
     def chunk(kind, data):
         body = kind + data
         return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body) & 0xFFFFFFFF)
 
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 2, 2, 8, 2, 0, 0, 0))
+    raw = b"".join(b"\x00" + bytes(r) for r in rows)
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0))
             + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+def checker_png():
+    """The 2 x 2 checker as an sRGB PNG (texel (0,0) top-left: colours 0 1 / 1 0)."""
+    rows = [b"".join(bytes(linear_to_srgb8(c) for c in CHECKER[(x + y) % 2]) for x in range(2))
+            for y in range(2)]
+    return png_rgb8(2, 2, rows)
 
 
 def uv_sphere(segments=96, rings=48):

@@ -15,7 +15,9 @@ _SAMPLE = {1: (np.float16, 2), 2: (np.float32, 4)}  # 0 (uint) is not written by
 _LINES = {0: 1, 2: 1, 3: 16}  # compression -> scan lines per block
 
 
-def _attributes(data):
+def attributes(data):
+    """The header attributes of an EXR file's bytes, `{name: (type, value bytes)}`, and where the
+    header ends."""
     if data[:4] != b"\x76\x2f\x31\x01":
         raise ValueError("not an OpenEXR file")
     if struct.unpack_from("<I", data, 4)[0] & 0x1E00:
@@ -70,7 +72,7 @@ def read(path):
     as (x0, y0, x1, y1) inclusive, and the text and float attributes."""
     with open(path, "rb") as f:
         data = f.read()
-    attrs, at = _attributes(data)
+    attrs, at = attributes(data)
     compression = attrs["compression"][1][0]
     if compression not in _LINES:
         raise ValueError(f"compression {compression} is not one aperture writes")
