@@ -1,14 +1,14 @@
 //! The BVH answers exactly as brute force over every triangle (same ray transform, same triangle
 //! test), for flattened and instanced scenes, closest hit and occlusion; and every reported hit
 //! lies on the triangle it names (checked against the input meshes, independently of the BVH).
-//! The batch queries (interleaved walks) answer exactly as the one-ray queries, so brute force
-//! checks them too. Scenes with instances
+//! The batch queries (interleaved walks) and the packet queries answer exactly as the one-ray
+//! queries, so brute force checks them too. Scenes with instances
 //! are checked both kept instanced and flattened into one world-space BVH.
 
 #[path = "accel_util.rs"]
 mod util;
 
-use aperture_accel::{Accel, BvhQuality, Hit, InstanceInput, Ray};
+use aperture_accel::{Accel, BvhQuality, Hit, InstanceInput, Ray, PACKET_CONE_COS, PACKET_LANES};
 use glam::{Affine3A, Vec3};
 use util::{icosphere, random_rays, random_transform, soup, Rng, Scene};
 
@@ -54,7 +54,74 @@ fn check(scene: &Scene, accel: &Accel, rays: &[Ray]) -> usize {
         );
     }
     check_batches(accel, rays);
+    check_packets(accel, rays);
     hits
+}
+
+/// `runs` runs of [`PACKET_LANES`] rays as a thin lens makes them: from points of a small disc
+/// around the origin of each of `rays` in turn towards one point on the ray, half of them ending
+/// there (a finite `tmax`, so occlusion answers differ within a run). Some runs are too wide:
+/// the packet queries interleave those. Rays close to an axis plane are passed over (their runs
+/// would straddle octants, which the incoherent rays cover); none when all are.
+fn lens_runs(rays: &[Ray], runs: usize, rng: &mut Rng) -> Vec<Ray> {
+    let mut out = Vec::new();
+    let off_axis = rays
+        .iter()
+        .filter(|r| r.dir.abs().min_element() >= 0.2 * r.dir.length());
+    for (k, ray) in off_axis.cycle().take(runs).enumerate() {
+        let focus = ray.origin + ray.dir.normalize() * rng.range(2.0, 12.0);
+        let radius = rng.range(0.0, 0.3);
+        for _ in 0..PACKET_LANES {
+            let origin = ray.origin + rng.unit_vector() * radius * rng.f32();
+            let mut r = Ray::new(origin, focus - origin);
+            if k % 2 == 1 {
+                r.tmax = 1.0;
+            }
+            out.push(r);
+        }
+    }
+    out
+}
+
+/// The packet queries give, ray by ray, exactly the one-ray answers: on thin-lens runs (most of
+/// them traced as packets, which the count checks) and on the incoherent `rays`, over the whole
+/// set and over short calls that end mid-packet.
+fn check_packets(accel: &Accel, rays: &[Ray]) {
+    let lens = lens_runs(rays, 400, &mut Rng(7));
+    let coherent = lens
+        .chunks(PACKET_LANES)
+        .filter(|run| {
+            let d0 = run[0].dir.normalize();
+            run.iter().all(|r| {
+                r.dir.cmplt(Vec3::ZERO) == run[0].dir.cmplt(Vec3::ZERO)
+                    && r.dir.normalize().dot(d0) >= PACKET_CONE_COS
+            })
+        })
+        .count();
+    let runs = lens.len() / PACKET_LANES;
+    assert!(
+        coherent >= runs / 2,
+        "{coherent} of {runs} runs are packets"
+    );
+    for set in [&lens[..], rays] {
+        let single: Vec<Option<Hit>> = set.iter().map(|r| accel.intersect(r)).collect();
+        let single_occ: Vec<bool> = set.iter().map(|r| accel.occluded(r)).collect();
+        let occluded = single_occ.iter().filter(|&&o| o).count();
+        if std::ptr::eq(set, &lens[..]) && !lens.is_empty() {
+            // Both answers within runs, or the comparison proves little.
+            assert!(occluded > 0 && occluded < set.len(), "{occluded} occluded");
+        }
+        for len in [set.len().max(1), 3, 8, 13] {
+            let mut hits = vec![None; set.len()];
+            let mut occ = vec![false; set.len()];
+            for (k, chunk) in set.chunks(len).enumerate() {
+                accel.intersect_packets(chunk, &mut hits[k * len..]);
+                accel.occluded_packets(chunk, &mut occ[k * len..]);
+            }
+            assert_eq!(hits, single, "packets in calls of {len}");
+            assert_eq!(occ, single_occ, "packets in calls of {len}");
+        }
+    }
 }
 
 /// The batch and many-ray queries give, ray by ray, exactly the one-ray answers: over the whole

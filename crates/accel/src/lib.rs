@@ -16,6 +16,9 @@
 //! - **Batches**: [`Accel::intersect_batch`] and [`Accel::occluded_batch`] answer exactly as the
 //!   one-ray queries but walk [`BATCH_LANES`] rays at once, interleaved, which hides much of
 //!   each walk's load-to-use latency (about 1.35× the rays per second on thin-lens primary rays).
+//! - **Packets**: [`Accel::intersect_packets`] and [`Accel::occluded_packets`] walk runs of
+//!   [`PACKET_LANES`] coherent rays (a pixel's lens samples) as one packet, one AVX2 lane per
+//!   ray, with the same per-ray answers; incoherent runs are interleaved as in the batches.
 //! - **Ray files**: [`rayfile`] reads and writes the Embree anchor's raw `.rays` format.
 //!
 //! ```
@@ -34,6 +37,7 @@
 
 mod build;
 mod node;
+mod packet;
 mod query;
 pub mod rayfile;
 mod spawn;
@@ -42,6 +46,7 @@ mod types;
 mod walk;
 
 pub use build::{FrameHints, FLATTEN_SHARED_LIMIT};
+pub use packet::{PACKET_CONE_COS, PACKET_LANES};
 pub use rayfile::{read_rays, write_rays, RayFileError};
 pub use spawn::{offset_ray_origin, SpawnPoint};
 pub use triangle::intersect_triangle;

@@ -134,7 +134,7 @@ impl Accel {
     /// The one bottom-level tree every ray walks, when interleaving applies: a scene of one
     /// entry whose stack fits inline. Other scenes (instanced, or degenerate depths) go ray by
     /// ray.
-    fn single_entry(&self) -> Option<(&Entry, &Blas)> {
+    pub(crate) fn single_entry(&self) -> Option<(&Entry, &Blas)> {
         match self.entries.as_slice() {
             [entry] if self.max_blas_depth < INLINE_STACK => self
                 .blases
@@ -148,7 +148,7 @@ impl Accel {
     /// The batch queries: [`interleave`]d walks of `rays` with leaves of type `L`, one answer per
     /// ray into `out`; ray by ray (`L::one`) where interleaving does not apply.
     #[inline(always)]
-    fn batch_impl<'s, const AVX2: bool, L: BlasLeaf<'s>>(
+    pub(crate) fn batch_impl<'s, const AVX2: bool, L: BlasLeaf<'s>>(
         &'s self,
         rays: &[Ray],
         out: &mut [L::Answer],
@@ -265,7 +265,11 @@ impl Accel {
     /// What a walk of `blas` (drawn by `entry`) for `ray` starts from: the ray in the tree's
     /// space prepared for box tests, and a fresh leaf with its triangle-test constants.
     #[inline(always)]
-    fn walk_start<'s, L: BlasLeaf<'s>>(entry: &Entry, blas: &'s Blas, ray: &Ray) -> (BoxRay, L) {
+    pub(crate) fn walk_start<'s, L: BlasLeaf<'s>>(
+        entry: &Entry,
+        blas: &'s Blas,
+        ray: &Ray,
+    ) -> (BoxRay, L) {
         let (o, d) = Self::object_ray(entry, ray);
         (
             BoxRay::new(o, d, ray.tmin, blas.box_bounds),

@@ -116,8 +116,15 @@ impl Leaf for ClosestLeaf<'_> {
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
         if let Some(tri) = self.tris.get(primitive as usize) {
             if let Some(h) = crate::triangle::intersect(&self.ray, &tri.p, self.tmin, *tmax) {
-                *tmax = h.0;
-                self.best = Some((primitive as usize, h));
+                // A tie in `t` goes to the lower primitive, so the answer does not depend on the
+                // order of the visits (packets visit in another order than one ray).
+                let first = self
+                    .best
+                    .is_none_or(|(best, _)| h.0 < *tmax || (primitive as usize) < best);
+                if first {
+                    *tmax = h.0;
+                    self.best = Some((primitive as usize, h));
+                }
             }
         }
         false

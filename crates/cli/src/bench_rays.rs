@@ -279,7 +279,7 @@ fn write_outputs(dir: &Path, scene: &str, runs: &[QualityRun]) -> anyhow::Result
             png.display()
         );
     }
-    write_png(&png, (1200, 640), |root| plot(root, scene, runs))?;
+    write_png(&png, (1500, 640), |root| plot(root, scene, runs))?;
     eprintln!("wrote {} and {}", csv.display(), png.display());
     Ok(())
 }
@@ -305,7 +305,11 @@ fn plot<DB: plotters::prelude::DrawingBackend>(
         .fold(0.0, f64::max)
         .max(1e-3)
         * 1.1;
-    for (panel, mode) in root.split_evenly((1, 2)).iter().zip(Mode::ALL) {
+    for (panel, mode) in root
+        .split_evenly((1, Mode::ALL.len()))
+        .iter()
+        .zip(Mode::ALL)
+    {
         let mut chart = ChartBuilder::on(panel)
             .caption(mode.name(), ("sans-serif", 20))
             .margin(15)

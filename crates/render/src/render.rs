@@ -482,9 +482,11 @@ impl Job<'_> {
     /// camera makes no ray for it) and `record` its pass values (default unless `AOV`).
     ///
     /// Why in runs: the primary rays of [`PRIMARY_BATCH`] samples go through one
-    /// [`Accel::intersect_batch`], which walks several rays at once (about 1.2–1.4× the rays
-    /// per second of one-ray queries, `BENCHMARKS.md`); the rest of each path is traced as
-    /// before. The results are exactly those of tracing each sample alone.
+    /// [`Accel::intersect_packets`]: the lens samples of a pixel (or a row of pixels at low
+    /// sample counts) are traced as packets of eight, other runs interleaved (1.2–1.4× the rays
+    /// per second of one-ray queries interleaved, packets more; `BENCHMARKS.md`); the rest of
+    /// each path is traced as before. The results are exactly those of tracing each sample
+    /// alone.
     fn samples<K: Copy, const AOV: bool>(
         &self,
         items: impl IntoIterator<Item = (K, u32, u32, u32)>,
@@ -510,7 +512,7 @@ impl Job<'_> {
             if run.is_empty() {
                 return;
             }
-            self.integrator.accel.intersect_batch(&rays, &mut hits);
+            self.integrator.accel.intersect_packets(&rays, &mut hits);
             let mut first = hits.iter();
             for (key, stream, ray) in &run {
                 let mut record = SampleAov::default();

@@ -214,10 +214,11 @@ fn timing_reports_every_quality_set_query_mode_and_pool() {
     let mut seen = 0;
     let runs = time_sets(&scene, &s, &opts, &mut |_, _| seen += 1).unwrap();
     assert_eq!(runs.len(), 3);
-    assert_eq!(seen, 3 * 4 * 2 * 2 * 2);
+    // quality × set × query × mode × pool
+    assert_eq!(seen, 3 * 4 * 2 * Mode::ALL.len() * 2);
     for run in &runs {
         assert!(run.memory_bytes > 0);
-        assert_eq!(run.timings.len(), 4 * 2 * 2 * 2);
+        assert_eq!(run.timings.len(), 4 * 2 * Mode::ALL.len() * 2);
         for t in &run.timings {
             let set = s.iter().find(|x| x.name == t.set).unwrap();
             assert_eq!(t.rays, set.rays.len());

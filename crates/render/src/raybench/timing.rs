@@ -1,4 +1,5 @@
-//! Timing ray queries: closest hit and occlusion, one ray at a time or in interleaved batches,
+//! Timing ray queries: closest hit and occlusion, one ray at a time, in interleaved batches or in
+//! packets,
 //! on a rayon pool of a given size; the median, least and most Mrays/s over repeats.
 
 use super::sets::RaySet;
@@ -40,17 +41,21 @@ pub enum Mode {
     OneRay,
     /// Interleaved batches ([`Accel::intersect_many`], [`Accel::occluded_many`]).
     Batch,
+    /// Packets of coherent runs ([`Accel::intersect_packets`], [`Accel::occluded_packets`]) on
+    /// chunks of the set in its order, what the renderer calls for primary rays.
+    Packet,
 }
 
 impl Mode {
-    /// Both modes.
-    pub const ALL: [Mode; 2] = [Mode::OneRay, Mode::Batch];
+    /// Every mode.
+    pub const ALL: [Mode; 3] = [Mode::OneRay, Mode::Batch, Mode::Packet];
 
-    /// `one-ray` or `batch`.
+    /// `one-ray`, `batch` or `packet`.
     pub fn name(self) -> &'static str {
         match self {
             Mode::OneRay => "one-ray",
             Mode::Batch => "batch",
+            Mode::Packet => "packet",
         }
     }
 }
@@ -60,6 +65,7 @@ pub fn closest_hits(accel: &Accel, rays: &[Ray], mode: Mode, out: &mut [Option<H
     match mode {
         Mode::OneRay => one_ray_at_a_time(rays, out, |r| accel.intersect(r)),
         Mode::Batch => accel.intersect_many(rays, out),
+        Mode::Packet => in_chunks(rays, out, |r, o| accel.intersect_packets(r, o)),
     }
 }
 
@@ -68,18 +74,24 @@ pub fn occlusions(accel: &Accel, rays: &[Ray], mode: Mode, out: &mut [bool]) {
     match mode {
         Mode::OneRay => one_ray_at_a_time(rays, out, |r| accel.occluded(r)),
         Mode::Batch => accel.occluded_many(rays, out),
+        Mode::Packet => in_chunks(rays, out, |r, o| accel.occluded_packets(r, o)),
     }
+}
+
+/// `query` of each chunk of [`CHUNK`] rays into its slots of `out`, on the rayon pool.
+fn in_chunks<T: Send>(rays: &[Ray], out: &mut [T], query: impl Fn(&[Ray], &mut [T]) + Sync) {
+    rays.par_chunks(CHUNK)
+        .zip(out.par_chunks_mut(CHUNK))
+        .for_each(|(r, o)| query(r, o));
 }
 
 /// `query` of every ray into its slot of `out`, one ray at a time, in chunks on the rayon pool.
 fn one_ray_at_a_time<T: Send>(rays: &[Ray], out: &mut [T], query: impl Fn(&Ray) -> T + Sync) {
-    rays.par_chunks(CHUNK)
-        .zip(out.par_chunks_mut(CHUNK))
-        .for_each(|(r, o)| {
-            for (ray, slot) in r.iter().zip(o) {
-                *slot = query(ray);
-            }
-        });
+    in_chunks(rays, out, |r, o| {
+        for (ray, slot) in r.iter().zip(o) {
+            *slot = query(ray);
+        }
+    });
 }
 
 /// The throughput of one query on one set.

@@ -1,0 +1,355 @@
+//! Packets: eight coherent rays (the lens samples of one pixel, neighbouring pixels) walked
+//! through the tree together, one node test for all of them.
+//!
+//! A packet walks the union of its rays' walks: a child is entered when any active ray's box
+//! test (the one-ray test's arithmetic, lane by lane, so the same per-ray answers) hits it, and
+//! each leaf's triangles are tested only for the rays that hit that leaf. Children are ordered
+//! by the packet's common direction octant. The node decode, the stack and the child ordering
+//! are paid once per packet instead of once per ray; rays that would have skipped a node pay its
+//! box test in their lane. Closest hits are the one-ray answers exactly, since
+//! [`ClosestLeaf`](crate::walk::ClosestLeaf) breaks ties in `t` by primitive, independently of
+//! the visit order.
+//!
+//! Packets apply when the rays share a direction octant and lie in a narrow cone
+//! ([`PACKET_CONE_COS`]); other runs take the interleaved walk ([`Accel::intersect_batch`]).
+
+use crate::node::BoxRay;
+use crate::walk::{stack_for, BlasLeaf, Group, InlineStack, Leaf, INLINE_STACK};
+use crate::{Accel, Hit, Ray};
+use obvhs::cwbvh::node::CwBvhNode;
+use std::mem::MaybeUninit;
+
+/// Rays per packet: one AVX2 lane each.
+pub const PACKET_LANES: usize = 8;
+
+/// A run is traced as a packet when every ray's direction is within this cosine of the first
+/// ray's (about 8°): wider runs share too little of their walks to gain.
+pub const PACKET_CONE_COS: f32 = 0.99;
+
+/// Eight rays prepared for box tests, lane by lane (structure of arrays of [`BoxRay`]s).
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct PacketRays {
+    origin: [[f32; PACKET_LANES]; 3],
+    inv: [[f32; PACKET_LANES]; 3],
+    slack: [[f32; PACKET_LANES]; 3],
+    tmin: [f32; PACKET_LANES],
+    /// The packet's common direction signs and child-ordering key.
+    neg: [bool; 3],
+    oct_inv4: u32,
+}
+
+impl PacketRays {
+    /// The lanes of `rays`, which must share their octant. Plain loops: closures (as in
+    /// `array::from_fn`) stayed calls in the AVX2 query.
+    #[inline(always)]
+    fn new(rays: &[BoxRay; PACKET_LANES]) -> Self {
+        let mut p = Self {
+            origin: [[0.0; PACKET_LANES]; 3],
+            inv: [[0.0; PACKET_LANES]; 3],
+            slack: [[0.0; PACKET_LANES]; 3],
+            tmin: [0.0; PACKET_LANES],
+            neg: rays[0].neg,
+            oct_inv4: rays[0].oct_inv4,
+        };
+        for (i, r) in rays.iter().enumerate() {
+            for a in 0..3 {
+                p.origin[a][i] = r.origin[a];
+                p.inv[a][i] = r.inv[a];
+                p.slack[a][i] = r.slack[a];
+            }
+            p.tmin[i] = r.tmin;
+        }
+        p
+    }
+}
+
+/// Whether `rays` share a direction octant and lie within [`PACKET_CONE_COS`] of the first.
+#[inline(always)]
+fn coherent(rays: &[Ray]) -> bool {
+    let Some(first) = rays.first() else {
+        return false;
+    };
+    let sign = |d: glam::Vec3| d.cmplt(glam::Vec3::ZERO).bitmask();
+    let d0 = first.dir.normalize_or_zero();
+    rays.iter().all(|r| {
+        sign(r.dir) == sign(first.dir) && r.dir.normalize_or_zero().dot(d0) >= PACKET_CONE_COS
+    })
+}
+
+/// One node's box test for the packet's `active` lanes: per child slot, the lanes whose ray
+/// hits it within `[tmin, tmax]` (bit `i` for lane `i`), and the slots some lane hits.
+///
+/// Each lane computes exactly what [`crate::node::intersect_node_avx2`] computes for its ray:
+/// `fma(q, e * inv, (p - o) * inv ∓ slack)`, clamped by `tmin` and `tmax`.
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA, and the caller must be compiled for them (inlined into
+/// the AVX2 queries, as `node::child_hits_avx2_wide`).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn node_lanes_avx2(
+    node: &CwBvhNode,
+    r: &PacketRays,
+    tmax: &[f32; PACKET_LANES],
+    active: u32,
+) -> ([u8; 8], u32) {
+    use std::arch::x86_64::*;
+    // SAFETY: AVX2 and FMA are guaranteed by the caller; every load reads one `[f32; 8]` or
+    // one `[u8; 8]` field in full.
+    unsafe {
+        // Macros, not closures: closures do not inherit the target features (a call per
+        // intrinsic).
+        macro_rules! load {
+            ($v:expr) => {
+                _mm256_loadu_ps($v.as_ptr())
+            };
+        }
+        macro_rules! q {
+            ($b:expr) => {
+                _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(
+                    $b.as_ptr() as *const __m128i
+                )))
+            };
+        }
+        macro_rules! pick {
+            ($neg:expr, $min:expr, $max:expr) => {
+                if $neg {
+                    (q!($max), q!($min))
+                } else {
+                    (q!($min), q!($max))
+                }
+            };
+        }
+        let mut scale = [_mm256_setzero_ps(); 3];
+        let mut lo = [_mm256_setzero_ps(); 3];
+        let mut hi = [_mm256_setzero_ps(); 3];
+        for a in 0..3 {
+            let e = _mm256_set1_ps(f32::from_bits((node.e[a] as u32) << 23));
+            let inv = load!(r.inv[a]);
+            let slack = load!(r.slack[a]);
+            let off = _mm256_mul_ps(
+                _mm256_sub_ps(_mm256_set1_ps(node.p[a]), load!(r.origin[a])),
+                inv,
+            );
+            scale[a] = _mm256_mul_ps(e, inv);
+            lo[a] = _mm256_sub_ps(off, slack);
+            hi[a] = _mm256_add_ps(off, slack);
+        }
+        let (nx, fx) = pick!(r.neg[0], node.child_min_x, node.child_max_x);
+        let (ny, fy) = pick!(r.neg[1], node.child_min_y, node.child_max_y);
+        let (nz, fz) = pick!(r.neg[2], node.child_min_z, node.child_max_z);
+        let tmin = load!(r.tmin);
+        let tmax = load!(tmax);
+        let mut out = [0u8; 8];
+        let mut any = 0u32;
+        // Empty slots have a zero meta byte.
+        let meta = _mm_loadl_epi64(node.child_meta.as_ptr() as *const __m128i);
+        let mut valid =
+            !(_mm_movemask_epi8(_mm_cmpeq_epi8(meta, _mm_setzero_si128())) as u32) & 0xff;
+        while valid != 0 {
+            let c = valid.trailing_zeros();
+            valid &= valid - 1;
+            let at = _mm256_set1_epi32(c as i32);
+            macro_rules! b {
+                ($v:expr) => {
+                    _mm256_permutevar8x32_ps($v, at)
+                };
+            }
+            let enter = _mm256_max_ps(
+                _mm256_max_ps(tmin, _mm256_fmadd_ps(b!(nx), scale[0], lo[0])),
+                _mm256_max_ps(
+                    _mm256_fmadd_ps(b!(ny), scale[1], lo[1]),
+                    _mm256_fmadd_ps(b!(nz), scale[2], lo[2]),
+                ),
+            );
+            let exit = _mm256_min_ps(
+                _mm256_min_ps(tmax, _mm256_fmadd_ps(b!(fx), scale[0], hi[0])),
+                _mm256_min_ps(
+                    _mm256_fmadd_ps(b!(fy), scale[1], hi[1]),
+                    _mm256_fmadd_ps(b!(fz), scale[2], hi[2]),
+                ),
+            );
+            let hit = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)) as u32;
+            let hit = hit & active;
+            out[c as usize] = hit as u8;
+            any |= u32::from(hit != 0) << c;
+        }
+        (out, any)
+    }
+}
+
+/// The walk of one packet over `nodes`: `leaves[i]` visits the primitives of the leaves its ray
+/// hits (and may shrink `tmax[i]`). Returns the lanes whose leaf stopped its walk. Lanes outside
+/// `active` are ignored.
+///
+/// # Safety
+/// As for [`node_lanes_avx2`].
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn walk_packet<L: Leaf>(
+    nodes: &[CwBvhNode],
+    r: &PacketRays,
+    tmax: &mut [f32; PACKET_LANES],
+    leaves: &mut [L; PACKET_LANES],
+    mut active: u32,
+    stack: &mut [MaybeUninit<Group>],
+) -> u32 {
+    let mut stopped = 0u32;
+    if nodes.is_empty() {
+        return stopped;
+    }
+    let oct = r.oct_inv4 & 0xff;
+    let mut sp = 0;
+    // The root as a group of one internal child at priority 7 (obvhs convention).
+    let mut current: Group = (0, 0x8000_0000);
+    loop {
+        if current.1 & 0xff00_0000 == 0 {
+            if sp == 0 {
+                return stopped;
+            }
+            sp -= 1;
+            // SAFETY: slots below `sp` were written before `sp` passed them.
+            current = unsafe { stack[sp].assume_init() };
+            continue;
+        }
+        let hits = current.1;
+        let offset = 31 - hits.leading_zeros();
+        current.1 &= !(1u32 << offset);
+        if current.1 & 0xff00_0000 != 0 {
+            stack[sp] = MaybeUninit::new(current);
+            sp += 1;
+        }
+        let slot = (offset - 24) ^ oct;
+        let relative = (hits & !(u32::MAX << slot)).count_ones();
+        let Some(node) = nodes.get((current.0 + relative) as usize) else {
+            // Unreachable for a well-formed tree; never read out of bounds.
+            return stopped;
+        };
+        // SAFETY: AVX2 and FMA are guaranteed by the caller.
+        let (lanes, mut any) = unsafe { node_lanes_avx2(node, r, tmax, active) };
+        let mut inner = 0u32;
+        while any != 0 {
+            let c = any.trailing_zeros() as usize;
+            any &= any - 1;
+            let lane_bits = lanes[c];
+            let meta = node.child_meta[c] as u32;
+            if meta & 0x18 == 0x18 {
+                // An internal child: its priority bit (24 + slot ^ octant), as obvhs places it.
+                inner |= 1 << ((meta & 0x1f) ^ oct);
+                continue;
+            }
+            let first = node.primitive_base_idx + (meta & 0x1f);
+            let count = (meta >> 5).count_ones();
+            let mut todo = u32::from(lane_bits) & active;
+            while todo != 0 {
+                let i = todo.trailing_zeros() as usize;
+                todo &= todo - 1;
+                for primitive in first..first + count {
+                    if leaves[i].visit(primitive, &mut tmax[i]) {
+                        stopped |= 1 << i;
+                        active &= !(1 << i);
+                        break;
+                    }
+                }
+            }
+            if active == 0 {
+                return stopped;
+            }
+        }
+        current = (node.child_base_idx, inner | node.imask as u32);
+    }
+}
+
+impl Accel {
+    /// [`Accel::intersect_batch`] for rays that come in coherent runs (the lens samples of a
+    /// pixel, a row of pixels): each run of [`PACKET_LANES`] rays that share a direction octant
+    /// and a narrow cone is walked as one packet; other runs are interleaved as in
+    /// `intersect_batch`. The answers are exactly [`Accel::intersect`]'s, ray by ray.
+    pub fn intersect_packets(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is set only when `detect_avx2` found every feature it enables.
+            return unsafe { self.intersect_packets_avx2(rays, out) };
+        }
+        self.intersect_batch(rays, out)
+    }
+
+    /// [`Accel::occluded_batch`] in packets, as [`Accel::intersect_packets`].
+    pub fn occluded_packets(&self, rays: &[Ray], out: &mut [bool]) {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: as in `intersect_packets`.
+            return unsafe { self.occluded_packets_avx2(rays, out) };
+        }
+        self.occluded_batch(rays, out)
+    }
+
+    /// # Safety
+    /// As for [`Accel::intersect_batch`]'s AVX2 path.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
+    unsafe fn intersect_packets_avx2(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        // SAFETY: forwarded.
+        unsafe { self.packets_impl::<crate::walk::ClosestLeaf>(rays, out) }
+    }
+
+    /// # Safety
+    /// As for [`Accel::intersect_batch`]'s AVX2 path.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
+    unsafe fn occluded_packets_avx2(&self, rays: &[Ray], out: &mut [bool]) {
+        // SAFETY: forwarded.
+        unsafe { self.packets_impl::<crate::walk::AnyLeaf>(rays, out) }
+    }
+
+    /// The packet queries with leaves of type `L`: runs of [`PACKET_LANES`] rays, each a packet
+    /// when [`coherent`], else interleaved.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn packets_impl<'s, L: BlasLeaf<'s>>(&'s self, rays: &[Ray], out: &mut [L::Answer]) {
+        let n = rays.len().min(out.len());
+        let (rays, out) = (&rays[..n], &mut out[..n]);
+        let Some((entry, blas)) = self.single_entry() else {
+            return self.batch_impl::<true, L>(rays, out);
+        };
+        let mut inline: InlineStack = [MaybeUninit::uninit(); INLINE_STACK];
+        let mut heap = Vec::new();
+        let stack = stack_for(self.max_blas_depth, &mut inline, &mut heap);
+        // Consecutive incoherent runs are interleaved together (one batch per stretch: the
+        // interleaved walk refills its lanes, which a batch per run of 8 would not).
+        let mut loose = 0;
+        for at in (0..n).step_by(PACKET_LANES) {
+            let end = (at + PACKET_LANES).min(n);
+            let run = &rays[at..end];
+            if run.len() < 2 || !coherent(run) {
+                continue;
+            }
+            self.batch_impl::<true, L>(&rays[loose..at], &mut out[loose..at]);
+            loose = end;
+            // Lanes past the run's end copy its last ray and stay inactive. Loops, not
+            // `array::from_fn`, whose closures stayed calls.
+            let (br0, leaf0) = Self::walk_start::<L>(entry, blas, &run[0]);
+            let mut boxes = [br0; PACKET_LANES];
+            let mut leaves = [leaf0; PACKET_LANES];
+            let mut tmax = [run[0].tmax; PACKET_LANES];
+            for i in 1..PACKET_LANES {
+                let ray = &run[i.min(run.len() - 1)];
+                (boxes[i], leaves[i]) = Self::walk_start::<L>(entry, blas, ray);
+                tmax[i] = ray.tmax;
+            }
+            let packet = PacketRays::new(&boxes);
+            let active = (1u32 << run.len()) - 1;
+            // SAFETY: forwarded from the caller.
+            let stopped =
+                unsafe { walk_packet(&blas.nodes, &packet, &mut tmax, &mut leaves, active, stack) };
+            for (i, answer) in out[at..end].iter_mut().enumerate() {
+                *answer = leaves[i].answer(blas, entry, stopped & (1 << i) != 0);
+            }
+        }
+        self.batch_impl::<true, L>(&rays[loose..], &mut out[loose..]);
+    }
+}
