@@ -83,6 +83,22 @@ fn lens_runs(rays: &[Ray], runs: usize, rng: &mut Rng) -> Vec<Ray> {
     out
 }
 
+/// Runs whose directions differ only in the sign of a zero component: one octant in world
+/// space, two in the box test (its reciprocals are ±1e20), so they must not be one packet.
+fn signed_zero_runs(rays: &[Ray], runs: usize) -> Vec<Ray> {
+    let mut out = Vec::new();
+    for (k, ray) in rays.iter().take(runs).enumerate() {
+        let axis = k % 3;
+        for i in 0..PACKET_LANES {
+            let mut dir = ray.dir;
+            dir[axis] = if i % 2 == 0 { 0.0 } else { -0.0 };
+            let jitter = Vec3::new(0.0, 1e-3, 2e-3) * i as f32;
+            out.push(Ray::new(ray.origin + jitter, dir));
+        }
+    }
+    out
+}
+
 /// The packet queries give, ray by ray, exactly the one-ray answers: on thin-lens runs (most of
 /// them traced as packets, which the count checks) and on the incoherent `rays`, over the whole
 /// set and over short calls that end mid-packet.
@@ -103,7 +119,8 @@ fn check_packets(accel: &Accel, rays: &[Ray]) {
         coherent >= runs / 2,
         "{coherent} of {runs} runs are packets"
     );
-    for set in [&lens[..], rays] {
+    let zeros = signed_zero_runs(rays, 100);
+    for set in [&lens[..], &zeros[..], rays] {
         let single: Vec<Option<Hit>> = set.iter().map(|r| accel.intersect(r)).collect();
         let single_occ: Vec<bool> = set.iter().map(|r| accel.occluded(r)).collect();
         let occluded = single_occ.iter().filter(|&&o| o).count();

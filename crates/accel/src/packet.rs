@@ -64,7 +64,8 @@ impl PacketRays {
     }
 }
 
-/// Whether `rays` share a direction octant and lie within [`PACKET_CONE_COS`] of the first.
+/// Whether `rays` share a direction octant and lie within [`PACKET_CONE_COS`] of the first, in
+/// world space (a first test; the box test's octant is checked once the rays are set up).
 #[inline(always)]
 fn coherent(rays: &[Ray]) -> bool {
     let Some(first) = rays.first() else {
@@ -328,8 +329,6 @@ impl Accel {
             if run.len() < 2 || !coherent(run) {
                 continue;
             }
-            self.batch_impl::<true, L>(&rays[loose..at], &mut out[loose..at]);
-            loose = end;
             // Lanes past the run's end copy its last ray and stay inactive. Loops, not
             // `array::from_fn`, whose closures stayed calls.
             let (br0, leaf0) = Self::walk_start::<L>(entry, blas, &run[0]);
@@ -341,6 +340,13 @@ impl Accel {
                 (boxes[i], leaves[i]) = Self::walk_start::<L>(entry, blas, ray);
                 tmax[i] = ray.tmax;
             }
+            // The octant that decides is the box test's, in the tree's space: it follows the
+            // sign of a zero component, which the world-space check above does not see.
+            if boxes.iter().any(|b| b.neg != br0.neg) {
+                continue;
+            }
+            self.batch_impl::<true, L>(&rays[loose..at], &mut out[loose..at]);
+            loose = end;
             let packet = PacketRays::new(&boxes);
             let active = (1u32 << run.len()) - 1;
             // SAFETY: forwarded from the caller.
