@@ -322,8 +322,12 @@ fn render_uniform(job: &Job<'_>, window: Window, progress: &(dyn Fn(usize, usize
     let tiles = tiles_of(window);
     let total = tiles.len();
     let done = AtomicUsize::new(0);
+    // One job per tile: rayon's adaptive splitting otherwise runs chunks of up to a quarter of
+    // the tiles (with two threads) as one job that cannot be stolen, leaving a core idle at the
+    // end (2 threads were 1.78–1.88× one on `outdoor_dof`; `BENCHMARKS.md`).
     let results: Vec<(Accum, u64, Vec<u32>)> = tiles
         .par_iter()
+        .with_max_len(1)
         .map(|&(x0, y0, tw, th)| {
             let r = if job.layout.records() {
                 job.render_tile::<true>(window.x0 + x0, window.y0 + y0, tw, th)
@@ -588,6 +592,7 @@ fn render_adaptive(
     for (r, &target) in rounds.iter().enumerate() {
         let updates: Vec<AdaptiveTile> = tiles
             .par_iter()
+            .with_max_len(1)
             .map(|&(x0, y0, tw, th)| {
                 let pixels: Vec<usize> = (y0..y0 + th)
                     .flat_map(|y| (x0..x0 + tw).map(move |x| y as usize * w + x as usize))
