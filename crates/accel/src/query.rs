@@ -174,11 +174,13 @@ impl Accel {
     }
 
     /// [`Accel::intersect`] for many rays, in parallel on the current rayon pool, each thread
-    /// running [`Accel::intersect_batch`] on runs of 256 rays. `out` receives one result per ray
+    /// running [`Accel::intersect_batch`] on runs of 256 rays (one job each, so that threads
+    /// finish together). `out` receives one result per ray
     /// (extra slots on either side are left alone).
     pub fn intersect_many(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
         rays.par_chunks(256)
             .zip(out.par_chunks_mut(256))
+            .with_max_len(1)
             .for_each(|(r, o)| self.intersect_batch(r, o));
     }
 
@@ -187,6 +189,7 @@ impl Accel {
     pub fn occluded_many(&self, rays: &[Ray], out: &mut [bool]) {
         rays.par_chunks(256)
             .zip(out.par_chunks_mut(256))
+            .with_max_len(1)
             .for_each(|(r, o)| self.occluded_batch(r, o));
     }
 

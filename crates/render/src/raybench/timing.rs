@@ -82,6 +82,7 @@ pub fn occlusions(accel: &Accel, rays: &[Ray], mode: Mode, out: &mut [bool]) {
 fn in_chunks<T: Send>(rays: &[Ray], out: &mut [T], query: impl Fn(&[Ray], &mut [T]) + Sync) {
     rays.par_chunks(CHUNK)
         .zip(out.par_chunks_mut(CHUNK))
+        .with_max_len(1)
         .for_each(|(r, o)| query(r, o));
 }
 
