@@ -71,7 +71,7 @@ fn bench_rays_writes_every_row_and_the_ray_files() {
     for q in ["fast", "medium", "high"] {
         for set in SETS {
             for query in ["closest", "occluded"] {
-                for mode in ["one-ray", "batch"] {
+                for mode in ["one-ray", "batch", "packet"] {
                     for threads in ["1", "2"] {
                         let key = (q, set, query, mode, threads).map_into();
                         assert!(keys.contains(&key), "missing {key:?}");
@@ -80,7 +80,8 @@ fn bench_rays_writes_every_row_and_the_ray_files() {
             }
         }
     }
-    assert_eq!(rows.len(), 3 * 4 * 2 * 2 * 2);
+    // quality × set × query × mode × threads
+    assert_eq!(rows.len(), 3 * 4 * 2 * 3 * 2);
     assert!(rows.iter().all(|r| r["scene"] == "demo.glb"));
     // The primary sets hold every lens sample of every pixel.
     let rays_of = |set: &str| -> u64 {
@@ -123,7 +124,7 @@ fn bench_rays_writes_every_row_and_the_ray_files() {
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let again = parse_csv(&std::fs::read_to_string(dir.path("again/bench-rays.csv")).unwrap());
-    assert_eq!(again.len(), 4, "2 queries × 2 modes × 1 thread");
+    assert_eq!(again.len(), 6, "2 queries × 3 modes × 1 thread");
     for r in &again {
         let first = rows
             .iter()
