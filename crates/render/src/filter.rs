@@ -105,6 +105,10 @@ impl Filter {
         while k > 0 && cdf[k - 1] > u {
             k -= 1;
         }
+        // Two steps without branches (almost every search ends within them), then the rest.
+        for _ in 0..2 {
+            k += usize::from(cdf.get(k).is_some_and(|&c| c <= u));
+        }
         while k < cdf.len() && cdf[k] <= u {
             k += 1;
         }
