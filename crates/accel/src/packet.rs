@@ -78,6 +78,32 @@ fn coherent(rays: &[Ray]) -> bool {
     })
 }
 
+/// The node's slab constants in each lane, per axis: `e * inv` and `(p - o) * inv ∓ slack` (the
+/// one-ray test's `frame`, lane by lane).
+///
+/// # Safety
+/// As for [`node_lanes_avx2`].
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn lane_frame(node: &CwBvhNode, r: &PacketRays) -> [[std::arch::x86_64::__m256; 3]; 3] {
+    use std::arch::x86_64::*;
+    // SAFETY: AVX2 is guaranteed by the caller; every load reads one `[f32; 8]` in full.
+    unsafe {
+        let mut frame = [[_mm256_setzero_ps(); 3]; 3];
+        for a in 0..3 {
+            let e = _mm256_set1_ps(f32::from_bits((node.e[a] as u32) << 23));
+            let inv = _mm256_loadu_ps(r.inv[a].as_ptr());
+            let slack = _mm256_loadu_ps(r.slack[a].as_ptr());
+            let o = _mm256_loadu_ps(r.origin[a].as_ptr());
+            let off = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(node.p[a]), o), inv);
+            frame[0][a] = _mm256_mul_ps(e, inv);
+            frame[1][a] = _mm256_sub_ps(off, slack);
+            frame[2][a] = _mm256_add_ps(off, slack);
+        }
+        frame
+    }
+}
+
 /// One node's box test for the packet's `active` lanes: per child slot, the lanes whose ray
 /// hits it within `[tmin, tmax]` (bit `i` for lane `i`), and the slots some lane hits.
 ///
@@ -122,21 +148,7 @@ unsafe fn node_lanes_avx2(
                 }
             };
         }
-        let mut scale = [_mm256_setzero_ps(); 3];
-        let mut lo = [_mm256_setzero_ps(); 3];
-        let mut hi = [_mm256_setzero_ps(); 3];
-        for a in 0..3 {
-            let e = _mm256_set1_ps(f32::from_bits((node.e[a] as u32) << 23));
-            let inv = load!(r.inv[a]);
-            let slack = load!(r.slack[a]);
-            let off = _mm256_mul_ps(
-                _mm256_sub_ps(_mm256_set1_ps(node.p[a]), load!(r.origin[a])),
-                inv,
-            );
-            scale[a] = _mm256_mul_ps(e, inv);
-            lo[a] = _mm256_sub_ps(off, slack);
-            hi[a] = _mm256_add_ps(off, slack);
-        }
+        let [scale, lo, hi] = lane_frame(node, r);
         let (nx, fx) = pick!(r.neg[0], node.child_min_x, node.child_max_x);
         let (ny, fy) = pick!(r.neg[1], node.child_min_y, node.child_max_y);
         let (nz, fz) = pick!(r.neg[2], node.child_min_z, node.child_max_z);
