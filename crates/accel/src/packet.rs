@@ -89,18 +89,24 @@ unsafe fn lane_frame(node: &CwBvhNode, r: &PacketRays) -> [[std::arch::x86_64::_
     use std::arch::x86_64::*;
     // SAFETY: AVX2 is guaranteed by the caller; every load reads one `[f32; 8]` in full.
     unsafe {
-        let mut frame = [[_mm256_setzero_ps(); 3]; 3];
-        for a in 0..3 {
-            let e = _mm256_set1_ps(f32::from_bits((node.e[a] as u32) << 23));
-            let inv = _mm256_loadu_ps(r.inv[a].as_ptr());
-            let slack = _mm256_loadu_ps(r.slack[a].as_ptr());
-            let o = _mm256_loadu_ps(r.origin[a].as_ptr());
-            let off = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(node.p[a]), o), inv);
-            frame[0][a] = _mm256_mul_ps(e, inv);
-            frame[1][a] = _mm256_sub_ps(off, slack);
-            frame[2][a] = _mm256_add_ps(off, slack);
+        macro_rules! axis {
+            ($a:expr) => {{
+                let e = _mm256_set1_ps(f32::from_bits((node.e[$a] as u32) << 23));
+                let inv = _mm256_loadu_ps(r.inv[$a].as_ptr());
+                let slack = _mm256_loadu_ps(r.slack[$a].as_ptr());
+                let o = _mm256_loadu_ps(r.origin[$a].as_ptr());
+                let off = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(node.p[$a]), o), inv);
+                (
+                    _mm256_mul_ps(e, inv),
+                    _mm256_sub_ps(off, slack),
+                    _mm256_add_ps(off, slack),
+                )
+            }};
         }
-        frame
+        let (s0, l0, h0) = axis!(0);
+        let (s1, l1, h1) = axis!(1);
+        let (s2, l2, h2) = axis!(2);
+        [[s0, s1, s2], [l0, l1, l2], [h0, h1, h2]]
     }
 }
 
