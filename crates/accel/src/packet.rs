@@ -14,7 +14,7 @@
 //! ([`PACKET_CONE_COS`]); other runs take the interleaved walk ([`Accel::intersect_batch`]).
 
 use crate::node::BoxRay;
-use crate::walk::{stack_for, BlasLeaf, Group, InlineStack, Leaf, INLINE_STACK};
+use crate::walk::{stack_for, take_child, BlasLeaf, Group, InlineStack, Leaf, INLINE_STACK};
 use crate::{Accel, Hit, Ray};
 use obvhs::cwbvh::node::CwBvhNode;
 use std::mem::MaybeUninit;
@@ -232,16 +232,8 @@ unsafe fn walk_packet<L: Leaf>(
             current = unsafe { stack[sp].assume_init() };
             continue;
         }
-        let hits = current.1;
-        let offset = 31 - hits.leading_zeros();
-        current.1 &= !(1u32 << offset);
-        if current.1 & 0xff00_0000 != 0 {
-            stack[sp] = MaybeUninit::new(current);
-            sp += 1;
-        }
-        let slot = (offset - 24) ^ oct;
-        let relative = (hits & !(u32::MAX << slot)).count_ones();
-        let Some(node) = nodes.get((current.0 + relative) as usize) else {
+        let index = take_child(&mut current, stack, &mut sp, oct);
+        let Some(node) = nodes.get(index as usize) else {
             // Unreachable for a well-formed tree; never read out of bounds.
             return stopped;
         };

@@ -253,16 +253,8 @@ impl Walk {
             }
         }
         if self.current.1 & 0xff00_0000 != 0 {
-            let hits = self.current.1;
-            let offset = 31 - hits.leading_zeros();
-            self.current.1 &= !(1u32 << offset);
-            if self.current.1 & 0xff00_0000 != 0 {
-                stack[self.sp] = MaybeUninit::new(self.current);
-                self.sp += 1;
-            }
-            let slot = (offset - 24) ^ (r.oct_inv4 & 0xff);
-            let relative = (hits & !(u32::MAX << slot)).count_ones();
-            let Some(node) = nodes.get((self.current.0 + relative) as usize) else {
+            let index = take_child(&mut self.current, stack, &mut self.sp, r.oct_inv4 & 0xff);
+            let Some(node) = nodes.get(index as usize) else {
                 // Unreachable for a well-formed tree (and for an empty one, whose root group is
                 // never read); never read out of bounds.
                 self.current.1 = 0;
@@ -298,6 +290,27 @@ impl Walk {
         }
         None
     }
+}
+
+/// Takes the next internal child of the node group `current` (obvhs' priority order for the
+/// octant key `oct`) and returns its node index; the group's other children, if any, are pushed
+/// on `stack` at `sp`. Shared by the one-ray walk and the packets' walk.
+#[inline(always)]
+pub(crate) fn take_child(
+    current: &mut Group,
+    stack: &mut [MaybeUninit<Group>],
+    sp: &mut usize,
+    oct: u32,
+) -> u32 {
+    let hits = current.1;
+    let offset = 31 - hits.leading_zeros();
+    current.1 &= !(1u32 << offset);
+    if current.1 & 0xff00_0000 != 0 {
+        stack[*sp] = MaybeUninit::new(*current);
+        *sp += 1;
+    }
+    let slot = (offset - 24) ^ oct;
+    current.0 + (hits & !(u32::MAX << slot)).count_ones()
 }
 
 /// Walks a CWBVH (obvhs layout) front to back for `r`, calling `leaf.visit(primitive, &mut tmax)`
