@@ -9,20 +9,20 @@ use crate::cryptomatte;
 use crate::environment::{EnvLight, Environment};
 use crate::film::{Accum, AovLayout, CryptoIds, Film, Window};
 use crate::filter::{Filter, FilterKind};
-use crate::integrator::{Clamp, Integrator};
+use crate::integrator::{Clamp, Integrator, Wavefront};
 use crate::lights::EmissiveLights;
 use crate::passes::{Pass, PassSet};
 use crate::sampler::{SampleStream, SamplerKind, MAX_SPP};
 use crate::surface::{Geometry, MaterialOverride};
 use crate::transmission::TransmissionMode;
-use aperture_accel::{Accel, Ray};
+use aperture_accel::Accel;
 use aperture_scene::Scene;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-/// Samples whose primary rays are traced together (see `Job::samples`).
-const PRIMARY_BATCH: usize = 64;
+/// Samples whose paths are traced together (see `Job::samples`).
+const PRIMARY_BATCH: usize = 256;
 
 /// Side of a square tile in pixels.
 pub const TILE: u32 = 32;
@@ -472,25 +472,15 @@ impl Job<'_> {
         (stream, self.camera.generate_ray(&sample))
     }
 
-    /// Radiance and coverage of sample `i` of pixel `(x, y)`, one at a time; `None` when the
-    /// camera makes no ray for it. The reference of [`Job::samples`].
-    #[cfg(test)]
-    fn sample(&self, x: u32, y: u32, i: u32) -> Option<(Vec3, bool)> {
-        let (stream, ray) = self.camera_ray(x, y, i);
-        let ray = ray?;
-        Some(self.integrator.li(ray.origin, ray.dir, &stream))
-    }
-
     /// Calls `f(key, result, record)` for every `(key, x, y, i)` of `items`, in order, where
     /// `result` is the radiance and coverage of sample `i` of pixel `(x, y)` (`None` when the
     /// camera makes no ray for it) and `record` its pass values (default unless `AOV`).
     ///
-    /// Why in runs: the primary rays of [`PRIMARY_BATCH`] samples go through one
-    /// [`Accel::intersect_packets`]: the lens samples of a pixel (or a row of pixels at low
-    /// sample counts) are traced as packets of eight, other runs interleaved (1.2–1.4× the rays
-    /// per second of one-ray queries interleaved, packets more; `BENCHMARKS.md`); the rest of
-    /// each path is traced as before. The results are exactly those of tracing each sample
-    /// alone.
+    /// Why in runs: the paths of [`PRIMARY_BATCH`] samples advance together through a
+    /// [`Wavefront`], so that every ray query is a batch: the lens samples of a pixel (or a row
+    /// of pixels at low sample counts) are traced as packets of eight, bounce and shadow rays
+    /// interleaved (1.2–1.4× the rays per second of one-ray queries, packets more;
+    /// `BENCHMARKS.md`). The results are exactly those of tracing each sample alone.
     fn samples<K: Copy, const AOV: bool>(
         &self,
         items: impl IntoIterator<Item = (K, u32, u32, u32)>,
@@ -498,39 +488,32 @@ impl Job<'_> {
     ) {
         let mut items = items.into_iter();
         let mut run = Vec::with_capacity(PRIMARY_BATCH);
-        let mut rays = Vec::with_capacity(PRIMARY_BATCH);
-        let mut hits = vec![None; PRIMARY_BATCH];
+        let mut starts = Vec::with_capacity(PRIMARY_BATCH);
+        let mut wavefront = Wavefront::<AOV>::default();
         loop {
             if self.opts.cancel.is_cancelled() {
                 return;
             }
             run.clear();
-            rays.clear();
+            starts.clear();
             for (key, x, y, i) in items.by_ref().take(PRIMARY_BATCH) {
                 let (stream, ray) = self.camera_ray(x, y, i);
                 if let Some(r) = &ray {
-                    rays.push(Ray::new(r.origin, r.dir));
+                    starts.push((r.origin, r.dir, stream));
                 }
-                run.push((key, stream, ray));
+                run.push((key, ray.is_some()));
             }
             if run.is_empty() {
                 return;
             }
-            self.integrator.accel.intersect_packets(&rays, &mut hits);
-            let mut first = hits.iter();
-            for (key, stream, ray) in &run {
-                let mut record = SampleAov::default();
-                let result = ray.as_ref().map(|r| {
-                    let hit = first.next().copied().flatten();
-                    self.integrator.li_with_first_hit::<AOV>(
-                        r.origin,
-                        r.dir,
-                        stream,
-                        hit,
-                        &mut record,
-                    )
-                });
-                f(*key, result, &record);
+            wavefront.run(self.integrator, &starts);
+            let mut results = wavefront.results();
+            let none = SampleAov::default();
+            for &(key, traced) in &run {
+                match traced.then(|| results.next()).flatten() {
+                    Some((l, covered, record)) => f(key, Some((l, covered)), record),
+                    None => f(key, None, &none),
+                }
             }
         }
     }
@@ -735,32 +718,58 @@ mod tests {
     }
 
     #[test]
-    fn primary_rays_in_batches_give_each_sample_as_alone() {
-        // Lens, emitter and a camera that sees both geometry and background; every sample of
-        // a run is compared bit for bit with the same sample traced alone.
+    fn wavefront_gives_each_sample_as_alone() {
+        // Lens, emitter, point light and a camera that sees both geometry and background;
+        // every sample of a run is compared bit for bit with the same sample traced alone,
+        // radiance and pass values, under a constant and an importance-sampled environment
+        // (whose shadow rays leave the scene).
         let mut scene = busy_scene();
         // A plane of 3.2 × 3.2 instead of 40 × 40: the view holds background too.
         scene.instances[0].world_from_object = Affine3A::from_scale(Vec3::new(0.08, 1.0, 0.08));
         let accel = build_accel(&scene, Default::default());
-        let opts = RenderOptions {
-            width: 13,
-            height: 11,
-            spp: 3,
-            ..RenderOptions::default()
-        };
+        let sky = Environment::Image(std::sync::Arc::new(crate::environment::EnvImage {
+            width: 4,
+            height: 2,
+            texels: (0..8)
+                .map(|i| Vec3::new(0.1 * i as f32, 0.3, 0.05))
+                .collect(),
+            rotation: 0.3,
+            strength: 1.0,
+            sampling: Default::default(),
+        }));
+        for env in [Environment::Constant(Vec3::splat(0.2)), sky] {
+            let opts = RenderOptions {
+                width: 23,
+                height: 13,
+                spp: 3,
+                env,
+                ..RenderOptions::default()
+            };
+            let mut integrator = integrator(&scene, &accel, &opts);
+            integrator.light_passes = true;
+            check_wavefront::<false>(&scene, &integrator, &opts);
+            check_wavefront::<true>(&scene, &integrator, &opts);
+        }
+    }
+
+    /// [`Job::samples`] against each sample traced alone ([`Integrator::li_alone`]).
+    fn check_wavefront<const AOV: bool>(
+        scene: &Scene,
+        integrator: &Integrator,
+        opts: &RenderOptions,
+    ) {
         let camera = Camera::new(&scene.cameras[0], opts.width, opts.height);
-        let integrator = integrator(&scene, &accel, &opts);
         let filter = Filter::new(opts.filter);
         let job = Job {
-            integrator: &integrator,
+            integrator,
             camera: &camera,
             filter: &filter,
-            opts: &opts,
+            opts,
             pinhole: false,
             layout: AovLayout::default(),
             ids: CryptoIds::default(),
         };
-        // More items than one batch, in an order that jumps between pixels and samples.
+        // More items than two runs, in an order that jumps between pixels and samples.
         let items: Vec<(usize, u32, u32, u32)> = (0..opts.height)
             .flat_map(|y| (0..opts.width).map(move |x| (x, y)))
             .flat_map(|(x, y)| (0..opts.spp).map(move |i| (x, y, i)))
@@ -770,15 +779,20 @@ mod tests {
             .collect();
         assert!(items.len() > 2 * PRIMARY_BATCH);
         let mut seen = 0;
-        let (mut hits, mut misses) = (0, 0);
-        job.samples::<_, false>(items.iter().copied(), |k, result, _| {
+        let (mut hits, mut misses, mut lit_passes) = (0, 0, 0);
+        job.samples::<_, AOV>(items.iter().copied(), |k, result, record| {
             assert_eq!(k, seen, "results arrive in order");
             seen += 1;
             let (_, x, y, i) = items[k];
-            let alone = job.sample(x, y, i);
+            let (stream, ray) = job.camera_ray(x, y, i);
+            let alone = ray.map(|r| integrator.li_alone::<AOV>(r.origin, r.dir, &stream));
             let bits =
                 |r: Option<(Vec3, bool)>| r.map(|(l, c)| (l.to_array().map(f32::to_bits), c));
-            assert_eq!(bits(result), bits(alone), "pixel ({x}, {y}) sample {i}");
+            let want = alone.map(|(l, c, _)| (l, c));
+            assert_eq!(bits(result), bits(want), "pixel ({x}, {y}) sample {i}");
+            let want_record = alone.map_or(SampleAov::default(), |(_, _, a)| a);
+            assert_eq!(*record, want_record, "pixel ({x}, {y}) sample {i}");
+            lit_passes += record.light.iter().any(|c| *c != Vec3::ZERO) as u32;
             match result {
                 Some((_, true)) => hits += 1,
                 _ => misses += 1,
@@ -786,6 +800,7 @@ mod tests {
         });
         assert_eq!(seen, items.len());
         assert!(hits > 0 && misses > 0, "{hits} hits, {misses} misses");
+        assert_eq!(lit_passes > 0, AOV, "light passes recorded only with AOV");
     }
 
     #[test]

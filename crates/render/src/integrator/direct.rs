@@ -1,11 +1,10 @@
 //! Next-event estimation: one routine per light kind sharing one contribution helper, and the
 //! shadow ray's transmittance.
 
-use super::{Integrator, PathState, MAX_ALPHA_PASSES};
-use crate::aov::Seen;
-use crate::bsdf::{Bsdf, Frame};
+use super::{Integrator, PathState, PendingLight, MAX_ALPHA_PASSES};
+use crate::bsdf::{Bsdf, Frame, LobeSplit};
 use crate::lights::punctual_incident;
-use crate::sampler::{BounceSample, SampleStream};
+use crate::sampler::{SampleStream, VertexLightSample};
 use crate::surface::SurfaceKind;
 use crate::warp::power_heuristic;
 use aperture_accel::{Ray, SpawnPoint};
@@ -55,7 +54,7 @@ impl Integrator<'_> {
         &self,
         v: &Vertex<'_>,
         beta: Vec3,
-        path: &mut PathState<'_, AOV>,
+        path: &mut PathState<AOV>,
     ) {
         for light in &self.geom.scene.lights {
             let Some((wi, dist, e)) = punctual_incident(light, v.p) else {
@@ -87,10 +86,12 @@ impl Integrator<'_> {
         &self,
         v: &Vertex<'_>,
         beta: Vec3,
-        bs: &BounceSample,
-        path: &mut PathState<'_, AOV>,
+        ls: Option<&VertexLightSample>,
+        path: &mut PathState<AOV>,
     ) {
-        let Some(em) = &self.emissive else { return };
+        let (Some(em), Some(bs)) = (&self.emissive, ls) else {
+            return;
+        };
         let i = em.table.sample(bs.light_pick);
         let t = em.triangles[i];
         let (a, b) = (bs.light[0].sqrt(), bs.light[1]);
@@ -130,7 +131,7 @@ impl Integrator<'_> {
         v: &Vertex<'_>,
         beta: Vec3,
         stream: &SampleStream,
-        path: &mut PathState<'_, AOV>,
+        path: &mut PathState<AOV>,
     ) {
         if !self.env.is_sampled() {
             return;
@@ -156,31 +157,41 @@ impl Integrator<'_> {
     /// The contribution every light sample shares: `c` (light over its density, through the
     /// BSDF) clamped as light after one more scattering, times the shadow ray's transmittance
     /// from `origin` along `dir` over `dist`; `wi_l` is the local light direction, which
-    /// splits the contribution among the lobes at the first vertex.
+    /// splits the contribution among the lobes at the first vertex. A deferring path keeps it
+    /// in its pending samples, for the wavefront to trace the shadow ray with its others.
     #[inline]
     #[allow(clippy::too_many_arguments)]
     fn add_direct<const AOV: bool>(
         &self,
         v: &Vertex<'_>,
-        path: &mut PathState<'_, AOV>,
+        path: &mut PathState<AOV>,
         c: Vec3,
         wi_l: Vec3,
         origin: Vec3,
         dir: Vec3,
         dist: f32,
     ) {
-        let lit =
-            self.clamp.apply(c, v.scatter + 1) * self.visibility(origin, dir, dist, v.sigma_a);
-        path.l += lit;
-        if AOV && path.light_passes {
-            let split = if v.scatter == 0 {
-                v.bsdf.lobe_split(v.wo_l, wi_l)
-            } else {
-                path.first_split
-            };
-            path.aov
-                .add_light(lit, v.scatter + 1, &split, Seen::Surface);
+        let clamped = self.clamp.apply(c, v.scatter + 1);
+        let split = if !(AOV && path.light_passes) {
+            LobeSplit::DIFFUSE
+        } else if v.scatter == 0 {
+            v.bsdf.lobe_split(v.wo_l, wi_l)
+        } else {
+            path.first_split
+        };
+        if path.defer {
+            let (ray, absorbed) = shadow_ray(origin, dir, dist, v.sigma_a);
+            path.pending.push(PendingLight {
+                ray,
+                clamped,
+                absorbed,
+                scatterings: v.scatter + 1,
+                split,
+            });
+            return;
         }
+        let lit = clamped * self.visibility(origin, dir, dist, v.sigma_a);
+        path.add_lit(lit, v.scatter + 1, &split);
     }
 
     /// Fraction of light arriving along a shadow ray from `origin` in unit direction `dir` over
@@ -188,23 +199,7 @@ impl Integrator<'_> {
     /// thin-walled ideal transmission let light through, refractive boundaries do not (light
     /// through them bends).
     pub(super) fn visibility(&self, origin: Vec3, dir: Vec3, dist: f32, sigma_a: Vec3) -> Vec3 {
-        let tmax = if dist.is_finite() {
-            dist * (1.0 - 1e-4)
-        } else {
-            f32::INFINITY
-        };
-        let mut ray = Ray {
-            origin,
-            dir,
-            tmin: 0.0,
-            tmax,
-        };
-        let absorbed = if sigma_a == Vec3::ZERO {
-            Vec3::ONE
-        } else {
-            let t = (-sigma_a * dist).exp();
-            Vec3::select(sigma_a.cmpgt(Vec3::ZERO), t, Vec3::ONE)
-        };
+        let (mut ray, absorbed) = shadow_ray(origin, dir, dist, sigma_a);
         if !self.geom.has_alpha && !self.geom.has_thin {
             return if self.accel.occluded(&ray) {
                 Vec3::ZERO
@@ -241,4 +236,28 @@ impl Integrator<'_> {
         }
         Vec3::ZERO
     }
+}
+
+/// The shadow ray from `origin` in unit direction `dir` towards a light `dist` away (stopping
+/// just short of it), and the transmittance of the medium absorbing `sigma_a` over `dist`.
+#[inline]
+pub(super) fn shadow_ray(origin: Vec3, dir: Vec3, dist: f32, sigma_a: Vec3) -> (Ray, Vec3) {
+    let tmax = if dist.is_finite() {
+        dist * (1.0 - 1e-4)
+    } else {
+        f32::INFINITY
+    };
+    let ray = Ray {
+        origin,
+        dir,
+        tmin: 0.0,
+        tmax,
+    };
+    let absorbed = if sigma_a == Vec3::ZERO {
+        Vec3::ONE
+    } else {
+        let t = (-sigma_a * dist).exp();
+        Vec3::select(sigma_a.cmpgt(Vec3::ZERO), t, Vec3::ONE)
+    };
+    (ray, absorbed)
 }

@@ -15,6 +15,10 @@
 
 mod direct;
 mod trace;
+mod wavefront;
+
+use wavefront::PendingLight;
+pub(crate) use wavefront::{PathInFlight, Wavefront};
 
 use crate::aov::{Features, SampleAov, Seen};
 use crate::bsdf::{Interface, LobeSplit};
@@ -120,142 +124,187 @@ struct Walk {
 }
 
 impl Integrator<'_> {
-    /// Radiance along a primary ray (unit direction), and whether it hit geometry. (The render
-    /// loop traces primary rays in batches and calls [`Integrator::li_with_first_hit`].)
+    /// Radiance along a primary ray (unit direction), whether it hit geometry, and the sample's
+    /// pass values (recorded with `AOV`), traced one ray at a time: the reference of the render
+    /// loop's [`Wavefront`].
     #[cfg(test)]
-    pub fn li(&self, origin: Vec3, dir: Vec3, stream: &SampleStream) -> (Vec3, bool) {
-        self.li_from::<false>(origin, dir, stream, None, &mut SampleAov::default())
-    }
-
-    /// [`Integrator::li`] with the primary ray's closest hit already found:
-    /// `first = accel.intersect(&Ray::new(origin, dir))` (from a batch query; the result is the
-    /// same as `li`'s). With `AOV`, the sample's pass values are recorded into `aov` (which
-    /// must start as [`SampleAov::default`]); the radiance is the same bit for bit either way.
-    pub fn li_with_first_hit<const AOV: bool>(
+    pub(crate) fn li_alone<const AOV: bool>(
         &self,
         origin: Vec3,
         dir: Vec3,
         stream: &SampleStream,
-        first: Option<Hit>,
-        aov: &mut SampleAov,
-    ) -> (Vec3, bool) {
-        self.li_from::<AOV>(origin, dir, stream, Some(first), aov)
-    }
-
-    #[inline]
-    fn li_from<const AOV: bool>(
-        &self,
-        origin: Vec3,
-        dir: Vec3,
-        stream: &SampleStream,
-        mut first: Option<Option<Hit>>,
-        aov: &mut SampleAov,
-    ) -> (Vec3, bool) {
-        let mut path = PathState::<AOV> {
-            l: Vec3::ZERO,
-            aov,
-            first_split: LobeSplit::DIFFUSE,
-            features: Features::default(),
-            light_passes: self.light_passes,
-        };
-        let mut w = Walk {
-            beta: Vec3::ONE,
-            ray: Ray::new(origin, dir),
-            arrival: Arrival {
-                p: origin,
-                pdf: f32::INFINITY,
-            },
-            vertex: 0,
-            scatter: 0,
-            media: MediumStack::default(),
-            wavelength: None,
-            internal: 0,
-        };
-        let mut covered = false;
-        loop {
-            let bs = stream.bounce(w.vertex);
-            let ray = w.ray;
-            let traced = self.trace(&ray, stream, w.vertex, bs.alpha, first.take(), &mut w);
-            let Some((hit, s, error)) = traced else {
-                self.escape(&mut path, &w);
-                break;
-            };
-            if w.vertex == 0 {
-                covered = true;
-            }
-            let wo = -w.ray.dir;
-            let ng = if s.ng.dot(wo) < 0.0 { -s.ng } else { s.ng };
-            let shading = self.geom.shade(&s);
-            let ns = view_normal(&s, &shading, ng, wo);
-            if AOV && w.vertex == 0 {
-                path.aov.normal = ns;
-                path.aov.instance = hit.instance;
-                path.aov.material = s.material;
-            }
-            if let Some(c) = shading.unlit {
-                path.add(
-                    self.clamp.apply(w.beta * c, w.scatter),
-                    w.scatter,
-                    Seen::Surface,
-                );
-                if AOV {
-                    path.features.at_colour(path.aov, c, ns);
-                }
-                break;
-            }
-            if shading.emission != Vec3::ZERO {
-                let mis = self.emitter_weight(&w.arrival, hit, &s, ng, wo);
-                // An emitter found after v scatterings has scattered v times on the way to
-                // the camera.
-                let c = self.clamp.apply(w.beta * shading.emission * mis, w.scatter);
-                path.add(c, w.scatter, Seen::Surface);
-            }
-            if w.scatter > self.max_bounces {
-                break;
-            }
-            let Some(mut bsdf) = shading.bsdf else { break };
-            let (frame, wo_l) = shading_frame(ns, ng, shading.tangent, wo);
-            let entering = w.ray.dir.dot(s.ng) < 0.0;
-            let kind = if self.geom.has_refractive || self.geom.has_thin {
-                self.geom.kind(hit.instance, s.material)
-            } else {
-                SurfaceKind::Opaque
-            };
-            let (interface, medium) = self.interface(kind, s.material, entering, stream, &mut w);
-            bsdf.prepare(&frame, wo_l, interface, self.energy_compensation);
-            if AOV && (path.light_passes || path.features.pending()) {
-                let albedos = bsdf.albedos(wo_l);
-                if w.vertex == 0 {
-                    path.aov.set_colours(&albedos);
-                }
-                let rough = bsdf.glossy_is_rough();
-                path.features.at_surface(path.aov, &albedos, rough, ns);
-            }
-            let v = direct::Vertex {
-                bsdf: &bsdf,
-                frame,
-                wo_l,
-                ng,
-                p: s.p,
-                // Our point is interpolated from the vertices; the accel's bound covers the
-                // rounding of instanced transforms, which a few ulps of the point alone would
-                // not.
-                p_out: SpawnPoint { p: s.p, error }.origin(ng),
-                spawn: SpawnPoint { p: s.p, error },
-                two_sided: bsdf.transmits() && kind != SurfaceKind::Refractive,
-                scatter: w.scatter,
-                vertex: w.vertex,
-                sigma_a: w.media.sigma_a(),
-            };
-            self.direct_punctual(&v, w.beta, &mut path);
-            self.direct_emissive(&v, w.beta, &bs, &mut path);
-            self.direct_environment(&v, w.beta, stream, &mut path);
-
-            if !self.continue_path(&v, &bs, medium, entering, &mut w, &mut path) {
-                break;
-            }
+    ) -> (Vec3, bool, SampleAov) {
+        let mut p = self.start_path::<AOV>(origin, dir, false);
+        while let Some(ray) = p.ray() {
+            let hit = self.accel.intersect(&ray);
+            self.advance(&mut p, stream, hit);
         }
-        (path.l, covered)
+        p.finish()
+    }
+
+    /// A path starting with the primary ray from `origin` along `dir` (unit). With `defer`, its
+    /// shadow rays wait in [`PathInFlight`] for [`PathInFlight::resolve`] where the scene lets
+    /// them (no alpha-cut or thin-walled surfaces, which shadow rays pass through one hit at a
+    /// time); otherwise [`Integrator::advance`] traces them as it goes.
+    pub(crate) fn start_path<const AOV: bool>(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        defer: bool,
+    ) -> PathInFlight<AOV> {
+        PathInFlight {
+            path: PathState {
+                l: Vec3::ZERO,
+                aov: SampleAov::default(),
+                first_split: LobeSplit::DIFFUSE,
+                features: Features::default(),
+                light_passes: self.light_passes,
+                defer: defer && !self.geom.has_alpha && !self.geom.has_thin,
+                pending: Vec::new(),
+            },
+            w: Walk {
+                beta: Vec3::ONE,
+                ray: Ray::new(origin, dir),
+                arrival: Arrival {
+                    p: origin,
+                    pdf: f32::INFINITY,
+                },
+                vertex: 0,
+                scatter: 0,
+                media: MediumStack::default(),
+                wavelength: None,
+                internal: 0,
+            },
+            covered: false,
+            live: true,
+        }
+    }
+
+    /// One vertex of path `p`: `hit` is the closest hit of its ray ([`PathInFlight::ray`]).
+    /// Adds what the vertex sees, samples the lights, and moves the path on to its next ray or
+    /// ends it. With `AOV`, the sample's pass values are recorded; the radiance is the same bit
+    /// for bit either way.
+    pub(crate) fn advance<const AOV: bool>(
+        &self,
+        p: &mut PathInFlight<AOV>,
+        stream: &SampleStream,
+        hit: Option<Hit>,
+    ) {
+        debug_assert!(p.live && p.path.pending.is_empty());
+        p.live = self.vertex(&mut p.path, &mut p.w, &mut p.covered, stream, hit);
+    }
+
+    /// [`Integrator::advance`]'s work; false ends the path.
+    #[inline]
+    fn vertex<const AOV: bool>(
+        &self,
+        path: &mut PathState<AOV>,
+        w: &mut Walk,
+        covered: &mut bool,
+        stream: &SampleStream,
+        hit: Option<Hit>,
+    ) -> bool {
+        let bs = stream.bounce(w.vertex);
+        let ls =
+            (self.emissive.is_some() || self.geom.has_alpha).then(|| stream.vertex_light(w.vertex));
+        let ray = w.ray;
+        let u_alpha = ls.map_or(0.5, |l| l.alpha);
+        let traced = self.trace(&ray, stream, w.vertex, u_alpha, Some(hit), w);
+        let Some((hit, s, error)) = traced else {
+            self.escape(path, w);
+            return false;
+        };
+        if w.vertex == 0 {
+            *covered = true;
+        }
+        let wo = -w.ray.dir;
+        let ng = if s.ng.dot(wo) < 0.0 { -s.ng } else { s.ng };
+        let shading = self.geom.shade(&s);
+        let ns = view_normal(&s, &shading, ng, wo);
+        if !self.light_seen(path, w, hit, &s, &shading, ng, ns) || w.scatter > self.max_bounces {
+            return false;
+        }
+        let Some(mut bsdf) = shading.bsdf else {
+            return false;
+        };
+        let (frame, wo_l) = shading_frame(ns, ng, shading.tangent, wo);
+        let entering = w.ray.dir.dot(s.ng) < 0.0;
+        let kind = if self.geom.has_refractive || self.geom.has_thin {
+            self.geom.kind(hit.instance, s.material)
+        } else {
+            SurfaceKind::Opaque
+        };
+        let (interface, medium) = self.interface(kind, s.material, entering, stream, w);
+        bsdf.prepare(&frame, wo_l, interface, self.energy_compensation);
+        if AOV && (path.light_passes || path.features.pending()) {
+            let albedos = bsdf.albedos(wo_l);
+            if w.vertex == 0 {
+                path.aov.set_colours(&albedos);
+            }
+            let rough = bsdf.glossy_is_rough();
+            path.features.at_surface(&mut path.aov, &albedos, rough, ns);
+        }
+        let v = direct::Vertex {
+            bsdf: &bsdf,
+            frame,
+            wo_l,
+            ng,
+            p: s.p,
+            // Our point is interpolated from the vertices; the accel's bound covers the
+            // rounding of instanced transforms, which a few ulps of the point alone would
+            // not.
+            p_out: SpawnPoint { p: s.p, error }.origin(ng),
+            spawn: SpawnPoint { p: s.p, error },
+            two_sided: bsdf.transmits() && kind != SurfaceKind::Refractive,
+            scatter: w.scatter,
+            vertex: w.vertex,
+            sigma_a: w.media.sigma_a(),
+        };
+        self.direct_punctual(&v, w.beta, path);
+        self.direct_emissive(&v, w.beta, ls.as_ref(), path);
+        self.direct_environment(&v, w.beta, stream, path);
+        self.continue_path(&v, &bs, medium, entering, w, path)
+    }
+
+    /// What the path sees at surface `s` (shading normal `ns`, geometric `ng` on the viewer's
+    /// side): an unlit colour, which ends the path (false), or emission, weighed by MIS. At the
+    /// camera's hit, the passes record the surface.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn light_seen<const AOV: bool>(
+        &self,
+        path: &mut PathState<AOV>,
+        w: &Walk,
+        hit: Hit,
+        s: &crate::surface::Surface,
+        shading: &crate::surface::Shading,
+        ng: Vec3,
+        ns: Vec3,
+    ) -> bool {
+        if AOV && w.vertex == 0 {
+            path.aov.normal = ns;
+            path.aov.instance = hit.instance;
+            path.aov.material = s.material;
+        }
+        if let Some(c) = shading.unlit {
+            path.add(
+                self.clamp.apply(w.beta * c, w.scatter),
+                w.scatter,
+                Seen::Surface,
+            );
+            if AOV {
+                path.features.at_colour(&mut path.aov, c, ns);
+            }
+            return false;
+        }
+        if shading.emission != Vec3::ZERO {
+            let mis = self.emitter_weight(&w.arrival, hit, s, ng, -w.ray.dir);
+            // An emitter found after v scatterings has scattered v times on the way to
+            // the camera.
+            let c = self.clamp.apply(w.beta * shading.emission * mis, w.scatter);
+            path.add(c, w.scatter, Seen::Surface);
+        }
+        true
     }
 
     /// Samples the BSDF at `v` and moves the walk on to its next ray (through `medium` when it
@@ -407,24 +456,38 @@ impl Integrator<'_> {
 }
 
 /// One path's running sums.
-struct PathState<'a, const AOV: bool> {
+struct PathState<const AOV: bool> {
     /// Radiance so far.
     l: Vec3,
     /// The sample's pass values (untouched unless `AOV`).
-    aov: &'a mut SampleAov,
+    aov: SampleAov,
     /// How the first vertex's sampled direction split among the lobes.
     first_split: LobeSplit,
     features: Features,
     light_passes: bool,
+    /// Light samples wait for their shadow rays in `pending` rather than tracing them.
+    defer: bool,
+    /// Light samples of the current vertex whose shadow rays are not traced yet.
+    pending: Vec<PendingLight>,
 }
 
-impl<const AOV: bool> PathState<'_, AOV> {
+impl<const AOV: bool> PathState<AOV> {
     /// Adds light that reached the camera after `scatterings` scatterings.
     #[inline]
     fn add(&mut self, c: Vec3, scatterings: u32, seen: Seen) {
         self.l += c;
         if AOV && self.light_passes {
             self.aov.add_light(c, scatterings, &self.first_split, seen);
+        }
+    }
+
+    /// Adds a light sample's contribution `lit` (after `scatterings` scatterings, split among
+    /// the lobes as `split`).
+    #[inline]
+    fn add_lit(&mut self, lit: Vec3, scatterings: u32, split: &LobeSplit) {
+        self.l += lit;
+        if AOV && self.light_passes {
+            self.aov.add_light(lit, scatterings, split, Seen::Surface);
         }
     }
 }

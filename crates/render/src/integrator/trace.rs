@@ -106,7 +106,7 @@ impl Integrator<'_> {
     /// environment is found by BSDF sampling alone (weight 1); an image is also light-sampled,
     /// so escaping BSDF rays share it by MIS. Inside an absorbing medium (an open mesh) an
     /// infinite path is absorbed.
-    pub(super) fn escape<const AOV: bool>(&self, path: &mut PathState<'_, AOV>, w: &Walk) {
+    pub(super) fn escape<const AOV: bool>(&self, path: &mut PathState<AOV>, w: &Walk) {
         let dir = w.ray.dir;
         let sigma = w.media.sigma_a();
         let beta = if sigma == Vec3::ZERO {
@@ -122,7 +122,7 @@ impl Integrator<'_> {
                 Seen::Environment,
             );
             if AOV {
-                path.features.at_colour(path.aov, seen, Vec3::ZERO);
+                path.features.at_colour(&mut path.aov, seen, Vec3::ZERO);
             }
             return;
         }
@@ -138,7 +138,7 @@ impl Integrator<'_> {
             Seen::Environment,
         );
         if AOV {
-            path.features.at_colour(path.aov, radiance, Vec3::ZERO);
+            path.features.at_colour(&mut path.aov, radiance, Vec3::ZERO);
         }
     }
 }

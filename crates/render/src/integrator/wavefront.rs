@@ -1,0 +1,154 @@
+//! The wavefront: the paths of a run of samples advanced together, one vertex at a time, so
+//! that each ray query of the run is one batch — the camera rays as packets, then per round
+//! every path's bounce ray and every shadow ray of the round — rather than one ray at a time
+//! (pbrt-v4's wavefront integrator and Mitsuba 3's LLVM backend work in such streams).
+//!
+//! Each path runs exactly the arithmetic it runs alone ([`Integrator::advance`] is the one
+//! vertex step of both): the batch queries return what one-ray queries do, and a path's
+//! pending light samples are added back before its next vertex, in the order they were made.
+//! So every sample's value is bit-identical to tracing it alone.
+
+use super::{Integrator, PathState, Walk};
+use crate::aov::SampleAov;
+use crate::bsdf::LobeSplit;
+use crate::sampler::SampleStream;
+use aperture_accel::{Hit, Ray};
+use glam::Vec3;
+
+/// A light sample whose shadow ray is not traced yet.
+pub(crate) struct PendingLight {
+    /// The shadow ray.
+    pub ray: Ray,
+    /// The contribution, clamped, if nothing blocks the ray.
+    pub clamped: Vec3,
+    /// The transmittance of the medium the ray crosses.
+    pub absorbed: Vec3,
+    /// Scatterings of the light on its way to the camera.
+    pub scatterings: u32,
+    /// How the contribution splits among the lobes (light passes).
+    pub split: LobeSplit,
+}
+
+/// A path between vertices: its walk and running sums.
+pub(crate) struct PathInFlight<const AOV: bool> {
+    pub(super) path: PathState<AOV>,
+    pub(super) w: Walk,
+    pub(super) covered: bool,
+    pub(super) live: bool,
+}
+
+impl<const AOV: bool> PathInFlight<AOV> {
+    /// The ray whose closest hit the next [`Integrator::advance`] needs; `None` once the path
+    /// has ended.
+    #[inline]
+    pub fn ray(&self) -> Option<Ray> {
+        self.live.then_some(self.w.ray)
+    }
+
+    /// The shadow rays of the light samples waiting since the last vertex.
+    #[inline]
+    pub fn shadow_rays(&self) -> impl Iterator<Item = Ray> + '_ {
+        self.path.pending.iter().map(|p| p.ray)
+    }
+
+    /// Adds the waiting light samples, given whether each one's shadow ray is `blocked` (in
+    /// the order of [`PathInFlight::shadow_rays`]). The arithmetic of an immediate light
+    /// sample: the clamped contribution times zero or the medium's transmittance.
+    #[inline]
+    pub fn resolve(&mut self, blocked: &[bool]) {
+        let path = &mut self.path;
+        for (p, &b) in path.pending.iter().zip(blocked) {
+            let lit = p.clamped * if b { Vec3::ZERO } else { p.absorbed };
+            path.l += lit;
+            if AOV && path.light_passes {
+                path.aov
+                    .add_light(lit, p.scatterings, &p.split, crate::aov::Seen::Surface);
+            }
+        }
+        path.pending.clear();
+    }
+
+    /// The path's radiance, whether its camera ray hit geometry, and its pass values.
+    #[cfg(test)]
+    pub fn finish(self) -> (Vec3, bool, SampleAov) {
+        (self.path.l, self.covered, self.path.aov)
+    }
+}
+
+/// The buffers of a wavefront, kept from one run to the next.
+#[derive(Default)]
+pub(crate) struct Wavefront<const AOV: bool> {
+    paths: Vec<PathInFlight<AOV>>,
+    /// Indices of the paths still going.
+    live: Vec<usize>,
+    rays: Vec<Ray>,
+    hits: Vec<Option<Hit>>,
+    shadows: Vec<Ray>,
+    blocked: Vec<bool>,
+}
+
+impl<const AOV: bool> Wavefront<AOV> {
+    /// Traces the paths of primary rays `starts` (origin, unit direction, sample stream) to
+    /// their ends; [`Wavefront::results`] then gives each one's radiance, coverage and pass
+    /// values, in order.
+    pub fn run(&mut self, integrator: &Integrator<'_>, starts: &[(Vec3, Vec3, SampleStream)]) {
+        let accel = integrator.accel;
+        // Slots are re-initialised in place: their pending lists keep their capacity.
+        self.paths.truncate(starts.len());
+        self.rays.clear();
+        for (k, &(origin, dir, _)) in starts.iter().enumerate() {
+            let fresh = integrator.start_path::<AOV>(origin, dir, true);
+            match self.paths.get_mut(k) {
+                Some(p) => {
+                    let pending = std::mem::take(&mut p.path.pending);
+                    *p = fresh;
+                    p.path.pending = pending;
+                }
+                None => self.paths.push(fresh),
+            }
+            self.rays.push(Ray::new(origin, dir));
+        }
+        self.live.clear();
+        self.live.extend(0..starts.len());
+        self.hits.clear();
+        self.hits.resize(self.rays.len(), None);
+        // Camera rays: a pixel's lens samples are coherent (packets).
+        accel.intersect_packets(&self.rays, &mut self.hits);
+        while !self.live.is_empty() {
+            self.shadows.clear();
+            for (&i, &hit) in self.live.iter().zip(&self.hits) {
+                let p = &mut self.paths[i];
+                integrator.advance(p, &starts[i].2, hit);
+                self.shadows.extend(p.shadow_rays());
+            }
+            if !self.shadows.is_empty() {
+                self.blocked.clear();
+                self.blocked.resize(self.shadows.len(), false);
+                accel.occluded_packets(&self.shadows, &mut self.blocked);
+                let mut at = 0;
+                for &i in &self.live {
+                    let p = &mut self.paths[i];
+                    let n = p.path.pending.len();
+                    p.resolve(&self.blocked[at..at + n]);
+                    at += n;
+                }
+            }
+            let paths = &self.paths;
+            self.live.retain(|&i| paths[i].live);
+            self.rays.clear();
+            self.rays
+                .extend(self.live.iter().filter_map(|&i| paths[i].ray()));
+            self.hits.clear();
+            self.hits.resize(self.rays.len(), None);
+            accel.intersect_batch(&self.rays, &mut self.hits);
+        }
+    }
+
+    /// The results of the last [`Wavefront::run`], in the order of its `starts`: radiance,
+    /// whether the camera ray hit geometry, pass values.
+    pub fn results(&self) -> impl Iterator<Item = (Vec3, bool, &SampleAov)> + '_ {
+        self.paths
+            .iter()
+            .map(|p| (p.path.l, p.covered, &p.path.aov))
+    }
+}
