@@ -5,10 +5,11 @@
 //!   once are flattened into one world-space BVH (and shared meshes too, in scenes drawing at
 //!   most [`FLATTEN_SHARED_LIMIT`] triangles); a top-level obvhs BVH over instance bounds
 //!   joins them. Triangles are stored in BVH order with their original index.
-//! - **Traversal** is ours (obvhs' node layout and child ordering): the box test honours
-//!   `tmin`/`tmax` and is widened by a bound on every rounding error involved, and the stack is
-//!   sized from the measured tree depth. Rays enter instances through `object_from_world`
-//!   without renormalising, so `t` is in world units everywhere.
+//! - **Traversal** is ours (obvhs' node layout): the box test honours `tmin`/`tmax` and is
+//!   widened by a bound on every rounding error involved, and the stack is sized from the
+//!   measured tree depth. Closest hits visit children nearest entry first and skip those a hit
+//!   has put beyond `tmax`; one-ray occlusion keeps obvhs' octant order. Rays enter instances
+//!   through `object_from_world` without renormalising, so `t` is in world units everywhere.
 //! - **Triangles**: watertight test of Woop, Benthin and Wald (2013) with an `f64` fallback for
 //!   zero edge functions and pbrt-v4's bound rejecting hits not provably in front; hits that
 //!   bound cannot prove are decided again in `f64` (close to the origin on large triangles).

@@ -143,7 +143,7 @@ fn hitmask_from_children(node: &CwBvhNode, oct_inv4: u32, mut hit8: u32) -> u32 
 #[inline(always)]
 pub(crate) fn intersect_node(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
     let f = frame(node, r);
-    let hit8 = child_hits(node, r, &f, tmax);
+    let hit8 = child_hits(node, r, &f, tmax).0;
     hitmask_from_children(node, r.oct_inv4, hit8)
 }
 
@@ -157,38 +157,8 @@ pub(crate) fn intersect_node(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
 #[inline]
 pub(crate) unsafe fn intersect_node_avx2(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
     use std::arch::x86_64::*;
-    // `frame` in registers: its three vectors come from one 16-byte load of `p`, `e` and
-    // `imask` with the same operations as `frame` (so the same values), then each lane is
-    // broadcast. (LLVM lowers the `vpermps` broadcasts back to shuffle + broadcast pairs; the
-    // instructions saved are in the loads and the exponent decode.)
-    // SAFETY: AVX2 is guaranteed by the caller. The loads read 16 bytes from the start of the
-    // node (`p`, then `e` and `imask`) and the 4 bytes of `e` and `imask` (`repr(C)` layout);
-    // lane 3 of every vector is never broadcast.
-    let hit = unsafe {
-        let base = node as *const CwBvhNode as *const u8;
-        let p = _mm_loadu_ps(base as *const f32);
-        let e_bits = _mm_cvtsi32_si128(std::ptr::read_unaligned(
-            base.add(std::mem::offset_of!(CwBvhNode, e)) as *const i32,
-        ));
-        let e = _mm_castsi128_ps(_mm_slli_epi32::<23>(_mm_cvtepu8_epi32(e_bits)));
-        let inv: __m128 = r.inv.into();
-        let slack: __m128 = r.slack.into();
-        let scale = _mm_mul_ps(e, inv);
-        let off = _mm_mul_ps(_mm_sub_ps(p, r.origin.into()), inv);
-        let off_lo = _mm_sub_ps(off, slack);
-        let off_hi = _mm_add_ps(off, slack);
-        macro_rules! lanes {
-            ($v:expr) => {{
-                let v = _mm256_castps128_ps256($v);
-                [
-                    _mm256_permutevar8x32_ps(v, _mm256_set1_epi32(0)),
-                    _mm256_permutevar8x32_ps(v, _mm256_set1_epi32(1)),
-                    _mm256_permutevar8x32_ps(v, _mm256_set1_epi32(2)),
-                ]
-            }};
-        }
-        child_hits_avx2_wide(node, r, lanes!(scale), lanes!(off_lo), lanes!(off_hi), tmax)
-    };
+    // SAFETY: AVX2 and FMA are guaranteed by the caller.
+    let hit = unsafe { node_test_avx2(node, r, tmax).0 };
     // `hitmask_from_children` without its data-dependent loop (one iteration per hit child, a
     // branch that mispredicts often): each lane shifts its child's bits to their index, lanes of
     // missed children are masked off, and the eight lanes are OR-ed together.
@@ -214,6 +184,119 @@ pub(crate) unsafe fn intersect_node_avx2(node: &CwBvhNode, r: &BoxRay, tmax: f32
         let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b01_00_11_10>(x));
         let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b10_11_00_01>(x));
         _mm_cvtsi128_si32(x) as u32
+    }
+}
+
+/// The eight children's box test with AVX2 and FMA: the hit lanes (all ones for a hit child)
+/// and each child's entry distance. Shared by [`intersect_node_avx2`] and
+/// [`child_hits_enter_avx2`].
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA, and the caller must be compiled for them (inlined).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn node_test_avx2(
+    node: &CwBvhNode,
+    r: &BoxRay,
+    tmax: f32,
+) -> (std::arch::x86_64::__m256, std::arch::x86_64::__m256) {
+    use std::arch::x86_64::*;
+    // `frame` in registers: its three vectors come from one 16-byte load of `p`, `e` and
+    // `imask` with the same operations as `frame` (so the same values), then each lane is
+    // broadcast. (LLVM lowers the `vpermps` broadcasts back to shuffle + broadcast pairs; the
+    // instructions saved are in the loads and the exponent decode.)
+    // SAFETY: AVX2 is guaranteed by the caller. The loads read 16 bytes from the start of the
+    // node (`p`, then `e` and `imask`) and the 4 bytes of `e` and `imask` (`repr(C)` layout);
+    // lane 3 of every vector is never broadcast.
+    unsafe {
+        let base = node as *const CwBvhNode as *const u8;
+        let p = _mm_loadu_ps(base as *const f32);
+        let e_bits = _mm_cvtsi32_si128(std::ptr::read_unaligned(
+            base.add(std::mem::offset_of!(CwBvhNode, e)) as *const i32,
+        ));
+        let e = _mm_castsi128_ps(_mm_slli_epi32::<23>(_mm_cvtepu8_epi32(e_bits)));
+        let inv: __m128 = r.inv.into();
+        let slack: __m128 = r.slack.into();
+        let scale = _mm_mul_ps(e, inv);
+        let off = _mm_mul_ps(_mm_sub_ps(p, r.origin.into()), inv);
+        let off_lo = _mm_sub_ps(off, slack);
+        let off_hi = _mm_add_ps(off, slack);
+        macro_rules! lanes {
+            ($v:expr) => {{
+                let v = _mm256_castps128_ps256($v);
+                [
+                    _mm256_permutevar8x32_ps(v, _mm256_set1_epi32(0)),
+                    _mm256_permutevar8x32_ps(v, _mm256_set1_epi32(1)),
+                    _mm256_permutevar8x32_ps(v, _mm256_set1_epi32(2)),
+                ]
+            }};
+        }
+        child_hits_avx2_wide(node, r, lanes!(scale), lanes!(off_lo), lanes!(off_hi), tmax)
+    }
+}
+
+/// The children of a node that a ray may enter, and where: what the distance-ordered walk
+/// (`walk.rs`) needs of a node, without obvhs' hit-mask encoding.
+#[derive(Clone, Copy)]
+pub(crate) struct ChildHits {
+    /// Bit `c` for each child slot `c` whose box the ray may enter within `[tmin, tmax]` (empty
+    /// slots may be set too: their meta byte is zero).
+    pub hits: u32,
+    /// Each slot's entry distance (`max(tmin, near planes)`, lowered by the slack like the whole
+    /// test, so never above the `t` of a hit the triangle test accepts in that child).
+    pub enter: [f32; 8],
+    /// The primitives of the hit leaves, as bits above `primitive_base_idx` (obvhs' hit mask
+    /// below bit 24).
+    pub prims: u32,
+}
+
+/// [`ChildHits`] of `node` for `[r.tmin, tmax]` (SSE2, or scalar off x86_64).
+#[inline(always)]
+pub(crate) fn child_hits_enter(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> ChildHits {
+    let f = frame(node, r);
+    let (hits, enter) = child_hits(node, r, &f, tmax);
+    // A leaf's meta byte holds its first primitive's offset (low 5 bits) and its count in unary
+    // (top 3 bits); empty slots' is zero.
+    let mut leaves = hits & !u32::from(node.imask);
+    let mut prims = 0;
+    while leaves != 0 {
+        let meta = node.child_meta[leaves.trailing_zeros() as usize & 7];
+        leaves &= leaves - 1;
+        prims |= u32::from(meta >> 5) << (meta & 0x1f);
+    }
+    ChildHits { hits, enter, prims }
+}
+
+/// [`child_hits_enter`] with AVX2 and FMA (the same arithmetic as [`intersect_node_avx2`]).
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+pub(crate) unsafe fn child_hits_enter_avx2(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> ChildHits {
+    use std::arch::x86_64::*;
+    // SAFETY: AVX2 and FMA are guaranteed by the caller; the load reads exactly the 8 bytes of
+    // `child_meta`, the store writes the 8 floats of `enter`.
+    unsafe {
+        let (hit, e) = node_test_avx2(node, r, tmax);
+        let mut enter = [0.0; 8];
+        _mm256_storeu_ps(enter.as_mut_ptr(), e);
+        // `child_hits_enter`'s loop over the hit leaves, lane-wise: each shifts its count bits
+        // to its offset; internal children (offset 24 + slot) set no bit below 24.
+        let meta =
+            _mm256_cvtepu8_epi32(_mm_loadl_epi64(node.child_meta.as_ptr() as *const __m128i));
+        let offset = _mm256_and_si256(meta, _mm256_set1_epi32(0x1f));
+        let bits = _mm256_srli_epi32::<5>(meta);
+        let m = _mm256_and_si256(_mm256_sllv_epi32(bits, offset), _mm256_castps_si256(hit));
+        let x = _mm_or_si128(_mm256_castsi256_si128(m), _mm256_extracti128_si256::<1>(m));
+        let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b01_00_11_10>(x));
+        let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b10_11_00_01>(x));
+        ChildHits {
+            hits: _mm256_movemask_ps(hit) as u32,
+            enter,
+            prims: _mm_cvtsi128_si32(x) as u32 & 0x00ff_ffff,
+        }
     }
 }
 
@@ -249,11 +332,12 @@ unsafe fn child_hits_avx2_lanes(
                 _mm256_set1_ps(v.z),
             ]
         };
-        child_hits_avx2_wide(node, r, b(f.scale), b(f.off_lo), b(f.off_hi), tmax)
+        child_hits_avx2_wide(node, r, b(f.scale), b(f.off_lo), b(f.off_hi), tmax).0
     }
 }
 
-/// [`child_hits_avx2_lanes`] with the frame's lanes already broadcast (`[x, y, z]` each).
+/// [`child_hits_avx2_lanes`] with the frame's lanes already broadcast (`[x, y, z]` each), and
+/// each child's entry distance.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 unsafe fn child_hits_avx2_wide(
@@ -263,7 +347,7 @@ unsafe fn child_hits_avx2_wide(
     off_lo: [std::arch::x86_64::__m256; 3],
     off_hi: [std::arch::x86_64::__m256; 3],
     tmax: f32,
-) -> std::arch::x86_64::__m256 {
+) -> (std::arch::x86_64::__m256, std::arch::x86_64::__m256) {
     use std::arch::x86_64::*;
     // SAFETY: AVX2 is guaranteed by the caller; each load reads exactly one `[u8; 8]` field.
     unsafe {
@@ -310,16 +394,16 @@ unsafe fn child_hits_avx2_wide(
                 _mm256_fmadd_ps(fz, scale[2], off_hi[2]),
             ),
         );
-        _mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)
+        (_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit), enter)
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn child_hits(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
+fn child_hits(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> (u32, [f32; 8]) {
     use std::arch::x86_64::*;
     // SAFETY: SSE2 is part of the x86_64 baseline; the loads read exactly 8 bytes of `[u8; 8]`
-    // fields.
+    // fields, the stores write 4 + 4 floats into `enter`.
     unsafe {
         #[inline(always)]
         unsafe fn load8(b: &[u8; 8]) -> (__m128, __m128) {
@@ -398,7 +482,10 @@ fn child_hits(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
         );
         let m0 = _mm_movemask_ps(_mm_cmple_ps(enter0, exit0)) as u32;
         let m1 = _mm_movemask_ps(_mm_cmple_ps(enter1, exit1)) as u32;
-        m0 | (m1 << 4)
+        let mut enter = [0.0; 8];
+        _mm_storeu_ps(enter.as_mut_ptr(), enter0);
+        _mm_storeu_ps(enter.as_mut_ptr().add(4), enter1);
+        (m0 | (m1 << 4), enter)
     }
 }
 
@@ -406,7 +493,7 @@ fn child_hits(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
 /// the reference those paths are checked against.
 #[cfg(any(test, not(target_arch = "x86_64")))]
 #[inline(always)]
-fn child_hits_scalar(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
+fn child_hits_scalar(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> (u32, [f32; 8]) {
     child_hits_scalar_with::<false>(node, r, f, tmax)
 }
 
@@ -419,8 +506,9 @@ fn child_hits_scalar_with<const FMA: bool>(
     r: &BoxRay,
     f: &NodeFrame,
     tmax: f32,
-) -> u32 {
+) -> (u32, [f32; 8]) {
     let mut hit8 = 0;
+    let mut enters = [0.0; 8];
     let lo = [&node.child_min_x, &node.child_min_y, &node.child_min_z];
     let hi = [&node.child_max_x, &node.child_max_y, &node.child_max_z];
     let scale = f.scale.to_array();
@@ -452,13 +540,14 @@ fn child_hits_scalar_with<const FMA: bool>(
         if enter <= exit {
             hit8 |= 1 << c;
         }
+        enters[c] = enter;
     }
-    hit8
+    (hit8, enters)
 }
 
 #[cfg(not(target_arch = "x86_64"))]
 #[inline(always)]
-fn child_hits(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
+fn child_hits(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> (u32, [f32; 8]) {
     child_hits_scalar(node, r, f, tmax)
 }
 
@@ -466,161 +555,14 @@ fn child_hits(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
 #[cfg(test)]
 pub(crate) fn child_hits_reference(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
     let f = frame(node, r);
-    child_hits_scalar(node, r, &f, tmax)
+    child_hits_scalar(node, r, &f, tmax).0
 }
 
 #[cfg(test)]
 pub(crate) fn child_hits_fast(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
     let f = frame(node, r);
-    child_hits(node, r, &f, tmax)
+    child_hits(node, r, &f, tmax).0
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use obvhs::{aabb::Aabb, cwbvh::builder::build_cwbvh, BvhBuildParams};
-    use std::time::Duration;
-
-    fn lcg(s: &mut u64) -> f32 {
-        *s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (*s >> 40) as f32 / (1u64 << 24) as f32
-    }
-
-    #[test]
-    fn simd_matches_scalar_reference() {
-        let mut s = 7u64;
-        let boxes: Vec<Aabb> = (0..500)
-            .map(|_| {
-                let c = Vec3A::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 100.0;
-                let h = Vec3A::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 3.0;
-                Aabb::new(c - h, c + h)
-            })
-            .collect();
-        let bvh = build_cwbvh(
-            &boxes,
-            BvhBuildParams::fast_build(),
-            &mut Duration::default(),
-        );
-        let mut nonzero = 0;
-        for i in 0..2000 {
-            let o = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 120.0 - 10.0;
-            let mut d = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) - 0.5;
-            if i % 5 == 0 {
-                d.y = 0.0; // exercises the clamped reciprocal
-            }
-            let r = BoxRay::new(
-                o,
-                d,
-                if i % 3 == 0 { 5.0 } else { 0.0 },
-                (Vec3::splat(-10.0), Vec3::splat(110.0)),
-            );
-            let tmax = if i % 4 == 0 { 50.0 } else { f32::INFINITY };
-            for node in &bvh.nodes {
-                let a = child_hits_fast(node, &r, tmax);
-                assert_eq!(a, child_hits_reference(node, &r, tmax));
-                #[cfg(target_arch = "x86_64")]
-                if std::arch::is_x86_feature_detected!("avx2")
-                    && std::arch::is_x86_feature_detected!("fma")
-                {
-                    let f = frame(node, &r);
-                    let fused = child_hits_scalar_with::<true>(node, &r, &f, tmax);
-                    // SAFETY: AVX2 and FMA were detected.
-                    assert_eq!(fused, unsafe { child_hits_avx2(node, &r, &f, tmax) });
-                    // SAFETY: AVX2 and FMA were detected.
-                    let full = unsafe { intersect_node_avx2(node, &r, tmax) };
-                    assert_eq!(full, hitmask_from_children(node, r.oct_inv4, fused));
-                }
-                nonzero += (a != 0) as usize;
-            }
-        }
-        assert!(nonzero > 100);
-    }
-
-    #[test]
-    fn lane_wise_setup_matches_per_axis() {
-        let vals = [
-            0.0f32,
-            -0.0,
-            1e-30,
-            -1e-30,
-            1e-45,
-            0.5,
-            -3.0,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            f32::NAN,
-            -f32::NAN,
-        ];
-        for &x in &vals {
-            for &y in &vals {
-                for &z in &vals {
-                    let d = Vec3::new(x, y, z);
-                    let r = BoxRay::new(Vec3::ZERO, d, 0.0, (Vec3::ZERO, Vec3::ONE));
-                    let want = BoxRay::inv_reference(d);
-                    assert_eq!(
-                        r.inv.to_array().map(f32::to_bits),
-                        want.to_array().map(f32::to_bits),
-                        "{d}"
-                    );
-                    let neg = want.to_array().map(|i| i < 0.0);
-                    assert_eq!(r.neg, neg, "{d}");
-                    let oct = (if neg[0] { 0 } else { 0x0404_0404 })
-                        | (if neg[1] { 0 } else { 0x0202_0202 })
-                        | (if neg[2] { 0 } else { 0x0101_0101 });
-                    assert_eq!(r.oct_inv4, oct, "{d}");
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn honours_tmin() {
-        // obvhs' own test ignores tmin; this one must reject boxes entirely before it.
-        let boxes = vec![
-            Aabb::new(Vec3A::new(0.0, -1.0, -1.0), Vec3A::new(1.0, 1.0, 1.0)),
-            Aabb::new(Vec3A::new(10.0, -1.0, -1.0), Vec3A::new(11.0, 1.0, 1.0)),
-        ];
-        let bvh = build_cwbvh(
-            &boxes,
-            BvhBuildParams::fast_build(),
-            &mut Duration::default(),
-        );
-        let root = &bvh.nodes[0];
-        let all = child_hits_fast(
-            root,
-            &BoxRay::new(
-                Vec3::new(-5.0, 0.0, 0.0),
-                Vec3::X,
-                0.0,
-                (Vec3::splat(-1.0), Vec3::splat(11.0)),
-            ),
-            f32::INFINITY,
-        );
-        let late = child_hits_fast(
-            root,
-            &BoxRay::new(
-                Vec3::new(-5.0, 0.0, 0.0),
-                Vec3::X,
-                8.0,
-                (Vec3::splat(-1.0), Vec3::splat(11.0)),
-            ),
-            f32::INFINITY,
-        );
-        let early = child_hits_fast(
-            root,
-            &BoxRay::new(
-                Vec3::new(-5.0, 0.0, 0.0),
-                Vec3::X,
-                0.0,
-                (Vec3::splat(-1.0), Vec3::splat(11.0)),
-            ),
-            8.0,
-        );
-        assert_eq!(all.count_ones(), 2);
-        assert_eq!(late.count_ones(), 1);
-        assert_eq!(early.count_ones(), 1);
-        assert_ne!(late, early);
-    }
-}
+mod tests;

@@ -136,7 +136,7 @@ impl Accel {
     /// ray.
     pub(crate) fn single_entry(&self) -> Option<(&Entry, &Blas)> {
         match self.entries.as_slice() {
-            [entry] if self.max_blas_depth < INLINE_STACK => self
+            [entry] if stack_len(self.max_blas_depth) <= INLINE_STACK => self
                 .blases
                 .get(entry.blas as usize)
                 .filter(|b| !b.nodes.is_empty())
@@ -211,7 +211,7 @@ impl Accel {
                 let mut inline: InlineStack = [MaybeUninit::uninit(); INLINE_STACK];
                 let mut heap = Vec::new();
                 let stack = stack_for(self.tlas_depth, &mut inline, &mut heap);
-                traverse::<AVX2>(&self.tlas, &r, tmax, stack, leaf)
+                traverse::<AVX2, _>(&self.tlas, &r, tmax, stack, leaf)
             }
         }
     }
@@ -261,7 +261,7 @@ impl Accel {
     ) -> Option<L::Answer> {
         let blas = self.blases.get(entry.blas as usize)?;
         let (br, mut leaf) = Self::walk_start::<L>(entry, blas, ray);
-        let stopped = traverse::<AVX2>(&blas.nodes, &br, tmax, stack, &mut leaf);
+        let stopped = traverse::<AVX2, _>(&blas.nodes, &br, tmax, stack, &mut leaf);
         Some(leaf.answer(blas, entry, stopped))
     }
 

@@ -1,5 +1,7 @@
 //! The traversal: the stack, the leaf visitors (closest and any hit, top level and bottom
-//! level), the stepped walk of one ray and the interleaved walk of a batch.
+//! level), the walk of one ray and the interleaved walk of a batch. Two walks:
+//! [`ordered`] (children in entry-distance order, pops beyond `tmax` skipped; closest hits, and
+//! every batch) and [`group`] (obvhs' node groups in octant order; one-ray occlusion, packets).
 
 use crate::node::BoxRay;
 use crate::triangle::TriRay;
@@ -7,12 +9,27 @@ use crate::{Accel, Blas, Entry, Hit, Ray, Tri};
 use obvhs::cwbvh::node::CwBvhNode;
 use std::mem::MaybeUninit;
 
-/// A traversal stack entry: a node group (obvhs encoding: child base index, hit mask).
+mod group;
+mod ordered;
+
+pub(crate) use group::take_child;
+use ordered::Walk;
+
+/// A traversal stack entry: a node group (obvhs encoding: child base index, hit mask) in the
+/// group walks, a node index and the bits of its entry distance in the ordered walks.
 pub(crate) type Group = (u32, u32);
 
-/// Stacks up to this depth live on the call stack; deeper trees (degenerate input) get a heap
-/// stack sized from the measured depth, so the stack can never overflow.
-pub(crate) const INLINE_STACK: usize = 48;
+/// Stacks up to this size live on the call stack (trees up to 27 levels deep); deeper trees
+/// (degenerate input) get a heap stack sized from the measured depth, so the stack can never
+/// overflow.
+pub(crate) const INLINE_STACK: usize = 192;
+
+/// The stack entries a walk of a tree of `depth` levels needs: in the ordered walk each node on
+/// the current path pushes at most seven of its eight children (the group walks, one entry).
+#[inline(always)]
+pub(crate) fn stack_len(depth: usize) -> usize {
+    depth.saturating_mul(7).saturating_add(1)
+}
 
 /// An uninitialised inline stack.
 pub(crate) type InlineStack = [MaybeUninit<Group>; INLINE_STACK];
@@ -22,7 +39,7 @@ pub(crate) type InlineStack = [MaybeUninit<Group>; INLINE_STACK];
 /// function after inlining (closures were separate calls per ray).
 ///
 /// Slots start uninitialised: zeroing 48 entries per query (a `memset` call) cost about 3 % of the
-/// instructions of a primary ray. [`traverse`] reads a slot only below its stack pointer, that
+/// instructions of a primary ray. The walks read a slot only below their stack pointer, that
 /// is, only after writing it.
 #[inline(always)]
 pub(crate) fn stack_for<'a>(
@@ -30,10 +47,11 @@ pub(crate) fn stack_for<'a>(
     inline: &'a mut InlineStack,
     heap: &'a mut Vec<MaybeUninit<Group>>,
 ) -> &'a mut [MaybeUninit<Group>] {
-    if depth < INLINE_STACK {
+    let len = stack_len(depth);
+    if len <= INLINE_STACK {
         inline
     } else {
-        *heap = vec![MaybeUninit::<Group>::uninit(); depth + 1];
+        *heap = vec![MaybeUninit::<Group>::uninit(); len];
         heap
     }
 }
@@ -42,11 +60,15 @@ pub(crate) fn stack_for<'a>(
 /// implementations rather than a closure: the compiler left the occlusion closure as a call per
 /// triangle once the traversal was inlined into the query.
 pub(crate) trait Leaf {
+    /// Whether the walk looks for the closest hit (nearest child first, pops beyond `tmax`
+    /// skipped) rather than any hit.
+    const CLOSEST: bool;
     /// Visits `primitive`; may shrink `tmax`; returns `true` to stop the traversal.
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool;
 }
 
 impl<L: Leaf> Leaf for &mut L {
+    const CLOSEST: bool = L::CLOSEST;
     #[inline(always)]
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
         (**self).visit(primitive, tmax)
@@ -65,6 +87,7 @@ pub(crate) struct EntriesClosest<'a, const AVX2: bool> {
 }
 
 impl<const AVX2: bool> Leaf for EntriesClosest<'_, AVX2> {
+    const CLOSEST: bool = true;
     #[inline(always)]
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
         if let Some(entry) = self.accel.entries.get(primitive as usize) {
@@ -88,6 +111,7 @@ pub(crate) struct EntriesAny<'a, const AVX2: bool> {
 }
 
 impl<const AVX2: bool> Leaf for EntriesAny<'_, AVX2> {
+    const CLOSEST: bool = false;
     #[inline(always)]
     fn visit(&mut self, primitive: u32, _: &mut f32) -> bool {
         let mut tmax = self.ray.tmax;
@@ -112,6 +136,7 @@ pub(crate) struct ClosestLeaf<'a> {
 }
 
 impl Leaf for ClosestLeaf<'_> {
+    const CLOSEST: bool = true;
     #[inline(always)]
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
         if let Some(tri) = self.tris.get(primitive as usize) {
@@ -140,6 +165,7 @@ pub(crate) struct AnyLeaf<'a> {
 }
 
 impl Leaf for AnyLeaf<'_> {
+    const CLOSEST: bool = false;
     #[inline(always)]
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
         self.tris.get(primitive as usize).is_some_and(|tri| {
@@ -204,134 +230,26 @@ impl<'a> BlasLeaf<'a> for AnyLeaf<'a> {
     }
 }
 
-/// A walk of a CWBVH (obvhs layout) in progress, front to back: the traversal of one ray as a
-/// state that advances one step at a time, so that several rays' walks can be interleaved on
-/// one thread (see [`Accel::intersect_batch`]). [`traverse`] runs one walk to its end.
+/// Walks a CWBVH (obvhs layout) for `r`, calling `leaf.visit(primitive, &mut tmax)` for every
+/// primitive in a hit leaf. Returns whether `leaf` stopped it. `stack` needs [`stack_len`]
+/// entries for the tree's depth.
 ///
-/// Each stack entry holds the unvisited siblings of one level of the current path, so the stack
-/// needs one entry per tree level (the depth measured at build time).
-#[derive(Clone, Copy)]
-pub(crate) struct Walk {
-    pub(crate) sp: usize,
-    pub(crate) current: Group,
-    pub(crate) prims: Group,
-}
-
-impl Walk {
-    /// A walk from the root.
-    #[inline(always)]
-    fn new() -> Self {
-        Self {
-            sp: 0,
-            // The root as a group of one internal child at priority 7 (obvhs convention).
-            current: (0, 0x8000_0000),
-            prims: (0, 0),
-        }
-    }
-
-    /// Visits the pending primitives of the current leaf (`leaf.visit(primitive, &mut tmax)`
-    /// each), then tests the next node. `Some(stopped)` once the walk has ended, where
-    /// `stopped` says whether `leaf` stopped it.
-    ///
-    /// With `AVX2` it must be inlined into a function compiled for AVX2 (`Accel::intersect_avx2`
-    /// and its kin), so that the node test and `count_ones`/`leading_zeros` become inline vector
-    /// and bit instructions.
-    #[inline(always)]
-    fn step<const AVX2: bool>(
-        &mut self,
-        nodes: &[CwBvhNode],
-        r: &BoxRay,
-        tmax: &mut f32,
-        stack: &mut [MaybeUninit<Group>],
-        leaf: &mut impl Leaf,
-    ) -> Option<bool> {
-        while self.prims.1 != 0 {
-            let local = 31 - self.prims.1.leading_zeros();
-            self.prims.1 &= !(1u32 << local);
-            if leaf.visit(self.prims.0 + local, tmax) {
-                return Some(true);
-            }
-        }
-        if self.current.1 & 0xff00_0000 != 0 {
-            let index = take_child(&mut self.current, stack, &mut self.sp, r.oct_inv4 & 0xff);
-            let Some(node) = nodes.get(index as usize) else {
-                // Unreachable for a well-formed tree (and for an empty one, whose root group is
-                // never read); never read out of bounds.
-                self.current.1 = 0;
-                return None;
-            };
-            let mask = if AVX2 {
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: `AVX2` is true only when `detect_avx2` found AVX2 on this CPU.
-                unsafe {
-                    crate::node::intersect_node_avx2(node, r, *tmax)
-                }
-                #[cfg(not(target_arch = "x86_64"))]
-                crate::node::intersect_node(node, r, *tmax)
-            } else {
-                crate::node::intersect_node(node, r, *tmax)
-            };
-            self.current = (
-                node.child_base_idx,
-                (mask & 0xff00_0000) | node.imask as u32,
-            );
-            self.prims = (node.primitive_base_idx, mask & 0x00ff_ffff);
-        } else {
-            self.current = (0, 0);
-        }
-        if self.prims.1 == 0 && self.current.1 & 0xff00_0000 == 0 {
-            if self.sp == 0 {
-                return Some(false);
-            }
-            self.sp -= 1;
-            // SAFETY: slots below `sp` were written by the push above before `sp` passed them
-            // (`sp` only grows right after a write), so slot `sp` holds an initialised group.
-            self.current = unsafe { stack[self.sp].assume_init() };
-        }
-        None
-    }
-}
-
-/// Takes the next internal child of the node group `current` (obvhs' priority order for the
-/// octant key `oct`) and returns its node index; the group's other children, if any, are pushed
-/// on `stack` at `sp`. Shared by the one-ray walk and the packets' walk.
+/// Closest hits take the ordered walk ([`ordered::traverse`]: nearest child first, children
+/// beyond `tmax` skipped); occlusion keeps obvhs' group walk in octant order
+/// ([`group::traverse_groups`]), which measured 3–7 % faster for one ray than the ordered walk
+/// (interleaved, the ordered walk is faster for both).
 #[inline(always)]
-pub(crate) fn take_child(
-    current: &mut Group,
-    stack: &mut [MaybeUninit<Group>],
-    sp: &mut usize,
-    oct: u32,
-) -> u32 {
-    let hits = current.1;
-    let offset = 31 - hits.leading_zeros();
-    current.1 &= !(1u32 << offset);
-    if current.1 & 0xff00_0000 != 0 {
-        stack[*sp] = MaybeUninit::new(*current);
-        *sp += 1;
-    }
-    let slot = (offset - 24) ^ oct;
-    current.0 + (hits & !(u32::MAX << slot)).count_ones()
-}
-
-/// Walks a CWBVH (obvhs layout) front to back for `r`, calling `leaf.visit(primitive, &mut tmax)`
-/// for every primitive in a hit leaf. Returns whether `leaf` stopped it. `stack` needs one entry
-/// per tree level.
-#[inline(always)]
-pub(crate) fn traverse<const AVX2: bool>(
+pub(crate) fn traverse<const AVX2: bool, L: Leaf>(
     nodes: &[CwBvhNode],
     r: &BoxRay,
     tmax: &mut f32,
     stack: &mut [MaybeUninit<Group>],
-    mut leaf: impl Leaf,
+    leaf: L,
 ) -> bool {
-    if nodes.is_empty() {
-        return false;
-    }
-    let mut walk = Walk::new();
-    loop {
-        if let Some(stopped) = walk.step::<AVX2>(nodes, r, tmax, stack, &mut leaf) {
-            return stopped;
-        }
+    if L::CLOSEST {
+        ordered::traverse::<AVX2, L>(nodes, r, tmax, stack, leaf)
+    } else {
+        group::traverse_groups::<AVX2>(nodes, r, tmax, stack, leaf)
     }
 }
 
@@ -390,7 +308,7 @@ pub(crate) fn interleave<const AVX2: bool, L: Leaf + Copy>(
             if lane.index == usize::MAX {
                 continue;
             }
-            let done = lane.walk.step::<AVX2>(
+            let done = lane.walk.step::<AVX2, _>(
                 nodes,
                 &lane.br,
                 &mut lane.tmax,
