@@ -129,13 +129,41 @@ impl Children<'_> {
             self.inner.trailing_zeros()
         };
         let mut rest = self.inner & !(1 << next);
+        if L::CLOSEST && rest & rest.wrapping_sub(1) != 0 {
+            self.push_sorted(rest, stack, sp);
+        } else {
+            while rest != 0 {
+                let c = rest.trailing_zeros();
+                rest &= rest - 1;
+                let entry = (self.index(c), self.enter[c as usize & 7].to_bits());
+                stack[*sp] = MaybeUninit::new(entry);
+                *sp += 1;
+            }
+        }
+        self.index(next)
+    }
+
+    /// Pushes the children of `rest` farthest entry first, so that the nearest pops first.
+    #[inline(always)]
+    fn push_sorted(&self, mut rest: u32, stack: &mut [MaybeUninit<Group>], sp: &mut usize) {
+        let mut sorted = [(0u32, 0f32); 8];
+        let mut n = 0;
         while rest != 0 {
             let c = rest.trailing_zeros();
             rest &= rest - 1;
-            stack[*sp] = MaybeUninit::new((self.index(c), self.enter[c as usize & 7].to_bits()));
+            let e = self.enter[c as usize & 7];
+            let mut j = n;
+            while j > 0 && sorted[j - 1].1 < e {
+                sorted[j] = sorted[j - 1];
+                j -= 1;
+            }
+            sorted[j] = (self.index(c), e);
+            n += 1;
+        }
+        for &(node, e) in &sorted[..n] {
+            stack[*sp] = MaybeUninit::new((node, e.to_bits()));
             *sp += 1;
         }
-        self.index(next)
     }
 
     /// The node index of slot `c`: internal children are stored in slot order.
