@@ -37,7 +37,7 @@ fn bench(c: &mut Criterion) {
             b.iter(|| each(&|s| s.pixel()[1]))
         });
         g.bench_function(BenchmarkId::new("bounce_vertex", &name), |b| {
-            b.iter(|| each(&|s| s.bounce(1).alpha))
+            b.iter(|| each(&|s| s.bounce(1).rr + s.vertex_light(1).alpha))
         });
     }
     g.finish();
