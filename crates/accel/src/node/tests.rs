@@ -126,36 +126,19 @@ fn honours_tmin() {
         &mut Duration::default(),
     );
     let root = &bvh.nodes[0];
-    let all = child_hits_fast(
-        root,
-        &BoxRay::new(
+    // A ray along +x through both boxes, starting at x = -5, over [tmin, tmax].
+    let hits = |tmin: f32, tmax: f32| {
+        let r = BoxRay::new(
             Vec3::new(-5.0, 0.0, 0.0),
             Vec3::X,
-            0.0,
+            tmin,
             (Vec3::splat(-1.0), Vec3::splat(11.0)),
-        ),
-        f32::INFINITY,
-    );
-    let late = child_hits_fast(
-        root,
-        &BoxRay::new(
-            Vec3::new(-5.0, 0.0, 0.0),
-            Vec3::X,
-            8.0,
-            (Vec3::splat(-1.0), Vec3::splat(11.0)),
-        ),
-        f32::INFINITY,
-    );
-    let early = child_hits_fast(
-        root,
-        &BoxRay::new(
-            Vec3::new(-5.0, 0.0, 0.0),
-            Vec3::X,
-            0.0,
-            (Vec3::splat(-1.0), Vec3::splat(11.0)),
-        ),
-        8.0,
-    );
+        );
+        child_hits_fast(root, &r, tmax)
+    };
+    let all = hits(0.0, f32::INFINITY);
+    let late = hits(8.0, f32::INFINITY);
+    let early = hits(0.0, 8.0);
     assert_eq!(all.count_ones(), 2);
     assert_eq!(late.count_ones(), 1);
     assert_eq!(early.count_ones(), 1);
