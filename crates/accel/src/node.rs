@@ -180,10 +180,7 @@ pub(crate) unsafe fn intersect_node_avx2(node: &CwBvhNode, r: &BoxRay, tmax: f32
         );
         let bits = _mm256_srli_epi32::<5>(meta);
         let m = _mm256_and_si256(_mm256_sllv_epi32(bits, index), _mm256_castps_si256(hit));
-        let x = _mm_or_si128(_mm256_castsi256_si128(m), _mm256_extracti128_si256::<1>(m));
-        let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b01_00_11_10>(x));
-        let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b10_11_00_01>(x));
-        _mm_cvtsi128_si32(x) as u32
+        or_lanes(m)
     }
 }
 
@@ -289,14 +286,28 @@ pub(crate) unsafe fn child_hits_enter_avx2(node: &CwBvhNode, r: &BoxRay, tmax: f
         let offset = _mm256_and_si256(meta, _mm256_set1_epi32(0x1f));
         let bits = _mm256_srli_epi32::<5>(meta);
         let m = _mm256_and_si256(_mm256_sllv_epi32(bits, offset), _mm256_castps_si256(hit));
-        let x = _mm_or_si128(_mm256_castsi256_si128(m), _mm256_extracti128_si256::<1>(m));
-        let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b01_00_11_10>(x));
-        let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b10_11_00_01>(x));
         ChildHits {
             hits: _mm256_movemask_ps(hit) as u32,
             enter,
-            prims: _mm_cvtsi128_si32(x) as u32 & 0x00ff_ffff,
+            prims: or_lanes(m) & 0x00ff_ffff,
         }
+    }
+}
+
+/// The OR of the eight 32-bit lanes of `m`.
+///
+/// # Safety
+/// The CPU must support AVX2, and the caller must be compiled for it (inlined).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn or_lanes(m: std::arch::x86_64::__m256i) -> u32 {
+    use std::arch::x86_64::*;
+    // SAFETY: register-only AVX2 operations, guaranteed by the caller.
+    unsafe {
+        let x = _mm_or_si128(_mm256_castsi256_si128(m), _mm256_extracti128_si256::<1>(m));
+        let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b01_00_11_10>(x));
+        let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b10_11_00_01>(x));
+        _mm_cvtsi128_si32(x) as u32
     }
 }
 

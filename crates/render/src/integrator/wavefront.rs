@@ -56,16 +56,14 @@ impl<const AOV: bool> PathInFlight<AOV> {
     /// sample: the clamped contribution times zero or the medium's transmittance.
     #[inline]
     pub fn resolve(&mut self, blocked: &[bool]) {
-        let path = &mut self.path;
-        for (p, &b) in path.pending.iter().zip(blocked) {
+        // Taken out and put back (emptied) so that its capacity serves the next vertex.
+        let mut pending = std::mem::take(&mut self.path.pending);
+        for (p, &b) in pending.iter().zip(blocked) {
             let lit = p.clamped * if b { Vec3::ZERO } else { p.absorbed };
-            path.l += lit;
-            if AOV && path.light_passes {
-                path.aov
-                    .add_light(lit, p.scatterings, &p.split, crate::aov::Seen::Surface);
-            }
+            self.path.add_lit(lit, p.scatterings, &p.split);
         }
-        path.pending.clear();
+        pending.clear();
+        self.path.pending = pending;
     }
 
     /// The path's radiance, whether its camera ray hit geometry, and its pass values.
@@ -95,7 +93,6 @@ impl<const AOV: bool> Wavefront<AOV> {
         let accel = integrator.accel;
         // Slots are re-initialised in place: their pending lists keep their capacity.
         self.paths.truncate(starts.len());
-        self.rays.clear();
         for (k, &(origin, dir, _)) in starts.iter().enumerate() {
             let fresh = integrator.start_path::<AOV>(origin, dir, true);
             match self.paths.get_mut(k) {
@@ -106,15 +103,24 @@ impl<const AOV: bool> Wavefront<AOV> {
                 }
                 None => self.paths.push(fresh),
             }
-            self.rays.push(Ray::new(origin, dir));
         }
         self.live.clear();
         self.live.extend(0..starts.len());
-        self.hits.clear();
-        self.hits.resize(self.rays.len(), None);
-        // Camera rays: a pixel's lens samples are coherent (packets).
-        accel.intersect_packets(&self.rays, &mut self.hits);
+        let mut camera_rays = true;
         while !self.live.is_empty() {
+            let paths = &self.paths;
+            self.rays.clear();
+            self.rays
+                .extend(self.live.iter().filter_map(|&i| paths[i].ray()));
+            self.hits.clear();
+            self.hits.resize(self.rays.len(), None);
+            if camera_rays {
+                // A pixel's lens samples are coherent: packets.
+                accel.intersect_packets(&self.rays, &mut self.hits);
+                camera_rays = false;
+            } else {
+                accel.intersect_batch(&self.rays, &mut self.hits);
+            }
             self.shadows.clear();
             for (&i, &hit) in self.live.iter().zip(&self.hits) {
                 let p = &mut self.paths[i];
@@ -135,12 +141,6 @@ impl<const AOV: bool> Wavefront<AOV> {
             }
             let paths = &self.paths;
             self.live.retain(|&i| paths[i].live);
-            self.rays.clear();
-            self.rays
-                .extend(self.live.iter().filter_map(|&i| paths[i].ray()));
-            self.hits.clear();
-            self.hits.resize(self.rays.len(), None);
-            accel.intersect_batch(&self.rays, &mut self.hits);
         }
     }
 
