@@ -336,3 +336,66 @@ fn thin_lens_like_rays_from_outside() {
         .collect();
     assert_mixed(check(&scene, &accel, &rays), rays.len());
 }
+
+/// Rays from outside the scene that only graze its bounds: through an extreme vertex of the
+/// mesh, within the face of the bounding box it touches, its target moved a few ulps in and
+/// out, at several scales and far from the world origin. The bounds test that lets rays
+/// missing everything skip the walk must never reject one that the walk (and brute force)
+/// finds a hit for.
+#[test]
+fn rays_grazing_the_scene_bounds() {
+    let mut rng = Rng(11);
+    for (scale, offset) in [(1e-3, 0.0), (1.0, 0.0), (1.0, 1e4), (1e4, -3e5)] {
+        let world_from_object = Affine3A::from_scale_rotation_translation(
+            Vec3::splat(scale),
+            Default::default(),
+            Vec3::splat(offset),
+        );
+        let scene = Scene {
+            meshes: vec![icosphere(2)],
+            instances: vec![InstanceInput {
+                mesh: 0,
+                world_from_object,
+            }],
+        };
+        let world: Vec<Vec3> = scene.meshes[0]
+            .0
+            .iter()
+            .map(|&p| world_from_object.transform_point3(p))
+            .collect();
+        let mut rays = Vec::new();
+        for axis in 0..3 {
+            for sign in [-1.0f32, 1.0] {
+                let extreme = world
+                    .iter()
+                    .copied()
+                    .max_by(|a, b| (sign * a[axis]).total_cmp(&(sign * b[axis])))
+                    .expect("vertices");
+                for _ in 0..20 {
+                    // A direction in the face plane (perpendicular to `axis`).
+                    let mut tangent = rng.unit_vector();
+                    tangent[axis] = 0.0;
+                    let origin = extreme + tangent.normalize_or(Vec3::X) * (3.0 * scale);
+                    for ulps in -2i32..=2 {
+                        let mut target = extreme;
+                        let bits = target[axis].to_bits() as i32;
+                        target[axis] = f32::from_bits(
+                            (bits + ulps * sign as i32 * target[axis].signum() as i32) as u32,
+                        );
+                        rays.push(Ray::new(origin, target - origin));
+                    }
+                }
+            }
+        }
+        let hits = check(&scene, &accel(&scene), &rays);
+        assert!(
+            hits > 0 && hits < rays.len(),
+            "scale {scale}: {hits} of {} hit",
+            rays.len()
+        );
+    }
+}
+
+fn accel(scene: &Scene) -> Accel {
+    scene.build(BvhQuality::default())
+}

@@ -339,6 +339,17 @@ impl Accel {
             if run.len() < 2 || !coherent(run) {
                 continue;
             }
+            // Rays that provably meet nothing stay inactive (their answers: a miss).
+            let mut active = 0u32;
+            for (i, ray) in run.iter().enumerate() {
+                active |= u32::from(!self.misses_bounds(ray)) << i;
+            }
+            if active == 0 {
+                self.batch_impl::<true, L>(&rays[loose..at], &mut out[loose..at]);
+                loose = end;
+                out[at..end].fill_with(L::miss);
+                continue;
+            }
             // Lanes past the run's end copy its last ray and stay inactive. Loops, not
             // `array::from_fn`, whose closures stayed calls.
             let (br0, leaf0) = Self::walk_start::<L>(entry, blas, &run[0]);
@@ -358,7 +369,6 @@ impl Accel {
             self.batch_impl::<true, L>(&rays[loose..at], &mut out[loose..at]);
             loose = end;
             let packet = PacketRays::new(&boxes);
-            let active = (1u32 << run.len()) - 1;
             // SAFETY: forwarded from the caller.
             let stopped =
                 unsafe { walk_packet(&blas.nodes, &packet, &mut tmax, &mut leaves, active, stack) };

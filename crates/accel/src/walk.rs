@@ -185,6 +185,8 @@ pub(crate) trait BlasLeaf<'a>: Leaf + Copy {
     fn answer(&self, blas: &Blas, entry: &Entry, stopped: bool) -> Self::Answer;
     /// The one-ray query, for scenes that interleaving does not cover.
     fn one<const AVX2: bool>(accel: &Accel, ray: &Ray) -> Self::Answer;
+    /// The answer for a ray that meets nothing.
+    fn miss() -> Self::Answer;
 }
 
 impl<'a> BlasLeaf<'a> for ClosestLeaf<'a> {
@@ -209,6 +211,11 @@ impl<'a> BlasLeaf<'a> for ClosestLeaf<'a> {
     fn one<const AVX2: bool>(accel: &Accel, ray: &Ray) -> Option<Hit> {
         accel.intersect_impl::<AVX2>(ray)
     }
+
+    #[inline(always)]
+    fn miss() -> Option<Hit> {
+        None
+    }
 }
 
 impl<'a> BlasLeaf<'a> for AnyLeaf<'a> {
@@ -227,6 +234,11 @@ impl<'a> BlasLeaf<'a> for AnyLeaf<'a> {
     #[inline(always)]
     fn one<const AVX2: bool>(accel: &Accel, ray: &Ray) -> bool {
         accel.occluded_impl::<AVX2>(ray)
+    }
+
+    #[inline(always)]
+    fn miss() -> bool {
+        false
     }
 }
 
