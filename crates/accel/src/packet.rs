@@ -336,10 +336,8 @@ impl Accel {
         for at in (0..n).step_by(PACKET_LANES) {
             let end = (at + PACKET_LANES).min(n);
             let run = &rays[at..end];
-            if run.len() < 2 || !coherent(run) {
-                continue;
-            }
-            // Rays that provably meet nothing stay inactive (their answers: a miss).
+            // Rays that provably meet nothing stay inactive (their answers: a miss); a run of
+            // only those is answered here, before the coherence test.
             let mut active = 0u32;
             for (i, ray) in run.iter().enumerate() {
                 active |= u32::from(!self.misses_bounds(ray)) << i;
@@ -348,6 +346,9 @@ impl Accel {
                 self.batch_impl::<true, L>(&rays[loose..at], &mut out[loose..at]);
                 loose = end;
                 out[at..end].fill_with(L::miss);
+                continue;
+            }
+            if run.len() < 2 || !coherent(run) {
                 continue;
             }
             // Lanes past the run's end copy its last ray and stay inactive. Loops, not
