@@ -13,6 +13,8 @@
 //! - **Triangles**: watertight test of Woop, Benthin and Wald (2013) with an `f64` fallback for
 //!   zero edge functions and pbrt-v4's bound rejecting hits not provably in front; hits that
 //!   bound cannot prove are decided again in `f64` (close to the origin on large triangles).
+//! - **Misses**: a ray starting outside the scene's bounds whose segment misses them (widened by
+//!   the box test's slack) is answered without a walk, in every query.
 //! - **Secondary rays** start from [`SpawnPoint::origin`] (or [`offset_ray_origin`]).
 //! - **Batches**: [`Accel::intersect_batch`] and [`Accel::occluded_batch`] answer exactly as the
 //!   one-ray queries but walk [`BATCH_LANES`] rays at once, interleaved, which hides much of
