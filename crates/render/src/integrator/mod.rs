@@ -204,11 +204,11 @@ impl Integrator<'_> {
         stream: &SampleStream,
         hit: Option<Hit>,
     ) -> bool {
-        let bs = stream.bounce(w.vertex);
-        let ls =
-            (self.emissive.is_some() || self.geom.has_alpha).then(|| stream.vertex_light(w.vertex));
+        // Alpha decisions need the light set before the trace; otherwise it (and the bounce
+        // set) waits for a hit: most rays of open scenes escape and would draw them for nothing.
+        let alpha_ls = self.geom.has_alpha.then(|| stream.vertex_light(w.vertex));
         let ray = w.ray;
-        let u_alpha = ls.map_or(0.5, |l| l.alpha);
+        let u_alpha = alpha_ls.map_or(0.5, |l| l.alpha);
         let traced = self.trace(&ray, stream, w.vertex, u_alpha, Some(hit), w);
         let Some((hit, s, error)) = traced else {
             self.escape(path, w);
@@ -261,8 +261,14 @@ impl Integrator<'_> {
             sigma_a: w.media.sigma_a(),
         };
         self.direct_punctual(&v, w.beta, path);
+        let ls = alpha_ls.or_else(|| {
+            self.emissive
+                .is_some()
+                .then(|| stream.vertex_light(w.vertex))
+        });
         self.direct_emissive(&v, w.beta, ls.as_ref(), path);
         self.direct_environment(&v, w.beta, stream, path);
+        let bs = stream.bounce(w.vertex);
         self.continue_path(&v, &bs, medium, entering, w, path)
     }
 
