@@ -250,9 +250,16 @@ impl<'a> Geometry<'a> {
     }
 
     /// [`Geometry::surface`], with the shading attributes (normal, tangent, colour) only if
-    /// `shading`.
+    /// `shading`; inline, for the path vertex to read the surface where it is built.
     #[inline(always)]
-    fn surface_at(&self, instance: u32, triangle: u32, b1: f32, b2: f32, shading: bool) -> Surface {
+    pub(crate) fn surface_at(
+        &self,
+        instance: u32,
+        triangle: u32,
+        b1: f32,
+        b2: f32,
+        shading: bool,
+    ) -> Surface {
         let inst = &self.scene.instances[instance as usize];
         let mesh = &self.scene.meshes[inst.mesh as usize];
         let [i0, i1, i2] = mesh.indices[triangle as usize].map(|i| i as usize);

@@ -39,7 +39,9 @@ impl Integrator<'_> {
         // Nothing to pass through: the first hit is the surface (inline, so that a ray that
         // escapes costs no call and the surface is built where the vertex reads it).
         let hit = first.unwrap_or_else(|| self.accel.intersect(ray))?;
-        let s = self.geom.surface(hit.instance, hit.triangle, hit.u, hit.v);
+        let s = self
+            .geom
+            .surface_at(hit.instance, hit.triangle, hit.u, hit.v, true);
         Some((hit, s, self.accel.spawn_point(ray, &hit).error))
     }
 
