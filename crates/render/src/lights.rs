@@ -114,6 +114,7 @@ fn triangle_power(geom: &Geometry<'_>, instance: u32, triangle: u32) -> f64 {
 
 /// Incident light from a punctual light at `p`: direction towards the light, distance (∞ for
 /// directional) and the radiance-times-solid-angle it delivers (irradiance at normal incidence).
+#[inline]
 pub(crate) fn punctual_incident(light: &Light, p: Vec3) -> Option<(Vec3, f32, Vec3)> {
     match light.kind {
         LightKind::Directional => Some((-light.direction, f32::INFINITY, light.intensity)),

@@ -239,6 +239,27 @@ impl<'a> Geometry<'a> {
 
     /// The surface at barycentrics (`b1`, `b2`) of `triangle` of `instance`.
     pub fn surface(&self, instance: u32, triangle: u32, b1: f32, b2: f32) -> Surface {
+        self.surface_at(instance, triangle, b1, b2, true)
+    }
+
+    /// [`Geometry::surface`] as a light sample on an emissive triangle reads it: position,
+    /// geometric normal, area, material and texture coordinates, bit for bit; the shading
+    /// normal is the geometric one (unless that needs it), no tangent, white vertex colour.
+    pub fn emitter_surface(&self, instance: u32, triangle: u32, b1: f32, b2: f32) -> Surface {
+        self.surface_at(instance, triangle, b1, b2, false)
+    }
+
+    /// [`Geometry::surface`], with the shading attributes (normal, tangent, colour) only if
+    /// `shading`; inline, for the path vertex to read the surface where it is built.
+    #[inline(always)]
+    pub(crate) fn surface_at(
+        &self,
+        instance: u32,
+        triangle: u32,
+        b1: f32,
+        b2: f32,
+        shading: bool,
+    ) -> Surface {
         let inst = &self.scene.instances[instance as usize];
         let mesh = &self.scene.meshes[inst.mesh as usize];
         let [i0, i1, i2] = mesh.indices[triangle as usize].map(|i| i as usize);
@@ -250,8 +271,10 @@ impl<'a> Geometry<'a> {
             .transform_vector3(p1 - p0)
             .cross(m.transform_vector3(p2 - p0));
         let len = cross.length();
+        let flat = len > 0.0 && len.is_finite();
         let nm = &self.normal_from_object[instance as usize];
-        let ns = if mesh.normals.is_empty() {
+        // A degenerate triangle's geometric normal is the interpolated one.
+        let ns = if mesh.normals.is_empty() || (!shading && flat) {
             None
         } else {
             let n = b0 * mesh.normals[i0] + b1 * mesh.normals[i1] + b2 * mesh.normals[i2];
@@ -259,12 +282,13 @@ impl<'a> Geometry<'a> {
         };
         // The world-space cross product flips under a mirroring transform; flip it back so the
         // geometric normal stays on the side glTF calls the front.
-        let mut ng = if len > 0.0 && len.is_finite() {
+        let mut ng = if flat {
             cross / len
         } else {
             ns.unwrap_or(Vec3::Z)
         };
-        if self.mirrored[instance as usize] {
+        let mirrored = self.mirrored[instance as usize];
+        if mirrored {
             ng = -ng;
         }
         let ns = ns.unwrap_or(ng);
@@ -275,22 +299,13 @@ impl<'a> Geometry<'a> {
                 b0 * v[i0] + b1 * v[i1] + b2 * v[i2]
             }
         };
-        let tangent = if mesh.tangents.is_empty() {
+        let corners = ([i0, i1, i2], Vec3::new(b0, b1, b2));
+        let tangent = if !shading || mesh.tangents.is_empty() {
             Vec4::ZERO
         } else {
-            let t = b0 * mesh.tangents[i0] + b1 * mesh.tangents[i1] + b2 * mesh.tangents[i2];
-            // The handedness sign is per vertex (±1); MikkTSpace splits vertices where it
-            // changes, so the first corner's sign is the triangle's. A mirroring transform
-            // reverses the cross product that builds the bitangent: flip the sign with it.
-            let w = if mesh.tangents[i0].w < 0.0 { -1.0 } else { 1.0 };
-            let w = if self.mirrored[instance as usize] {
-                -w
-            } else {
-                w
-            };
-            m.transform_vector3(t.xyz()).extend(w)
+            world_tangent(&mesh.tangents, corners, m, mirrored)
         };
-        let color = if mesh.colors.is_empty() {
+        let color = if !shading || mesh.colors.is_empty() {
             Vec4::ONE
         } else {
             b0 * mesh.colors[i0] + b1 * mesh.colors[i1] + b2 * mesh.colors[i2]
@@ -471,6 +486,23 @@ impl<'a> Geometry<'a> {
             tangent: None,
         }
     }
+}
+
+/// The world tangent (xyz) with bitangent sign (w) interpolated from `tangents` at the corners
+/// (vertex indices, barycentric weights), through `m`, under a `mirrored` transform or not.
+fn world_tangent(
+    tangents: &[Vec4],
+    ([i0, i1, i2], b): ([usize; 3], Vec3),
+    m: &glam::Affine3A,
+    mirrored: bool,
+) -> Vec4 {
+    let t = b.x * tangents[i0] + b.y * tangents[i1] + b.z * tangents[i2];
+    // The handedness sign is per vertex (±1); MikkTSpace splits vertices where it changes, so
+    // the first corner's sign is the triangle's. A mirroring transform reverses the cross
+    // product that builds the bitangent: flip the sign with it.
+    let w = if tangents[i0].w < 0.0 { -1.0 } else { 1.0 };
+    let w = if mirrored { -w } else { w };
+    m.transform_vector3(t.xyz()).extend(w)
 }
 
 /// How material `index` is shaded and transmits.

@@ -21,8 +21,14 @@ pub fn transform_uv(t: &TextureTransform, uv: Vec2) -> Vec2 {
 }
 
 /// Wraps an integer texel coordinate into `[0, n)`.
+#[inline]
 fn wrap(i: i64, n: u32, mode: Wrap) -> u32 {
     let n = n as i64;
+    // Most coordinates are inside already, where every mode is the identity: skip the
+    // 64-bit divisions of the remainders.
+    if (0..n).contains(&i) {
+        return i as u32;
+    }
     let w = match mode {
         Wrap::Repeat => i.rem_euclid(n),
         Wrap::ClampToEdge => i.clamp(0, n - 1),
@@ -39,6 +45,7 @@ fn wrap(i: i64, n: u32, mode: Wrap) -> u32 {
 }
 
 /// One texel, decoded to linear RGBA (alpha is always linear).
+#[inline(always)]
 fn texel(tex: &Texture, x: u32, y: u32) -> Vec4 {
     let i = y as usize * tex.width as usize + x as usize;
     match (&tex.texels, tex.color_space) {

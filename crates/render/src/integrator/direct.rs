@@ -97,7 +97,7 @@ impl Integrator<'_> {
         let (a, b) = (bs.light[0].sqrt(), bs.light[1]);
         let q = self
             .geom
-            .surface(t.instance, t.triangle, a * (1.0 - b), a * b);
+            .emitter_surface(t.instance, t.triangle, a * (1.0 - b), a * b);
         let d = q.p - v.p;
         let d2 = d.length_squared();
         let dist = d2.sqrt();

@@ -123,6 +123,26 @@ struct Walk {
     internal: u32,
 }
 
+impl Walk {
+    /// The walk of a path whose primary ray leaves `origin` along `dir` (unit).
+    #[inline]
+    fn start(origin: Vec3, dir: Vec3) -> Self {
+        Walk {
+            beta: Vec3::ONE,
+            ray: Ray::new(origin, dir),
+            arrival: Arrival {
+                p: origin,
+                pdf: f32::INFINITY,
+            },
+            vertex: 0,
+            scatter: 0,
+            media: MediumStack::default(),
+            wavelength: None,
+            internal: 0,
+        }
+    }
+}
+
 impl Integrator<'_> {
     /// Radiance along a primary ray (unit direction), whether it hit geometry, and the sample's
     /// pass values (recorded with `AOV`), traced one ray at a time: the reference of the render
@@ -162,22 +182,36 @@ impl Integrator<'_> {
                 defer: defer && !self.geom.has_alpha && !self.geom.has_thin,
                 pending: Vec::new(),
             },
-            w: Walk {
-                beta: Vec3::ONE,
-                ray: Ray::new(origin, dir),
-                arrival: Arrival {
-                    p: origin,
-                    pdf: f32::INFINITY,
-                },
-                vertex: 0,
-                scatter: 0,
-                media: MediumStack::default(),
-                wavelength: None,
-                internal: 0,
-            },
+            w: Walk::start(origin, dir),
             covered: false,
             live: true,
         }
+    }
+
+    /// Makes `p` (a path of this integrator's, ended or not) what [`Integrator::start_path`]
+    /// would start, in place: a wavefront's slots are reused run after run, and a fresh path
+    /// moved in would copy the whole of it. Its pending list keeps its capacity; without
+    /// `AOV` the pass values, which nothing writes then, stay as they are.
+    pub(crate) fn restart_path<const AOV: bool>(
+        &self,
+        p: &mut PathInFlight<AOV>,
+        origin: Vec3,
+        dir: Vec3,
+        defer: bool,
+    ) {
+        let path = &mut p.path;
+        path.l = Vec3::ZERO;
+        if AOV {
+            path.aov = SampleAov::default();
+            path.first_split = LobeSplit::DIFFUSE;
+            path.features = Features::default();
+        }
+        path.light_passes = self.light_passes;
+        path.defer = defer && !self.geom.has_alpha && !self.geom.has_thin;
+        path.pending.clear();
+        p.w = Walk::start(origin, dir);
+        p.covered = false;
+        p.live = true;
     }
 
     /// One vertex of path `p`: `hit` is the closest hit of its ray ([`PathInFlight::ray`]).
@@ -204,11 +238,11 @@ impl Integrator<'_> {
         stream: &SampleStream,
         hit: Option<Hit>,
     ) -> bool {
-        let bs = stream.bounce(w.vertex);
-        let ls =
-            (self.emissive.is_some() || self.geom.has_alpha).then(|| stream.vertex_light(w.vertex));
+        // Alpha decisions need the light set before the trace; otherwise it (and the bounce
+        // set) waits for a hit: most rays of open scenes escape and would draw them for nothing.
+        let alpha_ls = self.geom.has_alpha.then(|| stream.vertex_light(w.vertex));
         let ray = w.ray;
-        let u_alpha = ls.map_or(0.5, |l| l.alpha);
+        let u_alpha = alpha_ls.map_or(0.5, |l| l.alpha);
         let traced = self.trace(&ray, stream, w.vertex, u_alpha, Some(hit), w);
         let Some((hit, s, error)) = traced else {
             self.escape(path, w);
@@ -261,8 +295,14 @@ impl Integrator<'_> {
             sigma_a: w.media.sigma_a(),
         };
         self.direct_punctual(&v, w.beta, path);
+        let ls = alpha_ls.or_else(|| {
+            self.emissive
+                .is_some()
+                .then(|| stream.vertex_light(w.vertex))
+        });
         self.direct_emissive(&v, w.beta, ls.as_ref(), path);
         self.direct_environment(&v, w.beta, stream, path);
+        let bs = stream.bounce(w.vertex);
         self.continue_path(&v, &bs, medium, entering, w, path)
     }
 

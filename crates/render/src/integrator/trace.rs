@@ -23,7 +23,30 @@ impl Integrator<'_> {
     /// rounding-error bound of the hit point (from the ray segment that found it). Absorption
     /// of the media crossed multiplies `w.beta`. `first`, when given, is
     /// `accel.intersect(ray)` already found (by a batch query).
+    #[inline(always)]
     pub(super) fn trace(
+        &self,
+        ray: &Ray,
+        stream: &SampleStream,
+        vertex: u32,
+        u_alpha: f32,
+        first: Option<Option<Hit>>,
+        w: &mut Walk,
+    ) -> Option<(Hit, Surface, f32)> {
+        if self.geom.has_alpha || self.geom.has_refractive {
+            return self.trace_passing(ray, stream, vertex, u_alpha, first, w);
+        }
+        // Nothing to pass through: the first hit is the surface (inline, so that a ray that
+        // escapes costs no call and the surface is built where the vertex reads it).
+        let hit = first.unwrap_or_else(|| self.accel.intersect(ray))?;
+        let s = self
+            .geom
+            .surface_at(hit.instance, hit.triangle, hit.u, hit.v, true);
+        Some((hit, s, self.accel.spawn_point(ray, &hit).error))
+    }
+
+    /// [`Integrator::trace`] in a scene with alpha-cut, blended or refractive surfaces.
+    fn trace_passing(
         &self,
         ray: &Ray,
         stream: &SampleStream,
@@ -33,7 +56,6 @@ impl Integrator<'_> {
         w: &mut Walk,
     ) -> Option<(Hit, Surface, f32)> {
         let mut r = *ray;
-        let passes = self.geom.has_alpha || self.geom.has_refractive;
         for pass in 0..MAX_ALPHA_PASSES {
             let hit = match first.take() {
                 Some(hit) => hit?,
@@ -41,9 +63,6 @@ impl Integrator<'_> {
             };
             let s = self.geom.surface(hit.instance, hit.triangle, hit.u, hit.v);
             let error = self.accel.spawn_point(&r, &hit).error;
-            if !passes {
-                return Some((hit, s, error));
-            }
             let sigma = w.media.sigma_a();
             if sigma != Vec3::ZERO {
                 w.beta *= absorption(sigma, hit.t * r.dir.length());

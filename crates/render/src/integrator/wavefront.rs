@@ -94,14 +94,11 @@ impl<const AOV: bool> Wavefront<AOV> {
         // Slots are re-initialised in place: their pending lists keep their capacity.
         self.paths.truncate(starts.len());
         for (k, &(origin, dir, _)) in starts.iter().enumerate() {
-            let fresh = integrator.start_path::<AOV>(origin, dir, true);
             match self.paths.get_mut(k) {
-                Some(p) => {
-                    let pending = std::mem::take(&mut p.path.pending);
-                    *p = fresh;
-                    p.path.pending = pending;
-                }
-                None => self.paths.push(fresh),
+                Some(p) => integrator.restart_path(p, origin, dir, true),
+                None => self
+                    .paths
+                    .push(integrator.start_path::<AOV>(origin, dir, true)),
             }
         }
         self.live.clear();
