@@ -337,10 +337,14 @@ impl Accel {
             let end = (at + PACKET_LANES).min(n);
             let run = &rays[at..end];
             // Rays that provably meet nothing stay inactive (their answers: a miss); a run of
-            // only those is answered here, before the coherence test.
-            let mut active = 0u32;
-            for (i, ray) in run.iter().enumerate() {
-                active |= u32::from(!self.misses_bounds(ray)) << i;
+            // only those is answered here, before the coherence test. A run whose first ray
+            // starts inside the scene (a camera inside it, shadow rays) is not checked further:
+            // culling only saves work, and the runs that gain start outside.
+            let mut active = (1u32 << run.len()) - 1;
+            if !self.starts_inside(&run[0]) {
+                for (i, ray) in run.iter().enumerate() {
+                    active &= !(u32::from(self.misses_bounds(ray)) << i);
+                }
             }
             if active == 0 {
                 self.batch_impl::<true, L>(&rays[loose..at], &mut out[loose..at]);

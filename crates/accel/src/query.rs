@@ -66,11 +66,11 @@ impl Accel {
     /// root node as cheaply).
     #[inline(always)]
     pub(crate) fn misses_bounds(&self, ray: &Ray) -> bool {
-        let (lo, hi) = self.tlas_bounds;
-        let o = ray.origin;
-        if o.cmpge(lo).all() && o.cmple(hi).all() {
+        if self.starts_inside(ray) {
             return false;
         }
+        let (lo, hi) = self.tlas_bounds;
+        let o = ray.origin;
         if !(o.is_finite() && ray.dir.is_finite()) {
             return false;
         }
@@ -84,6 +84,14 @@ impl Accel {
         let enter = near.max_element().max(ray.tmin);
         let exit = far.min_element().min(ray.tmax);
         enter > exit
+    }
+
+    /// Whether `ray` starts inside the scene's bounds (then [`Accel::misses_bounds`] is false).
+    #[inline(always)]
+    pub(crate) fn starts_inside(&self, ray: &Ray) -> bool {
+        let (lo, hi) = self.tlas_bounds;
+        let o = glam::Vec3A::from(ray.origin);
+        (o.cmpge(lo.into()) & o.cmple(hi.into())).all()
     }
 
     #[inline(always)]
@@ -196,7 +204,21 @@ impl Accel {
             }
             return;
         };
-        // Only the rays that may meet something are walked.
+        // Only the rays that may meet something are walked. A batch whose first ray starts
+        // inside the scene (bounce and shadow rays, a camera inside) is walked whole, without
+        // the indirection: culling only saves work, and the batches that gain start outside.
+        if rays.first().is_none_or(|r| self.starts_inside(r)) {
+            return interleave::<AVX2, L>(
+                &blas.nodes,
+                n,
+                |i| {
+                    let ray = &rays[i];
+                    let (br, leaf) = Self::walk_start::<L>(entry, blas, ray);
+                    (br, ray.tmax, leaf)
+                },
+                |i, leaf, stopped| out[i] = leaf.answer(blas, entry, stopped),
+            );
+        }
         let mut walked = Vec::with_capacity(n);
         for (i, (ray, o)) in rays.iter().zip(out.iter_mut()).enumerate() {
             if self.misses_bounds(ray) {
