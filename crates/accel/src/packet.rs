@@ -72,9 +72,14 @@ fn coherent(rays: &[Ray]) -> bool {
         return false;
     };
     let sign = |d: glam::Vec3| d.cmplt(glam::Vec3::ZERO).bitmask();
-    let d0 = first.dir.normalize_or_zero();
+    // `cos(d, d0) >= PACKET_CONE_COS` without square roots or divisions: `d . d0 >= 0` and
+    // `(d . d0)^2 >= cos^2 |d|^2 |d0|^2`. Which runs are packets only changes the speed: the
+    // answers are the one-ray answers either way.
+    let d0 = first.dir;
+    let cos2_l0 = PACKET_CONE_COS * PACKET_CONE_COS * d0.length_squared();
     rays.iter().all(|r| {
-        sign(r.dir) == sign(first.dir) && r.dir.normalize_or_zero().dot(d0) >= PACKET_CONE_COS
+        let dot = r.dir.dot(d0);
+        sign(r.dir) == sign(d0) && dot >= 0.0 && dot * dot >= cos2_l0 * r.dir.length_squared()
     })
 }
 
