@@ -208,16 +208,7 @@ impl Accel {
         // inside the scene (bounce and shadow rays, a camera inside) is walked whole, without
         // the indirection: culling only saves work, and the batches that gain start outside.
         if rays.first().is_none_or(|r| self.starts_inside(r)) {
-            return interleave::<AVX2, L>(
-                &blas.nodes,
-                n,
-                |i| {
-                    let ray = &rays[i];
-                    let (br, leaf) = Self::walk_start::<L>(entry, blas, ray);
-                    (br, ray.tmax, leaf)
-                },
-                |i, leaf, stopped| out[i] = leaf.answer(blas, entry, stopped),
-            );
+            return Self::interleave_rays::<AVX2, L>(entry, blas, rays, out, n, |i| i);
         }
         let mut walked = Vec::with_capacity(n);
         for (i, (ray, o)) in rays.iter().zip(out.iter_mut()).enumerate() {
@@ -227,15 +218,30 @@ impl Accel {
                 walked.push(i);
             }
         }
+        Self::interleave_rays::<AVX2, L>(entry, blas, rays, out, walked.len(), |j| walked[j]);
+    }
+
+    /// The [`interleave`]d walks of `count` of `rays` over `blas`: walk `j` is ray `ray_of(j)`,
+    /// its answer goes to `out[ray_of(j)]`. A function per mapping (monomorphised), so that the
+    /// batch without culling pays no indirection.
+    #[inline(always)]
+    fn interleave_rays<'s, const AVX2: bool, L: BlasLeaf<'s>>(
+        entry: &Entry,
+        blas: &'s Blas,
+        rays: &[Ray],
+        out: &mut [L::Answer],
+        count: usize,
+        ray_of: impl Fn(usize) -> usize,
+    ) {
         interleave::<AVX2, L>(
             &blas.nodes,
-            walked.len(),
+            count,
             |j| {
-                let ray = &rays[walked[j]];
+                let ray = &rays[ray_of(j)];
                 let (br, leaf) = Self::walk_start::<L>(entry, blas, ray);
                 (br, ray.tmax, leaf)
             },
-            |j, leaf, stopped| out[walked[j]] = leaf.answer(blas, entry, stopped),
+            |j, leaf, stopped| out[ray_of(j)] = leaf.answer(blas, entry, stopped),
         );
     }
 

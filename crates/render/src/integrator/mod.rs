@@ -172,20 +172,23 @@ impl Integrator<'_> {
         dir: Vec3,
         defer: bool,
     ) -> PathInFlight<AOV> {
-        PathInFlight {
+        let mut p = PathInFlight {
             path: PathState {
                 l: Vec3::ZERO,
                 aov: SampleAov::default(),
                 first_split: LobeSplit::DIFFUSE,
                 features: Features::default(),
-                light_passes: self.light_passes,
-                defer: defer && !self.geom.has_alpha && !self.geom.has_thin,
+                light_passes: false,
+                defer: false,
                 pending: Vec::new(),
             },
             w: Walk::start(origin, dir),
             covered: false,
             live: true,
-        }
+        };
+        // The start itself in one place: `restart_path`.
+        self.restart_path(&mut p, origin, dir, defer);
+        p
     }
 
     /// Makes `p` (a path of this integrator's, ended or not) what [`Integrator::start_path`]
