@@ -29,6 +29,7 @@ mod film;
 mod filter;
 mod footprint;
 mod integrator;
+mod light_choice;
 mod lights;
 mod media;
 pub mod output;

@@ -1,8 +1,11 @@
 //! Lights: punctual lights (sampled by next-event estimation only: they are deltas) and emissive
-//! triangles, chosen in proportion to their power through an alias table. The triangle
-//! structures exist only when the scene has emissive triangles.
+//! triangles, chosen in proportion to their power through an alias table, with a bound of what
+//! they can send to a point (for the choice between them and the punctual lights,
+//! [`crate::light_choice`]). The triangle structures exist only when the scene has emissive
+//! triangles.
 
 use crate::color::luminance;
+use crate::light_choice::EmitterBounds;
 use crate::surface::Geometry;
 use crate::warp::AliasTable;
 use aperture_scene::{Light, LightKind};
@@ -23,6 +26,8 @@ pub(crate) struct EmissiveLights {
     /// For each instance, the light index of each of its triangles (`u32::MAX` when not
     /// emissive); `None` for instances without emissive triangles.
     index: Vec<Option<Box<[u32]>>>,
+    /// What they can send to a point, for the choice between them and punctual lights.
+    pub bounds: EmitterBounds,
 }
 
 impl EmissiveLights {
@@ -57,13 +62,21 @@ impl EmissiveLights {
             }
             index.push(map);
         }
-        if triangles.is_empty() {
-            return None;
-        }
+        let corners = |t: &EmissiveTriangle| {
+            [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]
+                .map(|(b1, b2)| geom.emitter_surface(t.instance, t.triangle, b1, b2).p)
+        };
+        let bounds = EmitterBounds::new(
+            triangles
+                .iter()
+                .zip(&weights)
+                .map(|(t, &w)| (corners(t), w as f32)),
+        )?;
         Some(Self {
             triangles,
             table: AliasTable::new(&weights),
             index,
+            bounds,
         })
     }
 

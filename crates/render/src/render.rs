@@ -428,6 +428,11 @@ fn integrator<'a>(scene: &'a Scene, accel: &'a Accel, opts: &RenderOptions) -> I
     let (model, _) = opts.transmission.resolve(scene);
     let geom = Geometry::with_transmission(scene, opts.material_override, model);
     let emissive = EmissiveLights::build(&geom);
+    let pick_light = crate::light_choice::Candidates {
+        lights: &scene.lights,
+        emitters: emissive.as_ref().map(|e| &e.bounds),
+    }
+    .choose();
     Integrator {
         geom,
         accel,
@@ -437,6 +442,7 @@ fn integrator<'a>(scene: &'a Scene, accel: &'a Accel, opts: &RenderOptions) -> I
         clamp: opts.clamp,
         light_passes: opts.passes.has_light_passes(),
         energy_compensation: opts.energy_compensation,
+        pick_light,
     }
 }
 
@@ -750,6 +756,82 @@ mod tests {
             integrator.light_passes = true;
             check_wavefront::<false>(&scene, &integrator, &opts);
             check_wavefront::<true>(&scene, &integrator, &opts);
+        }
+    }
+
+    #[test]
+    fn one_light_per_vertex_converges_to_every_light() {
+        // Two point lights and an emissive ball: three candidates, the ball picked at some
+        // vertices and not at others, so both its light samples and its MIS weights depend
+        // on the pick. The image's mean radiance with one light picked per vertex equals
+        // (within the spread of independently scrambled runs) the mean with every light
+        // sampled at every vertex, as it must for an unbiased pick.
+        let mut scene = busy_scene();
+        scene.lights.push(aperture_scene::Light {
+            name: None,
+            kind: aperture_scene::LightKind::Point,
+            position: Vec3::new(-0.5, 1.0, 2.0),
+            direction: Vec3::NEG_Y,
+            intensity: Vec3::new(4.0, 6.0, 8.0),
+        });
+        let accel = build_accel(&scene, Default::default());
+        let opts = RenderOptions {
+            width: 48,
+            height: 32,
+            spp: 64,
+            ..RenderOptions::default()
+        };
+        let camera = Camera::new(&scene.cameras[0], opts.width, opts.height);
+        let filter = Filter::new(opts.filter);
+        let mean = |pick: bool, seed: u32| {
+            let mut integrator = integrator(&scene, &accel, &opts);
+            assert!(integrator.pick_light);
+            integrator.pick_light = pick;
+            let opts = RenderOptions {
+                seed,
+                ..opts.clone()
+            };
+            let job = Job {
+                integrator: &integrator,
+                camera: &camera,
+                filter: &filter,
+                opts: &opts,
+                pinhole: false,
+                layout: AovLayout::default(),
+                ids: CryptoIds::default(),
+            };
+            let mut sum = Vec3::ZERO;
+            for (x, y) in (0..opts.height).flat_map(|y| (0..opts.width).map(move |x| (x, y))) {
+                for i in 0..opts.spp {
+                    let (stream, ray) = job.camera_ray(x, y, i);
+                    if let Some(r) = ray {
+                        sum += integrator.li_alone::<false>(r.origin, r.dir, &stream).0;
+                    }
+                }
+            }
+            sum / (opts.width * opts.height * opts.spp) as f32
+        };
+        // Mean and standard error over seeds (each an independent scramble).
+        let runs = |pick: bool| {
+            let m: Vec<Vec3> = (0..6).map(|seed| mean(pick, seed)).collect();
+            let avg = m.iter().sum::<Vec3>() / m.len() as f32;
+            let var = m.iter().map(|x| (*x - avg) * (*x - avg)).sum::<Vec3>() / 5.0;
+            (avg, (var / 6.0).powf(0.5))
+        };
+        let (picked, e_picked) = runs(true);
+        let (every, e_every) = runs(false);
+        assert!(every.min_element() > 0.01, "{every}");
+        for c in 0..3 {
+            let tolerance = 4.0 * (e_picked[c].powi(2) + e_every[c].powi(2)).sqrt();
+            assert!(
+                (picked[c] - every[c]).abs() <= tolerance,
+                "channel {c}: {picked} against {every} (tolerance {tolerance})"
+            );
+            // The spread is small enough for the comparison to mean something.
+            assert!(
+                tolerance < 0.01 * every[c],
+                "channel {c}: tolerance {tolerance}"
+            );
         }
     }
 

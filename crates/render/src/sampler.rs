@@ -195,11 +195,11 @@ pub struct BounceSample {
     pub rr: f32,
 }
 
-/// The values a path vertex draws only in scenes that need them: emissive triangles to
-/// sample, alpha-cut surfaces to pass.
+/// The values a path vertex draws only in scenes that need them: lights to choose between,
+/// emissive triangles to sample, alpha-cut surfaces to pass.
 #[derive(Debug, Clone, Copy)]
 pub struct VertexLightSample {
-    /// Which emissive triangle to sample.
+    /// Which light to sample, then (what the choice leaves of it) which emissive triangle.
     pub light_pick: f32,
     /// Where on it.
     pub light: [f32; 2],
@@ -252,8 +252,8 @@ impl SampleStream {
     }
 
     /// The light and alpha values of path vertex `k`: dimension set `2 + 2k`. Drawn apart from
-    /// [`SampleStream::bounce`] so that scenes without emitters or alpha skip its cost (a
-    /// twelfth of a diffuse render's time); each value is the same either way.
+    /// [`SampleStream::bounce`] so that scenes without emitters, a light choice or alpha skip
+    /// its cost (a twelfth of a diffuse render's time); each value is the same either way.
     pub fn vertex_light(&self, k: u32) -> VertexLightSample {
         let b = self.set_4d(2 + 2 * k);
         VertexLightSample {

@@ -3,6 +3,7 @@
 
 use super::{Integrator, PathState, PendingLight, MAX_ALPHA_PASSES};
 use crate::bsdf::{Bsdf, Frame, LobeSplit};
+use crate::light_choice::{Candidates, Choice, Pick};
 use crate::lights::punctual_incident;
 use crate::sampler::{SampleStream, VertexLightSample};
 use crate::surface::SurfaceKind;
@@ -32,6 +33,8 @@ pub(super) struct Vertex<'b> {
     pub vertex: u32,
     /// Absorption of the medium the vertex lies in.
     pub sigma_a: Vec3,
+    /// Probability that light sampling picks the emitters here (1 without a choice).
+    pub emitters: f32,
 }
 
 impl Vertex<'_> {
@@ -49,44 +52,87 @@ impl Vertex<'_> {
 }
 
 impl Integrator<'_> {
-    /// Next-event estimation towards every punctual light (deltas: light sampling only).
-    pub(super) fn direct_punctual<const AOV: bool>(
-        &self,
-        v: &Vertex<'_>,
-        beta: Vec3,
-        path: &mut PathState<AOV>,
-    ) {
-        for light in &self.geom.scene.lights {
-            let Some((wi, dist, e)) = punctual_incident(light, v.p) else {
-                continue;
-            };
-            if e == Vec3::ZERO {
-                continue;
-            }
-            let Some(origin) = v.origin_towards(wi) else {
-                continue;
-            };
-            let wi_l = v.frame.to_local(wi);
-            let (f, _) = v.bsdf.eval(v.wo_l, wi_l);
-            let c = beta * f * wi_l.z.abs() * e;
-            if c != Vec3::ZERO {
-                let dist = if dist.is_finite() {
-                    (light.position - origin).length()
-                } else {
-                    dist
-                };
-                self.add_direct(v, path, c, wi_l, origin, wi, dist);
-            }
+    /// What a vertex may pick from when it samples one light.
+    pub(super) fn candidates(&self) -> Candidates<'_> {
+        Candidates {
+            lights: &self.geom.scene.lights,
+            emitters: self.emissive.as_ref().map(|e| &e.bounds),
         }
     }
 
-    /// Next-event estimation towards one emissive triangle picked by power, weighted against
-    /// BSDF sampling by MIS.
-    pub(super) fn direct_emissive<const AOV: bool>(
+    /// Next-event estimation towards the light `choice` picked, its contribution divided by
+    /// the probability of the pick; towards every light when the scene leaves no choice (one
+    /// punctual light, or emitters alone; `choice` is `None`).
+    pub(super) fn direct_lights<const AOV: bool>(
         &self,
         v: &Vertex<'_>,
         beta: Vec3,
         ls: Option<&VertexLightSample>,
+        choice: Option<Choice>,
+        path: &mut PathState<AOV>,
+    ) {
+        let Some(c) = choice else {
+            for light in &self.geom.scene.lights {
+                self.direct_punctual(v, light, beta, path);
+            }
+            self.direct_emissive(v, beta, ls, 1.0, path);
+            return;
+        };
+        match c.pick {
+            Some(Pick::Punctual(i)) => {
+                if let Some(light) = self.geom.scene.lights.get(i) {
+                    self.direct_punctual(v, light, beta / c.probability, path);
+                }
+            }
+            Some(Pick::Emitters) => {
+                let ls = ls.map(|l| VertexLightSample {
+                    light_pick: c.u,
+                    ..*l
+                });
+                self.direct_emissive(v, beta, ls.as_ref(), c.probability, path);
+            }
+            None => {}
+        }
+    }
+
+    /// Next-event estimation towards a punctual light (a delta: light sampling only).
+    fn direct_punctual<const AOV: bool>(
+        &self,
+        v: &Vertex<'_>,
+        light: &aperture_scene::Light,
+        beta: Vec3,
+        path: &mut PathState<AOV>,
+    ) {
+        let Some((wi, dist, e)) = punctual_incident(light, v.p) else {
+            return;
+        };
+        if e == Vec3::ZERO {
+            return;
+        }
+        let Some(origin) = v.origin_towards(wi) else {
+            return;
+        };
+        let wi_l = v.frame.to_local(wi);
+        let (f, _) = v.bsdf.eval(v.wo_l, wi_l);
+        let c = beta * f * wi_l.z.abs() * e;
+        if c != Vec3::ZERO {
+            let dist = if dist.is_finite() {
+                (light.position - origin).length()
+            } else {
+                dist
+            };
+            self.add_direct(v, path, c, wi_l, origin, wi, dist);
+        }
+    }
+
+    /// Next-event estimation towards one emissive triangle picked by power, weighted against
+    /// BSDF sampling by MIS; `pick` is the probability that the emitters were picked at all.
+    fn direct_emissive<const AOV: bool>(
+        &self,
+        v: &Vertex<'_>,
+        beta: Vec3,
+        ls: Option<&VertexLightSample>,
+        pick: f32,
         path: &mut PathState<AOV>,
     ) {
         let (Some(em), Some(bs)) = (&self.emissive, ls) else {
@@ -109,7 +155,7 @@ impl Integrator<'_> {
         let Some(origin) = v.origin_towards(wi) else {
             return;
         };
-        let light_pdf = em.table.pmf(i) / q.area * d2 / cos_l;
+        let light_pdf = em.table.pmf(i) * pick / q.area * d2 / cos_l;
         let wi_l = v.frame.to_local(wi);
         let (f, bsdf_pdf) = v.bsdf.eval(v.wo_l, wi_l);
         let le = self.geom.emission(&q);

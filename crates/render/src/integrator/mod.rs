@@ -1,6 +1,8 @@
 //! Unidirectional path tracing with next-event estimation: punctual lights by NEE alone (they are
 //! deltas), emissive triangles and environment images by NEE and BSDF sampling combined with
 //! multiple importance sampling (power heuristic). Russian roulette from the fourth vertex on.
+//! Each vertex sends one shadow ray to one light, picked by its importance there among the
+//! punctual lights and the emitters ([`crate::light_choice`]), plus one to an environment image.
 //!
 //! `max_bounces` has Blender Cycles' meaning: 0 is direct light only (the camera ray's hit is lit
 //! by light sampling and by one BSDF-sampled ray that may find an emitter or the environment).
@@ -52,6 +54,9 @@ pub(crate) struct Integrator<'a> {
     pub light_passes: bool,
     /// Multiple-scattering energy compensation of microfacet lobes (see `bsdf::energy`).
     pub energy_compensation: bool,
+    /// Whether each vertex picks one light to sample (see [`crate::light_choice`]): the scene
+    /// has two candidates or more (punctual lights, and its emitters as one).
+    pub pick_light: bool,
 }
 
 /// Blender Cycles' "Clamp Direct" / "Clamp Indirect": the largest value one sample's
@@ -104,6 +109,8 @@ struct Arrival {
     /// Solid-angle density of the direction it drew; ∞ for the camera and delta lobes (no
     /// light sample could have found the emitter: weight 1).
     pdf: f32,
+    /// Probability that light sampling picked the emitters there (1 without a choice).
+    emitters: f32,
 }
 
 /// Where a path is between vertices.
@@ -133,6 +140,7 @@ impl Walk {
             arrival: Arrival {
                 p: origin,
                 pdf: f32::INFINITY,
+                emitters: 1.0,
             },
             vertex: 0,
             scatter: 0,
@@ -281,6 +289,14 @@ impl Integrator<'_> {
             let rough = bsdf.glossy_is_rough();
             path.features.at_surface(&mut path.aov, &albedos, rough, ns);
         }
+        let two_sided = bsdf.transmits() && kind != SurfaceKind::Refractive;
+        let ls = alpha_ls.or_else(|| {
+            (self.emissive.is_some() || self.pick_light).then(|| stream.vertex_light(w.vertex))
+        });
+        let choice = match (self.pick_light, &ls) {
+            (true, Some(l)) => Some(self.candidates().pick(s.p, ng, two_sided, l.light_pick)),
+            _ => None,
+        };
         let v = direct::Vertex {
             bsdf: &bsdf,
             frame,
@@ -292,18 +308,13 @@ impl Integrator<'_> {
             // not.
             p_out: SpawnPoint { p: s.p, error }.origin(ng),
             spawn: SpawnPoint { p: s.p, error },
-            two_sided: bsdf.transmits() && kind != SurfaceKind::Refractive,
+            two_sided,
             scatter: w.scatter,
             vertex: w.vertex,
             sigma_a: w.media.sigma_a(),
+            emitters: choice.map_or(1.0, |c| c.emitters),
         };
-        self.direct_punctual(&v, w.beta, path);
-        let ls = alpha_ls.or_else(|| {
-            self.emissive
-                .is_some()
-                .then(|| stream.vertex_light(w.vertex))
-        });
-        self.direct_emissive(&v, w.beta, ls.as_ref(), path);
+        self.direct_lights(&v, w.beta, ls.as_ref(), choice, path);
         self.direct_environment(&v, w.beta, stream, path);
         let bs = stream.bounce(w.vertex);
         self.continue_path(&v, &bs, medium, entering, w, path)
@@ -398,6 +409,7 @@ impl Integrator<'_> {
             w.arrival = Arrival {
                 p: v.p,
                 pdf: if unsampled { f32::INFINITY } else { sample.pdf },
+                emitters: v.emitters,
             };
         }
         if w.vertex >= RR_START {
@@ -448,7 +460,7 @@ impl Integrator<'_> {
         }
         match &self.emissive {
             Some(em) => {
-                let pick = em.pick_probability(hit.instance, hit.triangle);
+                let pick = em.pick_probability(hit.instance, hit.triangle) * arrival.emitters;
                 let cos_l = ng.dot(wo).abs();
                 let d2 = (s.p - arrival.p).length_squared();
                 let light_pdf = if cos_l > 0.0 && s.area > 0.0 {
