@@ -21,11 +21,13 @@ use glam::Vec3;
 /// their normals and their power (two-sided emitters, as the integrator's).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct EmitterBounds {
-    lo: Vec3,
-    hi: Vec3,
-    /// Axis and cosine of the half-angle of a cone holding every triangle's normal.
+    /// Centre and squared radius of a sphere around their box.
+    centre: Vec3,
+    radius2: f32,
+    /// Axis, cosine and sine of the half-angle of a cone holding every triangle's normal.
     axis: Vec3,
     cos_o: f32,
+    sin_o: f32,
     /// Total power, in the units of the punctual importance (radiance × area).
     phi: f32,
 }
@@ -64,10 +66,11 @@ impl EmitterBounds {
                 .max(-1.0)
         };
         Some(Self {
-            lo,
-            hi,
+            centre: (lo + hi) * 0.5,
+            radius2: (hi - lo).length_squared() * 0.25,
             axis,
             cos_o,
+            sin_o: (1.0 - cos_o * cos_o).max(0.0).sqrt(),
             phi: phi as f32,
         })
     }
@@ -76,8 +79,7 @@ impl EmitterBounds {
     /// `p` with normal `n` (facing the side light is received from), or from both sides of
     /// it when `two_sided`. Zero only where no emitter in the bound can light the point.
     pub fn importance(&self, p: Vec3, n: Vec3, two_sided: bool) -> f32 {
-        let centre = (self.lo + self.hi) * 0.5;
-        let radius2 = (self.hi - self.lo).length_squared() * 0.25;
+        let (centre, radius2) = (self.centre, self.radius2);
         let d2 = p.distance_squared(centre);
         // Directions from `p` into the bounding sphere: a cone of half-angle θ_b around the
         // centre's direction (every direction when `p` is inside).
@@ -92,8 +94,7 @@ impl EmitterBounds {
         // sided emitters light both ways).
         let cos_w = self.axis.dot(to_p).abs();
         let sin_w = (1.0 - cos_w * cos_w).max(0.0).sqrt();
-        let sin_o = (1.0 - self.cos_o * self.cos_o).max(0.0).sqrt();
-        let (sin_x, cos_x) = angle_less(sin_w, cos_w, sin_o, self.cos_o);
+        let (sin_x, cos_x) = angle_less(sin_w, cos_w, self.sin_o, self.cos_o);
         let (_, cos_emit) = angle_less(sin_x, cos_x, sin_b, cos_b);
         // Area emitters light their whole hemisphere: nothing beyond 90° of every normal.
         if cos_emit <= 0.0 && d2 > radius2 {
@@ -181,9 +182,24 @@ impl Candidates<'_> {
     /// `two_sided`) in proportion to the importances, from the uniform `u` (remapped into
     /// [`Choice::u`]). `pick` is `None` when no light can light the point.
     pub fn pick(&self, p: Vec3, n: Vec3, two_sided: bool, u: f32) -> Choice {
-        let punctual = |l: &Light| punctual_importance(l, p, n, two_sided);
+        // Up to `KEPT` punctual importances are kept from the sum for the walk; more are
+        // computed again (the same arithmetic, so the same values).
+        const KEPT: usize = 8;
+        let mut kept = [0.0f32; KEPT];
         let w_emit = self.emitters.map_or(0.0, |b| b.importance(p, n, two_sided));
-        let total: f32 = self.lights.iter().map(punctual).sum::<f32>() + w_emit;
+        let mut total = 0.0f32;
+        for (i, l) in self.lights.iter().enumerate() {
+            let w = punctual_importance(l, p, n, two_sided);
+            if let Some(k) = kept.get_mut(i) {
+                *k = w;
+            }
+            total += w;
+        }
+        total += w_emit;
+        let punctual = |i: usize, l: &Light| match kept.get(i) {
+            Some(&w) if self.lights.len() <= KEPT => w,
+            _ => punctual_importance(l, p, n, two_sided),
+        };
         let none = Choice {
             pick: None,
             probability: 0.0,
@@ -198,7 +214,7 @@ impl Candidates<'_> {
         let mut last = None;
         // The same sums in the same order as `total`, so the walk ends where `target` falls.
         for (i, l) in self.lights.iter().enumerate() {
-            let w = punctual(l);
+            let w = punctual(i, l);
             if w <= 0.0 {
                 continue;
             }
