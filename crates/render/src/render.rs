@@ -791,15 +791,7 @@ mod tests {
                 seed,
                 ..opts.clone()
             };
-            let job = Job {
-                integrator: &integrator,
-                camera: &camera,
-                filter: &filter,
-                opts: &opts,
-                pinhole: false,
-                layout: AovLayout::default(),
-                ids: CryptoIds::default(),
-            };
+            let job = lens_job(&integrator, &camera, &filter, &opts);
             let mut sum = Vec3::ZERO;
             for (x, y) in (0..opts.height).flat_map(|y| (0..opts.width).map(move |x| (x, y))) {
                 for i in 0..opts.spp {
@@ -835,6 +827,24 @@ mod tests {
         }
     }
 
+    /// A job of a thin-lens camera without passes, for tests that trace its samples.
+    fn lens_job<'a>(
+        integrator: &'a Integrator<'a>,
+        camera: &'a Camera,
+        filter: &'a Filter,
+        opts: &'a RenderOptions,
+    ) -> Job<'a> {
+        Job {
+            integrator,
+            camera,
+            filter,
+            opts,
+            pinhole: false,
+            layout: AovLayout::default(),
+            ids: CryptoIds::default(),
+        }
+    }
+
     /// [`Job::samples`] against each sample traced alone ([`Integrator::li_alone`]).
     fn check_wavefront<const AOV: bool>(
         scene: &Scene,
@@ -843,15 +853,7 @@ mod tests {
     ) {
         let camera = Camera::new(&scene.cameras[0], opts.width, opts.height);
         let filter = Filter::new(opts.filter);
-        let job = Job {
-            integrator,
-            camera: &camera,
-            filter: &filter,
-            opts,
-            pinhole: false,
-            layout: AovLayout::default(),
-            ids: CryptoIds::default(),
-        };
+        let job = lens_job(integrator, &camera, &filter, opts);
         // More items than two runs, in an order that jumps between pixels and samples.
         let items: Vec<(usize, u32, u32, u32)> = (0..opts.height)
             .flat_map(|y| (0..opts.width).map(move |x| (x, y)))
