@@ -1,5 +1,5 @@
 //! Which light a path vertex samples: one shadow ray per vertex, however many lights the scene
-//! has (pbrt-v4's exhaustive light sampler, Cycles' light tree at its root).
+//! has (as pbrt-v4's exhaustive light sampler; an environment image keeps its own shadow ray).
 //!
 //! Every punctual light and the scene's emissive triangles (as one candidate) get an importance
 //! at the vertex, and one is picked in proportion to it:
@@ -10,7 +10,7 @@
 //!
 //! A light of zero importance contributes nothing there, so the pick is unbiased; a light of
 //! positive importance is picked with that probability and its contribution divided by it.
-//! Scenes with a single candidate never pick (see [`Candidates::pick`]).
+//! Scenes with a single candidate never pick (see [`Candidates::choose`]).
 
 use crate::color::luminance;
 use crate::lights::punctual_incident;
