@@ -196,57 +196,47 @@ impl Candidates<'_> {
             total += w;
         }
         total += w_emit;
-        let punctual = |i: usize, l: &Light| match kept.get(i) {
-            Some(&w) if self.lights.len() <= KEPT => w,
-            _ => punctual_importance(l, p, n, two_sided),
-        };
-        let none = Choice {
+        let mut choice = Choice {
             pick: None,
             probability: 0.0,
             emitters: 0.0,
             u,
         };
         if !(total > 0.0 && total.is_finite()) {
-            return none;
+            return choice;
         }
+        choice.emitters = w_emit / total;
+        let weight = |pick: Pick| match pick {
+            Pick::Punctual(i) if self.lights.len() <= KEPT => kept[i],
+            Pick::Punctual(i) => punctual_importance(&self.lights[i], p, n, two_sided),
+            Pick::Emitters => w_emit,
+        };
+        // The same weights in the same order as `total`, so the walk ends where `target`
+        // falls; should rounding leave it past the end, the last candidate that can light the
+        // point takes the rest.
         let target = u * total;
         let mut below = 0.0f32;
         let mut last = None;
-        // The same sums in the same order as `total`, so the walk ends where `target` falls.
-        for (i, l) in self.lights.iter().enumerate() {
-            let w = punctual(i, l);
+        let all = (0..self.lights.len())
+            .map(Pick::Punctual)
+            .chain([Pick::Emitters]);
+        for pick in all {
+            let w = weight(pick);
             if w <= 0.0 {
                 continue;
             }
-            if target < below + w || (w_emit <= 0.0 && i + 1 == self.lights.len()) {
-                return Choice {
-                    pick: Some(Pick::Punctual(i)),
-                    probability: w / total,
-                    emitters: w_emit / total,
-                    u: remap(target - below, w),
-                };
+            last = Some((pick, w, below));
+            if target < below + w {
+                break;
             }
             below += w;
-            last = Some((i, w));
         }
-        if w_emit > 0.0 {
-            return Choice {
-                pick: Some(Pick::Emitters),
-                probability: w_emit / total,
-                emitters: w_emit / total,
-                u: remap(target - below, w_emit),
-            };
+        if let Some((pick, w, below)) = last {
+            choice.pick = Some(pick);
+            choice.probability = w / total;
+            choice.u = remap(target - below, w);
         }
-        // Rounding left `target` past the last positive punctual light: it takes the rest.
-        match last {
-            Some((i, w)) => Choice {
-                pick: Some(Pick::Punctual(i)),
-                probability: w / total,
-                emitters: 0.0,
-                u: remap(target - (below - w), w),
-            },
-            None => none,
-        }
+        choice
     }
 }
 

@@ -62,6 +62,9 @@ impl EmissiveLights {
             }
             index.push(map);
         }
+        if triangles.is_empty() {
+            return None;
+        }
         let corners = |t: &EmissiveTriangle| {
             [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]
                 .map(|(b1, b2)| geom.emitter_surface(t.instance, t.triangle, b1, b2).p)
@@ -71,7 +74,7 @@ impl EmissiveLights {
                 .iter()
                 .zip(&weights)
                 .map(|(t, &w)| (corners(t), w as f32)),
-        )?;
+        )?; // None only for non-finite corners, which a kept (finite-area) triangle has not.
         Some(Self {
             triangles,
             table: AliasTable::new(&weights),

@@ -428,12 +428,7 @@ fn integrator<'a>(scene: &'a Scene, accel: &'a Accel, opts: &RenderOptions) -> I
     let (model, _) = opts.transmission.resolve(scene);
     let geom = Geometry::with_transmission(scene, opts.material_override, model);
     let emissive = EmissiveLights::build(&geom);
-    let pick_light = crate::light_choice::Candidates {
-        lights: &scene.lights,
-        emitters: emissive.as_ref().map(|e| &e.bounds),
-    }
-    .choose();
-    Integrator {
+    let mut integrator = Integrator {
         geom,
         accel,
         emissive,
@@ -442,8 +437,10 @@ fn integrator<'a>(scene: &'a Scene, accel: &'a Accel, opts: &RenderOptions) -> I
         clamp: opts.clamp,
         light_passes: opts.passes.has_light_passes(),
         energy_compensation: opts.energy_compensation,
-        pick_light,
-    }
+        pick_light: false,
+    };
+    integrator.pick_light = integrator.candidates().choose();
+    integrator
 }
 
 /// What every sample of one render shares.

@@ -53,7 +53,7 @@ impl Vertex<'_> {
 
 impl Integrator<'_> {
     /// What a vertex may pick from when it samples one light.
-    pub(super) fn candidates(&self) -> Candidates<'_> {
+    pub(crate) fn candidates(&self) -> Candidates<'_> {
         Candidates {
             lights: &self.geom.scene.lights,
             emitters: self.emissive.as_ref().map(|e| &e.bounds),
