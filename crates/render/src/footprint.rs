@@ -8,7 +8,6 @@ use std::path::Path;
 use aperture_budget::{human_bytes, MemoryBudget, OverBudget};
 
 use crate::output::{channels, film_bytes_per_pixel, ExrOptions};
-use crate::render::TILE;
 use crate::{PassSet, RenderOptions, Window};
 
 /// The kinds of output file, which need memory differently.
@@ -81,10 +80,11 @@ pub fn footprint(opts: &RenderOptions, kind: OutputKind, exr: &ExrOptions) -> Fo
             let specs = channels::channels(passes, exr.half);
             let bpp = film_bytes_per_pixel(passes, adaptive, specs.len()) as u64;
             let w = u64::from(window.width);
-            // As output::bands: whole rows within the band budget, at least one tile row.
-            let rows =
-                (exr.band_bytes as u64 / (bpp * w).max(1)) / u64::from(TILE) * u64::from(TILE);
-            let rows = rows.max(u64::from(TILE)).min(u64::from(window.height));
+            let rows = u64::from(crate::output::band_rows(
+                window,
+                exr.band_bytes,
+                bpp as usize,
+            ));
             // Adaptive rounds render an apron of one pixel per round around the band.
             let apron = if adaptive { 2 * 17 } else { 0 };
             let band = (w + apron) * (rows + apron);

@@ -150,10 +150,7 @@ pub fn render_exr(
         layout.metadata.push((flag, MetaValue::Int(0)));
     }
     let bpp = film_bytes_per_pixel(passes, opts.adaptive.is_some(), layout.channels.len());
-    let bands = bands(
-        window,
-        exr.band_bytes / (bpp * window.width as usize).max(1),
-    );
+    let bands = bands(window, band_rows(window, exr.band_bytes, bpp));
     let units: Vec<usize> = bands
         .iter()
         .map(|b| crate::render::progress_units(&opts, *b))
@@ -241,11 +238,18 @@ fn placement(window: Window, whole: Window) -> Option<Placement> {
     })
 }
 
-/// `window` cut into bands of whole rows, each at most `max_pixels` pixels (but at least one
-/// tile row high), top to bottom.
-fn bands(window: Window, max_pixels: usize) -> Vec<Window> {
-    let rows = (max_pixels / window.width as usize) as u32;
-    let rows = (rows / TILE * TILE).max(TILE).min(window.height);
+/// Rows of a band of `window`: whole tile rows whose sums, at `bpp` bytes a pixel, fit in
+/// `band_bytes` (at least one tile row, at most the window). The render and its memory
+/// estimate ([`crate::footprint`]) both take it from here.
+pub(crate) fn band_rows(window: Window, band_bytes: usize, bpp: usize) -> u32 {
+    let rows = band_bytes / (bpp * window.width as usize).max(1);
+    let rows = u32::try_from(rows).unwrap_or(u32::MAX);
+    (rows / TILE * TILE).max(TILE).min(window.height)
+}
+
+/// `window` cut into bands of `rows` rows (the last may be shorter), top to bottom.
+fn bands(window: Window, rows: u32) -> Vec<Window> {
+    let rows = rows.max(1);
     (0..window.height.div_ceil(rows))
         .map(|k| {
             let y0 = window.y0 + k * rows;
@@ -387,13 +391,42 @@ mod tests {
             width: 100,
             height: 150,
         };
-        let b = bands(w, 100 * 70);
+        // A budget of 70 rows of 100 pixels at 8 bytes: two tile rows per band.
+        let b = bands(w, band_rows(w, 100 * 70 * 8, 8));
         assert_eq!(b.iter().map(|b| b.height).collect::<Vec<_>>(), [64, 64, 22]);
         assert_eq!(b[1].y0, 74);
         assert!(b.iter().all(|b| b.x0 == 3 && b.width == 100));
         // Tiny budgets still make progress a tile row at a time; huge ones take it all.
-        assert_eq!(bands(w, 1)[0].height, TILE);
-        assert_eq!(bands(w, usize::MAX).len(), 1);
+        assert_eq!(band_rows(w, 1, 8), TILE);
+        assert_eq!(bands(w, band_rows(w, usize::MAX, 8)).len(), 1);
+    }
+
+    #[test]
+    fn the_default_budget_renders_common_sizes_in_one_band() {
+        // The budget is bytes: it was once divided by the width twice, which cut a 320x240
+        // beauty render into four bands and a 1920x1080 one into 34, each rebuilding the
+        // integrator and waiting for its last tile.
+        let beauty = film_bytes_per_pixel(PassSet::NONE, false, 4);
+        let compositing = film_bytes_per_pixel(PassSet::compositing(), false, 40);
+        for (width, height, bpp) in [
+            (320, 240, beauty),
+            (1920, 1080, beauty),
+            (320, 240, compositing),
+            (640, 480, compositing),
+        ] {
+            let w = Window::whole(width, height);
+            assert_eq!(
+                bands(w, band_rows(w, BAND_BYTES, bpp)).len(),
+                1,
+                "{width}x{height}"
+            );
+        }
+        // Past the budget, bands hold whole tile rows within it.
+        let w = Window::whole(8192, 8192);
+        let rows = band_rows(w, BAND_BYTES, compositing);
+        let bpp = compositing;
+        assert!(rows % TILE == 0 && rows < w.height);
+        assert!(rows as usize * w.width as usize * bpp <= BAND_BYTES);
     }
 
     #[test]
