@@ -16,7 +16,10 @@ thin-lens camera). From that one definition the script writes
 
 For each renderer a series: a reference of two independent halves (``rmse(a, b) / 2`` is its
 noise RMSE), then per spp budget the median *render-only* time of ``--repeats`` renders, with
-RMSE / rel. MSE / MAE against that renderer's own reference, written as
+RMSE / rel. MSE / MAE against that renderer's own reference. ``all`` keeps one process per
+renderer loaded and alternates them, round by round within each budget, so that a machine
+whose speed drifts during the run (this one's moved by 15-40 % within an hour) moves all three
+alike (``series`` times one renderer alone). Written as
 ``OUT/<scene>/<renderer>.csv`` in the columns of ``aperture bench``'s results.csv (usable with
 ``aperture bench --series``). ``summary`` prints time to each RMSE target, the ratios and the
 per-sample costs. See README.md ("Three more scenes").
@@ -459,43 +462,128 @@ def write(args):
         print(f"wrote {os.path.relpath(path)} ({triangles(scene)} triangles, {size / 1e6:.1f} MB of geometry)", flush=True)
 
 
-def run_series(args):
-    import tempfile
+def make_renderer(args, tmp):
+    """The render(spp, seed) of `args.renderer` on `args.scene`, and the image size."""
     scene = scene_def(args.scene)
     gltf = os.path.abspath(gltf_path(scene, args.output))
     size = tuple(int(v) for v in args.size.split("x"))
+    if args.renderer == "mitsuba":
+        return mitsuba_renderer(scene, args.output, size, args.threads, args.variant), size
+    if args.renderer == "cycles":
+        return cycles_renderer(scene, gltf, size, args.threads, tmp), size
+    return aperture_renderer(scene, gltf, args.aperture, size, args.threads, tmp, args.bvh_quality), size
+
+
+def run_series(args):
+    import tempfile
     with tempfile.TemporaryDirectory() as tmp:
-        if args.renderer == "mitsuba":
-            render = mitsuba_renderer(scene, args.output, size, args.threads, args.variant)
-        elif args.renderer == "cycles":
-            render = cycles_renderer(scene, gltf, size, args.threads, tmp)
-        else:
-            render = aperture_renderer(scene, gltf, args.aperture, size, args.threads, tmp, args.bvh_quality)
+        render, size = make_renderer(args, tmp)
         series(render, args.renderer, args, size)
 
 
+def run_worker(args):
+    """One renderer kept loaded for `all`: its reference first, then a render per line "SPP SEED"
+    on stdin, answered on file descriptor `--result-fd` (the renderers print on stdout) with a
+    JSON line: seconds and the metrics against the reference."""
+    import tempfile
+    answer = os.fdopen(args.result_fd, "w")
+    with tempfile.TemporaryDirectory() as tmp:
+        render, size = make_renderer(args, tmp)
+        out_dir = os.path.join(args.output, args.scene)
+        os.makedirs(out_dir, exist_ok=True)
+        ref = reference(render, args.reference_spp, os.path.join(out_dir, f"{args.renderer}_reference"))
+        answer.write(json.dumps({"size": size}) + "\n")
+        answer.flush()
+        for line in sys.stdin:
+            spp, seed = (int(v) for v in line.split())
+            img, secs = render(spp, seed)
+            answer.write(json.dumps({"seconds": secs, **bm.metrics(img, ref)}) + "\n")
+            answer.flush()
+
+
+class Worker:
+    """A `worker` process of one renderer on one scene."""
+
+    def __init__(self, renderer, name, args, python):
+        read, write_end = os.pipe()
+        cmd = [python, os.path.abspath(__file__), "worker", "--renderer", renderer, "--scene", name,
+               "-o", args.output, "--reference-spp", str(args.reference_spp), "--threads", str(args.threads),
+               "--size", args.size, "--aperture", args.aperture, "--variant", args.variant,
+               "--bvh-quality", args.bvh_quality, "--result-fd", str(write_end)]
+        self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, text=True, pass_fds=(write_end,))
+        os.close(write_end)
+        self.answers = os.fdopen(read)
+        self.size = self._answer()["size"]
+
+    def _answer(self):
+        line = self.answers.readline()
+        if not line:
+            raise SystemExit(f"worker {self.proc.args[4]} ended (exit {self.proc.wait()})")
+        return json.loads(line)
+
+    def render(self, spp, seed):
+        self.proc.stdin.write(f"{spp} {seed}\n")
+        self.proc.stdin.flush()
+        return self._answer()
+
+    def close(self):
+        self.proc.stdin.close()
+        self.proc.wait()
+
+
+def alternated_series(workers, name, args):
+    """Per budget a first call of each renderer, then `repeats` rounds in which every renderer
+    renders once, in an order that rotates from round to round: a machine that speeds up or
+    slows down during the run moves every renderer's times alike. Writes each renderer's CSV."""
+    rows = {r: [] for r in workers}
+    for spp in [int(s) for s in args.spp.split(",")]:
+        first = {r: w.render(spp, 1)["seconds"] for r, w in workers.items()}
+        times = {r: [] for r in workers}
+        last = {}
+        order = list(workers)
+        for k in range(args.repeats):
+            for r in order[k % len(order):] + order[:k % len(order)]:
+                last[r] = workers[r].render(spp, 2 + k)
+                times[r].append(last[r]["seconds"])
+            if min(sum(t) for t in times.values()) > args.repeat_seconds:
+                break
+        for r, w in workers.items():
+            size = w.size
+            row = {"config": r, "spp": spp, "width": size[0], "height": size[1], "threads": args.threads,
+                   "seconds": statistics.median(times[r]), "samples": spp * size[0] * size[1],
+                   "mean_spp": float(spp), **{m: last[r][m] for m in ("rmse", "rel_mse", "mae")},
+                   "first_call_seconds": first[r]}
+            rows[r].append(row)
+            print(f"  {r:9} {spp:>5} spp: {row['seconds']:8.3f} s (of {len(times[r])}; first {first[r]:.3f} s), "
+                  f"RMSE {row['rmse']:.3e}", flush=True)
+    for r, v in rows.items():
+        bm.write_series_csv(os.path.join(args.output, name, f"{r}.csv"), v)
+
+
 def run_all(args):
-    """Scene files, then per scene the three series (the renderers' order rotates from scene to
-    scene), each in its own process, then the summary."""
+    """Scene files, then per scene one worker per renderer (each computes its reference, then
+    waits), the alternated series, then the summary."""
     write(args)
     python = {"aperture": args.mitsuba_python, "mitsuba": args.mitsuba_python, "cycles": args.blender_python}
     t0 = time.time()
-    for k, name in enumerate(args.scenes.split(",")):
-        for renderer in [r for r in RENDERERS[k % 3:] + RENDERERS[:k % 3] if r in args.renderers.split(",")]:
-            print(f"== {name}: {renderer} ({time.time() - t0:.0f} s so far)", flush=True)
-            cmd = [python[renderer], os.path.abspath(__file__), "series", "--renderer", renderer, "--scene", name,
-                   "-o", args.output, "--spp", args.spp, "--reference-spp", str(args.reference_spp),
-                   "--repeats", str(args.repeats), "--repeat-seconds", str(args.repeat_seconds),
-                   "--threads", str(args.threads), "--size", args.size,
-                   "--aperture", args.aperture, "--variant", args.variant, "--bvh-quality", args.bvh_quality]
-            subprocess.run(cmd, check=True)
+    for name in args.scenes.split(","):
+        workers = {}
+        try:
+            for renderer in [r for r in RENDERERS if r in args.renderers.split(",")]:
+                print(f"== {name}: {renderer} reference ({time.time() - t0:.0f} s so far)", flush=True)
+                workers[renderer] = Worker(renderer, name, args, python[renderer])
+            print(f"== {name}: alternated series ({time.time() - t0:.0f} s so far)", flush=True)
+            alternated_series(workers, name, args)
+        finally:
+            for w in workers.values():
+                w.close()
     print(f"== all series in {time.time() - t0:.0f} s")
     summary(args)
 
 
 def parser():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("command", choices=["all", "write", "series", "summary"])
+    ap.add_argument("command", choices=["all", "write", "series", "worker", "summary"])
     ap.add_argument("-o", "--output", default="bench-out/scenes")
     ap.add_argument("--scenes", default=",".join(SCENES))
     ap.add_argument("--renderers", default=",".join(RENDERERS))
@@ -516,6 +604,7 @@ def parser():
     ap.add_argument("--target", action="append", help="SCENE=RMSE,RMSE...: explicit targets (repeatable)")
     ap.add_argument("--scene", help="series: the scene")
     ap.add_argument("--renderer", choices=RENDERERS, help="series: the renderer")
+    ap.add_argument("--result-fd", type=int, help="worker: where its answers go")
     return ap
 
 
@@ -523,7 +612,8 @@ def main():
     args = parser().parse_args()
     if args.reference_spp % 2:
         sys.exit("--reference-spp must be even (two halves)")
-    {"all": run_all, "write": write, "series": run_series, "summary": summary}[args.command](args)
+    commands = {"all": run_all, "write": write, "series": run_series, "worker": run_worker, "summary": summary}
+    commands[args.command](args)
 
 
 if __name__ == "__main__":
