@@ -64,6 +64,31 @@ impl PacketRays {
     }
 }
 
+/// The lanes of `active` that primitive `b` stops (`leaf.visit`), trying the first active lane
+/// alone before the others: a miss there costs one triangle test for the packet.
+#[inline(always)]
+fn try_blocker<L: Leaf>(
+    leaves: &mut [L; PACKET_LANES],
+    tmax: &mut [f32; PACKET_LANES],
+    active: u32,
+    b: u32,
+) -> u32 {
+    let first = active.trailing_zeros() as usize & (PACKET_LANES - 1);
+    if !leaves[first].visit(b, &mut tmax[first]) {
+        return 0;
+    }
+    let mut stopped = 1 << first;
+    let mut rest = active & !stopped;
+    while rest != 0 {
+        let i = rest.trailing_zeros() as usize & (PACKET_LANES - 1);
+        rest &= rest - 1;
+        if leaves[i].visit(b, &mut tmax[i]) {
+            stopped |= 1 << i;
+        }
+    }
+    stopped
+}
+
 /// Whether `rays` share a direction octant and lie within [`PACKET_CONE_COS`] of the first, in
 /// world space (a first test; the box test's octant is checked once the rays are set up).
 #[inline(always)]
@@ -338,6 +363,11 @@ impl Accel {
         // Consecutive incoherent runs are interleaved together (one batch per stretch: the
         // interleaved walk refills its lanes, which a batch per run of 8 would not).
         let mut loose = 0;
+        // Any hit: the triangle that blocked every lane of the last packet, tried first on the
+        // next (neighbouring rays are mostly blocked by the same one; any blocker gives the
+        // same answer). Kept only while whole packets are blocked, so that unblocked runs
+        // (most shadow rays) pay nothing for it.
+        let mut blocker: Option<u32> = None;
         for at in (0..n).step_by(PACKET_LANES) {
             let end = (at + PACKET_LANES).min(n);
             let run = &rays[at..end];
@@ -378,10 +408,29 @@ impl Accel {
             }
             self.batch_impl::<true, L>(&rays[loose..at], &mut out[loose..at]);
             loose = end;
-            let packet = PacketRays::new(&boxes);
-            // SAFETY: forwarded from the caller.
-            let stopped =
-                unsafe { walk_packet(&blas.nodes, &packet, &mut tmax, &mut leaves, active, stack) };
+            let mut stopped = 0;
+            if let Some(b) = blocker {
+                stopped = try_blocker(&mut leaves, &mut tmax, active, b);
+            }
+            if stopped != active {
+                let packet = PacketRays::new(&boxes);
+                // SAFETY: forwarded from the caller.
+                stopped |= unsafe {
+                    walk_packet(
+                        &blas.nodes,
+                        &packet,
+                        &mut tmax,
+                        &mut leaves,
+                        active & !stopped,
+                        stack,
+                    )
+                };
+            }
+            blocker = if stopped == active {
+                leaves[active.trailing_zeros() as usize & (PACKET_LANES - 1)].blocker()
+            } else {
+                None
+            };
             for (i, answer) in out[at..end].iter_mut().enumerate() {
                 *answer = leaves[i].answer(blas, entry, stopped & (1 << i) != 0);
             }

@@ -162,15 +162,21 @@ pub(crate) struct AnyLeaf<'a> {
     pub(crate) tris: &'a [Tri],
     pub(crate) ray: TriRay,
     pub(crate) tmin: f32,
+    /// The primitive that stopped the walk (meaningful once one has).
+    pub(crate) blocker: u32,
 }
 
 impl Leaf for AnyLeaf<'_> {
     const CLOSEST: bool = false;
     #[inline(always)]
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
-        self.tris.get(primitive as usize).is_some_and(|tri| {
+        let hit = self.tris.get(primitive as usize).is_some_and(|tri| {
             crate::triangle::intersect(&self.ray, &tri.p, self.tmin, *tmax).is_some()
-        })
+        });
+        if hit {
+            self.blocker = primitive;
+        }
+        hit
     }
 }
 
@@ -187,6 +193,9 @@ pub(crate) trait BlasLeaf<'a>: Leaf + Copy {
     fn one<const AVX2: bool>(accel: &Accel, ray: &Ray) -> Self::Answer;
     /// The answer for a ray that meets nothing.
     fn miss() -> Self::Answer;
+    /// The primitive that stopped the walk, for leaves whose answer any stopping primitive
+    /// gives alike (any hit); `None` for the others.
+    fn blocker(&self) -> Option<u32>;
 }
 
 impl<'a> BlasLeaf<'a> for ClosestLeaf<'a> {
@@ -216,6 +225,11 @@ impl<'a> BlasLeaf<'a> for ClosestLeaf<'a> {
     fn miss() -> Option<Hit> {
         None
     }
+
+    #[inline(always)]
+    fn blocker(&self) -> Option<u32> {
+        None
+    }
 }
 
 impl<'a> BlasLeaf<'a> for AnyLeaf<'a> {
@@ -223,7 +237,12 @@ impl<'a> BlasLeaf<'a> for AnyLeaf<'a> {
 
     #[inline(always)]
     fn start(tris: &'a [Tri], ray: TriRay, tmin: f32) -> Self {
-        Self { tris, ray, tmin }
+        Self {
+            tris,
+            ray,
+            tmin,
+            blocker: 0,
+        }
     }
 
     #[inline(always)]
@@ -239,6 +258,11 @@ impl<'a> BlasLeaf<'a> for AnyLeaf<'a> {
     #[inline(always)]
     fn miss() -> bool {
         false
+    }
+
+    #[inline(always)]
+    fn blocker(&self) -> Option<u32> {
+        Some(self.blocker)
     }
 }
 
