@@ -356,13 +356,18 @@ def series(render, label, args, size):
             times.append(secs)
             if sum(times) > args.repeat_seconds:
                 break
-        row = {"config": label, "spp": spp, "width": size[0], "height": size[1], "threads": args.threads,
-               "seconds": statistics.median(times), "samples": spp * size[0] * size[1], "mean_spp": float(spp),
-               **bm.metrics(img, ref), "first_call_seconds": first}
-        rows.append(row)
-        print(f"  {label} {spp:>5} spp: {row['seconds']:8.3f} s (first {first:.3f} s), RMSE {row['rmse']:.3e}",
-              flush=True)
+        rows.append(series_row(label, spp, size, args.threads, times, first, bm.metrics(img, ref)))
     bm.write_series_csv(os.path.join(out_dir, f"{label}.csv"), rows)
+
+
+def series_row(label, spp, size, threads, times, first, metrics):
+    """One budget's CSV row (the median of `times`, the metrics of its last image), printed."""
+    row = {"config": label, "spp": spp, "width": size[0], "height": size[1], "threads": threads,
+           "seconds": statistics.median(times), "samples": spp * size[0] * size[1], "mean_spp": float(spp),
+           **{m: metrics[m] for m in ("rmse", "rel_mse", "mae")}, "first_call_seconds": first}
+    print(f"  {label:9} {spp:>5} spp: {row['seconds']:8.3f} s (median of {len(times)}; first {first:.3f} s), "
+          f"RMSE {row['rmse']:.3e}", flush=True)
+    return row
 
 
 # --------------------------------------------------------------------------------------------
@@ -548,14 +553,7 @@ def alternated_series(workers, name, args):
             if min(sum(t) for t in times.values()) > args.repeat_seconds:
                 break
         for r, w in workers.items():
-            size = w.size
-            row = {"config": r, "spp": spp, "width": size[0], "height": size[1], "threads": args.threads,
-                   "seconds": statistics.median(times[r]), "samples": spp * size[0] * size[1],
-                   "mean_spp": float(spp), **{m: last[r][m] for m in ("rmse", "rel_mse", "mae")},
-                   "first_call_seconds": first[r]}
-            rows[r].append(row)
-            print(f"  {r:9} {spp:>5} spp: {row['seconds']:8.3f} s (of {len(times[r])}; first {first[r]:.3f} s), "
-                  f"RMSE {row['rmse']:.3e}", flush=True)
+            rows[r].append(series_row(r, spp, w.size, args.threads, times[r], first[r], last[r]))
     for r, v in rows.items():
         bm.write_series_csv(os.path.join(args.output, name, f"{r}.csv"), v)
 

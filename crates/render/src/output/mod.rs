@@ -424,9 +424,8 @@ mod tests {
         // Past the budget, bands hold whole tile rows within it.
         let w = Window::whole(8192, 8192);
         let rows = band_rows(w, BAND_BYTES, compositing);
-        let bpp = compositing;
         assert!(rows % TILE == 0 && rows < w.height);
-        assert!(rows as usize * w.width as usize * bpp <= BAND_BYTES);
+        assert!(rows as usize * w.width as usize * compositing <= BAND_BYTES);
     }
 
     #[test]
