@@ -12,6 +12,10 @@
 //!
 //! Packets apply when the rays share a direction octant and lie in a narrow cone
 //! ([`PACKET_CONE_COS`]); other runs take the interleaved walk ([`Accel::intersect_batch`]).
+//!
+//! Occlusion keeps the triangle that blocked a whole packet and tries it first on the next one
+//! (neighbouring rays are mostly blocked by the same triangle, and any blocker gives the same
+//! answer): a packet it blocks whole needs no walk.
 
 use crate::node::BoxRay;
 use crate::walk::{stack_for, take_child, BlasLeaf, Group, InlineStack, Leaf, INLINE_STACK};
@@ -73,14 +77,14 @@ fn try_blocker<L: Leaf>(
     active: u32,
     b: u32,
 ) -> u32 {
-    let first = active.trailing_zeros() as usize & (PACKET_LANES - 1);
+    let first = active.trailing_zeros() as usize % PACKET_LANES;
     if !leaves[first].visit(b, &mut tmax[first]) {
         return 0;
     }
     let mut stopped = 1 << first;
     let mut rest = active & !stopped;
     while rest != 0 {
-        let i = rest.trailing_zeros() as usize & (PACKET_LANES - 1);
+        let i = rest.trailing_zeros() as usize % PACKET_LANES;
         rest &= rest - 1;
         if leaves[i].visit(b, &mut tmax[i]) {
             stopped |= 1 << i;
@@ -427,7 +431,7 @@ impl Accel {
                 };
             }
             blocker = if stopped == active {
-                leaves[active.trailing_zeros() as usize & (PACKET_LANES - 1)].blocker()
+                leaves[active.trailing_zeros() as usize % PACKET_LANES].blocker()
             } else {
                 None
             };
