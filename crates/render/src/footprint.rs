@@ -78,13 +78,9 @@ pub fn footprint(opts: &RenderOptions, kind: OutputKind, exr: &ExrOptions) -> Fo
             let window = exr.region.unwrap_or(whole);
             let passes = channels::file_passes(opts.passes, adaptive || window != whole);
             let specs = channels::channels(passes, exr.half);
-            let bpp = film_bytes_per_pixel(passes, adaptive, specs.len()) as u64;
-            let w = u64::from(window.width);
-            let rows = u64::from(crate::output::band_rows(
-                window,
-                exr.band_bytes,
-                bpp as usize,
-            ));
+            let bpp = film_bytes_per_pixel(passes, adaptive, specs.len());
+            let rows = u64::from(crate::output::band_rows(window, exr.band_bytes, bpp));
+            let (w, bpp) = (u64::from(window.width), bpp as u64);
             // Adaptive rounds render an apron of one pixel per round around the band.
             let apron = if adaptive { 2 * 17 } else { 0 };
             let band = (w + apron) * (rows + apron);

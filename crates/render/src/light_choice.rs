@@ -207,8 +207,10 @@ impl Candidates<'_> {
         }
         choice.emitters = w_emit / total;
         let weight = |pick: Pick| match pick {
-            Pick::Punctual(i) if self.lights.len() <= KEPT => kept[i],
-            Pick::Punctual(i) => punctual_importance(&self.lights[i], p, n, two_sided),
+            Pick::Punctual(i) => kept
+                .get(i)
+                .copied()
+                .unwrap_or_else(|| punctual_importance(&self.lights[i], p, n, two_sided)),
             Pick::Emitters => w_emit,
         };
         // The same weights in the same order as `total`, so the walk ends where `target`
