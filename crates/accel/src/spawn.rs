@@ -92,9 +92,55 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
 /// Wächter and Binder's offset: 256 ulps along `n` for coordinates of at least 1/32, and
 /// `float_scale · n` for those below, whose ulps are too fine to cover a rounding error that
 /// comes from larger magnitudes elsewhere.
+///
+/// The three coordinates at once in SSE2, branch-free: the same bits as the per-coordinate
+/// form ([`offset_ulps_scalar`], which other targets take), at about a third of its
+/// instructions (it runs at every path vertex).
+#[cfg(target_arch = "x86_64")]
+#[inline]
 fn offset_ulps(p: Vec3, n: Vec3, float_scale: f32) -> Vec3 {
-    const ORIGIN: f32 = 1.0 / 32.0;
-    const INT_SCALE: f32 = 256.0;
+    use std::arch::x86_64::*;
+    // SAFETY: SSE2 is part of the x86_64 baseline; the store writes the four floats of `out`.
+    unsafe {
+        let pv = _mm_setr_ps(p.x, p.y, p.z, 0.0);
+        let nv = _mm_setr_ps(n.x, n.y, n.z, 0.0);
+        let scaled = _mm_mul_ps(_mm_set1_ps(INT_SCALE), nv);
+        // `as i32`: truncation that saturates and takes NaN to 0, where `cvttps` gives
+        // `i32::MIN` for all three.
+        let of_i = _mm_cvttps_epi32(scaled);
+        let high = _mm_castps_si128(_mm_cmpge_ps(scaled, _mm_set1_ps(2_147_483_648.0)));
+        let of_i = _mm_or_si128(
+            _mm_and_si128(high, _mm_set1_epi32(i32::MAX)),
+            _mm_andnot_si128(high, of_i),
+        );
+        let of_i = _mm_andnot_si128(_mm_castps_si128(_mm_cmpunord_ps(scaled, scaled)), of_i);
+        // Negative coordinates step by −of_i (wrapping): (x ^ −1) − (−1) = −x.
+        let neg = _mm_castps_si128(_mm_cmplt_ps(pv, _mm_setzero_ps()));
+        let step = _mm_sub_epi32(_mm_xor_si128(of_i, neg), neg);
+        let moved = _mm_castsi128_ps(_mm_add_epi32(_mm_castps_si128(pv), step));
+        let small = _mm_cmplt_ps(_mm_andnot_ps(_mm_set1_ps(-0.0), pv), _mm_set1_ps(ORIGIN));
+        let near = _mm_add_ps(pv, _mm_mul_ps(_mm_set1_ps(float_scale), nv));
+        let out = _mm_or_ps(_mm_and_ps(small, near), _mm_andnot_ps(small, moved));
+        let mut lanes = [0.0f32; 4];
+        _mm_storeu_ps(lanes.as_mut_ptr(), out);
+        Vec3::new(lanes[0], lanes[1], lanes[2])
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+#[inline]
+fn offset_ulps(p: Vec3, n: Vec3, float_scale: f32) -> Vec3 {
+    offset_ulps_scalar(p, n, float_scale)
+}
+
+/// Coordinates of at least this magnitude move by ulps, smaller ones by `float_scale · n`.
+const ORIGIN: f32 = 1.0 / 32.0;
+/// The ulps a unit normal component moves a coordinate by.
+const INT_SCALE: f32 = 256.0;
+
+/// [`offset_ulps`] coordinate by coordinate, as the paper writes it.
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+fn offset_ulps_scalar(p: Vec3, n: Vec3, float_scale: f32) -> Vec3 {
     let of_i = (INT_SCALE * n).to_array().map(|x| x as i32);
     let pa = p.to_array();
     let mut out = [0.0f32; 3];
@@ -116,4 +162,63 @@ fn offset_ulps(p: Vec3, n: Vec3, float_scale: f32) -> Vec3 {
         };
     }
     Vec3::from_array(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A value from a counter, over every float class the offset meets: zeros, tiny and huge
+    /// magnitudes, both signs, the 1/32 boundary, infinities and NaN.
+    fn value(k: u32) -> f32 {
+        const SPECIAL: [f32; 12] = [
+            0.0,
+            -0.0,
+            ORIGIN,
+            -ORIGIN,
+            1.0 / 64.0,
+            1e-30,
+            -3e38,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            1e-45,
+        ];
+        let h = mix(k);
+        if h % 4 == 0 {
+            SPECIAL[(h >> 8) as usize % SPECIAL.len()]
+        } else {
+            // Any bit pattern: every exponent and sign.
+            f32::from_bits(mix(h))
+        }
+    }
+
+    fn mix(mut x: u32) -> u32 {
+        x ^= x >> 16;
+        x = x.wrapping_mul(0x7feb_352d);
+        x ^= x >> 15;
+        x = x.wrapping_mul(0x846c_a68b);
+        x ^ (x >> 16)
+    }
+
+    #[test]
+    fn the_simd_offset_has_the_bits_of_the_scalar_one() {
+        let mut checked = 0;
+        for k in 0..200_000u32 {
+            let p = Vec3::new(value(6 * k), value(6 * k + 1), value(6 * k + 2));
+            // Unit normals, as the callers pass, and raw values (saturating conversions).
+            let raw = Vec3::new(value(6 * k + 3), value(6 * k + 4), value(6 * k + 5));
+            let unit = raw.normalize_or_zero();
+            for n in [unit, raw, raw * 1e-3] {
+                for scale in [1.0 / 65536.0, 3e-7, 0.5] {
+                    let a = offset_ulps(p, n, scale).to_array().map(f32::to_bits);
+                    let b = offset_ulps_scalar(p, n, scale).to_array().map(f32::to_bits);
+                    assert_eq!(a, b, "p {p:?} n {n:?} scale {scale}");
+                    checked += 1;
+                }
+            }
+        }
+        assert_eq!(checked, 1_800_000);
+    }
 }
