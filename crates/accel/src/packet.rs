@@ -18,6 +18,8 @@
 //! answer): a packet it blocks whole needs no walk.
 
 use crate::node::BoxRay;
+#[cfg(target_arch = "x86_64")]
+use crate::triangle::lanes::{intersect_lanes, TriLanes};
 use crate::walk::{stack_for, take_child, BlasLeaf, Group, InlineStack, Leaf, INLINE_STACK};
 use crate::{Accel, Hit, Ray};
 use obvhs::cwbvh::node::CwBvhNode;
@@ -232,6 +234,77 @@ unsafe fn node_lanes_avx2(
     }
 }
 
+/// Lanes at a leaf from which its triangles are tested for all of them at once (fewer take
+/// the one-ray test, lane by lane).
+const MIN_LANES: u32 = 2;
+
+/// The triangle-test constants of the packet's leaves, lane by lane.
+///
+/// # Safety
+/// As for [`node_lanes_avx2`].
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn gather_lanes<'s, L: BlasLeaf<'s>>(leaves: &[L; PACKET_LANES]) -> TriLanes {
+    let mut rays = [leaves[0].triangles().1; PACKET_LANES];
+    let mut tmin = [0.0; PACKET_LANES];
+    for (i, leaf) in leaves.iter().enumerate() {
+        let (_, ray, t) = leaf.triangles();
+        rays[i] = ray;
+        tmin[i] = t;
+    }
+    // SAFETY: forwarded from the caller.
+    unsafe { TriLanes::new(rays, tmin) }
+}
+
+/// Triangles `first..first + count` of a leaf for lanes `todo`, each triangle tested for all
+/// of them at once: what each lane's `visit` of them, in order, would do (lanes are
+/// independent, so taking the triangles in the outer loop changes nothing). Lanes the
+/// eight-lane test leaves undecided take their scalar `visit`. Returns the lanes stopped.
+///
+/// # Safety
+/// As for [`node_lanes_avx2`].
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn leaf_lanes<'s, L: BlasLeaf<'s>>(
+    lanes: &TriLanes,
+    leaves: &mut [L; PACKET_LANES],
+    tmax: &mut [f32; PACKET_LANES],
+    first: u32,
+    count: u32,
+    mut todo: u32,
+) -> u32 {
+    let tris = leaves[todo.trailing_zeros() as usize % PACKET_LANES]
+        .triangles()
+        .0;
+    let mut stopped = 0;
+    for primitive in first..first + count {
+        let Some(tri) = tris.get(primitive as usize) else {
+            // Unreachable for a well-formed tree; `visit` skips it too.
+            continue;
+        };
+        // SAFETY: forwarded from the caller.
+        let h = unsafe { intersect_lanes(lanes, &tri.p, tmax, todo) };
+        let mut each = h.hits | h.scalar;
+        while each != 0 {
+            let i = each.trailing_zeros() as usize % PACKET_LANES;
+            each &= each - 1;
+            let stop = if h.scalar & (1 << i) != 0 {
+                leaves[i].visit(primitive, &mut tmax[i])
+            } else {
+                leaves[i].record(primitive, (h.t[i], h.b1[i], h.b2[i]), &mut tmax[i])
+            };
+            if stop {
+                stopped |= 1 << i;
+                todo &= !(1 << i);
+            }
+        }
+        if todo == 0 {
+            break;
+        }
+    }
+    stopped
+}
+
 /// The walk of one packet over `nodes`: `leaves[i]` visits the primitives of the leaves its ray
 /// hits (and may shrink `tmax[i]`). Returns the lanes whose leaf stopped its walk. Lanes outside
 /// `active` are ignored.
@@ -240,7 +313,7 @@ unsafe fn node_lanes_avx2(
 /// As for [`node_lanes_avx2`].
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn walk_packet<L: Leaf>(
+unsafe fn walk_packet<'s, L: BlasLeaf<'s>>(
     nodes: &[CwBvhNode],
     r: &PacketRays,
     tmax: &mut [f32; PACKET_LANES],
@@ -252,6 +325,8 @@ unsafe fn walk_packet<L: Leaf>(
     if nodes.is_empty() {
         return stopped;
     }
+    // The lanes' triangle-test constants, gathered at the first leaf that enough lanes reach.
+    let mut tri_lanes: Option<TriLanes> = None;
     let oct = r.oct_inv4 & 0xff;
     let mut sp = 0;
     // The root as a group of one internal child at priority 7 (obvhs convention).
@@ -287,6 +362,22 @@ unsafe fn walk_packet<L: Leaf>(
             let first = node.primitive_base_idx + (meta & 0x1f);
             let count = (meta >> 5).count_ones();
             let mut todo = u32::from(lane_bits) & active;
+            if todo.count_ones() >= MIN_LANES {
+                // Enough lanes: each triangle for all of them at once.
+                let lanes = match &mut tri_lanes {
+                    Some(l) => l,
+                    // SAFETY: forwarded from the caller.
+                    None => tri_lanes.insert(unsafe { gather_lanes(leaves) }),
+                };
+                // SAFETY: forwarded from the caller.
+                let s = unsafe { leaf_lanes(lanes, leaves, tmax, first, count, todo) };
+                stopped |= s;
+                active &= !s;
+                if active == 0 {
+                    return stopped;
+                }
+                continue;
+            }
             while todo != 0 {
                 let i = todo.trailing_zeros() as usize;
                 todo &= todo - 1;

@@ -9,6 +9,9 @@
 
 use glam::{Mat3A, Vec3, Vec3A};
 
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod lanes;
+
 /// Per-ray values of the watertight test, computed once per ray (and per instance, for rays
 /// moved into object space).
 #[derive(Debug, Clone, Copy)]

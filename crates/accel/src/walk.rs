@@ -141,15 +141,7 @@ impl Leaf for ClosestLeaf<'_> {
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
         if let Some(tri) = self.tris.get(primitive as usize) {
             if let Some(h) = crate::triangle::intersect(&self.ray, &tri.p, self.tmin, *tmax) {
-                // A tie in `t` goes to the lower primitive, so the answer does not depend on the
-                // order of the visits (packets visit in another order than one ray).
-                let first = self
-                    .best
-                    .is_none_or(|(best, _)| h.0 < *tmax || (primitive as usize) < best);
-                if first {
-                    *tmax = h.0;
-                    self.best = Some((primitive as usize, h));
-                }
+                return self.record(primitive, h, tmax);
             }
         }
         false
@@ -170,13 +162,11 @@ impl Leaf for AnyLeaf<'_> {
     const CLOSEST: bool = false;
     #[inline(always)]
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
-        let hit = self.tris.get(primitive as usize).is_some_and(|tri| {
-            crate::triangle::intersect(&self.ray, &tri.p, self.tmin, *tmax).is_some()
-        });
-        if hit {
-            self.blocker = primitive;
-        }
-        hit
+        let hit = self
+            .tris
+            .get(primitive as usize)
+            .and_then(|tri| crate::triangle::intersect(&self.ray, &tri.p, self.tmin, *tmax));
+        hit.is_some_and(|h| self.record(primitive, h, tmax))
     }
 }
 
@@ -196,6 +186,12 @@ pub(crate) trait BlasLeaf<'a>: Leaf + Copy {
     /// The primitive that stopped the walk, for leaves whose answer any stopping primitive
     /// gives alike (any hit); `None` for the others.
     fn blocker(&self) -> Option<u32>;
+    /// The triangles the leaf tests, its ray's triangle-test constants and `tmin`: what a
+    /// packet tests for several leaves at once ([`crate::triangle::lanes`]).
+    fn triangles(&self) -> (&'a [Tri], &TriRay, f32);
+    /// Takes hit `(t, b1, b2)` of `primitive`, found by the triangle test within
+    /// `[tmin, tmax]` (the rest of [`Leaf::visit`]); `true` stops the walk.
+    fn record(&mut self, primitive: u32, hit: (f32, f32, f32), tmax: &mut f32) -> bool;
 }
 
 impl<'a> BlasLeaf<'a> for ClosestLeaf<'a> {
@@ -230,6 +226,25 @@ impl<'a> BlasLeaf<'a> for ClosestLeaf<'a> {
     fn blocker(&self) -> Option<u32> {
         None
     }
+
+    #[inline(always)]
+    fn triangles(&self) -> (&'a [Tri], &TriRay, f32) {
+        (self.tris, &self.ray, self.tmin)
+    }
+
+    #[inline(always)]
+    fn record(&mut self, primitive: u32, h: (f32, f32, f32), tmax: &mut f32) -> bool {
+        // A tie in `t` goes to the lower primitive, so the answer does not depend on the
+        // order of the visits (packets visit in another order than one ray).
+        let first = self
+            .best
+            .is_none_or(|(best, _)| h.0 < *tmax || (primitive as usize) < best);
+        if first {
+            *tmax = h.0;
+            self.best = Some((primitive as usize, h));
+        }
+        false
+    }
 }
 
 impl<'a> BlasLeaf<'a> for AnyLeaf<'a> {
@@ -263,6 +278,17 @@ impl<'a> BlasLeaf<'a> for AnyLeaf<'a> {
     #[inline(always)]
     fn blocker(&self) -> Option<u32> {
         Some(self.blocker)
+    }
+
+    #[inline(always)]
+    fn triangles(&self) -> (&'a [Tri], &TriRay, f32) {
+        (self.tris, &self.ray, self.tmin)
+    }
+
+    #[inline(always)]
+    fn record(&mut self, primitive: u32, _: (f32, f32, f32), _: &mut f32) -> bool {
+        self.blocker = primitive;
+        true
     }
 }
 

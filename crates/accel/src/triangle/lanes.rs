@@ -1,0 +1,421 @@
+//! The watertight triangle test of [`super::intersect`] for the eight rays of a packet at once
+//! (AVX2): one triangle, eight lanes, the scalar test's arithmetic operation for operation, so
+//! each lane's answer has the bits of the scalar answer for its ray.
+//!
+//! Why: a packet's rays mostly reach the same leaves, where the scalar test ran once per ray
+//! and triangle (about 66 instructions each); eight lanes cost about twice one. Lanes the
+//! vector arithmetic cannot decide exactly as the scalar test does — an edge function of
+//! exactly zero (decided again in `f64`), a value that is not finite (where `maxps` and
+//! `f32::max` differ on NaN), a hit too close to tell in front of the origin (the `f64` plane
+//! test) — are left to the scalar test.
+
+use super::{gamma, TriRay};
+use glam::Vec3;
+use std::arch::x86_64::*;
+
+/// Lanes per test: one AVX2 register of `f32`.
+pub(crate) const LANES: usize = 8;
+
+/// The per-ray constants of [`TriRay`] for eight rays, lane by lane (structure of arrays), in
+/// registers.
+#[derive(Clone, Copy)]
+pub(crate) struct TriLanes {
+    origin: [__m256; 3],
+    /// `shear[c][j]`: component `j` of column `c` of each ray's shear matrix.
+    shear: [[__m256; 3]; 3],
+    sz: __m256,
+    tmin: __m256,
+}
+
+/// What [`intersect_lanes`] found: per lane, a hit (`hits`) with its `(t, b1, b2)`, or a lane
+/// for the scalar test (`scalar`); lanes in neither miss.
+pub(crate) struct LaneHits {
+    pub hits: u32,
+    pub scalar: u32,
+    pub t: [f32; LANES],
+    pub b1: [f32; LANES],
+    pub b2: [f32; LANES],
+}
+
+impl TriLanes {
+    /// The lanes of `rays` with their `tmin`s. By register transposes: lanes written one
+    /// float at a time and read back as vectors would stall on every load (store forwarding
+    /// cannot merge eight stores into one load).
+    ///
+    /// # Safety
+    /// The CPU must support AVX, and the caller must be compiled for it.
+    #[inline(always)]
+    pub unsafe fn new(rays: [&TriRay; LANES], tmin: [f32; LANES]) -> Self {
+        // SAFETY: AVX is guaranteed by the caller; register-only operations.
+        unsafe {
+            macro_rules! col {
+                ($($f:ident).+) => {
+                    transpose([0, 1, 2, 3, 4, 5, 6, 7].map(|i| __m128::from(rays[i].$($f).+)))
+                };
+            }
+            macro_rules! lanes {
+                ($v:expr) => {
+                    _mm256_setr_ps($v[0], $v[1], $v[2], $v[3], $v[4], $v[5], $v[6], $v[7])
+                };
+            }
+            let [ox, oy, oz, _] = col!(origin);
+            let [x0, x1, x2, _] = col!(shear.x_axis);
+            let [y0, y1, y2, _] = col!(shear.y_axis);
+            let [z0, z1, z2, _] = col!(shear.z_axis);
+            let sz = [0, 1, 2, 3, 4, 5, 6, 7].map(|i| rays[i].sz);
+            Self {
+                origin: [ox, oy, oz],
+                shear: [[x0, x1, x2], [y0, y1, y2], [z0, z1, z2]],
+                sz: lanes!(sz),
+                tmin: lanes!(tmin),
+            }
+        }
+    }
+}
+
+/// Eight 4-float vectors as four 8-float ones: `out[k]` holds component `k` of each.
+///
+/// # Safety
+/// The CPU must support AVX, and the caller must be compiled for it.
+#[inline(always)]
+pub(crate) unsafe fn transpose(v: [__m128; LANES]) -> [__m256; 4] {
+    // SAFETY: AVX is guaranteed by the caller; register-only operations.
+    unsafe {
+        // Vectors i and i + 4 share a register, one per 128-bit half; then a 4×4 transpose
+        // within each half.
+        let r0 = _mm256_set_m128(v[4], v[0]);
+        let r1 = _mm256_set_m128(v[5], v[1]);
+        let r2 = _mm256_set_m128(v[6], v[2]);
+        let r3 = _mm256_set_m128(v[7], v[3]);
+        let t0 = _mm256_unpacklo_ps(r0, r1);
+        let t1 = _mm256_unpackhi_ps(r0, r1);
+        let t2 = _mm256_unpacklo_ps(r2, r3);
+        let t3 = _mm256_unpackhi_ps(r2, r3);
+        [
+            _mm256_shuffle_ps::<0x44>(t0, t2),
+            _mm256_shuffle_ps::<0xee>(t0, t2),
+            _mm256_shuffle_ps::<0x44>(t1, t3),
+            _mm256_shuffle_ps::<0xee>(t1, t3),
+        ]
+    }
+}
+
+/// The watertight test of triangle `p` for the `lanes` of `l` (bit `i` for lane `i`), each
+/// within its `[tmin, tmax[i]]`.
+///
+/// # Safety
+/// The CPU must support AVX2, and the caller must be compiled for it (inlined into the AVX2
+/// packet queries).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(crate) unsafe fn intersect_lanes(
+    l: &TriLanes,
+    p: &[Vec3; 3],
+    tmax: &[f32; LANES],
+    lanes: u32,
+) -> LaneHits {
+    // SAFETY: AVX2 is guaranteed by the caller; every load reads one `[f32; 8]` in full and
+    // every store writes one. Macros, not closures: closures do not inherit the target
+    // features (a call per intrinsic).
+    unsafe {
+        macro_rules! ld {
+            ($v:expr) => {
+                _mm256_loadu_ps($v.as_ptr())
+            };
+        }
+        macro_rules! set {
+            ($x:expr) => {
+                _mm256_set1_ps($x)
+            };
+        }
+        macro_rules! abs {
+            ($x:expr) => {
+                _mm256_andnot_ps(_mm256_set1_ps(-0.0), $x)
+            };
+        }
+        macro_rules! mul {
+            ($a:expr, $b:expr) => {
+                _mm256_mul_ps($a, $b)
+            };
+        }
+        macro_rules! add {
+            ($a:expr, $b:expr) => {
+                _mm256_add_ps($a, $b)
+            };
+        }
+        macro_rules! max3 {
+            ($a:expr, $b:expr, $c:expr) => {
+                _mm256_max_ps(_mm256_max_ps(abs!($a), abs!($b)), abs!($c))
+            };
+        }
+        macro_rules! mask {
+            ($m:expr) => {
+                _mm256_movemask_ps($m) as u32
+            };
+        }
+        let o = l.origin;
+        let [c0, c1, c2] = l.shear;
+        // `shear * (v - origin)` as glam's `Mat3A * Vec3A`: `(c0 x + c1 y) + c2 z`, per row.
+        macro_rules! moved {
+            ($v:expr) => {{
+                let d = [
+                    _mm256_sub_ps(set!($v.x), o[0]),
+                    _mm256_sub_ps(set!($v.y), o[1]),
+                    _mm256_sub_ps(set!($v.z), o[2]),
+                ];
+                [
+                    add!(
+                        add!(mul!(c0[0], d[0]), mul!(c1[0], d[1])),
+                        mul!(c2[0], d[2])
+                    ),
+                    add!(
+                        add!(mul!(c0[1], d[0]), mul!(c1[1], d[1])),
+                        mul!(c2[1], d[2])
+                    ),
+                    add!(
+                        add!(mul!(c0[2], d[0]), mul!(c1[2], d[1])),
+                        mul!(c2[2], d[2])
+                    ),
+                ]
+            }};
+        }
+        let [ax, ay, az] = moved!(p[0]);
+        let [bx, by, bz] = moved!(p[1]);
+        let [cx, cy, cz] = moved!(p[2]);
+        // Edge functions; e0 is the weight of p0, e1 of p1, e2 of p2.
+        let e0 = _mm256_sub_ps(mul!(bx, cy), mul!(by, cx));
+        let e1 = _mm256_sub_ps(mul!(cx, ay), mul!(cy, ax));
+        let e2 = _mm256_sub_ps(mul!(ax, by), mul!(ay, bx));
+        let det = add!(add!(e0, e1), e2);
+        let max_z = max3!(az, bz, cz);
+        let sz = l.sz;
+        let (az, bz, cz) = (mul!(az, sz), mul!(bz, sz), mul!(cz, sz));
+        let zero = _mm256_setzero_ps();
+        let inf = set!(f32::INFINITY);
+        // Lanes for the scalar test: an edge function of exactly zero, or a value that is not
+        // finite (|x| unordered with or equal to infinity) among those the maxima read or
+        // that a zero or an infinite determinant would make.
+        let mut odd = _mm256_or_ps(
+            _mm256_or_ps(
+                _mm256_cmp_ps::<_CMP_EQ_OQ>(e0, zero),
+                _mm256_cmp_ps::<_CMP_EQ_OQ>(e1, zero),
+            ),
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(e2, zero),
+        );
+        for x in [ax, ay, az, bx, by, bz, cx, cy, cz, e0, e1, e2, det] {
+            odd = _mm256_or_ps(odd, _mm256_cmp_ps::<_CMP_NLT_UQ>(abs!(x), inf));
+        }
+        let scalar_lanes = mask!(odd) & lanes;
+        // Both signs among the edge functions: outside (all finite and non-zero here, so
+        // `det` is not zero either).
+        let any_neg = _mm256_or_ps(
+            _mm256_or_ps(
+                _mm256_cmp_ps::<_CMP_LT_OQ>(e0, zero),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(e1, zero),
+            ),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(e2, zero),
+        );
+        let any_pos = _mm256_or_ps(
+            _mm256_or_ps(
+                _mm256_cmp_ps::<_CMP_GT_OQ>(e0, zero),
+                _mm256_cmp_ps::<_CMP_GT_OQ>(e1, zero),
+            ),
+            _mm256_cmp_ps::<_CMP_GT_OQ>(e2, zero),
+        );
+        let inside = _mm256_andnot_ps(
+            _mm256_and_ps(any_neg, any_pos),
+            _mm256_castsi256_ps(_mm256_set1_epi32(-1)),
+        );
+        let candidates = lanes & !scalar_lanes & mask!(inside);
+        if candidates == 0 {
+            // Most tests end here, as the scalar test's do after its sign test.
+            return LaneHits {
+                hits: 0,
+                scalar: scalar_lanes,
+                t: [0.0; LANES],
+                b1: [0.0; LANES],
+                b2: [0.0; LANES],
+            };
+        }
+        let t_scaled = add!(add!(mul!(e0, az), mul!(e1, bz)), mul!(e2, cz));
+        let inv_det = _mm256_div_ps(set!(1.0), det);
+        let t = mul!(t_scaled, inv_det);
+        let in_range = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GE_OQ>(t, l.tmin),
+            _mm256_cmp_ps::<_CMP_LE_OQ>(t, ld!(tmax)),
+        );
+        // pbrt-v4's bound on t's error, in the scalar test's order of operations.
+        let max_zt = max3!(az, bz, cz);
+        let delta_z = mul!(set!(gamma(3)), max_zt);
+        let max_xt = max3!(ax, bx, cx);
+        let max_yt = max3!(ay, by, cy);
+        let delta_x = mul!(set!(gamma(5)), add!(max_xt, max_z));
+        let delta_y = mul!(set!(gamma(5)), add!(max_yt, max_z));
+        let delta_e = mul!(
+            set!(2.0),
+            add!(
+                add!(
+                    mul!(mul!(set!(gamma(2)), max_xt), max_yt),
+                    mul!(delta_y, max_xt)
+                ),
+                mul!(delta_x, max_yt)
+            )
+        );
+        let max_e = max3!(e0, e1, e2);
+        let delta_t = mul!(
+            mul!(
+                set!(3.0),
+                add!(
+                    add!(
+                        mul!(mul!(set!(gamma(3)), max_e), max_zt),
+                        mul!(delta_e, max_zt)
+                    ),
+                    mul!(delta_z, max_e)
+                )
+            ),
+            abs!(inv_det)
+        );
+        let decided = candidates & mask!(in_range);
+        // Hits too close to call go to the scalar test, which decides them in `f64`.
+        let close = decided & mask!(_mm256_cmp_ps::<_CMP_LE_OQ>(t, delta_t));
+        let mut out = LaneHits {
+            hits: decided & !close,
+            scalar: scalar_lanes | close,
+            t: [0.0; LANES],
+            b1: [0.0; LANES],
+            b2: [0.0; LANES],
+        };
+        _mm256_storeu_ps(out.t.as_mut_ptr(), t);
+        _mm256_storeu_ps(out.b1.as_mut_ptr(), mul!(e1, inv_det));
+        _mm256_storeu_ps(out.b2.as_mut_ptr(), mul!(e2, inv_det));
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::triangle::intersect;
+
+    fn mix(mut x: u32) -> u32 {
+        x ^= x >> 16;
+        x = x.wrapping_mul(0x7feb_352d);
+        x ^= x >> 15;
+        x = x.wrapping_mul(0x846c_a68b);
+        x ^ (x >> 16)
+    }
+
+    /// A uniform value in `[-1, 1)` from a counter.
+    fn unit(k: u32) -> f32 {
+        (mix(k) >> 8) as f32 / (1u32 << 23) as f32 - 1.0
+    }
+
+    /// Values that stress the test: exact zeros, ties, tiny and huge magnitudes.
+    fn odd(k: u32) -> f32 {
+        const V: [f32; 8] = [0.0, -0.0, 1.0, -1.0, 1e-30, 3e30, 0.5, f32::MIN_POSITIVE];
+        V[mix(k) as usize % V.len()]
+    }
+
+    /// The eight-lane answer of every lane against the scalar test's, bit for bit: the
+    /// lanes it decides must hit exactly where the scalar test hits, with its `(t, b1, b2)`,
+    /// and miss exactly where it misses.
+    #[test]
+    fn lanes_answer_as_the_scalar_test_does() {
+        if !(is_x86_feature_detected!("avx2")) {
+            return;
+        }
+        let (mut hits, mut scalar, mut misses) = (0, 0, 0);
+        for case in 0..40_000u32 {
+            let k = case * 64;
+            // Every other case draws exact and extreme values too; the others, ordinary ones.
+            let stress = case % 2 == 0;
+            let pick = |j: u32| {
+                if stress && mix(k + j) % 5 == 0 {
+                    odd(k + j)
+                } else {
+                    unit(k + j)
+                }
+            };
+            // A triangle near the origin, or with a vertex or edge on exact values.
+            let tri = [
+                Vec3::new(pick(1), pick(2), pick(3)),
+                Vec3::new(pick(4), pick(5), pick(6)),
+                Vec3::new(pick(7), pick(8), pick(9)),
+            ];
+            let mut rays = Vec::new();
+            let mut tmin = [0.0; LANES];
+            let mut tmax = [0.0; LANES];
+            for i in 0..LANES as u32 {
+                let q = |j: u32| pick(16 + 6 * i + j);
+                let origin = Vec3::new(q(0), q(1), q(2) + 2.0 * unit(k + 60));
+                // Rays towards the triangle (through a vertex or edge now and then) or anywhere.
+                let target = match mix(k + 61 + i) % 4 + 2 * u32::from(!stress) {
+                    0 => tri[0],
+                    1 => (tri[1] + tri[2]) * 0.5,
+                    2 => Vec3::new(q(3), q(4), q(5)),
+                    3 => (tri[0] + tri[1] + tri[2]) / 3.0,
+                    4 => Vec3::new(q(3), q(4), q(5)),
+                    _ => tri[1] * 0.25 + tri[2] * 0.25 + tri[0] * 0.5,
+                };
+                let dir = if stress && mix(k + 62 + i) % 7 == 0 {
+                    Vec3::new(q(3), 0.0, -0.0)
+                } else {
+                    target - origin
+                };
+                rays.push(TriRay::new(origin, dir));
+                tmin[i as usize] = if mix(k + 63 + i) % 3 == 0 { 0.0 } else { 1e-4 };
+                tmax[i as usize] = match mix(k + 40 + i) % 3 {
+                    0 => f32::INFINITY,
+                    1 => 0.7,
+                    _ => 1e3,
+                };
+            }
+            let refs: [&TriRay; LANES] = std::array::from_fn(|i| &rays[i]);
+            // SAFETY: AVX2 checked above.
+            let lanes = unsafe { TriLanes::new(refs, tmin) };
+            let all = (1u32 << LANES) - 1;
+            let want = mix(k + 50) & all | 1;
+            // SAFETY: AVX2 checked above.
+            let h = unsafe { intersect_lanes(&lanes, &tri, &tmax, want) };
+            assert_eq!(h.hits & h.scalar, 0);
+            assert_eq!((h.hits | h.scalar) & !want, 0, "lanes outside the mask");
+            for i in 0..LANES {
+                let expected = intersect(&rays[i], &tri, tmin[i], tmax[i]);
+                let bit = 1u32 << i;
+                if want & bit == 0 {
+                    continue;
+                }
+                if h.scalar & bit != 0 {
+                    scalar += u32::from(!stress);
+                } else if h.hits & bit != 0 {
+                    let got = (h.t[i], h.b1[i], h.b2[i]);
+                    let e = expected.unwrap_or_else(|| {
+                        panic!("case {case} lane {i}: {got:?} where the scalar test misses")
+                    });
+                    assert_eq!(
+                        [got.0, got.1, got.2].map(f32::to_bits),
+                        [e.0, e.1, e.2].map(f32::to_bits),
+                        "case {case} lane {i}"
+                    );
+                    hits += 1;
+                } else {
+                    assert!(
+                        expected.is_none(),
+                        "case {case} lane {i}: missed {expected:?}"
+                    );
+                    misses += 1;
+                }
+            }
+        }
+        // Every kind of answer is exercised, and on ordinary rays the lanes decide nearly all.
+        assert!(
+            hits > 10_000 && misses > 10_000,
+            "hits {hits} misses {misses}"
+        );
+        assert!(
+            scalar * 50 < hits + misses,
+            "scalar {scalar} of {}",
+            hits + misses
+        );
+    }
+}
