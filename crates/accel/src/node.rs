@@ -21,11 +21,30 @@ use obvhs::cwbvh::node::CwBvhNode;
 
 /// Relative spatial slack of the box test (see the module docs); 64 ulps at unit scale, which
 /// costs nothing measurable in traversal.
-const SLACK: f32 = 64.0 * f32::EPSILON;
+pub(crate) const SLACK: f32 = 64.0 * f32::EPSILON;
 
 /// Largest magnitude of a reciprocal direction component: zero components become this (keeping
 /// their sign), so slab products stay finite and `0 * inf` never makes a NaN.
-const INV_LIMIT: f32 = 1e20;
+pub(crate) const INV_LIMIT: f32 = 1e20;
+
+/// obvhs' child-ordering key for a direction whose negative axes are the bits of `neg_bits`
+/// (x, y, z from bit 0): 4 in each byte for +x, 2 for +y, 1 for +z.
+#[inline(always)]
+pub(crate) fn oct_inv4(neg_bits: u32) -> u32 {
+    const OCT: [u32; 8] = {
+        let mut t = [0u32; 8];
+        let mut b = 0;
+        while b < 8 {
+            let key = (if b & 1 == 0 { 4 } else { 0 })
+                | (if b & 2 == 0 { 2 } else { 0 })
+                | (if b & 4 == 0 { 1 } else { 0 });
+            t[b] = key * 0x0101_0101;
+            b += 1;
+        }
+        t
+    };
+    OCT[neg_bits as usize & 7]
+}
 
 /// A ray prepared for box tests.
 #[derive(Debug, Clone, Copy)]
@@ -57,20 +76,7 @@ impl BoxRay {
         );
         let neg_bits = inv.cmplt(Vec3A::ZERO).bitmask();
         let neg = [neg_bits & 1 != 0, neg_bits & 2 != 0, neg_bits & 4 != 0];
-        // obvhs' key: 4 in each byte for +x, 2 for +y, 1 for +z.
-        const OCT: [u32; 8] = {
-            let mut t = [0u32; 8];
-            let mut b = 0;
-            while b < 8 {
-                let key = (if b & 1 == 0 { 4 } else { 0 })
-                    | (if b & 2 == 0 { 2 } else { 0 })
-                    | (if b & 4 == 0 { 1 } else { 0 });
-                t[b] = key * 0x0101_0101;
-                b += 1;
-            }
-            t
-        };
-        let oct_inv4 = OCT[neg_bits as usize & 7];
+        let oct_inv4 = oct_inv4(neg_bits);
         let m = (lo - origin).abs().max((hi - origin).abs()).max_element()
             + 3.0 * (hi - lo).max_element();
         Self {

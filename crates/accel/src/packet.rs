@@ -17,13 +17,22 @@
 //! (neighbouring rays are mostly blocked by the same triangle, and any blocker gives the same
 //! answer): a packet it blocks whole needs no walk.
 
-use crate::node::BoxRay;
 #[cfg(target_arch = "x86_64")]
-use crate::triangle::lanes::{intersect_lanes, TriLanes};
+use crate::triangle::lanes::{intersect_lanes, transpose, TriLanes};
+use crate::triangle::TriRay;
 use crate::walk::{stack_for, take_child, BlasLeaf, Group, InlineStack, Leaf, INLINE_STACK};
 use crate::{Accel, Hit, Ray};
+#[cfg(target_arch = "x86_64")]
+use glam::Vec3A;
 use obvhs::cwbvh::node::CwBvhNode;
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::__m128;
 use std::mem::MaybeUninit;
+
+#[cfg(target_arch = "x86_64")]
+mod rays;
+#[cfg(target_arch = "x86_64")]
+use rays::PacketRays;
 
 /// Rays per packet: one AVX2 lane each.
 pub const PACKET_LANES: usize = 8;
@@ -31,44 +40,6 @@ pub const PACKET_LANES: usize = 8;
 /// A run is traced as a packet when every ray's direction is within this cosine of the first
 /// ray's (about 8°): wider runs share too little of their walks to gain.
 pub const PACKET_CONE_COS: f32 = 0.99;
-
-/// Eight rays prepared for box tests, lane by lane (structure of arrays of [`BoxRay`]s).
-#[derive(Clone, Copy)]
-#[repr(C, align(32))]
-struct PacketRays {
-    origin: [[f32; PACKET_LANES]; 3],
-    inv: [[f32; PACKET_LANES]; 3],
-    slack: [[f32; PACKET_LANES]; 3],
-    tmin: [f32; PACKET_LANES],
-    /// The packet's common direction signs and child-ordering key.
-    neg: [bool; 3],
-    oct_inv4: u32,
-}
-
-impl PacketRays {
-    /// The lanes of `rays`, which must share their octant. Plain loops: closures (as in
-    /// `array::from_fn`) stayed calls in the AVX2 query.
-    #[inline(always)]
-    fn new(rays: &[BoxRay; PACKET_LANES]) -> Self {
-        let mut p = Self {
-            origin: [[0.0; PACKET_LANES]; 3],
-            inv: [[0.0; PACKET_LANES]; 3],
-            slack: [[0.0; PACKET_LANES]; 3],
-            tmin: [0.0; PACKET_LANES],
-            neg: rays[0].neg,
-            oct_inv4: rays[0].oct_inv4,
-        };
-        for (i, r) in rays.iter().enumerate() {
-            for a in 0..3 {
-                p.origin[a][i] = r.origin[a];
-                p.inv[a][i] = r.inv[a];
-                p.slack[a][i] = r.slack[a];
-            }
-            p.tmin[i] = r.tmin;
-        }
-        p
-    }
-}
 
 /// The lanes of `active` that primitive `b` stops (`leaf.visit`), trying the first active lane
 /// alone before the others: a miss there costs one triangle test for the packet.
@@ -487,20 +458,31 @@ impl Accel {
             }
             // Lanes past the run's end copy its last ray and stay inactive. Loops, not
             // `array::from_fn`, whose closures stayed calls.
-            let (br0, leaf0) = Self::walk_start::<L>(entry, blas, &run[0]);
-            let mut boxes = [br0; PACKET_LANES];
+            let (o0, d0) = Self::object_ray(entry, &run[0]);
+            let leaf0 = L::start(&blas.tris, TriRay::new(o0, d0), run[0].tmin);
             let mut leaves = [leaf0; PACKET_LANES];
             let mut tmax = [run[0].tmax; PACKET_LANES];
+            let mut tmin = [run[0].tmin; PACKET_LANES];
+            let mut origins = [__m128::from(Vec3A::from(o0)); PACKET_LANES];
+            let mut dirs = [__m128::from(Vec3A::from(d0)); PACKET_LANES];
             for i in 1..PACKET_LANES {
                 let ray = &run[i.min(run.len() - 1)];
-                (boxes[i], leaves[i]) = Self::walk_start::<L>(entry, blas, ray);
-                tmax[i] = ray.tmax;
+                let (o, d) = Self::object_ray(entry, ray);
+                leaves[i] = L::start(&blas.tris, TriRay::new(o, d), ray.tmin);
+                (tmax[i], tmin[i]) = (ray.tmax, ray.tmin);
+                origins[i] = Vec3A::from(o).into();
+                dirs[i] = Vec3A::from(d).into();
             }
             // The octant that decides is the box test's, in the tree's space: it follows the
             // sign of a zero component, which the world-space check above does not see.
-            if boxes.iter().any(|b| b.neg != br0.neg) {
+            // SAFETY: forwarded from the caller.
+            let Some(packet) = (unsafe {
+                let [ox, oy, oz, _] = transpose(origins);
+                let [dx, dy, dz, _] = transpose(dirs);
+                PacketRays::from_rays([ox, oy, oz], [dx, dy, dz], tmin, blas.box_bounds)
+            }) else {
                 continue;
-            }
+            };
             self.batch_impl::<true, L>(&rays[loose..at], &mut out[loose..at]);
             loose = end;
             let mut stopped = 0;
@@ -508,7 +490,6 @@ impl Accel {
                 stopped = try_blocker(&mut leaves, &mut tmax, active, b);
             }
             if stopped != active {
-                let packet = PacketRays::new(&boxes);
                 // SAFETY: forwarded from the caller.
                 stopped |= unsafe {
                     walk_packet(

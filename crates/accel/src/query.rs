@@ -289,7 +289,7 @@ impl Accel {
     }
 
     #[inline(always)]
-    fn object_ray(entry: &Entry, ray: &Ray) -> (Vec3, Vec3) {
+    pub(crate) fn object_ray(entry: &Entry, ray: &Ray) -> (Vec3, Vec3) {
         if entry.identity {
             (ray.origin, ray.dir)
         } else {

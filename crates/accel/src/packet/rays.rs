@@ -1,0 +1,227 @@
+//! A packet's eight rays prepared for box tests, lane by lane: built in registers from the
+//! rays' origins and directions, with the arithmetic of eight `BoxRay::new`s.
+
+use super::PACKET_LANES;
+#[cfg(test)]
+use crate::node::BoxRay;
+use std::arch::x86_64::__m256;
+
+/// Eight rays prepared for box tests, lane by lane (structure of arrays of `BoxRay`s).
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+pub(super) struct PacketRays {
+    pub(super) origin: [[f32; PACKET_LANES]; 3],
+    pub(super) inv: [[f32; PACKET_LANES]; 3],
+    pub(super) slack: [[f32; PACKET_LANES]; 3],
+    pub(super) tmin: [f32; PACKET_LANES],
+    /// The packet's common direction signs and child-ordering key.
+    pub(super) neg: [bool; 3],
+    pub(super) oct_inv4: u32,
+}
+
+impl PacketRays {
+    /// The lanes of `rays` one float at a time: the reference [`PacketRays::from_rays`] must
+    /// match bit for bit.
+    #[cfg(test)]
+    #[inline(always)]
+    pub(super) fn new(rays: &[BoxRay; PACKET_LANES]) -> Self {
+        let mut p = Self {
+            origin: [[0.0; PACKET_LANES]; 3],
+            inv: [[0.0; PACKET_LANES]; 3],
+            slack: [[0.0; PACKET_LANES]; 3],
+            tmin: [0.0; PACKET_LANES],
+            neg: rays[0].neg,
+            oct_inv4: rays[0].oct_inv4,
+        };
+        for (i, r) in rays.iter().enumerate() {
+            for a in 0..3 {
+                p.origin[a][i] = r.origin[a];
+                p.inv[a][i] = r.inv[a];
+                p.slack[a][i] = r.slack[a];
+            }
+            p.tmin[i] = r.tmin;
+        }
+        p
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl PacketRays {
+    /// [`PacketRays::new`] of the `BoxRay::new`s of eight rays in the tree's space
+    /// (`origin`, `dir`, `tmin`; tree bounds `(lo, hi)`), computed for all lanes at once with
+    /// `BoxRay::new`'s operations lane by lane, so the same bits. `None` when a lane's origin
+    /// or direction is not finite (where the order of its maxima would matter) or the lanes'
+    /// direction signs differ (no packet then).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2, and the caller must be compiled for it.
+    #[inline(always)]
+    pub(super) unsafe fn from_rays(
+        origin: [__m256; 3],
+        dir: [__m256; 3],
+        tmin: [f32; PACKET_LANES],
+        (lo, hi): (glam::Vec3, glam::Vec3),
+    ) -> Option<Self> {
+        use std::arch::x86_64::*;
+        // SAFETY: AVX2 is guaranteed by the caller; each store writes one `[f32; 8]`.
+        unsafe {
+            let sign = _mm256_set1_ps(-0.0);
+            let inf = _mm256_set1_ps(f32::INFINITY);
+            let limit = _mm256_set1_ps(crate::node::INV_LIMIT);
+            let mut finite = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+            let mut p = Self {
+                origin: [[0.0; PACKET_LANES]; 3],
+                inv: [[0.0; PACKET_LANES]; 3],
+                slack: [[0.0; PACKET_LANES]; 3],
+                tmin,
+                neg: [false; 3],
+                oct_inv4: 0,
+            };
+            // `(lo - o).abs().max((hi - o).abs()).max_element()` per lane (finite lanes: the
+            // order of the maxima does not matter).
+            let mut reach = _mm256_setzero_ps();
+            let mut inv = [_mm256_setzero_ps(); 3];
+            let mut neg_bits = 0u32;
+            for a in 0..3 {
+                let (o, d) = (origin[a], dir[a]);
+                finite = _mm256_and_ps(
+                    finite,
+                    _mm256_and_ps(
+                        _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, o), inf),
+                        _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, d), inf),
+                    ),
+                );
+                // `BoxRay::new`: a finite reciprocal clamped to the limit, else the limit with
+                // the sign of `d`.
+                let i = _mm256_div_ps(_mm256_set1_ps(1.0), d);
+                let clamped = _mm256_min_ps(_mm256_max_ps(i, _mm256_xor_ps(limit, sign)), limit);
+                let signed = _mm256_or_ps(_mm256_and_ps(d, sign), _mm256_andnot_ps(sign, limit));
+                let ok = _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, i), inf);
+                inv[a] = _mm256_or_ps(_mm256_and_ps(ok, clamped), _mm256_andnot_ps(ok, signed));
+                let negative =
+                    _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(inv[a], _mm256_setzero_ps()))
+                        as u32;
+                if negative != 0 && negative != 0xff {
+                    return None;
+                }
+                neg_bits |= (negative & 1) << a;
+                let to_lo = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_set1_ps(lo[a]), o));
+                let to_hi = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_set1_ps(hi[a]), o));
+                reach = _mm256_max_ps(reach, _mm256_max_ps(to_lo, to_hi));
+                _mm256_storeu_ps(p.origin[a].as_mut_ptr(), o);
+                _mm256_storeu_ps(p.inv[a].as_mut_ptr(), inv[a]);
+            }
+            if _mm256_movemask_ps(finite) != 0xff {
+                return None;
+            }
+            let m = _mm256_add_ps(reach, _mm256_set1_ps(3.0 * (hi - lo).max_element()));
+            let scale = _mm256_mul_ps(_mm256_set1_ps(crate::node::SLACK), m);
+            for (lanes, inv) in p.slack.iter_mut().zip(inv) {
+                let slack = _mm256_mul_ps(_mm256_andnot_ps(sign, inv), scale);
+                _mm256_storeu_ps(lanes.as_mut_ptr(), slack);
+            }
+            p.neg = [neg_bits & 1 != 0, neg_bits & 2 != 0, neg_bits & 4 != 0];
+            p.oct_inv4 = crate::node::oct_inv4(neg_bits);
+            Some(p)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::triangle::lanes::transpose;
+    use glam::{Vec3, Vec3A};
+    use std::arch::x86_64::__m128;
+
+    fn mix(mut x: u32) -> u32 {
+        x ^= x >> 16;
+        x = x.wrapping_mul(0x7feb_352d);
+        x ^= x >> 15;
+        x = x.wrapping_mul(0x846c_a68b);
+        x ^ (x >> 16)
+    }
+
+    /// A coordinate from a counter: uniform, exactly zero (a direction along an axis), tiny
+    /// (a reciprocal past the clamp) or large.
+    fn coord(k: u32) -> f32 {
+        let u = (mix(k) >> 8) as f32 / (1u32 << 23) as f32 - 1.0;
+        match mix(k ^ 0x55) % 8 {
+            0 => 0.0,
+            1 => -0.0,
+            2 => u * 1e-25,
+            3 => u * 1e6,
+            _ => u,
+        }
+    }
+
+    /// The lanes built at once have the bits of eight `BoxRay::new`s put in lanes.
+    #[test]
+    fn packet_rays_at_once_match_box_rays_lane_by_lane() {
+        if !is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let bounds = (Vec3::new(-3.0, -0.5, -7.0), Vec3::new(4.0, 2.5, 1.0));
+        let (mut built, mut declined) = (0, 0);
+        for case in 0..20_000u32 {
+            let k = case * 64;
+            let mut origins = [__m128::from(Vec3A::ZERO); PACKET_LANES];
+            let mut dirs = origins;
+            let mut tmin = [0.0; PACKET_LANES];
+            let mut boxes = [BoxRay::new(Vec3::ZERO, Vec3::ONE, 0.0, bounds); PACKET_LANES];
+            // Half the cases share one direction's signs (packets), half mix them.
+            let base = Vec3::new(coord(k), coord(k + 1), coord(k + 2));
+            for i in 0..PACKET_LANES as u32 {
+                let o = Vec3::new(
+                    coord(k + 8 * i + 3),
+                    coord(k + 8 * i + 4),
+                    coord(k + 8 * i + 5),
+                );
+                let jitter = Vec3::new(
+                    coord(k + 8 * i + 6),
+                    coord(k + 8 * i + 7),
+                    coord(k + 8 * i + 8),
+                );
+                let d = if case % 2 == 0 {
+                    base * (1.0 + 0.01 * i as f32)
+                } else {
+                    jitter
+                };
+                let t = if i % 3 == 0 { 0.0 } else { 1e-4 * i as f32 };
+                boxes[i as usize] = BoxRay::new(o, d, t, bounds);
+                origins[i as usize] = Vec3A::from(o).into();
+                dirs[i as usize] = Vec3A::from(d).into();
+                tmin[i as usize] = t;
+            }
+            // SAFETY: AVX2 checked above.
+            let got = unsafe {
+                let [ox, oy, oz, _] = transpose(origins);
+                let [dx, dy, dz, _] = transpose(dirs);
+                PacketRays::from_rays([ox, oy, oz], [dx, dy, dz], tmin, bounds)
+            };
+            let same_signs = boxes.iter().all(|b| b.neg == boxes[0].neg);
+            let Some(got) = got else {
+                assert!(!same_signs, "case {case}: declined a packet of one octant");
+                declined += 1;
+                continue;
+            };
+            assert!(same_signs, "case {case}: a packet of mixed octants");
+            let want = PacketRays::new(&boxes);
+            let bits = |v: &[[f32; PACKET_LANES]; 3]| v.map(|a| a.map(f32::to_bits));
+            assert_eq!(bits(&got.origin), bits(&want.origin), "case {case} origin");
+            assert_eq!(bits(&got.inv), bits(&want.inv), "case {case} inv");
+            assert_eq!(bits(&got.slack), bits(&want.slack), "case {case} slack");
+            assert_eq!(got.tmin.map(f32::to_bits), want.tmin.map(f32::to_bits));
+            assert_eq!(
+                (got.neg, got.oct_inv4),
+                (want.neg, want.oct_inv4),
+                "case {case}"
+            );
+            built += 1;
+        }
+        assert!(
+            built > 5_000 && declined > 5_000,
+            "built {built} declined {declined}"
+        );
+    }
+}
