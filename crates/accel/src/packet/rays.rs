@@ -47,7 +47,7 @@ impl PacketRays {
 
 #[cfg(target_arch = "x86_64")]
 impl PacketRays {
-    /// [`PacketRays::new`] of the `BoxRay::new`s of eight rays in the tree's space
+    /// `PacketRays::new` of the `BoxRay::new`s of eight rays in the tree's space
     /// (`origin`, `dir`, `tmin`; tree bounds `(lo, hi)`), computed for all lanes at once with
     /// `BoxRay::new`'s operations lane by lane, so the same bits. `None` when a lane's origin
     /// or direction is not finite (where the order of its maxima would matter) or the lanes'
