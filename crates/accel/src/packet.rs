@@ -30,6 +30,8 @@ use std::arch::x86_64::__m128;
 use std::mem::MaybeUninit;
 
 #[cfg(target_arch = "x86_64")]
+mod cull;
+#[cfg(target_arch = "x86_64")]
 mod rays;
 #[cfg(target_arch = "x86_64")]
 use rays::PacketRays;
@@ -443,8 +445,13 @@ impl Accel {
             // culling only saves work, and the runs that gain start outside.
             let mut active = (1u32 << run.len()) - 1;
             if !self.starts_inside(&run[0]) {
-                for (i, ray) in run.iter().enumerate() {
-                    active &= !(u32::from(self.misses_bounds(ray)) << i);
+                if let Ok(eight) = <&[Ray; PACKET_LANES]>::try_from(run) {
+                    // SAFETY: forwarded from the caller.
+                    active &= !unsafe { self.misses_bounds_lanes(eight) };
+                } else {
+                    for (i, ray) in run.iter().enumerate() {
+                        active &= !(u32::from(self.misses_bounds(ray)) << i);
+                    }
                 }
             }
             if active == 0 {

@@ -1,0 +1,165 @@
+//! Which of a run's eight rays provably miss the scene's bounds: [`Accel::misses_bounds`] for
+//! eight rays at once, so that a run of camera rays around a lone asset is answered for a few
+//! instructions a ray (most rays of a product shot miss it).
+
+use super::PACKET_LANES;
+use crate::triangle::lanes::transpose;
+use crate::{Accel, Ray};
+use glam::Vec3A;
+use std::arch::x86_64::*;
+
+impl Accel {
+    /// The lanes of `run` (eight rays) that [`Accel::misses_bounds`] culls, bit `i` for ray
+    /// `i`: the same arithmetic lane by lane (a ray that starts inside the bounds, or whose
+    /// origin or direction is not finite, is never culled).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2, and the caller must be compiled for it.
+    #[inline(always)]
+    pub(super) unsafe fn misses_bounds_lanes(&self, run: &[Ray; PACKET_LANES]) -> u32 {
+        let (lo, hi) = self.tlas_bounds;
+        // SAFETY: AVX2 is guaranteed by the caller; register-only operations.
+        unsafe {
+            let [ox, oy, oz, _] = transpose(run.each_ref().map(|r| Vec3A::from(r.origin).into()));
+            let [dx, dy, dz, _] = transpose(run.each_ref().map(|r| Vec3A::from(r.dir).into()));
+            let t = run.each_ref().map(|r| r.tmin);
+            let tmin = _mm256_setr_ps(t[0], t[1], t[2], t[3], t[4], t[5], t[6], t[7]);
+            let t = run.each_ref().map(|r| r.tmax);
+            let tmax = _mm256_setr_ps(t[0], t[1], t[2], t[3], t[4], t[5], t[6], t[7]);
+            let sign = _mm256_set1_ps(-0.0);
+            let inf = _mm256_set1_ps(f32::INFINITY);
+            let limit = _mm256_set1_ps(crate::node::INV_LIMIT);
+            let mut keep = _mm256_setzero_ps();
+            let mut inside = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+            let mut reach = _mm256_setzero_ps();
+            let mut inv = [_mm256_setzero_ps(); 3];
+            for (a, (o, d)) in [(ox, dx), (oy, dy), (oz, dz)].into_iter().enumerate() {
+                // Not finite (unordered with or equal to infinity): never culled.
+                keep = _mm256_or_ps(
+                    keep,
+                    _mm256_or_ps(
+                        _mm256_cmp_ps::<_CMP_NLT_UQ>(_mm256_andnot_ps(sign, o), inf),
+                        _mm256_cmp_ps::<_CMP_NLT_UQ>(_mm256_andnot_ps(sign, d), inf),
+                    ),
+                );
+                let (l, h) = (_mm256_set1_ps(lo[a]), _mm256_set1_ps(hi[a]));
+                inside = _mm256_and_ps(
+                    inside,
+                    _mm256_and_ps(
+                        _mm256_cmp_ps::<_CMP_GE_OQ>(o, l),
+                        _mm256_cmp_ps::<_CMP_LE_OQ>(o, h),
+                    ),
+                );
+                // `BoxRay::new`'s reciprocal and reach, as in `PacketRays::from_rays`.
+                let i = _mm256_div_ps(_mm256_set1_ps(1.0), d);
+                let clamped = _mm256_min_ps(_mm256_max_ps(i, _mm256_xor_ps(limit, sign)), limit);
+                let signed = _mm256_or_ps(_mm256_and_ps(d, sign), _mm256_andnot_ps(sign, limit));
+                let ok = _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, i), inf);
+                inv[a] = _mm256_or_ps(_mm256_and_ps(ok, clamped), _mm256_andnot_ps(ok, signed));
+                let to_lo = _mm256_andnot_ps(sign, _mm256_sub_ps(l, o));
+                let to_hi = _mm256_andnot_ps(sign, _mm256_sub_ps(h, o));
+                reach = _mm256_max_ps(reach, _mm256_max_ps(to_lo, to_hi));
+            }
+            let m = _mm256_add_ps(reach, _mm256_set1_ps(3.0 * (hi - lo).max_element()));
+            let scale = _mm256_mul_ps(_mm256_set1_ps(crate::node::SLACK), m);
+            // The slab test against the bounds, widened by the slack.
+            let mut enter = tmin;
+            let mut exit = tmax;
+            for (a, o) in [ox, oy, oz].into_iter().enumerate() {
+                let slack = _mm256_mul_ps(_mm256_andnot_ps(sign, inv[a]), scale);
+                let t0 = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(lo[a]), o), inv[a]);
+                let t1 = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(hi[a]), o), inv[a]);
+                let near = _mm256_sub_ps(_mm256_min_ps(t0, t1), slack);
+                let far = _mm256_add_ps(_mm256_max_ps(t0, t1), slack);
+                enter = _mm256_max_ps(near, enter);
+                exit = _mm256_min_ps(far, exit);
+            }
+            let missed = _mm256_cmp_ps::<_CMP_GT_OQ>(enter, exit);
+            let culled = _mm256_andnot_ps(_mm256_or_ps(keep, inside), missed);
+            _mm256_movemask_ps(culled) as u32
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PACKET_LANES;
+    use crate::{Accel, BvhQuality, InstanceInput, MeshInput, Ray};
+    use glam::{Affine3A, Vec3};
+
+    fn mix(mut x: u32) -> u32 {
+        x ^= x >> 16;
+        x = x.wrapping_mul(0x7feb_352d);
+        x ^= x >> 15;
+        x = x.wrapping_mul(0x846c_a68b);
+        x ^ (x >> 16)
+    }
+
+    /// A coordinate: uniform in [-4, 4), now and then exactly zero, tiny or not finite.
+    fn coord(k: u32) -> f32 {
+        let u = 8.0 * ((mix(k) >> 8) as f32 / (1u32 << 24) as f32) - 4.0;
+        match mix(k ^ 0x3c) % 16 {
+            0 => 0.0,
+            1 => -0.0,
+            2 => u * 1e-30,
+            3 => f32::INFINITY,
+            4 => f32::NAN,
+            _ => u,
+        }
+    }
+
+    /// Eight rays at once cull exactly the rays `misses_bounds` culls, one by one.
+    #[test]
+    fn lanes_cull_as_misses_bounds_does() {
+        if !is_x86_feature_detected!("avx2") {
+            return;
+        }
+        // Two triangles spanning [-1, 1] x [-0.5, 0.5] x [-2, 0.3].
+        let positions = vec![
+            Vec3::new(-1.0, -0.5, -2.0),
+            Vec3::new(1.0, -0.5, 0.3),
+            Vec3::new(0.0, 0.5, -1.0),
+            Vec3::new(-1.0, 0.5, 0.0),
+        ];
+        let indices = vec![[0, 1, 2], [0, 2, 3]];
+        let meshes = [MeshInput {
+            positions: &positions,
+            indices: &indices,
+        }];
+        let instances = [InstanceInput {
+            mesh: 0,
+            world_from_object: Affine3A::IDENTITY,
+        }];
+        let accel = Accel::build(&meshes, &instances, BvhQuality::Medium);
+        let (mut culled, mut walked) = (0, 0);
+        for case in 0..30_000u32 {
+            let k = case * 64;
+            let run: [Ray; PACKET_LANES] = std::array::from_fn(|i| {
+                let j = k + 8 * i as u32;
+                let mut r = Ray::new(
+                    Vec3::new(coord(j), coord(j + 1), coord(j + 2)),
+                    Vec3::new(coord(j + 3), coord(j + 4), coord(j + 5)),
+                );
+                if mix(j + 6) % 3 == 0 {
+                    r.tmax = (mix(j + 7) % 8) as f32 * 0.5;
+                }
+                r
+            });
+            // SAFETY: AVX2 checked above.
+            let got = unsafe { accel.misses_bounds_lanes(&run) };
+            for (i, ray) in run.iter().enumerate() {
+                let want = accel.misses_bounds(ray);
+                assert_eq!(got >> i & 1 == 1, want, "case {case} ray {i}: {ray:?}");
+                if want {
+                    culled += 1;
+                } else {
+                    walked += 1;
+                }
+            }
+        }
+        assert!(
+            culled > 10_000 && walked > 10_000,
+            "culled {culled} walked {walked}"
+        );
+    }
+}
