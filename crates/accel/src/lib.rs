@@ -44,6 +44,8 @@ mod packet;
 mod query;
 pub mod rayfile;
 mod spawn;
+#[cfg(test)]
+mod test_util;
 mod triangle;
 mod types;
 mod walk;

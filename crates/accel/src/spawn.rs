@@ -167,6 +167,7 @@ fn offset_ulps_scalar(p: Vec3, n: Vec3, float_scale: f32) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_util::mix;
 
     /// A value from a counter, over every float class the offset meets: zeros, tiny and huge
     /// magnitudes, both signs, the 1/32 boundary, infinities and NaN.
@@ -192,14 +193,6 @@ mod tests {
             // Any bit pattern: every exponent and sign.
             f32::from_bits(mix(h))
         }
-    }
-
-    fn mix(mut x: u32) -> u32 {
-        x ^= x >> 16;
-        x = x.wrapping_mul(0x7feb_352d);
-        x ^= x >> 15;
-        x = x.wrapping_mul(0x846c_a68b);
-        x ^ (x >> 16)
     }
 
     #[test]

@@ -26,22 +26,12 @@ impl Accel {
             let tmin = _mm256_setr_ps(t[0], t[1], t[2], t[3], t[4], t[5], t[6], t[7]);
             let t = run.each_ref().map(|r| r.tmax);
             let tmax = _mm256_setr_ps(t[0], t[1], t[2], t[3], t[4], t[5], t[6], t[7]);
-            let sign = _mm256_set1_ps(-0.0);
-            let inf = _mm256_set1_ps(f32::INFINITY);
-            let limit = _mm256_set1_ps(crate::node::INV_LIMIT);
-            let mut keep = _mm256_setzero_ps();
+            let b = super::rays::box_lanes([ox, oy, oz], [dx, dy, dz], (lo, hi));
             let mut inside = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
-            let mut reach = _mm256_setzero_ps();
-            let mut inv = [_mm256_setzero_ps(); 3];
-            for (a, (o, d)) in [(ox, dx), (oy, dy), (oz, dz)].into_iter().enumerate() {
-                // Not finite (unordered with or equal to infinity): never culled.
-                keep = _mm256_or_ps(
-                    keep,
-                    _mm256_or_ps(
-                        _mm256_cmp_ps::<_CMP_NLT_UQ>(_mm256_andnot_ps(sign, o), inf),
-                        _mm256_cmp_ps::<_CMP_NLT_UQ>(_mm256_andnot_ps(sign, d), inf),
-                    ),
-                );
+            // The slab test against the bounds, widened by the slack.
+            let mut enter = tmin;
+            let mut exit = tmax;
+            for (a, o) in [ox, oy, oz].into_iter().enumerate() {
                 let (l, h) = (_mm256_set1_ps(lo[a]), _mm256_set1_ps(hi[a]));
                 inside = _mm256_and_ps(
                     inside,
@@ -50,32 +40,16 @@ impl Accel {
                         _mm256_cmp_ps::<_CMP_LE_OQ>(o, h),
                     ),
                 );
-                // `BoxRay::new`'s reciprocal and reach, as in `PacketRays::from_rays`.
-                let i = _mm256_div_ps(_mm256_set1_ps(1.0), d);
-                let clamped = _mm256_min_ps(_mm256_max_ps(i, _mm256_xor_ps(limit, sign)), limit);
-                let signed = _mm256_or_ps(_mm256_and_ps(d, sign), _mm256_andnot_ps(sign, limit));
-                let ok = _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, i), inf);
-                inv[a] = _mm256_or_ps(_mm256_and_ps(ok, clamped), _mm256_andnot_ps(ok, signed));
-                let to_lo = _mm256_andnot_ps(sign, _mm256_sub_ps(l, o));
-                let to_hi = _mm256_andnot_ps(sign, _mm256_sub_ps(h, o));
-                reach = _mm256_max_ps(reach, _mm256_max_ps(to_lo, to_hi));
-            }
-            let m = _mm256_add_ps(reach, _mm256_set1_ps(3.0 * (hi - lo).max_element()));
-            let scale = _mm256_mul_ps(_mm256_set1_ps(crate::node::SLACK), m);
-            // The slab test against the bounds, widened by the slack.
-            let mut enter = tmin;
-            let mut exit = tmax;
-            for (a, o) in [ox, oy, oz].into_iter().enumerate() {
-                let slack = _mm256_mul_ps(_mm256_andnot_ps(sign, inv[a]), scale);
-                let t0 = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(lo[a]), o), inv[a]);
-                let t1 = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(hi[a]), o), inv[a]);
-                let near = _mm256_sub_ps(_mm256_min_ps(t0, t1), slack);
-                let far = _mm256_add_ps(_mm256_max_ps(t0, t1), slack);
+                let t0 = _mm256_mul_ps(_mm256_sub_ps(l, o), b.inv[a]);
+                let t1 = _mm256_mul_ps(_mm256_sub_ps(h, o), b.inv[a]);
+                let near = _mm256_sub_ps(_mm256_min_ps(t0, t1), b.slack[a]);
+                let far = _mm256_add_ps(_mm256_max_ps(t0, t1), b.slack[a]);
                 enter = _mm256_max_ps(near, enter);
                 exit = _mm256_min_ps(far, exit);
             }
             let missed = _mm256_cmp_ps::<_CMP_GT_OQ>(enter, exit);
-            let culled = _mm256_andnot_ps(_mm256_or_ps(keep, inside), missed);
+            // Rays starting inside, or not finite, are walked.
+            let culled = _mm256_andnot_ps(inside, _mm256_and_ps(b.finite, missed));
             _mm256_movemask_ps(culled) as u32
         }
     }
@@ -84,16 +58,9 @@ impl Accel {
 #[cfg(test)]
 mod tests {
     use super::PACKET_LANES;
+    use crate::test_util::mix;
     use crate::{Accel, BvhQuality, InstanceInput, MeshInput, Ray};
     use glam::{Affine3A, Vec3};
-
-    fn mix(mut x: u32) -> u32 {
-        x ^= x >> 16;
-        x = x.wrapping_mul(0x7feb_352d);
-        x ^= x >> 15;
-        x = x.wrapping_mul(0x846c_a68b);
-        x ^ (x >> 16)
-    }
 
     /// A coordinate: uniform in [-4, 4), now and then exactly zero, tiny or not finite.
     fn coord(k: u32) -> f32 {

@@ -1,10 +1,11 @@
 //! A packet's eight rays prepared for box tests, lane by lane: built in registers from the
-//! rays' origins and directions, with the arithmetic of eight `BoxRay::new`s.
+//! rays' origins and directions, with the arithmetic of eight `BoxRay::new`s ([`box_lanes`],
+//! which the bounds cull shares).
 
 use super::PACKET_LANES;
 #[cfg(test)]
 use crate::node::BoxRay;
-use std::arch::x86_64::__m256;
+use std::arch::x86_64::*;
 
 /// Eight rays prepared for box tests, lane by lane (structure of arrays of `BoxRay`s).
 #[derive(Clone, Copy)]
@@ -45,13 +46,67 @@ impl PacketRays {
     }
 }
 
-#[cfg(target_arch = "x86_64")]
+/// What `BoxRay::new` computes for eight rays (origins and directions by lane, tree bounds
+/// `(lo, hi)`), with its operations lane by lane: the clamped reciprocal and the slack per axis,
+/// and which lanes have a finite origin and direction (only there is the slack's maximum
+/// independent of its order of operations).
+pub(super) struct BoxLanes {
+    pub(super) inv: [__m256; 3],
+    pub(super) slack: [__m256; 3],
+    /// All ones in the lanes whose origin and direction are finite.
+    pub(super) finite: __m256,
+}
+
+/// [`BoxLanes`] of eight rays.
+///
+/// # Safety
+/// The CPU must support AVX2, and the caller must be compiled for it.
+#[inline(always)]
+pub(super) unsafe fn box_lanes(
+    origin: [__m256; 3],
+    dir: [__m256; 3],
+    (lo, hi): (glam::Vec3, glam::Vec3),
+) -> BoxLanes {
+    // SAFETY: AVX2 is guaranteed by the caller; register-only operations.
+    unsafe {
+        let sign = _mm256_set1_ps(-0.0);
+        let inf = _mm256_set1_ps(f32::INFINITY);
+        let limit = _mm256_set1_ps(crate::node::INV_LIMIT);
+        let mut finite = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+        // `(lo - o).abs().max((hi - o).abs()).max_element()` per lane.
+        let mut reach = _mm256_setzero_ps();
+        let mut inv = [_mm256_setzero_ps(); 3];
+        for a in 0..3 {
+            let (o, d) = (origin[a], dir[a]);
+            finite = _mm256_and_ps(
+                finite,
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, o), inf),
+                    _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, d), inf),
+                ),
+            );
+            // A finite reciprocal clamped to the limit, else the limit with the sign of `d`.
+            let i = _mm256_div_ps(_mm256_set1_ps(1.0), d);
+            let clamped = _mm256_min_ps(_mm256_max_ps(i, _mm256_xor_ps(limit, sign)), limit);
+            let signed = _mm256_or_ps(_mm256_and_ps(d, sign), _mm256_andnot_ps(sign, limit));
+            let ok = _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, i), inf);
+            inv[a] = _mm256_or_ps(_mm256_and_ps(ok, clamped), _mm256_andnot_ps(ok, signed));
+            let to_lo = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_set1_ps(lo[a]), o));
+            let to_hi = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_set1_ps(hi[a]), o));
+            reach = _mm256_max_ps(reach, _mm256_max_ps(to_lo, to_hi));
+        }
+        let m = _mm256_add_ps(reach, _mm256_set1_ps(3.0 * (hi - lo).max_element()));
+        let scale = _mm256_mul_ps(_mm256_set1_ps(crate::node::SLACK), m);
+        let slack = inv.map(|i| _mm256_mul_ps(_mm256_andnot_ps(sign, i), scale));
+        BoxLanes { inv, slack, finite }
+    }
+}
+
 impl PacketRays {
     /// `PacketRays::new` of the `BoxRay::new`s of eight rays in the tree's space
-    /// (`origin`, `dir`, `tmin`; tree bounds `(lo, hi)`), computed for all lanes at once with
-    /// `BoxRay::new`'s operations lane by lane, so the same bits. `None` when a lane's origin
-    /// or direction is not finite (where the order of its maxima would matter) or the lanes'
-    /// direction signs differ (no packet then).
+    /// (`origin`, `dir`, `tmin`; tree bounds `bounds`), computed for all lanes at once
+    /// ([`box_lanes`]), so the same bits. `None` when a lane's origin or direction is not
+    /// finite or the lanes' direction signs differ (no packet then).
     ///
     /// # Safety
     /// The CPU must support AVX2, and the caller must be compiled for it.
@@ -60,15 +115,14 @@ impl PacketRays {
         origin: [__m256; 3],
         dir: [__m256; 3],
         tmin: [f32; PACKET_LANES],
-        (lo, hi): (glam::Vec3, glam::Vec3),
+        bounds: (glam::Vec3, glam::Vec3),
     ) -> Option<Self> {
-        use std::arch::x86_64::*;
         // SAFETY: AVX2 is guaranteed by the caller; each store writes one `[f32; 8]`.
         unsafe {
-            let sign = _mm256_set1_ps(-0.0);
-            let inf = _mm256_set1_ps(f32::INFINITY);
-            let limit = _mm256_set1_ps(crate::node::INV_LIMIT);
-            let mut finite = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+            let b = box_lanes(origin, dir, bounds);
+            if _mm256_movemask_ps(b.finite) != 0xff {
+                return None;
+            }
             let mut p = Self {
                 origin: [[0.0; PACKET_LANES]; 3],
                 inv: [[0.0; PACKET_LANES]; 3],
@@ -77,48 +131,22 @@ impl PacketRays {
                 neg: [false; 3],
                 oct_inv4: 0,
             };
-            // `(lo - o).abs().max((hi - o).abs()).max_element()` per lane (finite lanes: the
-            // order of the maxima does not matter).
-            let mut reach = _mm256_setzero_ps();
-            let mut inv = [_mm256_setzero_ps(); 3];
             let mut neg_bits = 0u32;
-            for a in 0..3 {
-                let (o, d) = (origin[a], dir[a]);
-                finite = _mm256_and_ps(
-                    finite,
-                    _mm256_and_ps(
-                        _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, o), inf),
-                        _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, d), inf),
-                    ),
-                );
-                // `BoxRay::new`: a finite reciprocal clamped to the limit, else the limit with
-                // the sign of `d`.
-                let i = _mm256_div_ps(_mm256_set1_ps(1.0), d);
-                let clamped = _mm256_min_ps(_mm256_max_ps(i, _mm256_xor_ps(limit, sign)), limit);
-                let signed = _mm256_or_ps(_mm256_and_ps(d, sign), _mm256_andnot_ps(sign, limit));
-                let ok = _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, i), inf);
-                inv[a] = _mm256_or_ps(_mm256_and_ps(ok, clamped), _mm256_andnot_ps(ok, signed));
+            for (a, (o, (inv, slack))) in origin
+                .into_iter()
+                .zip(b.inv.into_iter().zip(b.slack))
+                .enumerate()
+            {
                 let negative =
-                    _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(inv[a], _mm256_setzero_ps()))
+                    _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(inv, _mm256_setzero_ps()))
                         as u32;
                 if negative != 0 && negative != 0xff {
                     return None;
                 }
                 neg_bits |= (negative & 1) << a;
-                let to_lo = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_set1_ps(lo[a]), o));
-                let to_hi = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_set1_ps(hi[a]), o));
-                reach = _mm256_max_ps(reach, _mm256_max_ps(to_lo, to_hi));
                 _mm256_storeu_ps(p.origin[a].as_mut_ptr(), o);
-                _mm256_storeu_ps(p.inv[a].as_mut_ptr(), inv[a]);
-            }
-            if _mm256_movemask_ps(finite) != 0xff {
-                return None;
-            }
-            let m = _mm256_add_ps(reach, _mm256_set1_ps(3.0 * (hi - lo).max_element()));
-            let scale = _mm256_mul_ps(_mm256_set1_ps(crate::node::SLACK), m);
-            for (lanes, inv) in p.slack.iter_mut().zip(inv) {
-                let slack = _mm256_mul_ps(_mm256_andnot_ps(sign, inv), scale);
-                _mm256_storeu_ps(lanes.as_mut_ptr(), slack);
+                _mm256_storeu_ps(p.inv[a].as_mut_ptr(), inv);
+                _mm256_storeu_ps(p.slack[a].as_mut_ptr(), slack);
             }
             p.neg = [neg_bits & 1 != 0, neg_bits & 2 != 0, neg_bits & 4 != 0];
             p.oct_inv4 = crate::node::oct_inv4(neg_bits);
@@ -130,17 +158,10 @@ impl PacketRays {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_util::mix;
     use crate::triangle::lanes::transpose;
     use glam::{Vec3, Vec3A};
     use std::arch::x86_64::__m128;
-
-    fn mix(mut x: u32) -> u32 {
-        x ^= x >> 16;
-        x = x.wrapping_mul(0x7feb_352d);
-        x ^= x >> 15;
-        x = x.wrapping_mul(0x846c_a68b);
-        x ^ (x >> 16)
-    }
 
     /// A coordinate from a counter: uniform, exactly zero (a direction along an axis), tiny
     /// (a reciprocal past the clamp) or large.

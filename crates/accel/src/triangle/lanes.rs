@@ -295,15 +295,8 @@ pub(crate) unsafe fn intersect_lanes(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_util::mix;
     use crate::triangle::intersect;
-
-    fn mix(mut x: u32) -> u32 {
-        x ^= x >> 16;
-        x = x.wrapping_mul(0x7feb_352d);
-        x ^= x >> 15;
-        x = x.wrapping_mul(0x846c_a68b);
-        x ^ (x >> 16)
-    }
 
     /// A uniform value in `[-1, 1)` from a counter.
     fn unit(k: u32) -> f32 {
