@@ -3,7 +3,10 @@
 //!
 //! A packet walks the union of its rays' walks: a child is entered when any active ray's box
 //! test (the one-ray test's arithmetic, lane by lane, so the same per-ray answers) hits it, and
-//! each leaf's triangles are tested only for the rays that hit that leaf. Children are ordered
+//! each leaf's triangles are tested only for the rays that hit that leaf — for two rays or more,
+//! each triangle for all of them at once ([`crate::triangle::lanes`], the scalar test's bits
+//! lane by lane). The lanes' set-up is done for the eight rays at once too ([`rays`]), and rays
+//! that miss the scene's bounds are culled eight at a time ([`cull`]). Children are ordered
 //! by the packet's common direction octant. The node decode, the stack and the child ordering
 //! are paid once per packet instead of once per ray; rays that would have skipped a node pay its
 //! box test in their lane. Closest hits are the one-ray answers exactly, since
