@@ -22,6 +22,7 @@
 
 #[cfg(target_arch = "x86_64")]
 use crate::triangle::lanes::{intersect_lanes, transpose, TriLanes};
+#[cfg(target_arch = "x86_64")]
 use crate::triangle::TriRay;
 use crate::walk::{stack_for, take_child, BlasLeaf, Group, InlineStack, Leaf, INLINE_STACK};
 use crate::{Accel, Hit, Ray};
@@ -212,6 +213,7 @@ unsafe fn node_lanes_avx2(
 
 /// Lanes at a leaf from which its triangles are tested for all of them at once (fewer take
 /// the one-ray test, lane by lane).
+#[cfg(target_arch = "x86_64")]
 const MIN_LANES: u32 = 2;
 
 /// The triangle-test constants of the packet's leaves, lane by lane.

@@ -106,7 +106,6 @@ pub(crate) unsafe fn transpose(v: [__m128; LANES]) -> [__m256; 4] {
 /// # Safety
 /// The CPU must support AVX2, and the caller must be compiled for it (inlined into the AVX2
 /// packet queries).
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 pub(crate) unsafe fn intersect_lanes(
     l: &TriLanes,
@@ -118,11 +117,6 @@ pub(crate) unsafe fn intersect_lanes(
     // every store writes one. Macros, not closures: closures do not inherit the target
     // features (a call per intrinsic).
     unsafe {
-        macro_rules! ld {
-            ($v:expr) => {
-                _mm256_loadu_ps($v.as_ptr())
-            };
-        }
         macro_rules! set {
             ($x:expr) => {
                 _mm256_set1_ps($x)
@@ -242,7 +236,7 @@ pub(crate) unsafe fn intersect_lanes(
         let t = mul!(t_scaled, inv_det);
         let in_range = _mm256_and_ps(
             _mm256_cmp_ps::<_CMP_GE_OQ>(t, l.tmin),
-            _mm256_cmp_ps::<_CMP_LE_OQ>(t, ld!(tmax)),
+            _mm256_cmp_ps::<_CMP_LE_OQ>(t, _mm256_loadu_ps(tmax.as_ptr())),
         );
         // pbrt-v4's bound on t's error, in the scalar test's order of operations.
         let max_zt = max3!(az, bz, cz);
