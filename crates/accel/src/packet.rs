@@ -405,7 +405,7 @@ impl Accel {
     #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
     unsafe fn intersect_packets_avx2(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
         // SAFETY: forwarded.
-        unsafe { self.packets_impl::<crate::walk::ClosestLeaf>(rays, out) }
+        unsafe { self.packets_impl::<crate::walk::ClosestLeaf<true>>(rays, out) }
     }
 
     /// # Safety
@@ -414,7 +414,7 @@ impl Accel {
     #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
     unsafe fn occluded_packets_avx2(&self, rays: &[Ray], out: &mut [bool]) {
         // SAFETY: forwarded.
-        unsafe { self.packets_impl::<crate::walk::AnyLeaf>(rays, out) }
+        unsafe { self.packets_impl::<crate::walk::AnyLeaf<true>>(rays, out) }
     }
 
     /// The packet queries with leaves of type `L`: runs of [`PACKET_LANES`] rays, each a packet

@@ -140,7 +140,7 @@ impl Accel {
             // SAFETY: `avx2` is set only when `detect_avx2` found every feature it enables.
             return unsafe { self.intersect_batch_avx2(rays, out) };
         }
-        self.batch_impl::<false, ClosestLeaf>(rays, out)
+        self.batch_impl::<false, ClosestLeaf<false>>(rays, out)
     }
 
     /// [`Accel::occluded`] for each of `rays` on the calling thread, interleaved as
@@ -151,7 +151,7 @@ impl Accel {
             // SAFETY: as in `intersect_batch`.
             return unsafe { self.occluded_batch_avx2(rays, out) };
         }
-        self.batch_impl::<false, AnyLeaf>(rays, out)
+        self.batch_impl::<false, AnyLeaf<false>>(rays, out)
     }
 
     /// [`Accel::intersect_batch`] compiled for AVX2.
@@ -161,7 +161,7 @@ impl Accel {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
     unsafe fn intersect_batch_avx2(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
-        self.batch_impl::<true, ClosestLeaf>(rays, out)
+        self.batch_impl::<true, ClosestLeaf<true>>(rays, out)
     }
 
     /// [`Accel::occluded_batch`] compiled for AVX2.
@@ -171,7 +171,7 @@ impl Accel {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
     unsafe fn occluded_batch_avx2(&self, rays: &[Ray], out: &mut [bool]) {
-        self.batch_impl::<true, AnyLeaf>(rays, out)
+        self.batch_impl::<true, AnyLeaf<true>>(rays, out)
     }
 
     /// The one bottom-level tree every ray walks, when interleaving applies: a scene of one
@@ -364,7 +364,7 @@ impl Accel {
             let (o, d) = Self::object_ray(entry, ray);
             let tr = TriRay::new(o, d);
             for (i, tri) in blas.tris.iter().enumerate() {
-                if let Some(h) = crate::triangle::intersect(&tr, &tri.p, ray.tmin, tmax) {
+                if let Some(h) = crate::triangle::intersect::<false>(&tr, tri, ray.tmin, tmax) {
                     tmax = h.0;
                     best = Some(Self::make_hit(blas, entry, i, h));
                 }

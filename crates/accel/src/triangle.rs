@@ -7,6 +7,7 @@
 //! on both sides: a ray cannot slip through. Edge values of exactly zero are recomputed in `f64`,
 //! where the products of two `f32` are exact, so the sign of the edge function is never lost.
 
+use crate::Tri;
 use glam::{Mat3A, Vec3, Vec3A};
 
 #[cfg(target_arch = "x86_64")]
@@ -29,6 +30,12 @@ pub(crate) struct TriRay {
     pub sz: f32,
     /// The direction, for the `f64` check of hits close to the origin ([`t_in_front_f64`]).
     pub dir: Vec3A,
+    /// `(kx, ky, kz, kz)`: the components of a vertex in the order [`sheared`] takes them.
+    pub perm: [i32; 4],
+    /// The origin's components in that order.
+    pub origin_k: Vec3A,
+    /// `(sx, sy, 1)`, the shear's column `kz` (only its first two lanes are used).
+    pub s: Vec3A,
 }
 
 impl TriRay {
@@ -45,11 +52,15 @@ impl TriRay {
         cols[kx] = Vec3A::X;
         cols[ky] = Vec3A::Y;
         cols[kz] = Vec3A::new(sx, sy, 1.0);
+        let o = origin.to_array();
         Self {
             origin: origin.into(),
             shear: Mat3A::from_cols(cols[0], cols[1], cols[2]),
             sz,
             dir: dir.into(),
+            perm: [kx as i32, ky as i32, kz as i32, kz as i32],
+            origin_k: Vec3A::new(o[kx], o[ky], o[kz]),
+            s: cols[kz],
         }
     }
 }
@@ -84,21 +95,50 @@ fn gamma(n: i32) -> f32 {
     (n as f32 * e) / (1.0 - n as f32 * e)
 }
 
-/// Intersects the ray with triangle `(p0, p1, p2)`. Returns `(t, b1, b2)` (barycentric weights of
-/// `p1` and `p2`) for a hit with `tmin <= t <= tmax`. Both faces count.
+/// Vertex `k` of `tri` moved into the ray's space: `(d[kx] + sx d[kz], d[ky] + sy d[kz], d[kz])`
+/// for `d = p[k] - origin`, one product and one sum per coordinate. The same values as the
+/// product with [`TriRay::shear`] (whose other terms are products with exact zeros), except
+/// for the sign of a zero coordinate, which decides no edge function (a zero one is decided
+/// again in `f64`), and where `d` overflows (there `0 * inf` made the product NaN).
+///
+/// With `AVX` (x86_64) it must be inlined into a function compiled for AVX: one unaligned load
+/// of four floats (within the `Tri`, whose `prim` follows `p`), one permute, one product and
+/// one sum, against three loads and nine operations for the matrix product.
 #[inline(always)]
-pub(crate) fn intersect(
+fn sheared<const AVX: bool>(r: &TriRay, tri: &Tri, k: usize) -> Vec3A {
+    #[cfg(target_arch = "x86_64")]
+    if AVX {
+        use std::arch::x86_64::*;
+        // SAFETY: AVX is guaranteed by the caller (see above). `Tri` is `repr(C)`, `p` first:
+        // the 16 bytes from vertex `k < 3` end at most at byte 40, the end of the `Tri`; the
+        // fourth float read (the next vertex's x, or `prim`'s bits) is dropped by the permute.
+        unsafe {
+            let v = _mm_loadu_ps((tri as *const Tri as *const f32).add(3 * k));
+            let perm = _mm_loadu_si128(r.perm.as_ptr() as *const __m128i);
+            let d = _mm_sub_ps(_mm_permutevar_ps(v, perm), r.origin_k.into());
+            let z = _mm_shuffle_ps::<0xaa>(d, d);
+            let x = _mm_add_ps(d, _mm_mul_ps(r.s.into(), z));
+            return _mm_blend_ps::<0b1100>(x, d).into();
+        }
+    }
+    let d = (Vec3A::from(tri.p[k]) - r.origin).to_array();
+    let [kx, ky, kz, _] = r.perm.map(|i| i as usize & 3);
+    let (dx, dy, dz) = (d[kx], d[ky], d[kz]);
+    Vec3A::new(dx + r.s.x * dz, dy + r.s.y * dz, dz)
+}
+
+/// Intersects the ray with triangle `tri`. Returns `(t, b1, b2)` (barycentric weights of `p1`
+/// and `p2`) for a hit with `tmin <= t <= tmax`. Both faces count. With `AVX`, see [`sheared`].
+#[inline(always)]
+pub(crate) fn intersect<const AVX: bool>(
     r: &TriRay,
-    p: &[Vec3; 3],
+    tri: &Tri,
     tmin: f32,
     tmax: f32,
 ) -> Option<(f32, f32, f32)> {
-    // By reference: only the rare `f64` check reads the vertices again, and values would stay
-    // live in registers (or spilled) across the whole test for it.
-    let [p0, p1, p2] = *p;
-    let a = r.shear * (Vec3A::from(p0) - r.origin);
-    let b = r.shear * (Vec3A::from(p1) - r.origin);
-    let c = r.shear * (Vec3A::from(p2) - r.origin);
+    let a = sheared::<AVX>(r, tri, 0);
+    let b = sheared::<AVX>(r, tri, 1);
+    let c = sheared::<AVX>(r, tri, 2);
     let (ax, ay, az) = (a.x, a.y, a.z);
     let (bx, by, bz) = (b.x, b.y, b.z);
     let (cx, cy, cz) = (c.x, c.y, c.z);
@@ -125,7 +165,6 @@ pub(crate) fn intersect(
     }
     // pbrt-v4's x/y error terms add max|z| assuming |dir| is about 1; for unnormalised directions
     // (any scale) they need z before it is scaled by 1/dir[kz], in the same units as x and y.
-    let max_z = az.abs().max(bz.abs()).max(cz.abs());
     let az = az * r.sz;
     let bz = bz * r.sz;
     let cz = cz * r.sz;
@@ -136,19 +175,21 @@ pub(crate) fn intersect(
         return None;
     }
     // pbrt-v4: reject hits whose t is not provably positive (they may lie behind the origin),
-    // unless the f64 plane distance proves them in front (`t_in_front_f64`).
-    let max_zt = az.abs().max(bz.abs()).max(cz.abs());
+    // unless the f64 plane distance proves them in front (`t_in_front_f64`). No value here is
+    // NaN (a NaN coordinate makes `det` or `t` NaN), so the lane-wise maxima (`maxps`) equal
+    // `f32::max`'s.
+    let m = a.abs().max(b.abs()).max(c.abs());
+    let (max_xt, max_yt, max_z) = (m.x, m.y, m.z);
+    let max_zt = Vec3A::new(az, bz, cz).abs().max_element();
     let delta_z = gamma(3) * max_zt;
-    let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
-    let max_yt = ay.abs().max(by.abs()).max(cy.abs());
     let delta_x = gamma(5) * (max_xt + max_z);
     let delta_y = gamma(5) * (max_yt + max_z);
     let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-    let max_e = e0.abs().max(e1.abs()).max(e2.abs());
+    let max_e = Vec3A::new(e0, e1, e2).abs().max_element();
     let delta_t =
         3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
     if t <= delta_t {
-        return t_in_front_f64(r, p)
+        return t_in_front_f64(r, &tri.p)
             .filter(|t| *t >= tmin && *t <= tmax)
             .map(|t| (t, e1 * inv_det, e2 * inv_det));
     }
@@ -189,7 +230,7 @@ fn t_in_front_f64(r: &TriRay, p: &[Vec3; 3]) -> Option<f32> {
 /// can compare against brute force with identical arithmetic.
 pub fn intersect_triangle(ray: &crate::Ray, p: [Vec3; 3]) -> Option<(f32, f32, f32)> {
     let r = TriRay::new(ray.origin, ray.dir);
-    intersect(&r, &p, ray.tmin, ray.tmax)
+    intersect::<false>(&r, &Tri { p, prim: 0 }, ray.tmin, ray.tmax)
 }
 
 #[cfg(test)]

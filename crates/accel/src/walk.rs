@@ -93,7 +93,7 @@ impl<const AVX2: bool> Leaf for EntriesClosest<'_, AVX2> {
         if let Some(entry) = self.accel.entries.get(primitive as usize) {
             let hit = self
                 .accel
-                .walk_entry::<AVX2, ClosestLeaf>(entry, self.ray, tmax, self.stack);
+                .walk_entry::<AVX2, ClosestLeaf<AVX2>>(entry, self.ray, tmax, self.stack);
             if let Some(Some(hit)) = hit {
                 self.best = Some(hit);
             }
@@ -120,7 +120,7 @@ impl<const AVX2: bool> Leaf for EntriesAny<'_, AVX2> {
             .get(primitive as usize)
             .is_some_and(|entry| {
                 self.accel
-                    .walk_entry::<AVX2, AnyLeaf>(entry, self.ray, &mut tmax, self.stack)
+                    .walk_entry::<AVX2, AnyLeaf<AVX2>>(entry, self.ray, &mut tmax, self.stack)
                     == Some(true)
             })
     }
@@ -128,19 +128,19 @@ impl<const AVX2: bool> Leaf for EntriesAny<'_, AVX2> {
 
 /// Closest hit over a bottom-level BVH's triangles: `(triangle index, (t, u, v))`.
 #[derive(Clone, Copy)]
-pub(crate) struct ClosestLeaf<'a> {
+pub(crate) struct ClosestLeaf<'a, const AVX: bool> {
     pub(crate) tris: &'a [Tri],
     pub(crate) ray: TriRay,
     pub(crate) tmin: f32,
     pub(crate) best: Option<(usize, (f32, f32, f32))>,
 }
 
-impl Leaf for ClosestLeaf<'_> {
+impl<const AVX: bool> Leaf for ClosestLeaf<'_, AVX> {
     const CLOSEST: bool = true;
     #[inline(always)]
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
         if let Some(tri) = self.tris.get(primitive as usize) {
-            if let Some(h) = crate::triangle::intersect(&self.ray, &tri.p, self.tmin, *tmax) {
+            if let Some(h) = crate::triangle::intersect::<AVX>(&self.ray, tri, self.tmin, *tmax) {
                 return self.record(primitive, h, tmax);
             }
         }
@@ -150,7 +150,7 @@ impl Leaf for ClosestLeaf<'_> {
 
 /// Any hit over a bottom-level BVH's triangles: stops at the first.
 #[derive(Clone, Copy)]
-pub(crate) struct AnyLeaf<'a> {
+pub(crate) struct AnyLeaf<'a, const AVX: bool> {
     pub(crate) tris: &'a [Tri],
     pub(crate) ray: TriRay,
     pub(crate) tmin: f32,
@@ -158,14 +158,14 @@ pub(crate) struct AnyLeaf<'a> {
     pub(crate) blocker: u32,
 }
 
-impl Leaf for AnyLeaf<'_> {
+impl<const AVX: bool> Leaf for AnyLeaf<'_, AVX> {
     const CLOSEST: bool = false;
     #[inline(always)]
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
         let hit = self
             .tris
             .get(primitive as usize)
-            .and_then(|tri| crate::triangle::intersect(&self.ray, &tri.p, self.tmin, *tmax));
+            .and_then(|tri| crate::triangle::intersect::<AVX>(&self.ray, tri, self.tmin, *tmax));
         hit.is_some_and(|h| self.record(primitive, h, tmax))
     }
 }
@@ -194,7 +194,7 @@ pub(crate) trait BlasLeaf<'a>: Leaf + Copy {
     fn record(&mut self, primitive: u32, hit: (f32, f32, f32), tmax: &mut f32) -> bool;
 }
 
-impl<'a> BlasLeaf<'a> for ClosestLeaf<'a> {
+impl<'a, const AVX: bool> BlasLeaf<'a> for ClosestLeaf<'a, AVX> {
     type Answer = Option<Hit>;
 
     #[inline(always)]
@@ -247,7 +247,7 @@ impl<'a> BlasLeaf<'a> for ClosestLeaf<'a> {
     }
 }
 
-impl<'a> BlasLeaf<'a> for AnyLeaf<'a> {
+impl<'a, const AVX: bool> BlasLeaf<'a> for AnyLeaf<'a, AVX> {
     type Answer = bool;
 
     #[inline(always)]
