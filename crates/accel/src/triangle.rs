@@ -8,7 +8,9 @@
 //! where the products of two `f32` are exact, so the sign of the edge function is never lost.
 
 use crate::Tri;
-use glam::{Mat3A, Vec3, Vec3A};
+#[cfg(test)]
+use glam::Mat3A;
+use glam::{Vec3, Vec3A};
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod lanes;
@@ -19,22 +21,21 @@ pub(crate) mod lanes;
 pub(crate) struct TriRay {
     /// Ray origin.
     pub origin: Vec3A,
-    /// Rows `e_kx + sx e_kz`, `e_ky + sy e_kz`, `e_kz`: maps `v - origin` to the sheared
-    /// `(x, y)` and the unscaled `z`. `kz` is the axis of the largest direction component; `kx`,
-    /// `ky` are the others, swapped when `dir[kz] < 0` to keep the winding. Each row has at most
-    /// two non-zero entries and the others are exact zeros, so the SIMD product rounds exactly
-    /// like `v[kx] + sx * v[kz]` (one product, one sum): the same value for every triangle sharing
-    /// the vertex, which is what makes the test watertight.
-    pub shear: Mat3A,
     /// `1 / dir[kz]`: scales z into units of `t`.
     pub sz: f32,
     /// The direction, for the `f64` check of hits close to the origin ([`t_in_front_f64`]).
     pub dir: Vec3A,
-    /// `(kx, ky, kz, kz)`: the components of a vertex in the order [`sheared`] takes them.
+    /// `(kx, ky, kz, kz)`: `kz` is the axis of the largest direction component; `kx`, `ky` are
+    /// the others, swapped when `dir[kz] < 0` to keep the winding. The shear maps `v - origin`
+    /// to `(v[kx] + sx v[kz], v[ky] + sy v[kz], v[kz])` (one product, one sum: the same value
+    /// for every triangle sharing the vertex, which is what makes the test watertight), the
+    /// product with the matrix of rows `e_kx + sx e_kz`, `e_ky + sy e_kz`, `e_kz` ([`sheared`];
+    /// the packets' lanes build that matrix, `lanes::TriLanes`).
     pub perm: [i32; 4],
     /// The origin's components in that order.
     pub origin_k: Vec3A,
-    /// `(sx, sy, 1)`, the shear's column `kz` (only its first two lanes are used).
+    /// `(sx, sy, 1)`: `sx = -dir[kx] / dir[kz]`, `sy = -dir[ky] / dir[kz]` (only the first two
+    /// lanes are used).
     pub s: Vec3A,
 }
 
@@ -46,22 +47,27 @@ impl TriRay {
         let d = dir.to_array();
         let sz = 1.0 / d[kz];
         let (sx, sy) = (-d[kx] * sz, -d[ky] * sz);
-        // Rows `e_kx + sx e_kz`, `e_ky + sy e_kz`, `e_kz`, built as columns: column `kx` is
-        // `(1, 0, 0)`, `ky` is `(0, 1, 0)`, `kz` is `(sx, sy, 1)`.
-        let mut cols = [Vec3A::ZERO; 3];
-        cols[kx] = Vec3A::X;
-        cols[ky] = Vec3A::Y;
-        cols[kz] = Vec3A::new(sx, sy, 1.0);
         let o = origin.to_array();
         Self {
             origin: origin.into(),
-            shear: Mat3A::from_cols(cols[0], cols[1], cols[2]),
             sz,
             dir: dir.into(),
             perm: [kx as i32, ky as i32, kz as i32, kz as i32],
             origin_k: Vec3A::new(o[kx], o[ky], o[kz]),
-            s: cols[kz],
+            s: Vec3A::new(sx, sy, 1.0),
         }
+    }
+
+    /// The shear as a matrix (see [`TriRay::perm`]), built as columns: column `kx` is
+    /// `(1, 0, 0)`, `ky` is `(0, 1, 0)`, `kz` is `(sx, sy, 1)`. The reference of the lanes'.
+    #[cfg(test)]
+    pub fn shear(&self) -> Mat3A {
+        let [kx, ky, kz, _] = self.perm.map(|i| i as usize & 3);
+        let mut cols = [Vec3A::ZERO; 3];
+        cols[kx] = Vec3A::X;
+        cols[ky] = Vec3A::Y;
+        cols[kz] = self.s;
+        Mat3A::from_cols(cols[0], cols[1], cols[2])
     }
 }
 
@@ -97,7 +103,7 @@ fn gamma(n: i32) -> f32 {
 
 /// Vertex `k` of `tri` moved into the ray's space: `(d[kx] + sx d[kz], d[ky] + sy d[kz], d[kz])`
 /// for `d = p[k] - origin`, one product and one sum per coordinate. The same values as the
-/// product with [`TriRay::shear`] (whose other terms are products with exact zeros), except
+/// product with the shear matrix (whose other terms are products with exact zeros), except
 /// for the sign of a zero coordinate, which decides no edge function (a zero one is decided
 /// again in `f64`), and where `d` overflows (there `0 * inf` made the product NaN).
 ///
@@ -259,7 +265,7 @@ mod tests {
             rows[2][kz] = 1.0;
             let want = Mat3A::from_cols_array_2d(&rows).transpose();
             assert_eq!(
-                r.shear.to_cols_array().map(f32::to_bits),
+                r.shear().to_cols_array().map(f32::to_bits),
                 want.to_cols_array().map(f32::to_bits),
                 "{dir}"
             );

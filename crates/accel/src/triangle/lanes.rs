@@ -40,10 +40,11 @@ pub(crate) struct LaneHits {
 impl TriLanes {
     /// The lanes of `rays` with their `tmin`s. By register transposes: lanes written one
     /// float at a time and read back as vectors would stall on every load (store forwarding
-    /// cannot merge eight stores into one load).
+    /// cannot merge eight stores into one load). The shear matrix is built lane-wise from each
+    /// ray's axes: column `kx` is `(1, 0, 0)`, `ky` is `(0, 1, 0)`, `kz` is `(sx, sy, 1)`.
     ///
     /// # Safety
-    /// The CPU must support AVX, and the caller must be compiled for it.
+    /// The CPU must support AVX2, and the caller must be compiled for it.
     #[inline(always)]
     pub unsafe fn new(rays: [&TriRay; LANES], tmin: [f32; LANES]) -> Self {
         // SAFETY: AVX is guaranteed by the caller; register-only operations.
@@ -59,13 +60,32 @@ impl TriLanes {
                 };
             }
             let [ox, oy, oz, _] = col!(origin);
-            let [x0, x1, x2, _] = col!(shear.x_axis);
-            let [y0, y1, y2, _] = col!(shear.y_axis);
-            let [z0, z1, z2, _] = col!(shear.z_axis);
+            let [sx, sy, _, _] = col!(s);
+            // The axes as floats' bits (`perm` holds `i32`s), compared as integers.
+            let [kx, ky, kz, _] = transpose([0, 1, 2, 3, 4, 5, 6, 7].map(|i| {
+                _mm_castsi128_ps(_mm_loadu_si128(rays[i].perm.as_ptr() as *const __m128i))
+            }));
+            let (zero, one) = (_mm256_setzero_ps(), _mm256_set1_ps(1.0));
+            macro_rules! column {
+                ($c:expr) => {{
+                    let c = _mm256_set1_epi32($c);
+                    macro_rules! is {
+                        ($k:expr) => {
+                            _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_castps_si256($k), c))
+                        };
+                    }
+                    let (x, y, z) = (is!(kx), is!(ky), is!(kz));
+                    [
+                        _mm256_blendv_ps(_mm256_blendv_ps(zero, sx, z), one, x),
+                        _mm256_blendv_ps(_mm256_blendv_ps(zero, sy, z), one, y),
+                        _mm256_blendv_ps(zero, one, z),
+                    ]
+                }};
+            }
             let sz = [0, 1, 2, 3, 4, 5, 6, 7].map(|i| rays[i].sz);
             Self {
                 origin: [ox, oy, oz],
-                shear: [[x0, x1, x2], [y0, y1, y2], [z0, z1, z2]],
+                shear: [column!(0), column!(1), column!(2)],
                 sz: lanes!(sz),
                 tmin: lanes!(tmin),
             }
