@@ -126,7 +126,9 @@ impl<const AVX2: bool> Leaf for EntriesAny<'_, AVX2> {
     }
 }
 
-/// Closest hit over a bottom-level BVH's triangles: `(triangle index, (t, u, v))`.
+/// Closest hit over a bottom-level BVH's triangles: `(triangle index, (t, u, v))`. With `AVX`
+/// its triangle test takes the AVX path (`triangle::intersect`): such a leaf is only walked
+/// inside the queries compiled for AVX2 (`AVX2` of the walks), as `AnyLeaf`'s.
 #[derive(Clone, Copy)]
 pub(crate) struct ClosestLeaf<'a, const AVX: bool> {
     pub(crate) tris: &'a [Tri],

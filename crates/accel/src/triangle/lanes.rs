@@ -47,7 +47,8 @@ impl TriLanes {
     /// The CPU must support AVX2, and the caller must be compiled for it.
     #[inline(always)]
     pub unsafe fn new(rays: [&TriRay; LANES], tmin: [f32; LANES]) -> Self {
-        // SAFETY: AVX is guaranteed by the caller; register-only operations.
+        // SAFETY: AVX2 is guaranteed by the caller; each load reads one `perm` (`[i32; 4]`)
+        // in full, the rest are register-only operations.
         unsafe {
             macro_rules! col {
                 ($($f:ident).+) => {
