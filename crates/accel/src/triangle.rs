@@ -58,11 +58,18 @@ impl TriRay {
         }
     }
 
+    /// `(kx, ky, kz)` as indices (see [`TriRay::perm`]; `% 3` so that no value could index
+    /// past a 3-array).
+    #[inline(always)]
+    fn axes(&self) -> [usize; 3] {
+        [0, 1, 2].map(|c| self.perm[c] as usize % 3)
+    }
+
     /// The shear as a matrix (see [`TriRay::perm`]), built as columns: column `kx` is
     /// `(1, 0, 0)`, `ky` is `(0, 1, 0)`, `kz` is `(sx, sy, 1)`. The reference of the lanes'.
     #[cfg(test)]
     pub fn shear(&self) -> Mat3A {
-        let [kx, ky, kz, _] = self.perm.map(|i| i as usize & 3);
+        let [kx, ky, kz] = self.axes();
         let mut cols = [Vec3A::ZERO; 3];
         cols[kx] = Vec3A::X;
         cols[ky] = Vec3A::Y;
@@ -128,7 +135,7 @@ fn sheared<const AVX: bool>(r: &TriRay, tri: &Tri, k: usize) -> Vec3A {
         }
     }
     let d = (Vec3A::from(tri.p[k]) - r.origin).to_array();
-    let [kx, ky, kz, _] = r.perm.map(|i| i as usize & 3);
+    let [kx, ky, kz] = r.axes();
     let (dx, dy, dz) = (d[kx], d[ky], d[kz]);
     Vec3A::new(dx + r.s.x * dz, dy + r.s.y * dz, dz)
 }
