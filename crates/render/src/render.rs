@@ -9,7 +9,7 @@ use crate::cryptomatte;
 use crate::environment::{EnvLight, Environment};
 use crate::film::{Accum, AovLayout, CryptoIds, Film, Window};
 use crate::filter::{Filter, FilterKind};
-use crate::integrator::{Clamp, Integrator, Wavefront};
+use crate::integrator::{Clamp, Integrator, WavefrontPool};
 use crate::lights::EmissiveLights;
 use crate::passes::{Pass, PassSet};
 use crate::sampler::{SampleStream, SamplerKind, MAX_SPP};
@@ -20,6 +20,7 @@ use aperture_scene::Scene;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 /// Samples whose paths are traced together (see `Job::samples`). 256 rendered `outdoor_dof`
 /// 2–3 % faster than 64 or 1,024 (alternated runs, 2026-11-26).
@@ -280,6 +281,7 @@ pub fn render_window(
         pinhole: camera.aperture == crate::camera::Aperture::Pinhole,
         layout: AovLayout::new(opts.passes),
         ids: crypto_ids(scene, opts.passes),
+        wavefronts: WavefrontPool::default(),
     };
     let mut film = match opts.adaptive {
         Some(a) => render_adaptive(&job, &a, window, progress),
@@ -326,35 +328,45 @@ fn render_uniform(job: &Job<'_>, window: Window, progress: &(dyn Fn(usize, usize
     // One job per tile: rayon's adaptive splitting otherwise runs chunks of up to a quarter of
     // the tiles (with two threads) as one job that cannot be stolen, leaving a core idle at the
     // end (2 threads were 1.78–1.88× one on `outdoor_dof`; `BENCHMARKS.md`).
-    let results: Vec<(Accum, u64, Vec<u32>)> = tiles
+    // Each tile goes into the film as it finishes (tiles own disjoint pixels, so the order
+    // does not matter), and its buffers serve the next tile: a tile's own fresh accumulators
+    // cost page faults, and copying all of them after the last tile ran on one thread.
+    let film = Mutex::new(Film::for_window(
+        window,
+        opts.width,
+        opts.height,
+        opts.passes,
+    ));
+    let spare = Mutex::new(Vec::<TileSums>::new());
+    tiles
         .par_iter()
         .with_max_len(1)
-        .map(|&(x0, y0, tw, th)| {
-            let r = if job.layout.records() {
-                job.render_tile::<true>(window.x0 + x0, window.y0 + y0, tw, th)
+        .for_each(|&(x0, y0, tw, th)| {
+            let mut t = lock(&spare).pop().unwrap_or_default();
+            let (x, y) = (window.x0 + x0, window.y0 + y0);
+            let dropped = if job.layout.records() {
+                job.render_tile::<true>(x, y, tw, th, &mut t)
             } else {
-                job.render_tile::<false>(window.x0 + x0, window.y0 + y0, tw, th)
+                job.render_tile::<false>(x, y, tw, th, &mut t)
             };
+            // A tile cut short by cancelling records the samples each pixel got to.
+            lock(&film).merge_tile(x0, y0, tw, &t.acc, &t.taken, dropped);
+            lock(&spare).push(t);
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
-            r
-        })
-        .collect();
-    let mut film = Film::for_window(window, opts.width, opts.height, opts.passes);
-    for (&(x0, y0, tw, _), (tile, dropped, taken)) in tiles.iter().zip(&results) {
-        film.merge_tile(x0, y0, tw, tile, opts.spp, *dropped);
-        if opts.cancel.is_cancelled() {
-            // Stopped early: each pixel took what its tile got to.
-            for (k, &n) in taken.iter().enumerate() {
-                let (x, y) = (
-                    window.x0 + x0 + k as u32 % tw,
-                    window.y0 + y0 + k as u32 / tw,
-                );
-                let i = ((y - window.y0) * window.width + (x - window.x0)) as usize;
-                film.counts_mut().0[i] = n;
-            }
-        }
-    }
-    film
+        });
+    film.into_inner().unwrap_or_else(|e| e.into_inner())
+}
+
+/// `m` locked; a lock poisoned by a panicking thread still holds valid sums.
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// A tile's accumulators and the samples each of its pixels took.
+#[derive(Default)]
+struct TileSums {
+    acc: Accum,
+    taken: Vec<u32>,
 }
 
 /// Cryptomatte IDs of every instance's node and every material, when the passes need them.
@@ -452,6 +464,8 @@ struct Job<'a> {
     pinhole: bool,
     layout: AovLayout,
     ids: CryptoIds,
+    /// Wavefronts reused from tile to tile.
+    wavefronts: WavefrontPool,
 }
 
 impl Job<'_> {
@@ -481,10 +495,10 @@ impl Job<'_> {
     /// camera makes no ray for it) and `record` its pass values (default unless `AOV`).
     ///
     /// Why in runs: the paths of [`WAVEFRONT_SAMPLES`] samples advance together through a
-    /// [`Wavefront`], so that every ray query is a batch: the lens samples of a pixel (or a row
-    /// of pixels at low sample counts) are traced as packets of eight, bounce and shadow rays
-    /// interleaved (1.2–1.4× the rays per second of one-ray queries, packets more;
-    /// `BENCHMARKS.md`). The results are exactly those of tracing each sample alone.
+    /// wavefront (`integrator::wavefront`), so that every ray query is a batch: the lens
+    /// samples of a pixel (or a row of pixels at low sample counts) are traced as packets of
+    /// eight, bounce and shadow rays interleaved (1.2–1.4× the rays per second of one-ray
+    /// queries, packets more; `BENCHMARKS.md`). The results are exactly those of tracing each sample alone.
     fn samples<K: Copy, const AOV: bool>(
         &self,
         items: impl IntoIterator<Item = (K, u32, u32, u32)>,
@@ -493,10 +507,10 @@ impl Job<'_> {
         let mut items = items.into_iter();
         let mut run = Vec::with_capacity(WAVEFRONT_SAMPLES);
         let mut starts = Vec::with_capacity(WAVEFRONT_SAMPLES);
-        let mut wavefront = Wavefront::<AOV>::default();
+        let mut wavefront = self.wavefronts.take::<AOV>();
         loop {
             if self.opts.cancel.is_cancelled() {
-                return;
+                break;
             }
             run.clear();
             starts.clear();
@@ -508,7 +522,7 @@ impl Job<'_> {
                 run.push((key, ray.is_some()));
             }
             if run.is_empty() {
-                return;
+                break;
             }
             wavefront.run(self.integrator, &starts);
             let mut results = wavefront.results();
@@ -520,20 +534,25 @@ impl Job<'_> {
                 }
             }
         }
+        self.wavefronts.give(wavefront);
     }
 
-    /// Every pixel of a tile at `spp` samples: the sums, the dropped-sample count and the
-    /// samples each pixel took (`spp`, unless the render was cancelled).
+    /// Every pixel of a tile at `spp` samples into `t` (its sums and the samples each pixel
+    /// took: `spp`, unless the render was cancelled); returns the dropped-sample count.
     fn render_tile<const AOV: bool>(
         &self,
         x0: u32,
         y0: u32,
         tw: u32,
         th: u32,
-    ) -> (Accum, u64, Vec<u32>) {
-        let mut acc = Accum::new((tw * th) as usize, self.layout);
+        t: &mut TileSums,
+    ) -> u64 {
+        let n = (tw * th) as usize;
+        t.acc.reset(n, self.layout);
+        t.taken.clear();
+        t.taken.resize(n, 0);
+        let (acc, taken) = (&mut t.acc, &mut t.taken);
         let mut dropped = 0u64;
-        let mut taken = vec![0u32; (tw * th) as usize];
         let spp = self.opts.spp;
         let items = (y0..y0 + th).flat_map(|y| {
             (x0..x0 + tw).flat_map(move |x| {
@@ -548,7 +567,7 @@ impl Job<'_> {
                 _ => dropped += 1,
             }
         });
-        (acc, dropped, taken)
+        dropped
     }
 }
 
@@ -839,6 +858,7 @@ mod tests {
             pinhole: false,
             layout: AovLayout::default(),
             ids: CryptoIds::default(),
+            wavefronts: WavefrontPool::default(),
         }
     }
 
