@@ -210,7 +210,13 @@ pub struct VertexLightSample {
 impl SampleStream {
     /// The stream of sample `index` in the pixel `(x, y)`.
     pub fn new(kind: SamplerKind, x: u32, y: u32, index: u32, seed: u32) -> Self {
-        let pixel_seed = pixel_seed(x, y, seed);
+        Self::for_pixel(kind, pixel_seed(x, y, seed), index)
+    }
+
+    /// [`SampleStream::new`] given the pixel's [`pixel_seed`]: for callers that draw several
+    /// samples of one pixel and hash it once.
+    #[inline]
+    pub fn for_pixel(kind: SamplerKind, pixel_seed: u32, index: u32) -> Self {
         Self {
             kind,
             pixel_seed,
