@@ -414,9 +414,10 @@ impl Film {
         })
     }
 
-    /// Copies a finished tile in (`x0`, `y0` relative to the window). Tiles own disjoint
-    /// pixels, so the order of calls does not change the result; the renderer still merges in
-    /// a fixed order.
+    /// Copies a finished tile in (`x0`, `y0` relative to the window, `w` pixels wide), with
+    /// the samples each of its pixels took. Tiles own disjoint pixels and `dropped` is a sum,
+    /// so the order of calls does not change the result: the renderer merges each tile as it
+    /// finishes.
     pub(crate) fn merge_tile(
         &mut self,
         x0: u32,

@@ -544,7 +544,8 @@ impl Job<'_> {
     /// wavefront (`integrator::wavefront`), so that every ray query is a batch: the lens
     /// samples of a pixel (or a row of pixels at low sample counts) are traced as packets of
     /// eight, bounce and shadow rays interleaved (1.2–1.4× the rays per second of one-ray
-    /// queries, packets more; `BENCHMARKS.md`). The results are exactly those of tracing each sample alone.
+    /// queries, packets more; `BENCHMARKS.md`). The results are exactly those of tracing each
+    /// sample alone.
     fn samples<K: Copy, const AOV: bool>(
         &self,
         items: impl IntoIterator<Item = (K, u32, u32, u32)>,

@@ -153,9 +153,9 @@ impl<const AOV: bool> Wavefront<AOV> {
 }
 
 /// Wavefronts kept from one tile to the next for the threads of one render: a fresh one per
-/// tile allocated its buffers and every slot's pending list again, a fixed cost per tile that
-/// was about 8 % of a 1-spp render's instructions (`BENCHMARKS.md`). What a wavefront holds
-/// between runs never reaches a result ([`Wavefront::run`] restarts every slot it uses).
+/// tile allocated its buffers and grew every slot's pending list again (with the tiles' own
+/// accumulators, 5 % of a 1-spp render's instructions; `BENCHMARKS.md`). What a wavefront
+/// holds between runs never reaches a result ([`Wavefront::run`] restarts every slot it uses).
 #[derive(Default)]
 pub(crate) struct WavefrontPool(Mutex<Vec<Box<dyn Any + Send>>>);
 
