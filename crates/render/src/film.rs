@@ -207,19 +207,13 @@ pub(crate) struct Accum {
 impl Accum {
     /// Empty accumulators for `n` pixels.
     pub fn new(n: usize, layout: AovLayout) -> Self {
-        Self {
-            layout,
-            sums: vec![PixelSum::default(); n],
-            aov: vec![0.0; n * layout.stride],
-            crypto_object: vec![CryptoPixel::default(); if layout.crypto_object { n } else { 0 }],
-            crypto_material: vec![
-                CryptoPixel::default();
-                if layout.crypto_material { n } else { 0 }
-            ],
-        }
+        let mut a = Self::default();
+        a.reset(n, layout);
+        a
     }
 
-    /// Makes these accumulators [`Accum::new`]`(n, layout)`, keeping their allocations.
+    /// Makes these accumulators empty ones for `n` pixels of `layout` (what [`Accum::new`]
+    /// makes), keeping their allocations.
     pub fn reset(&mut self, n: usize, layout: AovLayout) {
         self.layout = layout;
         self.sums.clear();

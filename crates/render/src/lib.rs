@@ -39,6 +39,7 @@ mod render;
 pub mod sampler;
 pub mod sequence;
 mod shade_extended;
+mod spares;
 mod spectrum;
 mod surface;
 pub mod test_scenes;

@@ -9,16 +9,18 @@ use crate::cryptomatte;
 use crate::environment::{EnvLight, Environment};
 use crate::film::{Accum, AovLayout, CryptoIds, Film, Window};
 use crate::filter::{Filter, FilterKind};
-use crate::integrator::{Clamp, Integrator, WavefrontPool};
+use crate::integrator::{Clamp, Integrator, Wavefront};
 use crate::lights::EmissiveLights;
 use crate::passes::{Pass, PassSet};
 use crate::sampler::{pixel_seed, SampleStream, SamplerKind, MAX_SPP};
+use crate::spares::{lock, Spares};
 use crate::surface::{Geometry, MaterialOverride};
 use crate::transmission::TransmissionMode;
 use aperture_accel::Accel;
 use aperture_scene::Scene;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
+use std::any::Any;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
@@ -281,7 +283,7 @@ pub fn render_window(
         pinhole: camera.aperture == crate::camera::Aperture::Pinhole,
         layout: AovLayout::new(opts.passes),
         ids: crypto_ids(scene, opts.passes),
-        wavefronts: WavefrontPool::default(),
+        wavefronts: Spares::default(),
     };
     let mut film = match opts.adaptive {
         Some(a) => render_adaptive(&job, &a, window, progress),
@@ -337,12 +339,12 @@ fn render_uniform(job: &Job<'_>, window: Window, progress: &(dyn Fn(usize, usize
         opts.height,
         opts.passes,
     ));
-    let spare = Mutex::new(Vec::<TileSums>::new());
+    let spare = Spares::<TileSums>::default();
     tiles
         .par_iter()
         .with_max_len(1)
         .for_each(|&(x0, y0, tw, th)| {
-            let mut t = lock(&spare).pop().unwrap_or_default();
+            let mut t = spare.take().unwrap_or_default();
             let (x, y) = (window.x0 + x0, window.y0 + y0);
             let dropped = if job.layout.records() {
                 job.render_tile::<true>(x, y, tw, th, &mut t)
@@ -351,15 +353,11 @@ fn render_uniform(job: &Job<'_>, window: Window, progress: &(dyn Fn(usize, usize
             };
             // A tile cut short by cancelling records the samples each pixel got to.
             lock(&film).merge_tile(x0, y0, tw, &t.acc, &t.taken, dropped);
-            lock(&spare).push(t);
+            spare.give(t);
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
         });
-    film.into_inner().unwrap_or_else(|e| e.into_inner())
-}
-
-/// `m` locked; a lock poisoned by a panicking thread still holds valid sums.
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
+    film.into_inner()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 /// The samples of a tile as `(pixel k in the tile, x, y, sample i)`, row by row, a pixel's
@@ -374,6 +372,22 @@ struct TileItems {
     next: (usize, u32, u32, u32),
 }
 
+impl TileItems {
+    /// The samples of the `tw × th` tile at `(x0, y0)`, `spp` each.
+    fn new(x0: u32, y0: u32, tw: u32, th: u32, spp: u32) -> Self {
+        let y1 = y0 + th;
+        // An empty tile starts past its end.
+        let y = if tw == 0 || spp == 0 { y1 } else { y0 };
+        Self {
+            x0,
+            x1: x0 + tw,
+            y1,
+            spp,
+            next: (0, x0, y, 0),
+        }
+    }
+}
+
 impl Iterator for TileItems {
     type Item = (usize, u32, u32, u32);
 
@@ -381,7 +395,7 @@ impl Iterator for TileItems {
     fn next(&mut self) -> Option<Self::Item> {
         let item = self.next;
         let (k, x, y, i) = item;
-        if y >= self.y1 || self.x0 >= self.x1 || self.spp == 0 {
+        if y >= self.y1 {
             return None;
         }
         self.next = if i + 1 < self.spp {
@@ -400,6 +414,15 @@ impl Iterator for TileItems {
 struct TileSums {
     acc: Accum,
     taken: Vec<u32>,
+}
+
+impl TileSums {
+    /// Empty sums and counts for `n` pixels, keeping the allocations.
+    fn reset(&mut self, n: usize, layout: AovLayout) {
+        self.acc.reset(n, layout);
+        self.taken.clear();
+        self.taken.resize(n, 0);
+    }
 }
 
 /// Cryptomatte IDs of every instance's node and every material, when the passes need them.
@@ -497,8 +520,10 @@ struct Job<'a> {
     pinhole: bool,
     layout: AovLayout,
     ids: CryptoIds,
-    /// Wavefronts reused from tile to tile.
-    wavefronts: WavefrontPool,
+    /// Wavefronts reused from tile to tile (of one `AOV` kind per render: a fresh wavefront per
+    /// tile allocated its buffers and grew every slot's pending list again). What a wavefront
+    /// holds between runs never reaches a result: [`Wavefront::run`] restarts every slot it uses.
+    wavefronts: Spares<Box<dyn Any + Send>>,
 }
 
 impl Job<'_> {
@@ -541,7 +566,7 @@ impl Job<'_> {
     /// camera makes no ray for it) and `record` its pass values (default unless `AOV`).
     ///
     /// Why in runs: the paths of [`WAVEFRONT_SAMPLES`] samples advance together through a
-    /// wavefront (`integrator::wavefront`), so that every ray query is a batch: the lens
+    /// [`Wavefront`], so that every ray query is a batch: the lens
     /// samples of a pixel (or a row of pixels at low sample counts) are traced as packets of
     /// eight, bounce and shadow rays interleaved (1.2–1.4× the rays per second of one-ray
     /// queries, packets more; `BENCHMARKS.md`). The results are exactly those of tracing each
@@ -554,7 +579,9 @@ impl Job<'_> {
         let mut items = items.into_iter();
         let mut run = Vec::with_capacity(WAVEFRONT_SAMPLES);
         let mut starts = Vec::with_capacity(WAVEFRONT_SAMPLES);
-        let mut wavefront = self.wavefronts.take::<AOV>();
+        let mut wavefront = (self.wavefronts.take())
+            .and_then(|w| w.downcast::<Wavefront<AOV>>().ok())
+            .unwrap_or_default();
         let mut seeded = ((0, 0), pixel_seed(0, 0, self.opts.seed));
         loop {
             if self.opts.cancel.is_cancelled() {
@@ -599,19 +626,10 @@ impl Job<'_> {
         th: u32,
         t: &mut TileSums,
     ) -> u64 {
-        let n = (tw * th) as usize;
-        t.acc.reset(n, self.layout);
-        t.taken.clear();
-        t.taken.resize(n, 0);
+        t.reset((tw * th) as usize, self.layout);
         let (acc, taken) = (&mut t.acc, &mut t.taken);
         let mut dropped = 0u64;
-        let items = TileItems {
-            x0,
-            x1: x0 + tw,
-            y1: y0 + th,
-            spp: self.opts.spp,
-            next: (0, x0, y0, 0),
-        };
+        let items = TileItems::new(x0, y0, tw, th, self.opts.spp);
         self.samples::<_, AOV>(items, |k, result, rec| {
             taken[k] += 1;
             match result {
@@ -748,6 +766,9 @@ struct AdaptiveTile {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_scenes;
+    use aperture_accel::BvhQuality;
+    use glam::{Affine3A, Vec3};
 
     #[test]
     fn tile_items_are_every_sample_of_every_pixel_in_order() {
@@ -756,6 +777,7 @@ mod tests {
             (0, 0, 1, 1, 1),
             (7, 2, 5, 1, 3),
             (1, 1, 2, 2, 0),
+            (2, 3, 0, 2, 3),
         ] {
             let want: Vec<_> = (y0..y0 + th)
                 .flat_map(|y| {
@@ -765,13 +787,7 @@ mod tests {
                     })
                 })
                 .collect();
-            let items = TileItems {
-                x0,
-                x1: x0 + tw,
-                y1: y0 + th,
-                spp,
-                next: (0, x0, y0, 0),
-            };
+            let items = TileItems::new(x0, y0, tw, th, spp);
             assert_eq!(
                 items.collect::<Vec<_>>(),
                 want,
@@ -779,10 +795,6 @@ mod tests {
             );
         }
     }
-    use crate::test_scenes;
-    use aperture_accel::BvhQuality;
-    use glam::{Affine3A, Vec3};
-
     #[test]
     fn previews_of_big_scenes_build_fast() {
         // A 1-spp 960×540 preview of a 7.7 M-triangle scene, and of a 130 k one.
@@ -941,7 +953,7 @@ mod tests {
             pinhole: false,
             layout: AovLayout::default(),
             ids: CryptoIds::default(),
-            wavefronts: WavefrontPool::default(),
+            wavefronts: Spares::default(),
         }
     }
 

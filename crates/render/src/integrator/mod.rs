@@ -20,7 +20,7 @@ mod trace;
 mod wavefront;
 
 use wavefront::PendingLight;
-pub(crate) use wavefront::{PathInFlight, WavefrontPool};
+pub(crate) use wavefront::{PathInFlight, Wavefront};
 
 use crate::aov::{Features, SampleAov, Seen};
 use crate::bsdf::{Interface, LobeSplit};
@@ -154,7 +154,7 @@ impl Walk {
 impl Integrator<'_> {
     /// Radiance along a primary ray (unit direction), whether it hit geometry, and the sample's
     /// pass values (recorded with `AOV`), traced one ray at a time: the reference of the render
-    /// loop's [`Wavefront`](wavefront::Wavefront).
+    /// loop's [`Wavefront`].
     #[cfg(test)]
     pub(crate) fn li_alone<const AOV: bool>(
         &self,

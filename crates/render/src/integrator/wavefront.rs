@@ -14,8 +14,6 @@ use crate::bsdf::LobeSplit;
 use crate::sampler::SampleStream;
 use aperture_accel::{Hit, Ray};
 use glam::Vec3;
-use std::any::Any;
-use std::sync::Mutex;
 
 /// A light sample whose shadow ray is not traced yet.
 pub(crate) struct PendingLight {
@@ -149,30 +147,5 @@ impl<const AOV: bool> Wavefront<AOV> {
         self.paths
             .iter()
             .map(|p| (p.path.l, p.covered, &p.path.aov))
-    }
-}
-
-/// Wavefronts kept from one tile to the next for the threads of one render: a fresh one per
-/// tile allocated its buffers and grew every slot's pending list again (with the tiles' own
-/// accumulators, 5 % of a 1-spp render's instructions; `BENCHMARKS.md`). What a wavefront
-/// holds between runs never reaches a result ([`Wavefront::run`] restarts every slot it uses).
-#[derive(Default)]
-pub(crate) struct WavefrontPool(Mutex<Vec<Box<dyn Any + Send>>>);
-
-impl WavefrontPool {
-    /// A spare wavefront, or a new one.
-    pub fn take<const AOV: bool>(&self) -> Box<Wavefront<AOV>> {
-        // A poisoned lock (a panicking thread) only costs the reuse.
-        let spare = self.0.lock().ok().and_then(|mut v| v.pop());
-        spare
-            .and_then(|w| w.downcast::<Wavefront<AOV>>().ok())
-            .unwrap_or_default()
-    }
-
-    /// Returns `w` for the next tile.
-    pub fn give<const AOV: bool>(&self, w: Box<Wavefront<AOV>>) {
-        if let Ok(mut v) = self.0.lock() {
-            v.push(w);
-        }
     }
 }
