@@ -368,12 +368,13 @@ pub(crate) fn interleave<const AVX2: bool, L: Leaf + Copy>(
         }
     });
     next = next.min(n);
-    let mut active = lanes.iter().filter(|l| l.index != usize::MAX).count();
-    while active > 0 {
-        for (lane, stack) in lanes.iter_mut().zip(&mut stacks) {
-            if lane.index == usize::MAX {
-                continue;
-            }
+    // While rays remain to start, every lane walks: the four steps are written out (a macro,
+    // not a loop or closure), so each lane's state sits at a fixed offset and no step checks
+    // for an idle lane (9 instructions a step of the generic loop below).
+    const _: () = assert!(BATCH_LANES == 4, "the steady phase steps four lanes");
+    macro_rules! step_lane {
+        ($k:expr) => {{
+            let (lane, stack) = (&mut lanes[$k], &mut stacks[$k]);
             let done =
                 lane.walk
                     .step::<AVX2, _>(nodes, &lane.br, &mut lane.tmax, stack, &mut lane.leaf);
@@ -389,8 +390,27 @@ pub(crate) fn interleave<const AVX2: bool, L: Leaf + Copy>(
                     next += 1;
                 } else {
                     lane.index = usize::MAX;
-                    active -= 1;
                 }
+            }
+        }};
+    }
+    // Every lane is active here: a lane goes idle only once no ray is left to start.
+    while next < n {
+        step_lane!(0);
+        step_lane!(1);
+        step_lane!(2);
+        step_lane!(3);
+    }
+    // The last walks: lanes go idle one by one.
+    let mut active = lanes.iter().filter(|l| l.index != usize::MAX).count();
+    while active > 0 {
+        for k in 0..BATCH_LANES {
+            if lanes[k].index == usize::MAX {
+                continue;
+            }
+            step_lane!(k);
+            if lanes[k].index == usize::MAX {
+                active -= 1;
             }
         }
     }
