@@ -208,7 +208,7 @@ impl Accel {
         // inside the scene (bounce and shadow rays, a camera inside) is walked whole, without
         // the indirection: culling only saves work, and the batches that gain start outside.
         if rays.first().is_none_or(|r| self.starts_inside(r)) {
-            return Self::interleave_rays::<AVX2, L>(entry, blas, rays, out, n, |i| i);
+            return Self::interleave_rays::<AVX2, L>(entry, blas, rays, out, n, Direct);
         }
         let mut walked = Vec::with_capacity(n);
         for (i, (ray, o)) in rays.iter().zip(out.iter_mut()).enumerate() {
@@ -218,12 +218,12 @@ impl Accel {
                 walked.push(i);
             }
         }
-        Self::interleave_rays::<AVX2, L>(entry, blas, rays, out, walked.len(), |j| walked[j]);
+        Self::interleave_rays::<AVX2, L>(entry, blas, rays, out, walked.len(), Listed(&walked));
     }
 
-    /// The [`interleave`]d walks of `count` of `rays` over `blas`: walk `j` is ray `ray_of(j)`,
-    /// its answer goes to `out[ray_of(j)]`. A function per mapping (monomorphised), so that the
-    /// batch without culling pays no indirection.
+    /// The [`interleave`]d walks of `count` of `rays` over `blas`: walk `j` is ray
+    /// `map.ray(j)`, its answer goes to `out[map.ray(j)]`. Monomorphised per mapping, so that
+    /// the batch without culling pays no indirection.
     #[inline(always)]
     fn interleave_rays<'s, const AVX2: bool, L: BlasLeaf<'s>>(
         entry: &Entry,
@@ -231,18 +231,16 @@ impl Accel {
         rays: &[Ray],
         out: &mut [L::Answer],
         count: usize,
-        ray_of: impl Fn(usize) -> usize,
+        map: impl RayMap,
     ) {
-        interleave::<AVX2, L>(
-            &blas.nodes,
-            count,
-            |j| {
-                let ray = &rays[ray_of(j)];
-                let (br, leaf) = Self::walk_start::<L>(entry, blas, ray);
-                (br, ray.tmax, leaf)
-            },
-            |j, leaf, stopped| out[ray_of(j)] = leaf.answer(blas, entry, stopped),
-        );
+        let mut walks = BatchWalks {
+            entry,
+            blas,
+            rays,
+            out,
+            map,
+        };
+        interleave::<AVX2, L>(&blas.nodes, count, &mut walks);
     }
 
     /// [`Accel::intersect`] for many rays, in parallel on the current rayon pool, each thread
@@ -393,5 +391,54 @@ impl Accel {
             }
         }
         None
+    }
+}
+
+/// Which ray walk `j` of a batch is: [`Direct`] (ray `j`) or [`Listed`] (the `j`-th of a list).
+/// A trait, not a closure, for the reason of [`Walks`].
+trait RayMap {
+    fn ray(&self, j: usize) -> usize;
+}
+
+/// Walk `j` is ray `j`.
+struct Direct;
+
+impl RayMap for Direct {
+    #[inline(always)]
+    fn ray(&self, j: usize) -> usize {
+        j
+    }
+}
+
+/// Walk `j` is ray `self.0[j]`.
+struct Listed<'a>(&'a [usize]);
+
+impl RayMap for Listed<'_> {
+    #[inline(always)]
+    fn ray(&self, j: usize) -> usize {
+        self.0[j]
+    }
+}
+
+/// The walks of one batch over a single entry's tree: their starts, and their answers into `out`.
+struct BatchWalks<'s, 'a, L: BlasLeaf<'s>, M: RayMap> {
+    entry: &'a Entry,
+    blas: &'s Blas,
+    rays: &'a [Ray],
+    out: &'a mut [L::Answer],
+    map: M,
+}
+
+impl<'s, L: BlasLeaf<'s>, M: RayMap> Walks<L> for BatchWalks<'s, '_, L, M> {
+    #[inline(always)]
+    fn start(&mut self, j: usize) -> (BoxRay, f32, L) {
+        let ray = &self.rays[self.map.ray(j)];
+        let (br, leaf) = Accel::walk_start::<L>(self.entry, self.blas, ray);
+        (br, ray.tmax, leaf)
+    }
+
+    #[inline(always)]
+    fn finish(&mut self, j: usize, leaf: &L, stopped: bool) {
+        self.out[self.map.ray(j)] = leaf.answer(self.blas, self.entry, stopped);
     }
 }

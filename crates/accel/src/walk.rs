@@ -322,10 +322,20 @@ pub(crate) fn traverse<const AVX2: bool, L: Leaf>(
 /// in tile order, 4 gains more in random order, 8 less in tile order.
 pub const BATCH_LANES: usize = 4;
 
-/// Runs the walks of rays `0..n` over `nodes`, [`BATCH_LANES`] at a time, interleaved step by
-/// step. `start(i)` gives ray `i`'s box ray, `tmax` and leaf; `finish(i, leaf, stopped)` takes
-/// them back when its walk ends. Each ray's walk is exactly [`traverse`]'s, so the results are
-/// too; only the order of work between rays changes.
+/// The walks of an interleaved batch ([`interleave`]): how each starts and where its answer
+/// goes. A trait with `#[inline(always)]` implementations rather than closures: closures do
+/// not take the query's target features, and the start (the box and triangle set-ups of a
+/// ray) stayed a call compiled without AVX2, returning its 300 bytes through the stack.
+pub(crate) trait Walks<L> {
+    /// Walk `i`'s box ray, `tmax` and leaf.
+    fn start(&mut self, i: usize) -> (BoxRay, f32, L);
+    /// Takes walk `i`'s leaf back when the walk has ended (`stopped`: the leaf stopped it).
+    fn finish(&mut self, i: usize, leaf: &L, stopped: bool);
+}
+
+/// Runs walks `0..n` of `walks` over `nodes`, [`BATCH_LANES`] at a time, interleaved step by
+/// step. Each ray's walk is exactly [`traverse`]'s, so the results are too; only the order of
+/// work between rays changes.
 ///
 /// Why: one ray's walk is a chain of dependent loads and tests (a node's address comes out of
 /// its parent's test) that leaves most of the core idle; independent chains fill it.
@@ -333,8 +343,7 @@ pub const BATCH_LANES: usize = 4;
 pub(crate) fn interleave<const AVX2: bool, L: Leaf + Copy>(
     nodes: &[CwBvhNode],
     n: usize,
-    mut start: impl FnMut(usize) -> (BoxRay, f32, L),
-    mut finish: impl FnMut(usize, &L, bool),
+    walks: &mut impl Walks<L>,
 ) {
     if n == 0 {
         return;
@@ -357,7 +366,7 @@ pub(crate) fn interleave<const AVX2: bool, L: Leaf + Copy>(
     let mut lanes: [Lane<L>; BATCH_LANES] = std::array::from_fn(|_| {
         // Lanes beyond `n` start idle, on a copy of the last ray.
         let index = if next < n { next } else { usize::MAX };
-        let (br, tmax, leaf) = start(next.min(n - 1));
+        let (br, tmax, leaf) = walks.start(next.min(n - 1));
         next += 1;
         Lane {
             index,
@@ -379,9 +388,9 @@ pub(crate) fn interleave<const AVX2: bool, L: Leaf + Copy>(
                 lane.walk
                     .step::<AVX2, _>(nodes, &lane.br, &mut lane.tmax, stack, &mut lane.leaf);
             if let Some(stopped) = done {
-                finish(lane.index, &lane.leaf, stopped);
+                walks.finish(lane.index, &lane.leaf, stopped);
                 if next < n {
-                    let (br, tmax, leaf) = start(next);
+                    let (br, tmax, leaf) = walks.start(next);
                     lane.index = next;
                     lane.walk = Walk::new();
                     lane.br = br;
