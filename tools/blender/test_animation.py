@@ -185,7 +185,7 @@ def test_focus_pull(binary, work):
     from mathutils import Vector
 
     cams = focus_scene()
-    addon_file = addon_zip(tempfile.mkdtemp(prefix="aperture-addon-"))
+    addon_file = addon_zip(tempfile.mkdtemp(prefix="aperture-addon-", dir=work))
     bpy.ops.preferences.addon_install(filepath=addon_file, overwrite=True)
     bpy.ops.preferences.addon_enable(module=ADDON)
     path = os.path.join(work, "focus.gltf")

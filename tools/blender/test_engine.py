@@ -17,6 +17,7 @@ and aperture's own error message must reach the report area.
 import argparse
 import math
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -321,6 +322,17 @@ def main():
     parser.add_argument("--require-all", action="store_true")
     ARGS, _ = parser.parse_known_args()
     WORK = tempfile.mkdtemp(prefix="aperture-engine-")
+    # Every temporary folder of the run (the engine's own, kept by `keep_files`, included) is
+    # made inside WORK and goes with it: CI runs leave nothing behind in the system's.
+    tempfile.tempdir = WORK
+    try:
+        return run()
+    finally:
+        tempfile.tempdir = None
+        shutil.rmtree(WORK, ignore_errors=True)
+
+
+def run():
     if not os.path.isfile(ARGS.aperture):
         record("engine", False if ARGS.require_all else None, f"no aperture binary at {ARGS.aperture}")
         return summary()

@@ -87,7 +87,7 @@ def import_bpy(user_scripts):
 
 
 def install_addon():
-    addon_file = addon_zip(tempfile.mkdtemp(prefix="aperture-addon-"))
+    addon_file = addon_zip(tempfile.mkdtemp(prefix="aperture-addon-", dir=WORK))
     bpy.ops.preferences.addon_install(filepath=addon_file, overwrite=True)
     bpy.ops.preferences.addon_enable(module=ADDON)
     enabled = ADDON in bpy.context.preferences.addons.keys()
