@@ -319,13 +319,14 @@ pub(crate) fn traverse<const AVX2: bool, L: Leaf>(
 
 /// Rays walked at once, interleaved, by [`Accel::intersect_batch`] and [`Accel::occluded_batch`].
 /// Measured on thin-lens primary rays (`benches/`, closest hit, 1 thread): 2 and 4 gain alike
-/// in tile order, 4 gains more in random order, 8 less in tile order.
+/// in tile order, 4 gains more in random order, 8 less in tile order; 6 and 8 again with the
+/// steady phase of [`interleave`] on BlenderIO's diffuse and shadow rays: no gain over 4.
 pub const BATCH_LANES: usize = 4;
 
 /// The walks of an interleaved batch ([`interleave`]): how each starts and where its answer
 /// goes. A trait with `#[inline(always)]` implementations rather than closures: closures do
 /// not take the query's target features, and the start (the box and triangle set-ups of a
-/// ray) stayed a call compiled without AVX2, returning its 300 bytes through the stack.
+/// ray) stayed a call compiled without AVX2, returning them through the stack.
 pub(crate) trait Walks<L> {
     /// Walk `i`'s box ray, `tmax` and leaf.
     fn start(&mut self, i: usize) -> (BoxRay, f32, L);
