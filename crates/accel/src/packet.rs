@@ -471,7 +471,8 @@ impl Accel {
             // Lanes past the run's end copy its last ray and stay inactive. Loops, not
             // `array::from_fn`, whose closures stayed calls.
             let (o0, d0) = Self::object_ray(entry, &run[0]);
-            let leaf0 = L::start(&blas.tris, TriRay::new(o0, d0), run[0].tmin);
+            // SAFETY: AVX2 (and so AVX) is guaranteed by the caller.
+            let leaf0 = L::start(&blas.tris, unsafe { TriRay::new_avx(o0, d0) }, run[0].tmin);
             let mut leaves = [leaf0; PACKET_LANES];
             let mut tmax = [run[0].tmax; PACKET_LANES];
             let mut tmin = [run[0].tmin; PACKET_LANES];
@@ -480,7 +481,8 @@ impl Accel {
             for i in 1..PACKET_LANES {
                 let ray = &run[i.min(run.len() - 1)];
                 let (o, d) = Self::object_ray(entry, ray);
-                leaves[i] = L::start(&blas.tris, TriRay::new(o, d), ray.tmin);
+                // SAFETY: as above.
+                leaves[i] = L::start(&blas.tris, unsafe { TriRay::new_avx(o, d) }, ray.tmin);
                 (tmax[i], tmin[i]) = (ray.tmax, ray.tmin);
                 origins[i] = Vec3A::from(o).into();
                 dirs[i] = Vec3A::from(d).into();

@@ -233,7 +233,7 @@ impl Accel {
         count: usize,
         map: impl RayMap,
     ) {
-        let mut walks = BatchWalks {
+        let mut walks = BatchWalks::<L, _, AVX2> {
             entry,
             blas,
             rays,
@@ -330,23 +330,27 @@ impl Accel {
         stack: &mut [MaybeUninit<Group>],
     ) -> Option<L::Answer> {
         let blas = self.blases.get(entry.blas as usize)?;
-        let (br, mut leaf) = Self::walk_start::<L>(entry, blas, ray);
+        let (br, mut leaf) = Self::walk_start::<AVX2, L>(entry, blas, ray);
         let stopped = traverse::<AVX2, _>(&blas.nodes, &br, tmax, stack, &mut leaf);
         Some(leaf.answer(blas, entry, stopped))
     }
 
     /// What a walk of `blas` (drawn by `entry`) for `ray` starts from: the ray in the tree's
     /// space prepared for box tests, and a fresh leaf with its triangle-test constants.
+    /// With `AVX2` it must be inlined into a function compiled for AVX2 (the triangle-test
+    /// constants come from [`TriRay::new_avx`]).
     #[inline(always)]
-    pub(crate) fn walk_start<'s, L: BlasLeaf<'s>>(
+    pub(crate) fn walk_start<'s, const AVX2: bool, L: BlasLeaf<'s>>(
         entry: &Entry,
         blas: &'s Blas,
         ray: &Ray,
     ) -> (BoxRay, L) {
         let (o, d) = Self::object_ray(entry, ray);
+        // SAFETY: `AVX2` only in the queries compiled for AVX2 (see above).
+        let tri_ray = unsafe { TriRay::new_for::<AVX2>(o, d) };
         (
             BoxRay::new(o, d, ray.tmin, blas.box_bounds),
-            L::start(&blas.tris, TriRay::new(o, d), ray.tmin),
+            L::start(&blas.tris, tri_ray, ray.tmin),
         )
     }
 
@@ -420,8 +424,9 @@ impl RayMap for Listed<'_> {
     }
 }
 
-/// The walks of one batch over a single entry's tree: their starts, and their answers into `out`.
-struct BatchWalks<'s, 'a, L: BlasLeaf<'s>, M: RayMap> {
+/// The walks of one batch over a single entry's tree: their starts, and their answers into
+/// `out`. With `AVX2` only inside the queries compiled for AVX2 ([`Accel::walk_start`]).
+struct BatchWalks<'s, 'a, L: BlasLeaf<'s>, M: RayMap, const AVX2: bool> {
     entry: &'a Entry,
     blas: &'s Blas,
     rays: &'a [Ray],
@@ -429,11 +434,11 @@ struct BatchWalks<'s, 'a, L: BlasLeaf<'s>, M: RayMap> {
     map: M,
 }
 
-impl<'s, L: BlasLeaf<'s>, M: RayMap> Walks<L> for BatchWalks<'s, '_, L, M> {
+impl<'s, L: BlasLeaf<'s>, M: RayMap, const AVX2: bool> Walks<L> for BatchWalks<'s, '_, L, M, AVX2> {
     #[inline(always)]
     fn start(&mut self, j: usize) -> (BoxRay, f32, L) {
         let ray = &self.rays[self.map.ray(j)];
-        let (br, leaf) = Accel::walk_start::<L>(self.entry, self.blas, ray);
+        let (br, leaf) = Accel::walk_start::<AVX2, L>(self.entry, self.blas, ray);
         (br, ray.tmax, leaf)
     }
 

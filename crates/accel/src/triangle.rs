@@ -58,6 +58,72 @@ impl TriRay {
         }
     }
 
+    /// [`TriRay::new`] with AVX, the same bits: the axes from one lane-wise comparison and two
+    /// small tables instead of branches, the direction and origin permuted in registers instead
+    /// of indexed through the stack. Must be inlined into a function compiled for AVX (the
+    /// queries' AVX2 paths: `AVX` of [`TriRay::new_for`]).
+    ///
+    /// # Safety
+    /// The CPU must support AVX, and the caller must be compiled for it.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    pub unsafe fn new_avx(origin: Vec3, dir: Vec3) -> Self {
+        use std::arch::x86_64::*;
+        /// `kz` of [`axes`] for the bits `|x| > |y|`, `|x| > |z|`, `|y| > |z|` (bit 0, 1, 2).
+        const KZ: [usize; 8] = [2, 2, 2, 0, 1, 2, 1, 0];
+        /// `(kx, ky, kz, kz)` of [`axes`] for `2 kz + (dir[kz] < 0)`.
+        const PERM: [[i32; 4]; 6] = [
+            [1, 2, 0, 0],
+            [2, 1, 0, 0],
+            [2, 0, 1, 1],
+            [0, 2, 1, 1],
+            [0, 1, 2, 2],
+            [1, 0, 2, 2],
+        ];
+        // SAFETY: AVX is guaranteed by the caller; register-only operations and one 16-byte
+        // load of a `[i32; 4]` table row.
+        unsafe {
+            let d: __m128 = Vec3A::from(dir).into();
+            let o: __m128 = Vec3A::from(origin).into();
+            let a = _mm_andnot_ps(_mm_set1_ps(-0.0), d);
+            // Lanes (|x|, |x|, |y|) against (|y|, |z|, |z|): `axes`' comparisons (false on NaN).
+            let gt = _mm_cmpgt_ps(
+                _mm_permute_ps::<0b00_01_00_00>(a),
+                _mm_permute_ps::<0b00_10_10_01>(a),
+            );
+            let kz = KZ[(_mm_movemask_ps(gt) & 7) as usize];
+            let neg = (_mm_movemask_ps(_mm_cmplt_ps(d, _mm_setzero_ps())) >> kz) & 1;
+            let perm = PERM[2 * kz + neg as usize];
+            let pv = _mm_loadu_si128(perm.as_ptr() as *const __m128i);
+            let dk = _mm_permutevar_ps(d, pv);
+            let sz = _mm_div_ps(_mm_set1_ps(1.0), _mm_permute_ps::<0xaa>(dk));
+            // `-d[k] * sz` per lane; `(sx, sy, 1, 1)` as `Vec3A::new(sx, sy, 1.0)` leaves it.
+            let s = _mm_mul_ps(_mm_xor_ps(dk, _mm_set1_ps(-0.0)), sz);
+            Self {
+                origin: origin.into(),
+                sz: _mm_cvtss_f32(sz),
+                dir: dir.into(),
+                perm,
+                origin_k: _mm_permutevar_ps(o, pv).into(),
+                s: _mm_blend_ps::<0b1100>(s, _mm_set1_ps(1.0)).into(),
+            }
+        }
+    }
+
+    /// [`TriRay::new_avx`] with `AVX`, else [`TriRay::new`] (the same bits).
+    ///
+    /// # Safety
+    /// With `AVX`, as for [`TriRay::new_avx`].
+    #[inline(always)]
+    pub unsafe fn new_for<const AVX: bool>(origin: Vec3, dir: Vec3) -> Self {
+        #[cfg(target_arch = "x86_64")]
+        if AVX {
+            // SAFETY: forwarded from the caller.
+            return unsafe { Self::new_avx(origin, dir) };
+        }
+        Self::new(origin, dir)
+    }
+
     /// `(kx, ky, kz)` as indices (see [`TriRay::perm`]; `% 3` so that no value could index
     /// past a 3-array).
     #[inline(always)]
@@ -277,6 +343,52 @@ mod tests {
                 "{dir}"
             );
         }
+    }
+
+    /// The AVX construction has the scalar one's bits, field by field, on directions with
+    /// ties between components, zeros of both signs, tiny, huge, infinite and NaN ones.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx_construction_matches_the_scalar_one() {
+        if !is_x86_feature_detected!("avx") {
+            return;
+        }
+        let values = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            -0.5,
+            2.0,
+            -3.0,
+            1e-30,
+            -1e-30,
+            1e30,
+            f32::INFINITY,
+            -f32::INFINITY,
+            f32::NAN,
+        ];
+        let bits = |v: Vec3A| v.to_array().map(f32::to_bits);
+        let mut cases = 0;
+        for &x in &values {
+            for &y in &values {
+                for &z in &values {
+                    let (o, d) = (Vec3::new(z, -x, 7.0), Vec3::new(x, y, z));
+                    let want = TriRay::new(o, d);
+                    // SAFETY: AVX checked above.
+                    let got = unsafe { TriRay::new_avx(o, d) };
+                    assert_eq!(got.perm, want.perm, "{d}");
+                    assert_eq!(got.sz.to_bits(), want.sz.to_bits(), "{d}");
+                    assert_eq!(bits(got.origin_k)[..3], bits(want.origin_k)[..3], "{d}");
+                    assert_eq!(bits(got.s)[..3], bits(want.s)[..3], "{d}");
+                    assert_eq!(bits(got.origin)[..3], bits(want.origin)[..3], "{d}");
+                    assert_eq!(bits(got.dir)[..3], bits(want.dir)[..3], "{d}");
+                    cases += 1;
+                }
+            }
+        }
+        assert_eq!(cases, values.len().pow(3));
     }
 
     #[test]
