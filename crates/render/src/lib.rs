@@ -34,6 +34,7 @@ mod lights;
 mod media;
 pub mod output;
 pub mod passes;
+mod primary;
 pub mod raybench;
 mod render;
 pub mod sampler;
