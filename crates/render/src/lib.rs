@@ -21,6 +21,7 @@ pub mod adaptive;
 mod aov;
 mod bsdf;
 pub mod camera;
+mod camera_lanes;
 mod cancel;
 mod color;
 pub mod cryptomatte;

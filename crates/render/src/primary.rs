@@ -5,6 +5,7 @@
 //! function of (pixel, index, dimension, seed).
 
 use crate::camera::{Camera, CameraRay, CameraSample};
+use crate::camera_lanes::{LensLanes, LANES};
 use crate::filter::Filter;
 use crate::sampler::{pixel_seed, PixelRun, SampleStream, SamplerKind};
 use glam::{Vec2, Vec3};
@@ -24,6 +25,10 @@ pub(crate) struct PrimarySamples<'a> {
     /// Its centre in raster coordinates.
     centre: Vec2,
     run: PixelRun,
+    /// The camera's rays made [`LANES`] at a time, when it is a kind the lanes cover.
+    lanes: Option<LensLanes>,
+    /// The streams of the samples in the lanes.
+    streams: [SampleStream; LANES],
 }
 
 impl<'a> PrimarySamples<'a> {
@@ -36,8 +41,10 @@ impl<'a> PrimarySamples<'a> {
         seed: u32,
         sample_offset: u32,
     ) -> Self {
+        let run = PixelRun::new(kind, 0, 0);
         Self {
             camera: *camera,
+            lanes: LensLanes::new(camera),
             filter,
             kind,
             seed,
@@ -45,14 +52,14 @@ impl<'a> PrimarySamples<'a> {
             pinhole: camera.aperture == crate::camera::Aperture::Pinhole,
             pixel: None,
             centre: Vec2::ZERO,
-            run: PixelRun::new(kind, 0, 0),
+            run,
+            streams: [run.stream(); LANES],
         }
     }
 
     /// Takes up to `n` items `(key, x, y, i)` from `items`: appends each one's key and whether
     /// its camera makes a ray to `run`, and its ray (origin, unit direction) and stream to
-    /// `starts` when it does. The loop is here, the sample inlined into it, so that what
-    /// every sample reads of the camera is read once.
+    /// `starts` when it does.
     pub fn fill<K>(
         &mut self,
         items: &mut impl Iterator<Item = (K, u32, u32, u32)>,
@@ -60,12 +67,47 @@ impl<'a> PrimarySamples<'a> {
         run: &mut Vec<(K, bool)>,
         starts: &mut Vec<(Vec3, Vec3, SampleStream)>,
     ) {
-        for (key, x, y, i) in items.take(n) {
-            let (stream, ray) = self.sample(x, y, i);
-            if let Some(r) = &ray {
-                starts.push((r.origin, r.dir, stream));
+        let Some(lanes) = self.lanes else {
+            for (key, x, y, i) in items.take(n) {
+                let (stream, ray) = self.sample(x, y, i);
+                if let Some(r) = &ray {
+                    starts.push((r.origin, r.dir, stream));
+                }
+                run.push((key, ray.is_some()));
             }
-            run.push((key, ray.is_some()));
+            return;
+        };
+        // The usual camera: the rays of `LANES` samples at a time.
+        let mut items = items.take(n);
+        loop {
+            let (mut film, mut lens) = ([[0.0; LANES]; 2], [[0.0; LANES]; 2]);
+            let first = run.len();
+            let mut m = 0;
+            for (l, (key, x, y, i)) in items.by_ref().take(LANES).enumerate() {
+                let (stream, p_film, p_lens) = self.numbers(x, y, i);
+                (film[0][l], film[1][l]) = (p_film.x, p_film.y);
+                (lens[0][l], lens[1][l]) = (p_lens.x, p_lens.y);
+                self.streams[l] = stream;
+                run.push((key, false));
+                m = l + 1;
+            }
+            if m == 0 {
+                break;
+            }
+            let rays = lanes.rays(film, lens);
+            let (o, d) = (&rays.origin, &rays.dir);
+            for (l, &stream) in self.streams.iter().enumerate().take(m) {
+                if rays.made[l] {
+                    let origin = Vec3::new(o[0][l], o[1][l], o[2][l]);
+                    starts.push((origin, Vec3::new(d[0][l], d[1][l], d[2][l]), stream));
+                }
+            }
+            for (r, &made) in run.iter_mut().skip(first).zip(&rays.made) {
+                r.1 = made;
+            }
+            if m < LANES {
+                break;
+            }
         }
     }
 
@@ -197,11 +239,43 @@ mod tests {
                 for kind in [SamplerKind::Sobol, SamplerKind::Random] {
                     for (seed, offset) in [(0, 0), (77, 64)] {
                         let mut primary = PrimarySamples::new(&camera, &filter, kind, seed, offset);
-                        for &(x, y, i) in &items {
-                            let want = alone(&camera, &filter, kind, (x, y, offset + i, seed));
+                        let want: Vec<_> = items
+                            .iter()
+                            .map(|&(x, y, i)| {
+                                alone(&camera, &filter, kind, (x, y, offset + i, seed))
+                            })
+                            .collect();
+                        for (&(x, y, i), want) in items.iter().zip(&want) {
                             let got = primary.sample(x, y, i);
-                            assert_eq!(bits(got), bits(want), "({x}, {y}) sample {i}");
+                            assert_eq!(bits(got), bits(*want), "({x}, {y}) sample {i}");
                         }
+                        // `fill`, by runs of 7 (the lanes' batches cut anywhere): the same
+                        // samples, those without a ray left out of `starts`.
+                        let mut primary = PrimarySamples::new(&camera, &filter, kind, seed, offset);
+                        let mut it = items.iter().enumerate().map(|(k, &(x, y, i))| (k, x, y, i));
+                        let (mut run, mut starts) = (Vec::new(), Vec::new());
+                        loop {
+                            let (had, traced) = (run.len(), starts.len());
+                            primary.fill(&mut it, 7, &mut run, &mut starts);
+                            assert!(
+                                run.len() - had <= 7 && starts.len() - traced <= run.len() - had
+                            );
+                            if run.len() == had {
+                                break;
+                            }
+                        }
+                        let mut traced = starts.iter();
+                        assert_eq!(run.len(), items.len());
+                        for (&(k, made), want) in run.iter().zip(&want) {
+                            let got = made
+                                .then(|| traced.next())
+                                .flatten()
+                                .map(|&(o, d, s)| (s, Some(CameraRay { origin: o, dir: d })));
+                            let (x, y, i) = items[k];
+                            let got = got.unwrap_or((want.0, None));
+                            assert_eq!(bits(got), bits(*want), "fill: ({x}, {y}) sample {i}");
+                        }
+                        assert!(traced.next().is_none());
                     }
                 }
             }
