@@ -7,7 +7,7 @@
 use crate::camera::{Camera, CameraRay, CameraSample};
 use crate::camera_lanes::{LensLanes, LANES};
 use crate::filter::Filter;
-use crate::sampler::{pixel_seed, PixelRun, SampleStream, SamplerKind};
+use crate::sampler::{pixel_seed_in_row, row_seed, PixelRun, SampleStream, SamplerKind};
 use glam::{Vec2, Vec3};
 
 /// Makes the primary samples of a render, pixel by pixel; cheapest when a pixel's samples come
@@ -19,16 +19,18 @@ pub(crate) struct PrimarySamples<'a> {
     kind: SamplerKind,
     seed: u32,
     sample_offset: u32,
+    /// `sample_offset.reverse_bits()`.
+    offset_rev: u32,
     pinhole: bool,
     /// The pixel of `run`, if any yet.
     pixel: Option<(u32, u32)>,
+    /// The row of the last pixel, if any yet, and its [`row_seed`].
+    row: (Option<u32>, u32),
     /// Its centre in raster coordinates.
     centre: Vec2,
     run: PixelRun,
     /// The camera's rays made [`LANES`] at a time, when it is a kind the lanes cover.
     lanes: Option<LensLanes>,
-    /// The streams of the samples in the lanes.
-    streams: [SampleStream; LANES],
 }
 
 impl<'a> PrimarySamples<'a> {
@@ -41,7 +43,6 @@ impl<'a> PrimarySamples<'a> {
         seed: u32,
         sample_offset: u32,
     ) -> Self {
-        let run = PixelRun::new(kind, 0, 0);
         Self {
             camera: *camera,
             lanes: LensLanes::new(camera),
@@ -49,18 +50,19 @@ impl<'a> PrimarySamples<'a> {
             kind,
             seed,
             sample_offset,
+            offset_rev: sample_offset.reverse_bits(),
             pinhole: camera.aperture == crate::camera::Aperture::Pinhole,
             pixel: None,
+            row: (None, 0),
             centre: Vec2::ZERO,
-            run,
-            streams: [run.stream(); LANES],
+            run: PixelRun::new(kind, 0, 0),
         }
     }
 
     /// Takes up to `n` items `(key, x, y, i)` from `items`: appends each one's key and whether
     /// its camera makes a ray to `run`, and its ray (origin, unit direction) and stream to
     /// `starts` when it does.
-    pub fn fill<K>(
+    pub fn fill<K: Copy>(
         &mut self,
         items: &mut impl Iterator<Item = (K, u32, u32, u32)>,
         n: usize,
@@ -78,35 +80,35 @@ impl<'a> PrimarySamples<'a> {
             return;
         };
         // The usual camera: the rays of `LANES` samples at a time.
-        let mut items = items.take(n);
+        let mut left = n;
         loop {
             let (mut film, mut lens) = ([[0.0; LANES]; 2], [[0.0; LANES]; 2]);
-            let first = run.len();
-            let mut m = 0;
-            for (l, (key, x, y, i)) in items.by_ref().take(LANES).enumerate() {
+            let mut taken: [Option<(K, SampleStream)>; LANES] = [None; LANES];
+            for (l, slot) in taken.iter_mut().enumerate().take(left) {
+                let Some((key, x, y, i)) = items.next() else {
+                    break;
+                };
                 let (stream, p_film, p_lens) = self.numbers(x, y, i);
                 (film[0][l], film[1][l]) = (p_film.x, p_film.y);
                 (lens[0][l], lens[1][l]) = (p_lens.x, p_lens.y);
-                self.streams[l] = stream;
-                run.push((key, false));
-                m = l + 1;
+                *slot = Some((key, stream));
             }
-            if m == 0 {
-                break;
-            }
+            left = left.saturating_sub(LANES);
             let rays = lanes.rays(film, lens);
             let (o, d) = (&rays.origin, &rays.dir);
-            for (l, &stream) in self.streams.iter().enumerate().take(m) {
+            for (l, slot) in taken.into_iter().enumerate() {
+                // An empty lane: the items or the `n` ran out.
+                let Some((key, stream)) = slot else {
+                    return;
+                };
                 if rays.made[l] {
                     let origin = Vec3::new(o[0][l], o[1][l], o[2][l]);
                     starts.push((origin, Vec3::new(d[0][l], d[1][l], d[2][l]), stream));
                 }
+                run.push((key, rays.made[l]));
             }
-            for (r, &made) in run.iter_mut().skip(first).zip(&rays.made) {
-                r.1 = made;
-            }
-            if m < LANES {
-                break;
+            if left == 0 {
+                return;
             }
         }
     }
@@ -129,7 +131,17 @@ impl<'a> PrimarySamples<'a> {
         } else {
             self.pixel = Some((x, y));
             self.centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-            self.run = PixelRun::new(self.kind, pixel_seed(x, y, self.seed), index);
+            if self.row.0 != Some(y) {
+                self.row = (Some(y), row_seed(y, self.seed));
+            }
+            let seed = pixel_seed_in_row(x, self.row.1);
+            // A pixel's first sample is almost always its first index: reversed once.
+            let rev = if index == self.sample_offset {
+                self.offset_rev
+            } else {
+                index.reverse_bits()
+            };
+            self.run = PixelRun::with_reversed(self.kind, seed, index, rev);
         }
         // The camera's 4-D point: pixel pair, lens pair (which a pinhole ignores).
         let (stream, c) = self.run.next();

@@ -56,7 +56,20 @@ fn u32_to_unit(x: u32) -> f32 {
 /// The per-pixel seed: decorrelates pixels while keeping each pixel's sequence a pure function of
 /// (pixel, seed).
 pub fn pixel_seed(x: u32, y: u32, seed: u32) -> u32 {
-    hash_u32(x ^ hash_u32(y.wrapping_add(0x9e37_79b9) ^ hash_u32(seed.wrapping_add(0x85eb_ca6b))))
+    pixel_seed_in_row(x, row_seed(y, seed))
+}
+
+/// The part of [`pixel_seed`] that depends on the row `y` and the render's `seed` only: hashed
+/// once for a row's pixels.
+#[inline]
+pub(crate) fn row_seed(y: u32, seed: u32) -> u32 {
+    hash_u32(y.wrapping_add(0x9e37_79b9) ^ hash_u32(seed.wrapping_add(0x85eb_ca6b)))
+}
+
+/// [`pixel_seed`] of column `x` given its row's [`row_seed`].
+#[inline]
+pub(crate) fn pixel_seed_in_row(x: u32, row_seed: u32) -> u32 {
+    hash_u32(x ^ row_seed)
 }
 
 impl SamplerKind {
@@ -112,8 +125,8 @@ fn random_4d(pixel_seed: u32, index: u32, set: u32) -> [f32; 4] {
 /// same bits (`cached_shuffle_matches_the_crate` checks it).
 #[inline]
 fn sobol_4d_shuffled(shuffled_rev: u32, set: u32, seed: u32) -> [f32; 4] {
-    let table = &nibble_tables()[set as usize];
-    sobol_scrambled(table, shuffled_rev, set_scramble(set, seed))
+    let sobol = sobol_by_nibbles(&nibble_tables()[set as usize], shuffled_rev);
+    sobol_scrambled(sobol, set_scramble(set, seed))
 }
 
 /// The Owen scramble (hashed) of dimension set `set` under `seed`, as `sobol_burley::sample_4d`
@@ -126,12 +139,11 @@ fn set_scramble(set: u32, seed: u32) -> sobol_burley::parts::Int4 {
     hash_int4(seed ^ ds ^ [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8].into())
 }
 
-/// The last steps of `sobol_burley::sample_4d`: the Sobol point of the shuffled index from its
-/// set's nibble `table`, Owen-scrambled by the set's hashed `scramble`, as floats.
+/// The last steps of `sobol_burley::sample_4d`: the Sobol point of the shuffled index,
+/// Owen-scrambled by its set's hashed `scramble`, as floats.
 #[inline]
-fn sobol_scrambled(table: &NibbleTable, shuffled_rev: u32, scramble: Int4) -> [f32; 4] {
-    use sobol_burley::parts::owen_scramble_int4_rev;
-    owen_scramble_int4_rev(sobol_by_nibbles(table, shuffled_rev), scramble)
+fn sobol_scrambled(sobol: Int4, scramble: Int4) -> [f32; 4] {
+    sobol_burley::parts::owen_scramble_int4_rev(sobol, scramble)
         .reverse_bits()
         .to_f32_norm()
 }

@@ -1,9 +1,31 @@
 //! A pixel's consecutive samples, with what they share worked out once.
 
 use super::{
-    nibble_tables, random_4d, set_scramble, shuffle_scramble, sobol_scrambled, sobol_shuffle_rev,
-    Int4, NibbleTable, SampleStream, SamplerKind,
+    random_4d, set_scramble, shuffle_scramble, sobol_scrambled, sobol_shuffle_rev, Int4,
+    SampleStream, SamplerKind,
 };
+
+/// The camera set's Sobol point per byte of the top 16 index bits (most significant first) and
+/// per value of that byte: 8 KiB, built once. Two lookups give a sample's point, where the
+/// nibble tables of the other sets take four (`byte_table_matches_the_crate` checks it).
+type ByteTable = [[Int4; 256]; 2];
+
+/// The [`ByteTable`] of the camera's dimension set (0).
+fn camera_bytes() -> &'static ByteTable {
+    use sobol_burley::parts::sobol_int4_rev;
+    static TABLE: std::sync::OnceLock<Box<ByteTable>> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        Box::new(std::array::from_fn(|k| {
+            std::array::from_fn(|v| sobol_int4_rev((v as u32) << (24 - 8 * k), 0))
+        }))
+    })
+}
+
+/// `sobol_burley::parts::sobol_int4_rev(index_rev, 0)` by two lookups in [`camera_bytes`].
+#[inline]
+fn camera_sobol(t: &ByteTable, index_rev: u32) -> Int4 {
+    t[0][(index_rev >> 24) as u8 as usize] ^ t[1][(index_rev >> 16) as u8 as usize]
+}
 
 /// `(index + 1).reverse_bits()` from `index` and `index_rev = index.reverse_bits()`: adding 1
 /// flips the trailing ones of `index` and the zero above them, a run of low bits whose
@@ -29,7 +51,7 @@ pub(crate) struct PixelRun {
     shuffle: u32,
     /// [`set_scramble`] of the camera set under the pixel seed.
     camera_scramble: Int4,
-    camera_table: &'static NibbleTable,
+    camera_table: &'static ByteTable,
     /// The next sample's index and its bit reversal.
     index: u32,
     index_rev: u32,
@@ -39,14 +61,21 @@ impl PixelRun {
     /// The samples `first, first + 1, …` of the pixel whose seed is `pixel_seed`.
     #[inline]
     pub fn new(kind: SamplerKind, pixel_seed: u32, first: u32) -> Self {
+        Self::with_reversed(kind, pixel_seed, first, first.reverse_bits())
+    }
+
+    /// [`PixelRun::new`] given `first_rev = first.reverse_bits()`, for callers that start many
+    /// pixels at one index and reverse it once.
+    #[inline]
+    pub fn with_reversed(kind: SamplerKind, pixel_seed: u32, first: u32, first_rev: u32) -> Self {
         Self {
             kind,
             pixel_seed,
             shuffle: shuffle_scramble(pixel_seed),
             camera_scramble: set_scramble(0, pixel_seed),
-            camera_table: &nibble_tables()[0],
+            camera_table: camera_bytes(),
             index: first,
-            index_rev: first.reverse_bits(),
+            index_rev: first_rev,
         }
     }
 
@@ -65,17 +94,6 @@ impl PixelRun {
         }
     }
 
-    /// The stream of the next sample, without moving on.
-    #[inline]
-    pub fn stream(&self) -> SampleStream {
-        SampleStream {
-            kind: self.kind,
-            pixel_seed: self.pixel_seed,
-            index: self.index,
-            shuffled_rev: sobol_shuffle_rev(self.index_rev, self.shuffle),
-        }
-    }
-
     /// The next sample's stream and its camera point (what [`SampleStream::camera`] gives).
     #[inline]
     pub fn next(&mut self) -> (SampleStream, [f32; 4]) {
@@ -91,7 +109,8 @@ impl PixelRun {
         let shuffled_rev = stream.shuffled_rev;
         let camera = match self.kind {
             SamplerKind::Sobol => {
-                sobol_scrambled(self.camera_table, shuffled_rev, self.camera_scramble)
+                let sobol = camera_sobol(self.camera_table, shuffled_rev);
+                sobol_scrambled(sobol, self.camera_scramble)
             }
             SamplerKind::Random => random_4d(self.pixel_seed, index, 0),
         };
@@ -119,6 +138,33 @@ mod tests {
                 i = i.wrapping_add(1);
                 assert_eq!(rev, i.reverse_bits(), "{i:#x}");
             }
+        }
+    }
+
+    #[test]
+    fn byte_table_matches_the_crate() {
+        use sobol_burley::parts::sobol_int4_rev;
+        let bits = |v: Int4| v.to_f32_norm().map(f32::to_bits);
+        let mut x = 0x9e37_79b9u32;
+        let mut revs = vec![
+            0,
+            u32::MAX,
+            0xffff_0000,
+            0x8000_0000,
+            0x0001_0000,
+            0x1234_5678,
+        ];
+        revs.extend((0..500).map(|_| {
+            x = hash_u32(x);
+            x
+        }));
+        for index_rev in revs {
+            let want = bits(sobol_int4_rev(index_rev, 0));
+            assert_eq!(
+                bits(camera_sobol(camera_bytes(), index_rev)),
+                want,
+                "{index_rev:#x}"
+            );
         }
     }
 
