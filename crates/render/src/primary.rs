@@ -16,12 +16,10 @@ pub(crate) struct PrimarySamples<'a> {
     /// A copy, so that its fields stay in registers across samples.
     camera: Camera,
     filter: &'a Filter,
-    kind: SamplerKind,
     seed: u32,
     sample_offset: u32,
     /// `sample_offset.reverse_bits()`.
     offset_rev: u32,
-    pinhole: bool,
     /// The pixel of `run`, if any yet.
     pixel: Option<(u32, u32)>,
     /// The row of the last pixel, if any yet, and its [`row_seed`].
@@ -47,11 +45,9 @@ impl<'a> PrimarySamples<'a> {
             camera: *camera,
             lanes: LensLanes::new(camera),
             filter,
-            kind,
             seed,
             sample_offset,
             offset_rev: sample_offset.reverse_bits(),
-            pinhole: camera.aperture == crate::camera::Aperture::Pinhole,
             pixel: None,
             row: (None, 0),
             centre: Vec2::ZERO,
@@ -96,9 +92,9 @@ impl<'a> PrimarySamples<'a> {
             left = left.saturating_sub(LANES);
             let rays = lanes.rays(film, lens);
             let (o, d) = (&rays.origin, &rays.dir);
-            for (l, slot) in taken.into_iter().enumerate() {
+            for (l, slot) in taken.iter().enumerate() {
                 // An empty lane: the items or the `n` ran out.
-                let Some((key, stream)) = slot else {
+                let &Some((key, stream)) = slot else {
                     return;
                 };
                 if rays.made[l] {
@@ -141,15 +137,11 @@ impl<'a> PrimarySamples<'a> {
             } else {
                 index.reverse_bits()
             };
-            self.run = PixelRun::with_reversed(self.kind, seed, index, rev);
+            self.run.restart(seed, index, rev);
         }
-        // The camera's 4-D point: pixel pair, lens pair (which a pinhole ignores).
+        // The camera's 4-D point: pixel pair, lens pair (which a pinhole camera ignores).
         let (stream, c) = self.run.next();
-        let p_lens = if self.pinhole {
-            Vec2::ZERO
-        } else {
-            Vec2::new(c[2], c[3])
-        };
+        let p_lens = Vec2::new(c[2], c[3]);
         let offset = self.filter.sample([c[0], c[1]]);
         let p_film = Vec2::new(self.centre.x + offset.x, self.centre.y + offset.y);
         (stream, p_film, p_lens)

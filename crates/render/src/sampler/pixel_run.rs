@@ -61,22 +61,30 @@ impl PixelRun {
     /// The samples `first, first + 1, …` of the pixel whose seed is `pixel_seed`.
     #[inline]
     pub fn new(kind: SamplerKind, pixel_seed: u32, first: u32) -> Self {
-        Self::with_reversed(kind, pixel_seed, first, first.reverse_bits())
-    }
-
-    /// [`PixelRun::new`] given `first_rev = first.reverse_bits()`, for callers that start many
-    /// pixels at one index and reverse it once.
-    #[inline]
-    pub fn with_reversed(kind: SamplerKind, pixel_seed: u32, first: u32, first_rev: u32) -> Self {
-        Self {
+        let mut run = Self {
             kind,
             pixel_seed,
-            shuffle: shuffle_scramble(pixel_seed),
-            camera_scramble: set_scramble(0, pixel_seed),
+            shuffle: 0,
+            camera_scramble: [0; 4].into(),
             camera_table: camera_bytes(),
             index: first,
-            index_rev: first_rev,
-        }
+            index_rev: 0,
+        };
+        run.restart(pixel_seed, first, first.reverse_bits());
+        run
+    }
+
+    /// Starts over at the samples `first, first + 1, …` of the pixel whose seed is
+    /// `pixel_seed`, given `first_rev = first.reverse_bits()`: what [`PixelRun::new`] makes,
+    /// for callers that go from pixel to pixel (the table is looked up once, and a common
+    /// first index reversed once).
+    #[inline]
+    pub fn restart(&mut self, pixel_seed: u32, first: u32, first_rev: u32) {
+        self.pixel_seed = pixel_seed;
+        self.shuffle = shuffle_scramble(pixel_seed);
+        self.camera_scramble = set_scramble(0, pixel_seed);
+        self.index = first;
+        self.index_rev = first_rev;
     }
 
     /// The index [`PixelRun::next`] gives next.
