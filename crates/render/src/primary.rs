@@ -1,8 +1,9 @@
 //! The primary samples of a render: for sample `i` of pixel `(x, y)`, its sample stream and
 //! camera ray, with what a render's samples and a pixel's consecutive samples share worked out
-//! once (the camera's and filter's dispatch, the pixel's seed and scramble hashes, its
-//! bit-reversed index). The values are exactly those of drawing each sample alone: a pure
-//! function of (pixel, index, dimension, seed).
+//! once (the camera's constants, a row's and a pixel's seed and scramble hashes, the
+//! bit-reversed index), and a thin-lens camera's rays made four at a time ([`LensLanes`]).
+//! The values are exactly those of drawing each sample alone: a pure function of (pixel,
+//! index, dimension, seed).
 
 use crate::camera::{Camera, CameraRay, CameraSample};
 use crate::camera_lanes::{LensLanes, LANES};
@@ -13,7 +14,7 @@ use glam::{Vec2, Vec3};
 /// Makes the primary samples of a render, pixel by pixel; cheapest when a pixel's samples come
 /// one after another in index order, as tiles and adaptive rounds give them.
 pub(crate) struct PrimarySamples<'a> {
-    /// A copy, so that its fields stay in registers across samples.
+    /// The camera of the one-at-a-time path (orthographic, polygonal apertures), copied in.
     camera: Camera,
     filter: &'a Filter,
     seed: u32,
@@ -80,7 +81,7 @@ impl<'a> PrimarySamples<'a> {
         loop {
             let (mut film, mut lens) = ([[0.0; LANES]; 2], [[0.0; LANES]; 2]);
             let mut taken: [Option<(K, SampleStream)>; LANES] = [None; LANES];
-            for (l, slot) in taken.iter_mut().enumerate().take(left) {
+            for (l, slot) in taken[..left.min(LANES)].iter_mut().enumerate() {
                 let Some((key, x, y, i)) = items.next() else {
                     break;
                 };
