@@ -13,8 +13,11 @@ pub(crate) const LANES: usize = 4;
 /// Rays of a batch: origin and unit direction per axis, and whether the camera made each one
 /// (what `generate_ray` returning `Some` means).
 pub(crate) struct RayLanes {
+    /// World-space origins, x, y and z of each lane.
     pub origin: [[f32; LANES]; 3],
+    /// World-space unit directions, x, y and z of each lane.
     pub dir: [[f32; LANES]; 3],
+    /// Whether the camera made each lane's ray (its direction is finite).
     pub made: [bool; LANES],
 }
 
