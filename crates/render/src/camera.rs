@@ -72,6 +72,7 @@ impl Aperture {
     }
 
     /// Maps `u ∈ [0,1)²` uniformly onto the aperture, in lens-plane units (x right, y up).
+    #[inline(always)]
     pub fn sample(&self, u: Vec2) -> Vec2 {
         match *self {
             Self::Pinhole => Vec2::ZERO,
@@ -79,6 +80,14 @@ impl Aperture {
                 let d = concentric_disc(u) * radius;
                 Vec2::new(d.x / ratio, d.y)
             }
+            // Out of line: its two `sin_cos` calls would keep the disc from being inlined.
+            Self::Polygon { .. } => self.sample_polygon(u),
+        }
+    }
+
+    /// [`Aperture::sample`] of a polygon (a pinhole or disc gives the centre).
+    fn sample_polygon(&self, u: Vec2) -> Vec2 {
+        match *self {
             Self::Polygon {
                 radius,
                 blades,
@@ -88,6 +97,7 @@ impl Aperture {
                 let d = uniform_polygon(u, blades, rotation) * radius;
                 Vec2::new(d.x / ratio, d.y)
             }
+            Self::Pinhole | Self::Disc { .. } => Vec2::ZERO,
         }
     }
 
@@ -166,6 +176,7 @@ impl Camera {
 
     /// The point of the image plane (at `d = 1` for perspective, in scene units for
     /// orthographic) a raster position maps to; +Y up, row 0 at the top.
+    #[inline(always)]
     pub fn screen_point(&self, p_film: Vec2) -> Vec2 {
         let ndc = Vec2::new(
             2.0 * p_film.x / self.width as f32 - 1.0,
@@ -181,6 +192,7 @@ impl Camera {
     }
 
     /// The primary ray for one sample, in camera space (the camera looks down −Z).
+    #[inline(always)]
     pub fn generate_ray_camera_space(&self, s: &CameraSample) -> Option<CameraRay> {
         let ps = self.screen_point(s.p_film);
         let (origin, dir) = match (self.model, self.aperture) {
@@ -207,6 +219,7 @@ impl Camera {
     }
 
     /// The primary ray for one sample, in world space.
+    #[inline(always)]
     pub fn generate_ray(&self, s: &CameraSample) -> Option<CameraRay> {
         let r = self.generate_ray_camera_space(s)?;
         let dir = self.world_from_camera.transform_vector3(r.dir).normalize();

@@ -4,7 +4,7 @@
 
 use crate::adaptive::{self, AdaptiveOptions};
 use crate::aov::SampleAov;
-use crate::camera::{Camera, CameraRay, CameraSample};
+use crate::camera::Camera;
 use crate::cryptomatte;
 use crate::environment::{EnvLight, Environment};
 use crate::film::{Accum, AovLayout, CryptoIds, Film, Window};
@@ -12,7 +12,8 @@ use crate::filter::{Filter, FilterKind};
 use crate::integrator::{Clamp, Integrator, Wavefront};
 use crate::lights::EmissiveLights;
 use crate::passes::{Pass, PassSet};
-use crate::sampler::{pixel_seed, SampleStream, SamplerKind, MAX_SPP};
+use crate::primary::PrimarySamples;
+use crate::sampler::{SamplerKind, MAX_SPP};
 use crate::spares::{lock, Spares};
 use crate::surface::{Geometry, MaterialOverride};
 use crate::transmission::TransmissionMode;
@@ -280,7 +281,6 @@ pub fn render_window(
         camera,
         filter: &filter,
         opts,
-        pinhole: camera.aperture == crate::camera::Aperture::Pinhole,
         layout: AovLayout::new(opts.passes),
         ids: crypto_ids(scene, opts.passes),
         wavefronts: Spares::default(),
@@ -517,7 +517,6 @@ struct Job<'a> {
     camera: &'a Camera,
     filter: &'a Filter,
     opts: &'a RenderOptions,
-    pinhole: bool,
     layout: AovLayout,
     ids: CryptoIds,
     /// Wavefronts reused from tile to tile (of one `AOV` kind per render: a fresh wavefront per
@@ -528,33 +527,30 @@ struct Job<'a> {
 
 impl Job<'_> {
     /// The sample stream of sample `i` of pixel `(x, y)` (index `sample_offset + i` of the
-    /// pixel's sequence) and its camera ray (`None` when the camera makes none).
-    #[inline]
+    /// pixel's sequence) and its camera ray (`None` when the camera makes none), drawn alone:
+    /// what [`Job::samples`] must give.
     #[cfg(test)]
-    fn camera_ray(&self, x: u32, y: u32, i: u32) -> (SampleStream, Option<CameraRay>) {
-        self.camera_ray_seeded(x, y, i, pixel_seed(x, y, self.opts.seed))
-    }
-
-    /// [`Job::camera_ray`] given the pixel's [`pixel_seed`].
-    #[inline]
-    fn camera_ray_seeded(
+    fn camera_ray(
         &self,
         x: u32,
         y: u32,
         i: u32,
-        seed: u32,
-    ) -> (SampleStream, Option<CameraRay>) {
+    ) -> (
+        crate::sampler::SampleStream,
+        Option<crate::camera::CameraRay>,
+    ) {
         let index = self.opts.sample_offset + i;
-        let stream = SampleStream::for_pixel(self.opts.sampler, seed, index);
+        let stream =
+            crate::sampler::SampleStream::new(self.opts.sampler, x, y, index, self.opts.seed);
         // A pinhole draws only the pixel pair; a lens draws the 4-D point.
-        let (u_film, p_lens) = if self.pinhole {
+        let (u_film, p_lens) = if self.camera.aperture == crate::camera::Aperture::Pinhole {
             (stream.pixel(), Vec2::ZERO)
         } else {
             let c = stream.camera();
             ([c[0], c[1]], Vec2::new(c[2], c[3]))
         };
         let offset = self.filter.sample(u_film);
-        let sample = CameraSample {
+        let sample = crate::camera::CameraSample {
             p_film: Vec2::new(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y),
             p_lens,
         };
@@ -582,24 +578,16 @@ impl Job<'_> {
         let mut wavefront = (self.wavefronts.take())
             .and_then(|w| w.downcast::<Wavefront<AOV>>().ok())
             .unwrap_or_default();
-        let mut seeded = ((0, 0), pixel_seed(0, 0, self.opts.seed));
+        let o = self.opts;
+        let mut primary =
+            PrimarySamples::new(self.camera, self.filter, o.sampler, o.seed, o.sample_offset);
         loop {
             if self.opts.cancel.is_cancelled() {
                 break;
             }
             run.clear();
             starts.clear();
-            for (key, x, y, i) in items.by_ref().take(WAVEFRONT_SAMPLES) {
-                // A pixel's samples come one after another: its seed is hashed once.
-                if (x, y) != seeded.0 {
-                    seeded = ((x, y), pixel_seed(x, y, self.opts.seed));
-                }
-                let (stream, ray) = self.camera_ray_seeded(x, y, i, seeded.1);
-                if let Some(r) = &ray {
-                    starts.push((r.origin, r.dir, stream));
-                }
-                run.push((key, ray.is_some()));
-            }
+            primary.fill(&mut items, WAVEFRONT_SAMPLES, &mut run, &mut starts);
             if run.is_empty() {
                 break;
             }
@@ -631,10 +619,16 @@ impl Job<'_> {
         let mut dropped = 0u64;
         let items = TileItems::new(x0, y0, tw, th, self.opts.spp);
         self.samples::<_, AOV>(items, |k, result, rec| {
-            taken[k] += 1;
-            match result {
-                Some((l, hit)) if acc.add(k, l, hit, rec, &self.ids) => {}
-                _ => dropped += 1,
+            if let Some(t) = taken.get_mut(k) {
+                *t += 1;
+            }
+            // Without passes, the radiance alone: the layout's checks stay out of the loop.
+            let added = |(l, hit)| match AOV {
+                true => acc.add(k, l, hit, rec, &self.ids),
+                false => acc.add_radiance(k, l, hit),
+            };
+            if !result.is_some_and(added) {
+                dropped += 1;
             }
         });
         dropped
@@ -950,7 +944,6 @@ mod tests {
             camera,
             filter,
             opts,
-            pinhole: false,
             layout: AovLayout::default(),
             ids: CryptoIds::default(),
             wavefronts: Spares::default(),

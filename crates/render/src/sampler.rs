@@ -6,6 +6,11 @@
 //! 4-D dimension sets. Pixels are decorrelated by hashing (pixel, seed) into the sequence's seed,
 //! so neighbouring pixels show noise rather than structure.
 
+mod pixel_run;
+
+pub(crate) use pixel_run::PixelRun;
+use sobol_burley::parts::Int4;
+
 /// Which sequence generates sample values (`--sampler`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum SamplerKind {
@@ -51,7 +56,20 @@ fn u32_to_unit(x: u32) -> f32 {
 /// The per-pixel seed: decorrelates pixels while keeping each pixel's sequence a pure function of
 /// (pixel, seed).
 pub fn pixel_seed(x: u32, y: u32, seed: u32) -> u32 {
-    hash_u32(x ^ hash_u32(y.wrapping_add(0x9e37_79b9) ^ hash_u32(seed.wrapping_add(0x85eb_ca6b))))
+    pixel_seed_in_row(x, row_seed(y, seed))
+}
+
+/// The part of [`pixel_seed`] that depends on the row `y` and the render's `seed` only: hashed
+/// once for a row's pixels.
+#[inline]
+pub(crate) fn row_seed(y: u32, seed: u32) -> u32 {
+    hash_u32(y.wrapping_add(0x9e37_79b9) ^ hash_u32(seed.wrapping_add(0x85eb_ca6b)))
+}
+
+/// [`pixel_seed`] of column `x` given its row's [`row_seed`].
+#[inline]
+pub(crate) fn pixel_seed_in_row(x: u32, row_seed: u32) -> u32 {
+    hash_u32(x ^ row_seed)
 }
 
 impl SamplerKind {
@@ -107,35 +125,48 @@ fn random_4d(pixel_seed: u32, index: u32, set: u32) -> [f32; 4] {
 /// same bits (`cached_shuffle_matches_the_crate` checks it).
 #[inline]
 fn sobol_4d_shuffled(shuffled_rev: u32, set: u32, seed: u32) -> [f32; 4] {
-    use sobol_burley::parts::{hash_int4, owen_scramble_int4_rev, Int4};
-    let sobol = sobol_by_nibbles(shuffled_rev, set);
-    let scramble = {
-        let seed: Int4 = [seed.wrapping_mul(0x9c8f_2d3b); 4].into();
-        let ds: Int4 = [set; 4].into();
-        seed ^ ds ^ [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8].into()
-    };
-    owen_scramble_int4_rev(sobol, hash_int4(scramble))
+    let sobol = sobol_by_nibbles(&nibble_tables()[set as usize], shuffled_rev);
+    sobol_scrambled(sobol, set_scramble(set, seed))
+}
+
+/// The Owen scramble (hashed) of dimension set `set` under `seed`, as `sobol_burley::sample_4d`
+/// derives it: the same for every sample of a pixel.
+#[inline]
+fn set_scramble(set: u32, seed: u32) -> sobol_burley::parts::Int4 {
+    use sobol_burley::parts::{hash_int4, Int4};
+    let seed: Int4 = [seed.wrapping_mul(0x9c8f_2d3b); 4].into();
+    let ds: Int4 = [set; 4].into();
+    hash_int4(seed ^ ds ^ [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8].into())
+}
+
+/// The last steps of `sobol_burley::sample_4d`: the Sobol point of the shuffled index,
+/// Owen-scrambled by its set's hashed `scramble`, as floats.
+#[inline]
+fn sobol_scrambled(sobol: Int4, scramble: Int4) -> [f32; 4] {
+    sobol_burley::parts::owen_scramble_int4_rev(sobol, scramble)
         .reverse_bits()
         .to_f32_norm()
 }
 
-/// `sobol_burley::parts::sobol_int4_rev(index_rev, set)` (`set` below [`SOBOL_SETS`]) by four
-/// table lookups: the point is the XOR of the direction vectors of the top 16 index bits, so
+/// `sobol_burley::parts::sobol_int4_rev(index_rev, set)` by four lookups in set `set`'s table
+/// `t`: the point is the XOR of the direction vectors of the top 16 index bits, so
 /// XORing each nibble's precomputed share gives the same bits as the crate's loop over the set
 /// bits, at a quarter of its instructions (`nibble_tables_match_the_crate` checks it).
 #[inline]
-fn sobol_by_nibbles(index_rev: u32, set: u32) -> sobol_burley::parts::Int4 {
-    let t = &nibble_tables()[set as usize];
+fn sobol_by_nibbles(t: &NibbleTable, index_rev: u32) -> Int4 {
     let nibble = |k: usize| ((index_rev >> (28 - 4 * k)) & 15) as usize;
     t[0][nibble(0)] ^ t[1][nibble(1)] ^ t[2][nibble(2)] ^ t[3][nibble(3)]
 }
 
+/// One table set's share of the Sobol point per nibble of the top 16 index bits (most
+/// significant first) and per value of that nibble.
+type NibbleTable = [[Int4; 16]; 4];
+
 /// Per table set, per nibble of the top 16 index bits (most significant first), the Sobol
 /// point of each of its 16 values alone: 64 KiB, built once.
-fn nibble_tables() -> &'static [[[sobol_burley::parts::Int4; 16]; 4]] {
+fn nibble_tables() -> &'static [NibbleTable] {
     use sobol_burley::parts::sobol_int4_rev;
-    static TABLES: std::sync::OnceLock<Vec<[[sobol_burley::parts::Int4; 16]; 4]>> =
-        std::sync::OnceLock::new();
+    static TABLES: std::sync::OnceLock<Vec<NibbleTable>> = std::sync::OnceLock::new();
     TABLES.get_or_init(|| {
         (0..SOBOL_SETS)
             .map(|set| {
@@ -150,8 +181,20 @@ fn nibble_tables() -> &'static [[[sobol_burley::parts::Int4; 16]; 4]] {
 /// The Owen-shuffled, bit-reversed sample index of `sobol_burley::sample_4d` for `seed`.
 #[inline]
 fn sobol_shuffle(index: u32, seed: u32) -> u32 {
-    use sobol_burley::parts::{hash, owen_scramble_rev};
-    owen_scramble_rev(index.reverse_bits(), hash(seed ^ 0x79c6_8e4a))
+    sobol_shuffle_rev(index.reverse_bits(), shuffle_scramble(seed))
+}
+
+/// The Owen-shuffled, bit-reversed sample index of `sobol_burley::sample_4d`, given the
+/// bit-reversed index and the pixel's [`shuffle_scramble`].
+#[inline]
+fn sobol_shuffle_rev(index_rev: u32, scramble: u32) -> u32 {
+    sobol_burley::parts::owen_scramble_rev(index_rev, scramble)
+}
+
+/// The hashed seed of [`sobol_shuffle`]: the same for every sample of a pixel.
+#[inline]
+fn shuffle_scramble(seed: u32) -> u32 {
+    sobol_burley::parts::hash(seed ^ 0x79c6_8e4a)
 }
 
 /// The table set and scramble seed of dimension set `set`.
@@ -355,6 +398,7 @@ mod tests {
         let bits = |v: sobol_burley::parts::Int4| v.to_f32_norm().map(f32::to_bits);
         let mut x = 0x9e37_79b9u32;
         for set in 0..SOBOL_SETS {
+            let table = &nibble_tables()[set as usize];
             for index_rev in [
                 0,
                 u32::MAX,
@@ -364,13 +408,13 @@ mod tests {
                 0x1234_5678,
             ] {
                 let want = bits(sobol_int4_rev(index_rev, set));
-                assert_eq!(bits(sobol_by_nibbles(index_rev, set)), want);
+                assert_eq!(bits(sobol_by_nibbles(table, index_rev)), want);
             }
             for _ in 0..64 {
                 x = hash_u32(x);
                 let want = bits(sobol_int4_rev(x, set));
                 assert_eq!(
-                    bits(sobol_by_nibbles(x, set)),
+                    bits(sobol_by_nibbles(table, x)),
                     want,
                     "set {set}, index {x:#x}"
                 );

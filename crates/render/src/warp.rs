@@ -13,6 +13,7 @@ use std::f32::consts::{FRAC_PI_4, PI, TAU};
 /// [`sin_cos_quarter`] for the one angle in `[-π/4, π/4]` the mapping needs: the lens and every
 /// diffuse bounce go through here, and a 50/50 branch plus libm's `sincosf` cost more than the
 /// mapping itself.
+#[inline(always)]
 pub fn concentric_disc(u: Vec2) -> Vec2 {
     let o = 2.0 * u - Vec2::ONE;
     // In the wedges around ±y the angle is π/2 − φ: cosine and sine trade places.

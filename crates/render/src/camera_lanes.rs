@@ -1,0 +1,258 @@
+//! The camera rays of [`LANES`] samples at once, lane by lane, for the usual camera: a thin lens
+//! (perspective) with a pinhole or round aperture. Each lane does the IEEE operations of
+//! [`Camera::generate_ray`] in the same order (no fused multiply-add, no reassociation), so its
+//! ray has the same bits; on `Vec4`s, whose operations are SIMD instructions.
+
+use crate::camera::{Aperture, Camera, CameraModel};
+use glam::{Affine3A, Vec4};
+use std::f32::consts::FRAC_PI_4;
+
+/// Samples whose rays are made together.
+pub(crate) const LANES: usize = 4;
+
+/// Rays of a batch: origin and unit direction per axis, and whether the camera made each one
+/// (what `generate_ray` returning `Some` means).
+pub(crate) struct RayLanes {
+    /// World-space origins, x, y and z of each lane.
+    pub origin: [[f32; LANES]; 3],
+    /// World-space unit directions, x, y and z of each lane.
+    pub dir: [[f32; LANES]; 3],
+    /// Whether the camera made each lane's ray (its direction is finite).
+    pub made: [bool; LANES],
+}
+
+/// What the lanes need of a thin-lens camera.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LensLanes {
+    width: f32,
+    height: f32,
+    tan_half: [f32; 2],
+    focus_distance: f32,
+    /// Radius and `aperture_ratio` of a round aperture; `None` for a pinhole.
+    disc: Option<(f32, f32)>,
+    world_from_camera: Affine3A,
+}
+
+impl LensLanes {
+    /// The lanes of `camera`, or `None` for the cameras they do not cover (orthographic, a
+    /// polygonal aperture), which make their rays one at a time.
+    pub fn new(camera: &Camera) -> Option<Self> {
+        let CameraModel::ThinLens {
+            tan_half_x,
+            tan_half_y,
+        } = camera.model
+        else {
+            return None;
+        };
+        let disc = match camera.aperture {
+            Aperture::Pinhole => None,
+            Aperture::Disc { radius, ratio } => Some((radius, ratio)),
+            Aperture::Polygon { .. } => return None,
+        };
+        Some(Self {
+            width: camera.width as f32,
+            height: camera.height as f32,
+            tan_half: [tan_half_x, tan_half_y],
+            focus_distance: camera.focus_distance,
+            disc,
+            world_from_camera: camera.world_from_camera,
+        })
+    }
+
+    /// The rays of film positions `film` (raster x, y) and lens samples `lens` (ignored by a
+    /// pinhole): lane `l` is `Camera::generate_ray` of sample `l`, bit for bit.
+    #[inline]
+    pub fn rays(&self, film: [[f32; LANES]; 2], lens: [[f32; LANES]; 2]) -> RayLanes {
+        let [fx, fy] = film.map(Vec4::from_array);
+        // `Camera::screen_point`.
+        let ps_x = (2.0 * fx / self.width - 1.0) * self.tan_half[0];
+        let ps_y = (1.0 - 2.0 * fy / self.height) * self.tan_half[1];
+        // `Camera::generate_ray_camera_space`: origin on the lens, direction to the focus point.
+        let (lens_x, lens_y, dir) = match self.disc {
+            None => (Vec4::ZERO, Vec4::ZERO, [ps_x, ps_y, Vec4::splat(-1.0)]),
+            Some((radius, ratio)) => {
+                let (dx, dy) = concentric_disc_lanes(lens.map(Vec4::from_array));
+                let (lx, ly) = (dx * radius / ratio, dy * radius);
+                let f = self.focus_distance;
+                (
+                    lx,
+                    ly,
+                    [ps_x * f - lx, ps_y * f - ly, Vec4::splat(-f - 0.0)],
+                )
+            }
+        };
+        let dir = normalize(dir);
+        let made = dir[0].is_finite_mask() & dir[1].is_finite_mask() & dir[2].is_finite_mask();
+        // `Camera::generate_ray`: to world space, the direction normalised again.
+        let m = &self.world_from_camera.matrix3;
+        let (ax, ay, az) = (
+            m.x_axis.to_array(),
+            m.y_axis.to_array(),
+            m.z_axis.to_array(),
+        );
+        let t = self.world_from_camera.translation.to_array();
+        let world_dir: [Vec4; 3] =
+            std::array::from_fn(|c| ax[c] * dir[0] + ay[c] * dir[1] + az[c] * dir[2]);
+        // The lens point's z is 0, but its product is added all the same (it may be −0).
+        let origin: [Vec4; 3] = std::array::from_fn(|c| {
+            ax[c] * lens_x + ay[c] * lens_y + Vec4::splat(az[c] * 0.0) + t[c]
+        });
+        let bits = made.bitmask();
+        RayLanes {
+            origin: origin.map(|v| v.to_array()),
+            dir: normalize(world_dir).map(|v| v.to_array()),
+            made: std::array::from_fn(|l| bits & (1 << l) != 0),
+        }
+    }
+}
+
+/// `Vec3::normalize` lane by lane: times the reciprocal of the length.
+#[inline(always)]
+fn normalize(v: [Vec4; 3]) -> [Vec4; 3] {
+    let inv = Vec4::ONE / (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    v.map(|c| c * inv)
+}
+
+/// `warp::concentric_disc` lane by lane, its branches as selects.
+#[inline(always)]
+fn concentric_disc_lanes(u: [Vec4; 2]) -> (Vec4, Vec4) {
+    let ox = 2.0 * u[0] - Vec4::ONE;
+    let oy = 2.0 * u[1] - Vec4::ONE;
+    let swap = ox.abs().cmple(oy.abs());
+    let num = Vec4::select(swap, ox, oy);
+    let r = Vec4::select(swap, oy, ox);
+    let (s, c) = sin_cos_quarter_lanes(FRAC_PI_4 * (num / r));
+    // At the centre (`r` = 0) the point is the origin.
+    let centre = r.cmpeq(Vec4::ZERO);
+    let x = Vec4::select(centre, Vec4::ZERO, r * Vec4::select(swap, s, c));
+    let y = Vec4::select(centre, Vec4::ZERO, r * Vec4::select(swap, c, s));
+    (x, y)
+}
+
+/// `warp::sin_cos_quarter` lane by lane, term for term.
+#[inline(always)]
+fn sin_cos_quarter_lanes(x: Vec4) -> (Vec4, Vec4) {
+    let z = x * x;
+    let s = x + x * z * ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1);
+    let c = 1.0 - 0.5 * z + z * z * ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2);
+    (s, c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::{CameraRay, CameraSample};
+    use crate::sampler::hash_u32;
+    use aperture_scene::{Dof, Projection};
+    use glam::{Vec2, Vec3};
+
+    fn camera(radius: f32, ratio: f32) -> Camera {
+        let sc = aperture_scene::Camera {
+            name: "test".into(),
+            node: None,
+            world_from_camera: Affine3A::from_translation(Vec3::new(0.5, -1.0, 3.0))
+                * Affine3A::from_rotation_y(0.3)
+                * Affine3A::from_rotation_x(-0.7),
+            projection: Projection::Perspective {
+                yfov: 0.8,
+                aspect_ratio: None,
+            },
+            dof: Dof {
+                enabled: true,
+                aperture_radius: radius,
+                focus_distance: 4.0,
+                ratio,
+                ..Dof::default()
+            },
+        };
+        Camera::new(&sc, 37, 23)
+    }
+
+    /// A float in [0, 1) from a hash, with exact values (0, 0.5, the largest below 1) mixed in.
+    fn unit(x: &mut u32) -> f32 {
+        *x = hash_u32(*x);
+        match *x % 16 {
+            0 => 0.0,
+            1 => 0.5,
+            2 => 1.0 - f32::EPSILON / 2.0,
+            _ => (*x >> 8) as f32 / (1u32 << 24) as f32,
+        }
+    }
+
+    #[test]
+    fn lanes_are_the_scalar_rays_bit_for_bit() {
+        let bits = |r: Option<CameraRay>| {
+            r.map(|r| {
+                (
+                    r.origin.to_array().map(f32::to_bits),
+                    r.dir.to_array().map(f32::to_bits),
+                )
+            })
+        };
+        let mut x = 5u32;
+        for cam in [camera(0.0, 1.0), camera(0.1, 1.0), camera(0.3, 1.7)] {
+            let lanes_of = LensLanes::new(&cam).unwrap();
+            for _ in 0..400 {
+                let mut film = [[0.0; LANES]; 2];
+                let mut lens = [[0.0; LANES]; 2];
+                for l in 0..LANES {
+                    // Film positions over and past the image, and lens samples at the centre.
+                    film[0][l] = unit(&mut x) * 40.0 - 1.0;
+                    film[1][l] = unit(&mut x) * 25.0 - 1.0;
+                    lens[0][l] = unit(&mut x);
+                    lens[1][l] = unit(&mut x);
+                }
+                let got = lanes_of.rays(film, lens);
+                for l in 0..LANES {
+                    let want = cam.generate_ray(&CameraSample {
+                        p_film: Vec2::new(film[0][l], film[1][l]),
+                        p_lens: Vec2::new(lens[0][l], lens[1][l]),
+                    });
+                    let ray = got.made[l].then(|| CameraRay {
+                        origin: Vec3::new(got.origin[0][l], got.origin[1][l], got.origin[2][l]),
+                        dir: Vec3::new(got.dir[0][l], got.dir[1][l], got.dir[2][l]),
+                    });
+                    assert_eq!(
+                        bits(ray),
+                        bits(want),
+                        "film {film:?} lens {lens:?} lane {l}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn sine_and_cosine_lanes_are_the_scalar_ones() {
+        let mut x = 9u32;
+        for _ in 0..2000 {
+            let v: [f32; LANES] = std::array::from_fn(|_| (unit(&mut x) * 2.0 - 1.0) * FRAC_PI_4);
+            let (s, c) = sin_cos_quarter_lanes(Vec4::from_array(v));
+            for l in 0..LANES {
+                let (ws, wc) = crate::warp::sin_cos_quarter(v[l]);
+                assert_eq!(
+                    (s[l].to_bits(), c[l].to_bits()),
+                    (ws.to_bits(), wc.to_bits())
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_lanes_refuse_other_cameras() {
+        let mut cam = camera(0.1, 1.0);
+        cam.aperture = Aperture::Polygon {
+            radius: 0.1,
+            blades: 6,
+            rotation: 0.0,
+            ratio: 1.0,
+        };
+        assert!(LensLanes::new(&cam).is_none());
+        let mut cam = camera(0.1, 1.0);
+        cam.model = CameraModel::Orthographic {
+            half_x: 1.0,
+            half_y: 1.0,
+        };
+        assert!(LensLanes::new(&cam).is_none());
+    }
+}

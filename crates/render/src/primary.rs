@@ -1,0 +1,289 @@
+//! The primary samples of a render: for sample `i` of pixel `(x, y)`, its sample stream and
+//! camera ray, with what a render's samples and a pixel's consecutive samples share worked out
+//! once (the camera's constants, a row's and a pixel's seed and scramble hashes, the
+//! bit-reversed index), and a thin-lens camera's rays made four at a time ([`LensLanes`]).
+//! The values are exactly those of drawing each sample alone: a pure function of (pixel,
+//! index, dimension, seed).
+
+use crate::camera::{Camera, CameraRay, CameraSample};
+use crate::camera_lanes::{LensLanes, LANES};
+use crate::filter::Filter;
+use crate::sampler::{pixel_seed_in_row, row_seed, PixelRun, SampleStream, SamplerKind};
+use glam::{Vec2, Vec3};
+
+/// Makes the primary samples of a render, pixel by pixel; cheapest when a pixel's samples come
+/// one after another in index order, as tiles and adaptive rounds give them.
+pub(crate) struct PrimarySamples<'a> {
+    /// The camera of the one-at-a-time path (orthographic, polygonal apertures), copied in.
+    camera: Camera,
+    filter: &'a Filter,
+    seed: u32,
+    sample_offset: u32,
+    /// `sample_offset.reverse_bits()`.
+    offset_rev: u32,
+    /// The pixel of `run`, if any yet.
+    pixel: Option<(u32, u32)>,
+    /// The row of the last pixel, if any yet, and its [`row_seed`].
+    row: (Option<u32>, u32),
+    /// Its centre in raster coordinates.
+    centre: Vec2,
+    run: PixelRun,
+    /// The camera's rays made [`LANES`] at a time, when it is a kind the lanes cover.
+    lanes: Option<LensLanes>,
+}
+
+impl<'a> PrimarySamples<'a> {
+    /// The samples of sequence `kind` under `seed`, index `sample_offset + i` for sample `i`,
+    /// through `camera` and `filter`.
+    pub fn new(
+        camera: &Camera,
+        filter: &'a Filter,
+        kind: SamplerKind,
+        seed: u32,
+        sample_offset: u32,
+    ) -> Self {
+        Self {
+            camera: *camera,
+            lanes: LensLanes::new(camera),
+            filter,
+            seed,
+            sample_offset,
+            offset_rev: sample_offset.reverse_bits(),
+            pixel: None,
+            row: (None, 0),
+            centre: Vec2::ZERO,
+            run: PixelRun::new(kind, 0, 0),
+        }
+    }
+
+    /// Takes up to `n` items `(key, x, y, i)` from `items`: appends each one's key and whether
+    /// its camera makes a ray to `run`, and its ray (origin, unit direction) and stream to
+    /// `starts` when it does.
+    pub fn fill<K: Copy>(
+        &mut self,
+        items: &mut impl Iterator<Item = (K, u32, u32, u32)>,
+        n: usize,
+        run: &mut Vec<(K, bool)>,
+        starts: &mut Vec<(Vec3, Vec3, SampleStream)>,
+    ) {
+        let Some(lanes) = self.lanes else {
+            for (key, x, y, i) in items.take(n) {
+                let (stream, ray) = self.sample(x, y, i);
+                if let Some(r) = &ray {
+                    starts.push((r.origin, r.dir, stream));
+                }
+                run.push((key, ray.is_some()));
+            }
+            return;
+        };
+        // The usual camera: the rays of `LANES` samples at a time.
+        let mut left = n;
+        loop {
+            let (mut film, mut lens) = ([[0.0; LANES]; 2], [[0.0; LANES]; 2]);
+            let mut taken: [Option<(K, SampleStream)>; LANES] = [None; LANES];
+            for (l, slot) in taken[..left.min(LANES)].iter_mut().enumerate() {
+                let Some((key, x, y, i)) = items.next() else {
+                    break;
+                };
+                let (stream, p_film, p_lens) = self.numbers(x, y, i);
+                (film[0][l], film[1][l]) = (p_film.x, p_film.y);
+                (lens[0][l], lens[1][l]) = (p_lens.x, p_lens.y);
+                *slot = Some((key, stream));
+            }
+            left = left.saturating_sub(LANES);
+            let rays = lanes.rays(film, lens);
+            let (o, d) = (&rays.origin, &rays.dir);
+            for (l, slot) in taken.iter().enumerate() {
+                // An empty lane: the items or the `n` ran out.
+                let &Some((key, stream)) = slot else {
+                    return;
+                };
+                if rays.made[l] {
+                    let origin = Vec3::new(o[0][l], o[1][l], o[2][l]);
+                    starts.push((origin, Vec3::new(d[0][l], d[1][l], d[2][l]), stream));
+                }
+                run.push((key, rays.made[l]));
+            }
+            if left == 0 {
+                return;
+            }
+        }
+    }
+
+    /// Sample `i` of pixel `(x, y)`: its stream and its camera ray (`None` when the camera
+    /// makes none).
+    #[inline(always)]
+    pub fn sample(&mut self, x: u32, y: u32, i: u32) -> (SampleStream, Option<CameraRay>) {
+        let (stream, p_film, p_lens) = self.numbers(x, y, i);
+        let sample = CameraSample { p_film, p_lens };
+        (stream, self.camera.generate_ray(&sample))
+    }
+
+    /// Sample `i` of pixel `(x, y)`: its stream and the numbers it gives the camera.
+    #[inline(always)]
+    fn numbers(&mut self, x: u32, y: u32, i: u32) -> (SampleStream, Vec2, Vec2) {
+        let index = self.sample_offset.wrapping_add(i);
+        if self.pixel == Some((x, y)) {
+            self.run.seek(index);
+        } else {
+            self.pixel = Some((x, y));
+            self.centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            if self.row.0 != Some(y) {
+                self.row = (Some(y), row_seed(y, self.seed));
+            }
+            let seed = pixel_seed_in_row(x, self.row.1);
+            // A pixel's first sample is almost always its first index: reversed once.
+            let rev = if index == self.sample_offset {
+                self.offset_rev
+            } else {
+                index.reverse_bits()
+            };
+            self.run.restart(seed, index, rev);
+        }
+        // The camera's 4-D point: pixel pair, lens pair (which a pinhole camera ignores).
+        let (stream, c) = self.run.next();
+        let p_lens = Vec2::new(c[2], c[3]);
+        let offset = self.filter.sample([c[0], c[1]]);
+        let p_film = Vec2::new(self.centre.x + offset.x, self.centre.y + offset.y);
+        (stream, p_film, p_lens)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Aperture;
+    use crate::filter::FilterKind;
+    use aperture_scene::{Dof, Projection};
+    use glam::Affine3A;
+
+    /// The sample as drawn alone: a fresh stream, its camera (or pixel) pair, the filter, the
+    /// camera.
+    fn alone(
+        camera: &Camera,
+        filter: &Filter,
+        kind: SamplerKind,
+        (x, y, index, seed): (u32, u32, u32, u32),
+    ) -> (SampleStream, Option<CameraRay>) {
+        let stream = SampleStream::new(kind, x, y, index, seed);
+        let (u_film, p_lens) = if camera.aperture == Aperture::Pinhole {
+            (stream.pixel(), Vec2::ZERO)
+        } else {
+            let c = stream.camera();
+            ([c[0], c[1]], Vec2::new(c[2], c[3]))
+        };
+        let offset = filter.sample(u_film);
+        let sample = CameraSample {
+            p_film: Vec2::new(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y),
+            p_lens,
+        };
+        (stream, camera.generate_ray(&sample))
+    }
+
+    fn cameras() -> Vec<Camera> {
+        let mut out = Vec::new();
+        for ortho in [false, true] {
+            for (radius, blades) in [(0.0, 0), (0.1, 0), (0.2, 6)] {
+                let sc = aperture_scene::Camera {
+                    name: "test".into(),
+                    node: None,
+                    world_from_camera: Affine3A::from_translation(Vec3::new(0.5, -1.0, 3.0))
+                        * Affine3A::from_rotation_y(0.3),
+                    projection: if ortho {
+                        Projection::Orthographic {
+                            xmag: 2.0,
+                            ymag: 1.5,
+                        }
+                    } else {
+                        Projection::Perspective {
+                            yfov: 0.8,
+                            aspect_ratio: None,
+                        }
+                    },
+                    dof: Dof {
+                        enabled: true,
+                        aperture_radius: radius,
+                        focus_distance: 4.0,
+                        blades,
+                        rotation: 0.2,
+                        ratio: 1.3,
+                        ..Dof::default()
+                    },
+                };
+                out.push(Camera::new(&sc, 24, 16));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn samples_are_those_drawn_alone() {
+        let bits = |(s, r): (SampleStream, Option<CameraRay>)| {
+            let r = r.map(|r| (r.origin.to_array(), r.dir.to_array()));
+            (
+                s.camera().map(f32::to_bits),
+                s.bounce(1).bsdf.map(f32::to_bits),
+                r.map(|(o, d)| (o.map(f32::to_bits), d.map(f32::to_bits))),
+            )
+        };
+        // Runs of consecutive samples, a pixel revisited, samples skipped and repeated.
+        let mut items: Vec<(u32, u32, u32)> = (0..3)
+            .flat_map(|y| (0..4).flat_map(move |x| (0..5).map(move |i| (x, y, i))))
+            .collect();
+        items.extend([
+            (2, 1, 9),
+            (2, 1, 3),
+            (2, 1, 3),
+            (2, 1, 4),
+            (0, 0, 0),
+            (23, 15, 7),
+        ]);
+        for camera in cameras() {
+            for filter in [FilterKind::Box, FilterKind::BlackmanHarris] {
+                let filter = Filter::new(filter);
+                for kind in [SamplerKind::Sobol, SamplerKind::Random] {
+                    for (seed, offset) in [(0, 0), (77, 64)] {
+                        let mut primary = PrimarySamples::new(&camera, &filter, kind, seed, offset);
+                        let want: Vec<_> = items
+                            .iter()
+                            .map(|&(x, y, i)| {
+                                alone(&camera, &filter, kind, (x, y, offset + i, seed))
+                            })
+                            .collect();
+                        for (&(x, y, i), want) in items.iter().zip(&want) {
+                            let got = primary.sample(x, y, i);
+                            assert_eq!(bits(got), bits(*want), "({x}, {y}) sample {i}");
+                        }
+                        // `fill`, by runs of 7 (the lanes' batches cut anywhere): the same
+                        // samples, those without a ray left out of `starts`.
+                        let mut primary = PrimarySamples::new(&camera, &filter, kind, seed, offset);
+                        let mut it = items.iter().enumerate().map(|(k, &(x, y, i))| (k, x, y, i));
+                        let (mut run, mut starts) = (Vec::new(), Vec::new());
+                        loop {
+                            let (had, traced) = (run.len(), starts.len());
+                            primary.fill(&mut it, 7, &mut run, &mut starts);
+                            assert!(
+                                run.len() - had <= 7 && starts.len() - traced <= run.len() - had
+                            );
+                            if run.len() == had {
+                                break;
+                            }
+                        }
+                        let mut traced = starts.iter();
+                        assert_eq!(run.len(), items.len());
+                        for (&(k, made), want) in run.iter().zip(&want) {
+                            let got = made
+                                .then(|| traced.next())
+                                .flatten()
+                                .map(|&(o, d, s)| (s, Some(CameraRay { origin: o, dir: d })));
+                            let (x, y, i) = items[k];
+                            let got = got.unwrap_or((want.0, None));
+                            assert_eq!(bits(got), bits(*want), "fill: ({x}, {y}) sample {i}");
+                        }
+                        assert!(traced.next().is_none());
+                    }
+                }
+            }
+        }
+    }
+}
