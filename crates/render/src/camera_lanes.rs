@@ -4,8 +4,8 @@
 //! ray has the same bits; on `Vec4`s, whose operations are SIMD instructions.
 
 use crate::camera::{Aperture, Camera, CameraModel};
+use crate::warp::concentric_disc_lanes;
 use glam::{Affine3A, Vec4};
-use std::f32::consts::FRAC_PI_4;
 
 /// Samples whose rays are made together.
 pub(crate) const LANES: usize = 4;
@@ -113,31 +113,6 @@ fn normalize(v: [Vec4; 3]) -> [Vec4; 3] {
     v.map(|c| c * inv)
 }
 
-/// `warp::concentric_disc` lane by lane, its branches as selects.
-#[inline(always)]
-fn concentric_disc_lanes(u: [Vec4; 2]) -> (Vec4, Vec4) {
-    let ox = 2.0 * u[0] - Vec4::ONE;
-    let oy = 2.0 * u[1] - Vec4::ONE;
-    let swap = ox.abs().cmple(oy.abs());
-    let num = Vec4::select(swap, ox, oy);
-    let r = Vec4::select(swap, oy, ox);
-    let (s, c) = sin_cos_quarter_lanes(FRAC_PI_4 * (num / r));
-    // At the centre (`r` = 0) the point is the origin.
-    let centre = r.cmpeq(Vec4::ZERO);
-    let x = Vec4::select(centre, Vec4::ZERO, r * Vec4::select(swap, s, c));
-    let y = Vec4::select(centre, Vec4::ZERO, r * Vec4::select(swap, c, s));
-    (x, y)
-}
-
-/// `warp::sin_cos_quarter` lane by lane, term for term.
-#[inline(always)]
-fn sin_cos_quarter_lanes(x: Vec4) -> (Vec4, Vec4) {
-    let z = x * x;
-    let s = x + x * z * ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1);
-    let c = 1.0 - 0.5 * z + z * z * ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2);
-    (s, c)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -218,22 +193,6 @@ mod tests {
                         "film {film:?} lens {lens:?} lane {l}"
                     );
                 }
-            }
-        }
-    }
-
-    #[test]
-    fn sine_and_cosine_lanes_are_the_scalar_ones() {
-        let mut x = 9u32;
-        for _ in 0..2000 {
-            let v: [f32; LANES] = std::array::from_fn(|_| (unit(&mut x) * 2.0 - 1.0) * FRAC_PI_4);
-            let (s, c) = sin_cos_quarter_lanes(Vec4::from_array(v));
-            for l in 0..LANES {
-                let (ws, wc) = crate::warp::sin_cos_quarter(v[l]);
-                assert_eq!(
-                    (s[l].to_bits(), c[l].to_bits()),
-                    (ws.to_bits(), wc.to_bits())
-                );
             }
         }
     }

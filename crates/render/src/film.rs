@@ -276,8 +276,9 @@ impl Accum {
         true
     }
 
-    /// [`Accum::add`] for a layout that records nothing but radiance (with another, the
-    /// passes miss the sample): inlined into the per-sample loop, without the layout's checks.
+    /// [`Accum::add`] for a layout that records nothing but radiance ([`AovLayout::records`]
+    /// false; with one that does, the passes would miss the sample): inlined into the
+    /// per-sample loop, without the layout's checks.
     #[inline]
     pub fn add_radiance(&mut self, k: usize, l: Vec3, hit: bool) -> bool {
         self.sums.get_mut(k).is_some_and(|s| s.add(l, hit))

@@ -3,7 +3,7 @@
 //! discrete distribution (the alias table of lights and environment texels), and the power
 //! heuristic that weighs two strategies' samples.
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use std::f32::consts::{FRAC_PI_4, PI, TAU};
 
 /// Shirley–Chiu concentric mapping of the unit square onto the unit disc: continuous and
@@ -32,13 +32,46 @@ pub fn concentric_disc(u: Vec2) -> Vec2 {
 }
 
 /// `(sin x, cos x)` for `|x| ≤ π/4`: Cephes' single-precision minimax kernels (within about
-/// 1 ulp there), without the range reduction and branches of a general `sin_cos`.
+/// 1 ulp there), without the range reduction and branches of a general `sin_cos`. One macro
+/// for the scalar and the lane version, so that both evaluate the same terms in the same order.
+macro_rules! sin_cos_quarter_terms {
+    ($x:expr) => {{
+        let x = $x;
+        let z = x * x;
+        let s = x + x * z * ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1);
+        let c =
+            1.0 - 0.5 * z + z * z * ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2);
+        (s, c)
+    }};
+}
+
+/// `(sin x, cos x)` for `|x| ≤ π/4` (`sin_cos_quarter_terms`).
 #[inline]
 pub(crate) fn sin_cos_quarter(x: f32) -> (f32, f32) {
-    let z = x * x;
-    let s = x + x * z * ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1);
-    let c = 1.0 - 0.5 * z + z * z * ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2);
-    (s, c)
+    sin_cos_quarter_terms!(x)
+}
+
+/// [`sin_cos_quarter`] in four lanes, term for term (the same bits per lane).
+#[inline(always)]
+pub(crate) fn sin_cos_quarter_lanes(x: Vec4) -> (Vec4, Vec4) {
+    sin_cos_quarter_terms!(x)
+}
+
+/// [`concentric_disc`] in four lanes (`u` as its x and y lanes), its branches as selects: the
+/// same bits per lane. The camera's lanes (`camera_lanes.rs`) map four lens samples at once.
+#[inline(always)]
+pub(crate) fn concentric_disc_lanes(u: [Vec4; 2]) -> (Vec4, Vec4) {
+    let ox = 2.0 * u[0] - Vec4::ONE;
+    let oy = 2.0 * u[1] - Vec4::ONE;
+    let swap = ox.abs().cmple(oy.abs());
+    let num = Vec4::select(swap, ox, oy);
+    let r = Vec4::select(swap, oy, ox);
+    let (s, c) = sin_cos_quarter_lanes(FRAC_PI_4 * (num / r));
+    // At the centre (`r` = 0) the point is the origin.
+    let centre = r.cmpeq(Vec4::ZERO);
+    let x = Vec4::select(centre, Vec4::ZERO, r * Vec4::select(swap, s, c));
+    let y = Vec4::select(centre, Vec4::ZERO, r * Vec4::select(swap, c, s));
+    (x, y)
 }
 
 /// The `k`-th corner of a regular `n`-gon inscribed in the unit circle, placed as Cycles places
@@ -155,6 +188,42 @@ pub(crate) fn power_heuristic(a: f32, b: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The lanes give the scalar mapping's bits, lane by lane, over a grid with the centre,
+    /// the wedge borders (|x| = |y|) and the square's edges on it.
+    #[test]
+    fn concentric_disc_lanes_are_the_scalar_mapping() {
+        let n = 64;
+        let values: Vec<f32> = (0..=n)
+            .map(|i| i as f32 / n as f32)
+            .map(|v| v.min(1.0 - f32::EPSILON / 2.0))
+            .collect();
+        let points: Vec<Vec2> = values
+            .iter()
+            .flat_map(|&x| values.iter().map(move |&y| Vec2::new(x, y)))
+            .collect();
+        assert!(
+            points.contains(&Vec2::splat(0.5)),
+            "the centre is on the grid"
+        );
+        for quad in points.chunks(4) {
+            let lane = |k: usize| quad.get(k).copied().unwrap_or(quad[0]);
+            let u = [
+                Vec4::new(lane(0).x, lane(1).x, lane(2).x, lane(3).x),
+                Vec4::new(lane(0).y, lane(1).y, lane(2).y, lane(3).y),
+            ];
+            let (x, y) = concentric_disc_lanes(u);
+            for k in 0..4 {
+                let want = concentric_disc(lane(k));
+                assert_eq!(
+                    (x[k].to_bits(), y[k].to_bits()),
+                    (want.x.to_bits(), want.y.to_bits()),
+                    "{}",
+                    lane(k)
+                );
+            }
+        }
+    }
 
     fn grid(n: u32) -> impl Iterator<Item = Vec2> {
         (0..n * n).map(move |i| {
