@@ -277,30 +277,37 @@ pub fn default_height(cam: &aperture_scene::Camera, width: u32) -> u32 {
     ((width as f32 / aspect).round() as u32).max(1)
 }
 
+/// The scene camera of the render crate's camera tests: perspective (`yfov` 0.8), placed off
+/// the axes and turned, with depth of field `dof`.
+#[cfg(test)]
+pub(crate) fn test_scene_camera(dof: aperture_scene::Dof) -> aperture_scene::Camera {
+    aperture_scene::Camera {
+        name: "test".into(),
+        node: None,
+        world_from_camera: Affine3A::from_translation(Vec3::new(0.5, -1.0, 3.0))
+            * Affine3A::from_rotation_y(0.3),
+        projection: Projection::Perspective {
+            yfov: 0.8,
+            aspect_ratio: None,
+        },
+        dof,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use aperture_scene::Dof;
 
     fn scene_camera(radius: f32, blades: u32, focus: f32) -> aperture_scene::Camera {
-        aperture_scene::Camera {
-            name: "test".into(),
-            node: None,
-            world_from_camera: Affine3A::from_translation(Vec3::new(0.5, -1.0, 3.0))
-                * Affine3A::from_rotation_y(0.3),
-            projection: Projection::Perspective {
-                yfov: 0.8,
-                aspect_ratio: None,
-            },
-            dof: Dof {
-                enabled: true,
-                aperture_radius: radius,
-                focus_distance: focus,
-                blades,
-                rotation: 0.2,
-                ..Dof::default()
-            },
-        }
+        test_scene_camera(Dof {
+            enabled: true,
+            aperture_radius: radius,
+            focus_distance: focus,
+            blades,
+            rotation: 0.2,
+            ..Dof::default()
+        })
     }
 
     fn grid(n: u32) -> impl Iterator<Item = Vec2> {

@@ -118,28 +118,19 @@ mod tests {
     use super::*;
     use crate::camera::{CameraRay, CameraSample};
     use crate::sampler::hash_u32;
-    use aperture_scene::{Dof, Projection};
+    use aperture_scene::Dof;
     use glam::{Vec2, Vec3};
 
     fn camera(radius: f32, ratio: f32) -> Camera {
-        let sc = aperture_scene::Camera {
-            name: "test".into(),
-            node: None,
-            world_from_camera: Affine3A::from_translation(Vec3::new(0.5, -1.0, 3.0))
-                * Affine3A::from_rotation_y(0.3)
-                * Affine3A::from_rotation_x(-0.7),
-            projection: Projection::Perspective {
-                yfov: 0.8,
-                aspect_ratio: None,
-            },
-            dof: Dof {
-                enabled: true,
-                aperture_radius: radius,
-                focus_distance: 4.0,
-                ratio,
-                ..Dof::default()
-            },
-        };
+        let mut sc = crate::camera::test_scene_camera(Dof {
+            enabled: true,
+            aperture_radius: radius,
+            focus_distance: 4.0,
+            ratio,
+            ..Dof::default()
+        });
+        // Tilted as well, so that every matrix entry takes part.
+        sc.world_from_camera *= Affine3A::from_rotation_x(-0.7);
         Camera::new(&sc, 37, 23)
     }
 

@@ -149,67 +149,56 @@ impl<'a> PrimarySamples<'a> {
     }
 }
 
+/// Sample `(x, y, index)` under `seed` as drawn alone, the way every sample was drawn before
+/// [`PrimarySamples`]: a fresh stream, its camera pair (a pinhole: its pixel pair), the
+/// filter, the camera. The reference of this module's tests and of the renderer's.
+#[cfg(test)]
+pub(crate) fn drawn_alone(
+    camera: &Camera,
+    filter: &Filter,
+    kind: SamplerKind,
+    (x, y, index, seed): (u32, u32, u32, u32),
+) -> (SampleStream, Option<CameraRay>) {
+    let stream = SampleStream::new(kind, x, y, index, seed);
+    let (u_film, p_lens) = if camera.aperture == crate::camera::Aperture::Pinhole {
+        (stream.pixel(), Vec2::ZERO)
+    } else {
+        let c = stream.camera();
+        ([c[0], c[1]], Vec2::new(c[2], c[3]))
+    };
+    let offset = filter.sample(u_film);
+    let sample = CameraSample {
+        p_film: Vec2::new(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y),
+        p_lens,
+    };
+    (stream, camera.generate_ray(&sample))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::Aperture;
     use crate::filter::FilterKind;
     use aperture_scene::{Dof, Projection};
-    use glam::Affine3A;
-
-    /// The sample as drawn alone: a fresh stream, its camera (or pixel) pair, the filter, the
-    /// camera.
-    fn alone(
-        camera: &Camera,
-        filter: &Filter,
-        kind: SamplerKind,
-        (x, y, index, seed): (u32, u32, u32, u32),
-    ) -> (SampleStream, Option<CameraRay>) {
-        let stream = SampleStream::new(kind, x, y, index, seed);
-        let (u_film, p_lens) = if camera.aperture == Aperture::Pinhole {
-            (stream.pixel(), Vec2::ZERO)
-        } else {
-            let c = stream.camera();
-            ([c[0], c[1]], Vec2::new(c[2], c[3]))
-        };
-        let offset = filter.sample(u_film);
-        let sample = CameraSample {
-            p_film: Vec2::new(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y),
-            p_lens,
-        };
-        (stream, camera.generate_ray(&sample))
-    }
 
     fn cameras() -> Vec<Camera> {
         let mut out = Vec::new();
         for ortho in [false, true] {
             for (radius, blades) in [(0.0, 0), (0.1, 0), (0.2, 6)] {
-                let sc = aperture_scene::Camera {
-                    name: "test".into(),
-                    node: None,
-                    world_from_camera: Affine3A::from_translation(Vec3::new(0.5, -1.0, 3.0))
-                        * Affine3A::from_rotation_y(0.3),
-                    projection: if ortho {
-                        Projection::Orthographic {
-                            xmag: 2.0,
-                            ymag: 1.5,
-                        }
-                    } else {
-                        Projection::Perspective {
-                            yfov: 0.8,
-                            aspect_ratio: None,
-                        }
-                    },
-                    dof: Dof {
-                        enabled: true,
-                        aperture_radius: radius,
-                        focus_distance: 4.0,
-                        blades,
-                        rotation: 0.2,
-                        ratio: 1.3,
-                        ..Dof::default()
-                    },
-                };
+                let mut sc = crate::camera::test_scene_camera(Dof {
+                    enabled: true,
+                    aperture_radius: radius,
+                    focus_distance: 4.0,
+                    blades,
+                    rotation: 0.2,
+                    ratio: 1.3,
+                    ..Dof::default()
+                });
+                if ortho {
+                    sc.projection = Projection::Orthographic {
+                        xmag: 2.0,
+                        ymag: 1.5,
+                    };
+                }
                 out.push(Camera::new(&sc, 24, 16));
             }
         }
@@ -247,7 +236,7 @@ mod tests {
                         let want: Vec<_> = items
                             .iter()
                             .map(|&(x, y, i)| {
-                                alone(&camera, &filter, kind, (x, y, offset + i, seed))
+                                drawn_alone(&camera, &filter, kind, (x, y, offset + i, seed))
                             })
                             .collect();
                         for (&(x, y, i), want) in items.iter().zip(&want) {

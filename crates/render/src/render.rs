@@ -539,22 +539,9 @@ impl Job<'_> {
         crate::sampler::SampleStream,
         Option<crate::camera::CameraRay>,
     ) {
-        let index = self.opts.sample_offset + i;
-        let stream =
-            crate::sampler::SampleStream::new(self.opts.sampler, x, y, index, self.opts.seed);
-        // A pinhole draws only the pixel pair; a lens draws the 4-D point.
-        let (u_film, p_lens) = if self.camera.aperture == crate::camera::Aperture::Pinhole {
-            (stream.pixel(), Vec2::ZERO)
-        } else {
-            let c = stream.camera();
-            ([c[0], c[1]], Vec2::new(c[2], c[3]))
-        };
-        let offset = self.filter.sample(u_film);
-        let sample = crate::camera::CameraSample {
-            p_film: Vec2::new(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y),
-            p_lens,
-        };
-        (stream, self.camera.generate_ray(&sample))
+        let o = self.opts;
+        let at = (x, y, o.sample_offset + i, o.seed);
+        crate::primary::drawn_alone(self.camera, self.filter, o.sampler, at)
     }
 
     /// Calls `f(key, result, record)` for every `(key, x, y, i)` of `items`, in order, where
