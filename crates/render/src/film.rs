@@ -10,8 +10,8 @@ use crate::cryptomatte::CryptoPixel;
 use crate::passes::{Pass, PassSet};
 use glam::Vec3;
 
-/// Sums of one pixel.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+/// Sums of one pixel. `Zeroable`: all zeros is the empty sum (`Default`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::Zeroable)]
 pub struct PixelSum {
     /// Sum of radiance.
     pub rgb: [f64; 3],
@@ -207,10 +207,18 @@ pub(crate) struct Accum {
 }
 
 impl Accum {
-    /// Empty accumulators for `n` pixels.
+    /// Empty accumulators for `n` pixels. The sums come as zeroed memory from the allocator
+    /// (fresh pages are zero already): a film's 3 MB of sums written zero by `resize` took
+    /// the first of its render's milliseconds on one thread before any tile could start.
     pub fn new(n: usize, layout: AovLayout) -> Self {
-        let mut a = Self::default();
-        a.reset(n, layout);
+        let mut a = Self {
+            layout,
+            sums: bytemuck::zeroed_vec(n),
+            aov: vec![0.0; n * layout.stride],
+            ..Self::default()
+        };
+        // The Cryptomatte sums (rarely asked for) as `reset` makes them.
+        a.reset_crypto(n);
         a
     }
 
@@ -222,6 +230,12 @@ impl Accum {
         self.sums.resize(n, PixelSum::default());
         self.aov.clear();
         self.aov.resize(n * layout.stride, 0.0);
+        self.reset_crypto(n);
+    }
+
+    /// Empty Cryptomatte sums for `n` pixels of this layout.
+    fn reset_crypto(&mut self, n: usize) {
+        let layout = self.layout;
         self.crypto_object.clear();
         self.crypto_object.resize(
             if layout.crypto_object { n } else { 0 },
