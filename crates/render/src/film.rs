@@ -481,6 +481,25 @@ mod tests {
     }
 
     #[test]
+    fn new_accumulators_are_reset_ones() {
+        // `new` takes zeroed memory, `reset` writes defaults: the same empty sums either way,
+        // for every layout (a used `reset` target first, so its old contents must go).
+        for passes in ["", "Normal", "Normal,Emission,CryptoObject,CryptoMaterial"] {
+            let layout = AovLayout::new(PassSet::parse(passes).unwrap());
+            for n in [0, 1, 3, 1000] {
+                let mut reset = Accum::new(7, AovLayout::new(PassSet::parse("All").unwrap()));
+                reset.sums.iter_mut().for_each(|s| _ = s.add(Vec3::ONE, true));
+                reset.aov.iter_mut().for_each(|v| *v = 1.0);
+                reset.reset(n, layout);
+                let new = Accum::new(n, layout);
+                assert_eq!(new, reset, "passes {passes:?}, {n} pixels");
+                assert!(new.sums.iter().all(|s| *s == PixelSum::default()));
+                assert_eq!(new.aov.len(), n * layout.stride);
+            }
+        }
+    }
+
+    #[test]
     fn tiles_land_where_they_belong() {
         let mut f = Film::new(4, 3);
         let mut tile = Accum::new(4, AovLayout::default());
