@@ -29,18 +29,19 @@ pub(super) fn render_adaptive(
     let tiles = tiles_of(region);
     let mut sums = RegionSums::new(region, job.layout);
     let mut active = vec![true; region.pixels()];
+    // Each tile's buffers, kept from round to round: the region's sums are read during a round
+    // and written only after it, so every tile's update is held until then anyway.
+    let mut updates: Vec<AdaptiveTile> = tiles.iter().map(|_| AdaptiveTile::default()).collect();
     let total = tiles.len() * rounds.len();
     let done = AtomicUsize::new(0);
     for (r, &target) in rounds.iter().enumerate() {
-        let updates: Vec<AdaptiveTile> = tiles
-            .par_iter()
+        // One job per tile, as in `render_uniform`.
+        (tiles.par_iter().zip(&mut updates))
             .with_max_len(1)
-            .map(|&tile| {
-                let t = AdaptiveTile::round(job, &sums, &active, tile, target);
+            .for_each(|(&tile, t)| {
+                t.run(job, &sums, &active, tile, target);
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
-                t
-            })
-            .collect();
+            });
         for t in &updates {
             sums.apply(t);
         }
@@ -119,7 +120,9 @@ impl RegionSums {
     }
 }
 
-/// The active pixels of one tile during an adaptive round, with their running sums.
+/// The active pixels of one tile during an adaptive round, with their running sums. Kept from
+/// round to round for its allocations: [`AdaptiveTile::run`] overwrites all it holds.
+#[derive(Default)]
 struct AdaptiveTile {
     /// Indices into the region.
     pixels: Vec<usize>,
@@ -129,59 +132,70 @@ struct AdaptiveTile {
     dropped: Vec<u64>,
     /// Samples each pixel took this round (all it was due, unless the render was cancelled).
     taken: Vec<u32>,
+    /// This round's samples as `(k, x, y, i)`: sample `i` of pixel `(x, y)`, `pixels[k]`.
+    items: Vec<(usize, u32, u32, u32)>,
 }
 
 impl AdaptiveTile {
     /// One round of the tile `(x0, y0, tw, th)` of the region: its active pixels, from their
     /// sums so far, up to `target` samples each.
-    fn round(
+    fn run(
+        &mut self,
         job: &Job<'_>,
         sums: &RegionSums,
         active: &[bool],
         (x0, y0, tw, th): (u32, u32, u32, u32),
         target: u32,
-    ) -> Self {
+    ) {
         let region = sums.region;
         let w = region.width as usize;
-        let pixels: Vec<usize> = (y0..y0 + th)
-            .flat_map(|y| (x0..x0 + tw).map(move |x| y as usize * w + x as usize))
-            .filter(|&i| active[i])
-            .collect();
-        let mut t = AdaptiveTile {
-            acc: Accum::new(pixels.len(), job.layout),
-            sq: pixels.iter().map(|&i| sums.sq[i]).collect(),
-            dropped: vec![0; pixels.len()],
-            taken: vec![0; pixels.len()],
-            pixels,
-        };
-        for (k, &i) in t.pixels.iter().enumerate() {
-            t.acc.copy_pixel(k, &sums.acc, i);
+        self.pixels.clear();
+        self.pixels.extend(
+            (y0..y0 + th)
+                .flat_map(|y| (x0..x0 + tw).map(move |x| y as usize * w + x as usize))
+                .filter(|&i| active[i]),
+        );
+        let n = self.pixels.len();
+        self.acc.reset(n, job.layout);
+        for (k, &i) in self.pixels.iter().enumerate() {
+            self.acc.copy_pixel(k, &sums.acc, i);
         }
-        let items: Vec<(usize, u32, u32, u32)> = t
-            .pixels
-            .iter()
-            .enumerate()
-            .flat_map(|(k, &i)| {
+        self.sq.clear();
+        self.sq.extend(self.pixels.iter().map(|&i| sums.sq[i]));
+        self.dropped.clear();
+        self.dropped.resize(n, 0);
+        self.taken.clear();
+        self.taken.resize(n, 0);
+        self.items.clear();
+        self.items
+            .extend(self.pixels.iter().enumerate().flat_map(|(k, &i)| {
                 let (x, y) = (region.x0 + (i % w) as u32, region.y0 + (i / w) as u32);
                 (sums.taken[i]..target).map(move |s| (k, x, y, s))
-            })
-            .collect();
+            }));
+        let Self {
+            acc,
+            sq,
+            dropped,
+            taken,
+            items,
+            ..
+        } = self;
         let mut add = |k: usize, result: Option<(Vec3, bool)>, rec: &SampleAov| {
-            t.taken[k] += 1;
+            taken[k] += 1;
             match result {
-                Some((l, hit)) if t.acc.add(k, l, hit, rec, &job.ids) => {
-                    for (s, v) in t.sq[k].iter_mut().zip(l.to_array()) {
+                Some((l, hit)) if acc.add(k, l, hit, rec, &job.ids) => {
+                    for (s, v) in sq[k].iter_mut().zip(l.to_array()) {
                         *s += f64::from(v) * f64::from(v);
                     }
                 }
-                _ => t.dropped[k] += 1,
+                _ => dropped[k] += 1,
             }
         };
+        let items = items.iter().copied();
         if job.layout.records() {
             job.samples::<_, true>(items, &mut add);
         } else {
             job.samples::<_, false>(items, &mut add);
         }
-        t
     }
 }
