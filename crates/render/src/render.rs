@@ -1,6 +1,6 @@
-//! The render loop: fixed tiles rendered in parallel by rayon, merged in a fixed order. Every
-//! sample value is a pure function of (pixel, index, dimension, seed) and every pixel is owned
-//! by one tile, so the image is bit-identical for any thread count and any run.
+//! The render loop: fixed tiles rendered in parallel by rayon. Every sample value is a pure
+//! function of (pixel, index, dimension, seed) and every pixel is owned by one tile, so the
+//! image is bit-identical for any thread count and any run, whatever order the tiles finish in.
 //!
 //! Here: the options and their checks, the entry points, and what every render shares (its
 //! path tracer, the Cryptomatte IDs, the Depth and Position passes' centre rays). The pixels

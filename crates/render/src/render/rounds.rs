@@ -58,11 +58,14 @@ pub(super) fn render_adaptive(
 
 /// The running sums of every pixel of the region (the window and its apron) between rounds.
 struct RegionSums {
+    /// The window and its apron, in image pixels.
     region: Window,
     acc: Accum,
     /// Per channel, the sums of squared samples, for the error estimate.
     sq: Vec<[f64; 3]>,
+    /// Samples each pixel took so far.
     taken: Vec<u32>,
+    /// Of those, the ones dropped (no camera ray, or radiance not finite).
     dropped: Vec<u64>,
 }
 
@@ -89,8 +92,8 @@ impl RegionSums {
         }
     }
 
-    /// The pixels the next round samples: those not converged, or with a neighbour that is
-    /// not, and with samples left.
+    /// The pixels the next round samples: those not converged and their eight neighbours, if
+    /// they have samples left ([`adaptive::dilate`]).
     fn active(&self, a: &AdaptiveOptions, spp: u32) -> Vec<bool> {
         let converged: Vec<bool> = (0..self.taken.len())
             .map(|i| adaptive::pixel_error(&self.acc.sums[i], &self.sq[i]) < f64::from(a.threshold))
