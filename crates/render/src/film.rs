@@ -10,8 +10,8 @@ use crate::cryptomatte::CryptoPixel;
 use crate::passes::{Pass, PassSet};
 use glam::Vec3;
 
-/// Sums of one pixel. `Zeroable`: all zeros is the empty sum (`Default`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::Zeroable)]
+/// Sums of one pixel.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct PixelSum {
     /// Sum of radiance.
     pub rgb: [f64; 3],
@@ -207,18 +207,10 @@ pub(crate) struct Accum {
 }
 
 impl Accum {
-    /// Empty accumulators for `n` pixels. The sums come as zeroed memory from the allocator
-    /// (fresh pages are zero already): a film's 3 MB of sums written zero by `resize` took
-    /// the first of its render's milliseconds on one thread before any tile could start.
+    /// Empty accumulators for `n` pixels.
     pub fn new(n: usize, layout: AovLayout) -> Self {
-        let mut a = Self {
-            layout,
-            sums: bytemuck::zeroed_vec(n),
-            aov: vec![0.0; n * layout.stride],
-            ..Self::default()
-        };
-        // The Cryptomatte sums (rarely asked for) as `reset` makes them.
-        a.reset_crypto(n);
+        let mut a = Self::default();
+        a.reset(n, layout);
         a
     }
 
@@ -230,12 +222,6 @@ impl Accum {
         self.sums.resize(n, PixelSum::default());
         self.aov.clear();
         self.aov.resize(n * layout.stride, 0.0);
-        self.reset_crypto(n);
-    }
-
-    /// Empty Cryptomatte sums for `n` pixels of this layout.
-    fn reset_crypto(&mut self, n: usize) {
-        let layout = self.layout;
         self.crypto_object.clear();
         self.crypto_object.resize(
             if layout.crypto_object { n } else { 0 },
@@ -478,25 +464,6 @@ mod tests {
         assert!(!p.add(Vec3::new(0.0, f32::INFINITY, 0.0), false));
         assert!(p.add(Vec3::new(3.0, 2.0, 1.0), false));
         assert_eq!(p.resolve(), [2.0, 2.0, 2.0, 0.5]);
-    }
-
-    #[test]
-    fn new_accumulators_are_reset_ones() {
-        // `new` takes zeroed memory, `reset` writes defaults: the same empty sums either way,
-        // for every layout (a used `reset` target first, so its old contents must go).
-        for passes in ["", "Normal", "Normal,Emission,CryptoObject,CryptoMaterial"] {
-            let layout = AovLayout::new(PassSet::parse(passes).unwrap());
-            for n in [0, 1, 3, 1000] {
-                let mut reset = Accum::new(7, AovLayout::new(PassSet::parse("All").unwrap()));
-                reset.sums.iter_mut().for_each(|s| _ = s.add(Vec3::ONE, true));
-                reset.aov.iter_mut().for_each(|v| *v = 1.0);
-                reset.reset(n, layout);
-                let new = Accum::new(n, layout);
-                assert_eq!(new, reset, "passes {passes:?}, {n} pixels");
-                assert!(new.sums.iter().all(|s| *s == PixelSum::default()));
-                assert_eq!(new.aov.len(), n * layout.stride);
-            }
-        }
     }
 
     #[test]
