@@ -279,11 +279,7 @@ impl Integrator<'_> {
         } else {
             SurfaceKind::Opaque
         };
-        // An opaque surface (the common case) without the call: its answer is a constant.
-        let (interface, medium) = match kind {
-            SurfaceKind::Opaque => (Interface::Opaque, None),
-            _ => self.interface(kind, s.material, entering, stream, w),
-        };
+        let (interface, medium) = self.interface(kind, s.material, entering, stream, w);
         bsdf.prepare(&frame, wo_l, interface, self.energy_compensation);
         if AOV && (path.light_passes || path.features.pending()) {
             let albedos = bsdf.albedos(wo_l);
