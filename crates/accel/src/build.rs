@@ -2,22 +2,20 @@
 //! meshes drawn once, a top-level BVH over them, and, for animation, reusing the bottom-level
 //! BVHs of meshes that did not change since the previous frame.
 
+use crate::node::{layout::nodes_from_cwbvh, Node};
 use crate::{
     detect_avx2, Accel, AccelStats, Blas, BvhQuality, Entry, InstanceInput, MeshInput, Tri,
     FLATTENED,
 };
 use glam::{Affine3A, Vec3};
 use obvhs::{
-    aabb::Aabb,
-    bvh2::reinsertion::ReinsertionOptimizer,
-    cwbvh::{bvh2_to_cwbvh::bvh2_to_cwbvh, node::CwBvhNode},
-    ploc::PlocBuilder,
-    BvhBuildParams,
+    aabb::Aabb, bvh2::reinsertion::ReinsertionOptimizer, cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh,
+    ploc::PlocBuilder, BvhBuildParams,
 };
 use rayon::prelude::*;
 
-/// Depth (levels of nodes) of an obvhs CWBVH; children always follow their parent in `nodes`.
-fn cwbvh_depth(nodes: &[CwBvhNode]) -> usize {
+/// Depth (levels of nodes) of a tree; children always follow their parent in `nodes`.
+fn cwbvh_depth(nodes: &[Node]) -> usize {
     let mut depth = vec![0u32; nodes.len()];
     let mut max = 0u32;
     for i in 0..nodes.len() {
@@ -77,7 +75,7 @@ fn build_params(quality: BvhQuality) -> BvhBuildParams {
     p
 }
 
-fn build_cwbvh(aabbs: &[Aabb], quality: BvhQuality) -> (Vec<CwBvhNode>, Vec<u32>) {
+fn build_cwbvh(aabbs: &[Aabb], quality: BvhQuality) -> (Vec<Node>, Vec<u32>) {
     if aabbs.is_empty() {
         return (Vec::new(), Vec::new());
     }
@@ -91,7 +89,8 @@ fn build_cwbvh(aabbs: &[Aabb], quality: BvhQuality) -> (Vec<CwBvhNode>, Vec<u32>
     );
     ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
     let cw = bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf, true, false);
-    (cw.nodes, cw.primitive_indices)
+    let nodes = nodes_from_cwbvh(&cw.nodes, &cw.primitive_indices, aabbs);
+    (nodes, cw.primitive_indices)
 }
 
 /// Why a triangle is left out.
@@ -526,12 +525,12 @@ impl Accel {
             .blases
             .iter()
             .map(|b| {
-                b.nodes.len() * size_of::<CwBvhNode>()
+                b.nodes.len() * size_of::<Node>()
                     + b.tris.len() * size_of::<Tri>()
                     + b.tri_instance.len() * 4
             })
             .sum::<usize>()
-            + accel.tlas.len() * size_of::<CwBvhNode>()
+            + accel.tlas.len() * size_of::<Node>()
             + accel.entries.len() * size_of::<Entry>();
         stats.build_time = start.elapsed();
         accel.stats = stats;

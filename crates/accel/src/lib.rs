@@ -1,11 +1,12 @@
 //! Ray queries over triangle meshes placed by instances: closest hit and occlusion.
 //!
-//! - **Build**: obvhs (PLOC, reinsertion, conversion to its compressed 8-wide CWBVH). A mesh drawn
+//! - **Build**: obvhs (PLOC, reinsertion, conversion to its 8-wide CWBVH), whose nodes we store
+//!   with each child's exact box in floats (`node::layout`: Embree's BVH8 layout). A mesh drawn
 //!   by several instances gets one bottom-level BVH in object space, stored once; meshes drawn
 //!   once are flattened into one world-space BVH (and shared meshes too, in scenes drawing at
 //!   most [`FLATTEN_SHARED_LIMIT`] triangles); a top-level obvhs BVH over instance bounds
 //!   joins them. Triangles are stored in BVH order with their original index.
-//! - **Traversal** is ours (obvhs' node layout): the box test honours `tmin`/`tmax` and is
+//! - **Traversal** is ours: the box test honours `tmin`/`tmax` and is
 //!   widened by a bound on every rounding error involved, and the stack is sized from the
 //!   measured tree depth. Closest hits visit children nearest entry first and skip those a hit
 //!   has put beyond `tmax`; one-ray occlusion keeps obvhs' octant order. Rays enter instances
@@ -59,8 +60,8 @@ pub use types::{AccelStats, BvhQuality, Hit, InstanceInput, MeshInput, ParseBvhQ
 use walk::detect_avx2;
 pub use walk::BATCH_LANES;
 
+use crate::node::Node;
 use glam::{Affine3A, Vec3};
-use obvhs::cwbvh::node::CwBvhNode;
 
 /// A triangle in BVH order: its vertices exactly as given (shared vertices stay bitwise equal,
 /// which the watertight test relies on) and its index in the mesh's original `indices`.
@@ -74,7 +75,7 @@ struct Tri {
 /// A bottom-level BVH over one mesh (object space) or over all flattened meshes (world space).
 #[derive(Debug, Clone, Default)]
 struct Blas {
-    nodes: Vec<CwBvhNode>,
+    nodes: Vec<Node>,
     tris: Vec<Tri>,
     /// For the flattened BVH only: the instance of each triangle (BVH order). Empty otherwise.
     tri_instance: Vec<u32>,
@@ -109,7 +110,7 @@ pub struct Accel {
     blases: Vec<Blas>,
     /// In top-level BVH order.
     entries: Vec<Entry>,
-    tlas: Vec<CwBvhNode>,
+    tlas: Vec<Node>,
     tlas_depth: usize,
     /// Bounds of all instance bounds.
     tlas_bounds: (Vec3, Vec3),
@@ -117,9 +118,8 @@ pub struct Accel {
     /// Per input instance: a bound on the magnitudes met when moving its points between object
     /// and world space (`|T| + |M| max|p_obj|`), for [`Accel::spawn_point`].
     instance_magnitude: Vec<f32>,
-    /// Node tests take the 8-wide AVX2 + FMA path (detected at build time; the x86_64 baseline
-    /// is SSE2, 4 wide). Both are conservative and give identical hits; node masks may differ
-    /// where a fused slab distance rounds differently.
+    /// Node tests take the 8-wide AVX2 path (detected at build time; the x86_64 baseline is SSE2,
+    /// 4 wide). Both compute the same operations: the same node masks, the same hits.
     avx2: bool,
     stats: AccelStats,
     /// Per input mesh: its bottom-level BVH in `blases`, or `u32::MAX` (flattened, or not drawn).

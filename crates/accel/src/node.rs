@@ -1,23 +1,31 @@
-//! Conservative ray test against the eight quantised child boxes of an obvhs `CwBvhNode`.
+//! Our 8-wide node ([`Node`]: obvhs' CWBVH topology with each child's box in floats, built by
+//! [`layout`]) and the conservative ray test against its eight child boxes.
 //!
-//! obvhs' own test clamps the entry distance to a fixed `1e-4` instead of `ray.tmin` and does not
-//! account for rounding, so hits are lost at small scales. This one honours `[tmin, tmax]` and
-//! widens every slab by a bound on all rounding errors involved:
-//! - obvhs quantises child boxes as `floor((child.min - p) / e)`, where the subtraction is rounded:
-//!   the stored box can be short of the true one by one rounding of a value below `255 e`;
-//! - the slab distances are evaluated as `q * (e / d) + (p - o) / d` (about four roundings);
+//! The boxes are exact: a leaf's is the union of its primitives' boxes (a triangle's own `f32`
+//! coordinates; an instance's world bounds), an internal child's the union of its children's. (obvhs quantises them
+//! to 8 bits relative to the parent, which both widens them and costs a decode per node test.)
+//! The test honours `[tmin, tmax]` and widens every slab by a bound on all rounding errors
+//! involved:
+//! - a slab distance is `(o - b) * -inv`: one rounding in the subtraction, one in the product;
 //! - the triangle test itself accepts hits up to a few ulps of `|v - o|` outside the triangle,
 //!   in any axis (the shear mixes them), so the box must accept at least as much.
 //!
-//! All of these are below `K ε M` in space, where `M` bounds the largest coordinate of `|p - o|`
-//! plus the node's extent. `M` is taken once per ray and tree as the largest coordinate of
-//! `|corner - o|` over the tree's bounds plus three times its extent (so the slack costs nothing
-//! per node and stays tight when the scene sits far from the world origin), and each slab
-//! is widened by `K ε M / |d_axis|` in `t` (Ize 2013 scales `tmax` by `1 + 2γ` for the same
-//! purpose; an absolute bound also covers rays that start inside a box).
+//! All of these are below `K ε M` in space, where `M` bounds the largest coordinate of `|b - o|`.
+//! `M` is taken once per ray and tree as the largest coordinate of `|corner - o|` over the tree's
+//! bounds plus three times its extent (so the slack costs nothing per node and stays tight when
+//! the scene sits far from the world origin). The slack is applied by moving the ray's origin:
+//! towards each near plane and away from each far plane by `K ε M` plus two ulps of the origin's
+//! coordinate (so that the move survives rounding), once per ray ([`BoxRay::new`]). Ize (2013)
+//! scales `tmax` by `1 + 2γ` for the same purpose; an absolute bound also covers rays that start
+//! inside a box.
+//!
+//! Every path (AVX2, SSE2, scalar) computes the same operations in the same order: the same bits.
 
 use glam::{Vec3, Vec3A};
-use obvhs::cwbvh::node::CwBvhNode;
+
+pub(crate) mod layout;
+
+pub(crate) use layout::Node;
 
 /// Relative spatial slack of the box test (see the module docs); 64 ulps at unit scale, which
 /// costs nothing measurable in traversal.
@@ -46,48 +54,71 @@ pub(crate) fn oct_inv4(neg_bits: u32) -> u32 {
     OCT[neg_bits as usize & 7]
 }
 
+/// The reciprocal of `dir` for slab tests, lane-wise (one division, selects instead of a branch
+/// per axis): a finite reciprocal is clamped to `INV_LIMIT`, an infinite or NaN one becomes
+/// `INV_LIMIT` with the sign of `dir`.
+#[inline(always)]
+pub(crate) fn clamped_inv(dir: Vec3) -> Vec3A {
+    let d = Vec3A::from(dir);
+    let i = Vec3A::ONE / d;
+    let limit = Vec3A::splat(INV_LIMIT);
+    Vec3A::select(
+        i.abs().cmplt(Vec3A::INFINITY),
+        i.clamp(-limit, limit),
+        limit.copysign(d),
+    )
+}
+
+/// The box test's slack in space, `K ε M`, for a ray from `o` in a tree of bounds `(lo, hi)`
+/// (module docs).
+#[inline(always)]
+pub(crate) fn reach(o: Vec3A, (lo, hi): (Vec3, Vec3)) -> f32 {
+    let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
+    let m = (lo - o).abs().max((hi - o).abs()).max_element() + 3.0 * (hi - lo).max_element();
+    SLACK * m
+}
+
+/// The origins a ray's near and far planes are measured from: `o` moved by `reach` (the slack
+/// `K ε M`) plus two ulps of `o`, towards the near planes and away from the far ones (`inv`'s
+/// signs say which way). Lane-wise, so the packets' lanes compute the same bits.
+#[inline(always)]
+pub(crate) fn widened_origins(o: Vec3A, inv: Vec3A, reach: f32) -> (Vec3A, Vec3A) {
+    let w = (o.abs() * (2.0 * f32::EPSILON) + Vec3A::splat(reach)).copysign(inv);
+    (o + w, o - w)
+}
+
 /// A ray prepared for box tests.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct BoxRay {
-    pub origin: Vec3A,
-    pub inv: Vec3A,
-    /// Per axis, whether the direction is negative (the far plane is the box minimum).
-    pub neg: [bool; 3],
+    /// The origin the near planes are measured from (module docs).
+    pub o_near: Vec3A,
+    /// The origin the far planes are measured from.
+    pub o_far: Vec3A,
+    /// The negated, clamped reciprocal direction: a slab distance is `(o - b) * ninv`.
+    pub ninv: Vec3A,
+    /// Where the near and far planes are in a node (the far plane is the box minimum on a
+    /// negative axis).
+    pub rows: Rows,
     /// obvhs' child-ordering key for this direction.
     pub oct_inv4: u32,
     pub tmin: f32,
-    /// Per-axis widening of every slab, in `t` (see the module docs).
-    pub slack: Vec3A,
 }
 
 impl BoxRay {
     /// `bounds`: the tree's bounding box (sizes the rounding slack).
     #[inline]
-    pub fn new(origin: Vec3, dir: Vec3, tmin: f32, (lo, hi): (Vec3, Vec3)) -> Self {
-        // Lane-wise (one division, selects instead of a branch per axis): a finite reciprocal is
-        // clamped to `INV_LIMIT`, an infinite or NaN one becomes `INV_LIMIT` with the sign of `d`.
-        let d = Vec3A::from(dir);
-        let i = Vec3A::ONE / d;
-        let limit = Vec3A::splat(INV_LIMIT);
-        let inv = Vec3A::select(
-            i.abs().cmplt(Vec3A::INFINITY),
-            i.clamp(-limit, limit),
-            limit.copysign(d),
-        );
+    pub fn new(origin: Vec3, dir: Vec3, tmin: f32, bounds: (Vec3, Vec3)) -> Self {
+        let inv = clamped_inv(dir);
         let neg_bits = inv.cmplt(Vec3A::ZERO).bitmask();
-        let neg = [neg_bits & 1 != 0, neg_bits & 2 != 0, neg_bits & 4 != 0];
-        let oct_inv4 = oct_inv4(neg_bits);
-        // In lanes (`Vec3` arithmetic is scalar here: 20 instructions a ray); the same values
-        // for finite inputs.
-        let (o, lo, hi) = (Vec3A::from(origin), Vec3A::from(lo), Vec3A::from(hi));
-        let m = (lo - o).abs().max((hi - o).abs()).max_element() + 3.0 * (hi - lo).max_element();
+        let o = Vec3A::from(origin);
+        let (o_near, o_far) = widened_origins(o, inv, reach(o, bounds));
         Self {
-            origin: o,
-            inv,
-            neg,
-            oct_inv4,
+            o_near,
+            o_far,
+            ninv: -inv,
+            rows: Rows::new(neg_bits),
+            oct_inv4: oct_inv4(neg_bits),
             tmin,
-            slack: inv.abs() * (SLACK * m),
         }
     }
 
@@ -108,34 +139,50 @@ impl BoxRay {
     }
 }
 
-/// Per-node constants of the slab test: `t = q * scale + offset_{lo,hi}` per axis.
-#[derive(Clone, Copy)]
-struct NodeFrame {
-    scale: Vec3A,
-    off_lo: Vec3A,
-    off_hi: Vec3A,
-}
+/// Where a ray's six planes are in [`Node::bounds`]: the byte offsets of its near rows (x, y, z)
+/// then its far rows (the minimum row on a positive axis is the near one). Private, so every
+/// value is one of [`Rows::new`]'s: offsets of whole rows inside `bounds`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Rows([u32; 6]);
 
-#[inline(always)]
-fn frame(node: &CwBvhNode, r: &BoxRay) -> NodeFrame {
-    let e = Vec3A::new(
-        f32::from_bits((node.e[0] as u32) << 23),
-        f32::from_bits((node.e[1] as u32) << 23),
-        f32::from_bits((node.e[2] as u32) << 23),
-    );
-    let off = (Vec3A::from(node.p) - r.origin) * r.inv;
-    NodeFrame {
-        scale: e * r.inv,
-        off_lo: off - r.slack,
-        off_hi: off + r.slack,
+impl Rows {
+    /// The rows for the direction whose negative axes are the bits of `neg_bits` (x from bit 0).
+    #[inline(always)]
+    pub fn new(neg_bits: u32) -> Self {
+        const ROW: u32 = 32;
+        let r = |a: u32, far: bool| {
+            let neg = (neg_bits >> a) & 1 == 1;
+            (2 * a + u32::from(neg != far)) * ROW
+        };
+        Self([
+            r(0, false),
+            r(1, false),
+            r(2, false),
+            r(0, true),
+            r(1, true),
+            r(2, true),
+        ])
+    }
+
+    /// The six rows of `node`'s children in the order a ray meets them: per axis, the near
+    /// rows, then the far rows. Row lookups by offset, not by branch: a walk's rays differ in
+    /// direction from step to step.
+    #[inline(always)]
+    pub fn planes<'n>(&self, node: &'n Node) -> [&'n [f32; 8]; 6] {
+        let base = node.bounds.as_ptr() as *const u8;
+        // SAFETY: each offset is `32 k` with `k < 6` (`Rows::new` is the only constructor), the
+        // start of row `k` of `bounds` (`[[f32; 8]; 6]`, 32 bytes a row, 4-byte aligned), which
+        // lives as long as `node`.
+        self.0
+            .map(|off| unsafe { &*(base.add(off as usize) as *const [f32; 8]) })
     }
 }
 
 /// obvhs' encoding of a child hit into the node hit mask: internal children set a bit in the top
 /// byte (at their traversal priority), leaves set their primitives' bits in the low 24 bits.
 #[inline(always)]
-fn hitmask_from_children(node: &CwBvhNode, oct_inv4: u32, mut hit8: u32) -> u32 {
-    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+fn hitmask_from_children(node: &Node, oct_inv4: u32, mut hit8: u32) -> u32 {
+    let (child_bits8, bit_index8) = node.child_and_index_bits(oct_inv4);
     let mut mask = 0u32;
     while hit8 != 0 {
         let c = hit8.trailing_zeros() as usize;
@@ -149,31 +196,30 @@ fn hitmask_from_children(node: &CwBvhNode, oct_inv4: u32, mut hit8: u32) -> u32 
 
 /// The node's hit mask for `[r.tmin, tmax]`, in obvhs' encoding.
 #[inline(always)]
-pub(crate) fn intersect_node(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
-    let f = frame(node, r);
-    let hit8 = child_hits(node, r, &f, tmax).0;
+pub(crate) fn intersect_node(node: &Node, r: &BoxRay, tmax: f32) -> u32 {
+    let hit8 = child_hits(node, r, tmax).0;
     hitmask_from_children(node, r.oct_inv4, hit8)
 }
 
-/// [`intersect_node`] testing all eight children at once with AVX2 and FMA. Inlined into the
-/// traversal of the AVX2 query functions, which enable the same features.
+/// [`intersect_node`] testing all eight children at once with AVX2. Inlined into the traversal
+/// of the AVX2 query functions, which enable the same features.
 ///
 /// # Safety
 /// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
+#[target_feature(enable = "avx2")]
 #[inline]
-pub(crate) unsafe fn intersect_node_avx2(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
+pub(crate) unsafe fn intersect_node_avx2(node: &Node, r: &BoxRay, tmax: f32) -> u32 {
     use std::arch::x86_64::*;
-    // SAFETY: AVX2 and FMA are guaranteed by the caller.
+    // SAFETY: AVX2 is guaranteed by the caller.
     let hit = unsafe { node_test_avx2(node, r, tmax).0 };
     // `hitmask_from_children` without its data-dependent loop (one iteration per hit child, a
     // branch that mispredicts often): each lane shifts its child's bits to their index, lanes of
     // missed children are masked off, and the eight lanes are OR-ed together.
-    // The child bits and their indices are `CwBvhNode::get_child_and_index_bits` lane by lane
-    // (there on the eight bytes of a `u64`): a child is internal when bits 3 and 4 of its meta
-    // byte are both set; its index is then its slot (low 5 bits) XOR the ray's octant, a leaf's is
-    // its first primitive's offset; the bits are the meta byte's top three.
+    // The child bits and their indices are `Node::child_and_index_bits` lane by lane (there on
+    // the eight bytes of a `u64`): a child is internal when bits 3 and 4 of its meta byte are
+    // both set; its index is then its slot (low 5 bits) XOR the ray's octant, a leaf's is its
+    // first primitive's offset; the bits are the meta byte's top three.
     // SAFETY: AVX2 is guaranteed by the caller; the load reads exactly the 8 bytes of
     // `child_meta`, the rest are register-only operations.
     unsafe {
@@ -192,51 +238,41 @@ pub(crate) unsafe fn intersect_node_avx2(node: &CwBvhNode, r: &BoxRay, tmax: f32
     }
 }
 
-/// The eight children's box test with AVX2 and FMA: the hit lanes (all ones for a hit child)
-/// and each child's entry distance. Shared by [`intersect_node_avx2`] and
-/// [`child_hits_enter_avx2`].
+/// The eight children's box test with AVX2: the hit lanes (all ones for a hit child) and each
+/// child's entry distance. Shared by [`intersect_node_avx2`] and [`child_hits_enter_avx2`].
 ///
 /// # Safety
-/// The CPU must support AVX2 and FMA, and the caller must be compiled for them (inlined).
+/// The CPU must support AVX2, and the caller must be compiled for it (inlined).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 unsafe fn node_test_avx2(
-    node: &CwBvhNode,
+    node: &Node,
     r: &BoxRay,
     tmax: f32,
 ) -> (std::arch::x86_64::__m256, std::arch::x86_64::__m256) {
     use std::arch::x86_64::*;
-    // `frame` in registers: its three vectors come from one 16-byte load of `p`, `e` and
-    // `imask` with the same operations as `frame` (so the same values), then each lane is
-    // broadcast. (LLVM lowers the `vpermps` broadcasts back to shuffle + broadcast pairs; the
-    // instructions saved are in the loads and the exponent decode.)
-    // SAFETY: AVX2 is guaranteed by the caller. The loads read 16 bytes from the start of the
-    // node (`p`, then `e` and `imask`) and the 4 bytes of `e` and `imask` (`repr(C)` layout);
-    // lane 3 of every vector is never broadcast.
+    // SAFETY: AVX2 is guaranteed by the caller; each load reads one `[f32; 8]` row in full.
     unsafe {
-        let base = node as *const CwBvhNode as *const u8;
-        let p = _mm_loadu_ps(base as *const f32);
-        let e_bits = _mm_cvtsi32_si128(std::ptr::read_unaligned(
-            base.add(std::mem::offset_of!(CwBvhNode, e)) as *const i32,
-        ));
-        let e = _mm_castsi128_ps(_mm_slli_epi32::<23>(_mm_cvtepu8_epi32(e_bits)));
-        let inv: __m128 = r.inv.into();
-        let slack: __m128 = r.slack.into();
-        let scale = _mm_mul_ps(e, inv);
-        let off = _mm_mul_ps(_mm_sub_ps(p, r.origin.into()), inv);
-        let off_lo = _mm_sub_ps(off, slack);
-        let off_hi = _mm_add_ps(off, slack);
-        macro_rules! lanes {
-            ($v:expr) => {{
-                let v = _mm256_castps128_ps256($v);
-                [
-                    _mm256_permutevar8x32_ps(v, _mm256_set1_epi32(0)),
-                    _mm256_permutevar8x32_ps(v, _mm256_set1_epi32(1)),
-                    _mm256_permutevar8x32_ps(v, _mm256_set1_epi32(2)),
-                ]
-            }};
+        let [nx, ny, nz, fx, fy, fz] = r.rows.planes(node);
+        // Macros, not closures: closures do not inherit the caller's target features.
+        macro_rules! slab {
+            ($o:expr, $row:expr, $ninv:expr) => {
+                _mm256_mul_ps(
+                    _mm256_sub_ps(_mm256_set1_ps($o), _mm256_loadu_ps($row.as_ptr())),
+                    _mm256_set1_ps($ninv),
+                )
+            };
         }
-        child_hits_avx2_wide(node, r, lanes!(scale), lanes!(off_lo), lanes!(off_hi), tmax)
+        let (on, of, ni) = (r.o_near, r.o_far, r.ninv);
+        let enter = _mm256_max_ps(
+            _mm256_max_ps(_mm256_set1_ps(r.tmin), slab!(on.x, nx, ni.x)),
+            _mm256_max_ps(slab!(on.y, ny, ni.y), slab!(on.z, nz, ni.z)),
+        );
+        let exit = _mm256_min_ps(
+            _mm256_min_ps(_mm256_set1_ps(tmax), slab!(of.x, fx, ni.x)),
+            _mm256_min_ps(slab!(of.y, fy, ni.y), slab!(of.z, fz, ni.z)),
+        );
+        (_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit), enter)
     }
 }
 
@@ -244,8 +280,7 @@ unsafe fn node_test_avx2(
 /// (`walk.rs`) needs of a node, without obvhs' hit-mask encoding.
 #[derive(Clone, Copy)]
 pub(crate) struct ChildHits {
-    /// Bit `c` for each child slot `c` whose box the ray may enter within `[tmin, tmax]` (empty
-    /// slots may be set too: their meta byte is zero).
+    /// Bit `c` for each child slot `c` whose box the ray may enter within `[tmin, tmax]`.
     pub hits: u32,
     /// Each slot's entry distance (`max(tmin, near planes)`, lowered by the slack like the whole
     /// test, so never above the `t` of a hit the triangle test accepts in that child).
@@ -257,9 +292,8 @@ pub(crate) struct ChildHits {
 
 /// [`ChildHits`] of `node` for `[r.tmin, tmax]` (SSE2, or scalar off x86_64).
 #[inline(always)]
-pub(crate) fn child_hits_enter(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> ChildHits {
-    let f = frame(node, r);
-    let (hits, enter) = child_hits(node, r, &f, tmax);
+pub(crate) fn child_hits_enter(node: &Node, r: &BoxRay, tmax: f32) -> ChildHits {
+    let (hits, enter) = child_hits(node, r, tmax);
     // A leaf's meta byte holds its first primitive's offset (low 5 bits) and its count in unary
     // (top 3 bits); empty slots' is zero.
     let mut leaves = hits & !u32::from(node.imask);
@@ -272,16 +306,16 @@ pub(crate) fn child_hits_enter(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> Child
     ChildHits { hits, enter, prims }
 }
 
-/// [`child_hits_enter`] with AVX2 and FMA (the same arithmetic as [`intersect_node_avx2`]).
+/// [`child_hits_enter`] with AVX2 (the same arithmetic as [`intersect_node_avx2`]).
 ///
 /// # Safety
-/// The CPU must support AVX2 and FMA.
+/// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
+#[target_feature(enable = "avx2")]
 #[inline]
-pub(crate) unsafe fn child_hits_enter_avx2(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> ChildHits {
+pub(crate) unsafe fn child_hits_enter_avx2(node: &Node, r: &BoxRay, tmax: f32) -> ChildHits {
     use std::arch::x86_64::*;
-    // SAFETY: AVX2 and FMA are guaranteed by the caller; the load reads exactly the 8 bytes of
+    // SAFETY: AVX2 is guaranteed by the caller; the load reads exactly the 8 bytes of
     // `child_meta`, the store writes the 8 floats of `enter`.
     unsafe {
         let (hit, e) = node_test_avx2(node, r, tmax);
@@ -319,243 +353,65 @@ unsafe fn or_lanes(m: std::arch::x86_64::__m256i) -> u32 {
     }
 }
 
-/// The SSE2 test below, eight lanes wide, with each slab distance `q * scale + offset` fused
-/// (one rounding instead of two, one instruction instead of two: 6 fewer per node). The
-/// distances can then differ from the SSE2 path's in the last bit, so both are checked against a
-/// scalar reference of their own arithmetic; the slack (module docs) bounds the error of either.
-/// `max`/`min`/ordered `<=` behave the same on NaN in both.
-#[cfg(all(test, target_arch = "x86_64"))]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn child_hits_avx2(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> u32 {
-    use std::arch::x86_64::*;
-    // SAFETY: forwarded from the caller.
-    unsafe { _mm256_movemask_ps(child_hits_avx2_lanes(node, r, f, tmax)) as u32 }
-}
-
-/// [`child_hits_avx2`] as a lane mask (all ones for a hit child).
-#[cfg(all(test, target_arch = "x86_64"))]
-#[inline(always)]
-unsafe fn child_hits_avx2_lanes(
-    node: &CwBvhNode,
-    r: &BoxRay,
-    f: &NodeFrame,
-    tmax: f32,
-) -> std::arch::x86_64::__m256 {
-    use std::arch::x86_64::*;
-    // SAFETY: forwarded from the caller.
-    unsafe {
-        let b = |v: Vec3A| {
-            [
-                _mm256_set1_ps(v.x),
-                _mm256_set1_ps(v.y),
-                _mm256_set1_ps(v.z),
-            ]
-        };
-        child_hits_avx2_wide(node, r, b(f.scale), b(f.off_lo), b(f.off_hi), tmax).0
-    }
-}
-
-/// [`child_hits_avx2_lanes`] with the frame's lanes already broadcast (`[x, y, z]` each), and
-/// each child's entry distance.
+/// The box test four children at a time with SSE2 (the x86_64 baseline): the hit slots and each
+/// slot's entry distance.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn child_hits_avx2_wide(
-    node: &CwBvhNode,
-    r: &BoxRay,
-    scale: [std::arch::x86_64::__m256; 3],
-    off_lo: [std::arch::x86_64::__m256; 3],
-    off_hi: [std::arch::x86_64::__m256; 3],
-    tmax: f32,
-) -> (std::arch::x86_64::__m256, std::arch::x86_64::__m256) {
+fn child_hits(node: &Node, r: &BoxRay, tmax: f32) -> (u32, [f32; 8]) {
     use std::arch::x86_64::*;
-    // SAFETY: AVX2 is guaranteed by the caller; each load reads exactly one `[u8; 8]` field.
+    // SAFETY: SSE2 is part of the x86_64 baseline; each load reads 4 floats of an `[f32; 8]`
+    // row, the stores write 4 + 4 floats into `enter`.
     unsafe {
-        #[inline(always)]
-        unsafe fn load8(b: &[u8; 8]) -> __m256 {
-            // SAFETY: as above.
-            unsafe {
-                _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(
-                    b.as_ptr() as *const __m128i
-                )))
-            }
-        }
-        // Macros, not closures: closures do not inherit the caller's target features, and an
-        // AVX2 intrinsic that is not inlined costs a call per instruction.
-        macro_rules! pick {
-            ($neg:expr, $lo:expr, $hi:expr) => {
-                if $neg {
-                    (load8($hi), load8($lo))
-                } else {
-                    (load8($lo), load8($hi))
-                }
-            };
-        }
-        let (nx, fx) = pick!(r.neg[0], &node.child_min_x, &node.child_max_x);
-        let (ny, fy) = pick!(r.neg[1], &node.child_min_y, &node.child_max_y);
-        let (nz, fz) = pick!(r.neg[2], &node.child_min_z, &node.child_max_z);
-        let enter = _mm256_max_ps(
-            _mm256_max_ps(
-                _mm256_set1_ps(r.tmin),
-                _mm256_fmadd_ps(nx, scale[0], off_lo[0]),
-            ),
-            _mm256_max_ps(
-                _mm256_fmadd_ps(ny, scale[1], off_lo[1]),
-                _mm256_fmadd_ps(nz, scale[2], off_lo[2]),
-            ),
-        );
-        let exit = _mm256_min_ps(
-            _mm256_min_ps(
-                _mm256_set1_ps(tmax),
-                _mm256_fmadd_ps(fx, scale[0], off_hi[0]),
-            ),
-            _mm256_min_ps(
-                _mm256_fmadd_ps(fy, scale[1], off_hi[1]),
-                _mm256_fmadd_ps(fz, scale[2], off_hi[2]),
-            ),
-        );
-        (_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit), enter)
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn child_hits(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> (u32, [f32; 8]) {
-    use std::arch::x86_64::*;
-    // SAFETY: SSE2 is part of the x86_64 baseline; the loads read exactly 8 bytes of `[u8; 8]`
-    // fields, the stores write 4 + 4 floats into `enter`.
-    unsafe {
-        #[inline(always)]
-        unsafe fn load8(b: &[u8; 8]) -> (__m128, __m128) {
-            // SAFETY: `b` is 8 readable bytes; SSE2 is baseline.
-            unsafe {
-                let z = _mm_setzero_si128();
-                let v = _mm_loadl_epi64(b.as_ptr() as *const __m128i);
-                let v16 = _mm_unpacklo_epi8(v, z);
-                (
-                    _mm_cvtepi32_ps(_mm_unpacklo_epi16(v16, z)),
-                    _mm_cvtepi32_ps(_mm_unpackhi_epi16(v16, z)),
-                )
-            }
-        }
-        let (near_x, far_x) = if r.neg[0] {
-            (&node.child_max_x, &node.child_min_x)
-        } else {
-            (&node.child_min_x, &node.child_max_x)
-        };
-        let (near_y, far_y) = if r.neg[1] {
-            (&node.child_max_y, &node.child_min_y)
-        } else {
-            (&node.child_min_y, &node.child_max_y)
-        };
-        let (near_z, far_z) = if r.neg[2] {
-            (&node.child_max_z, &node.child_min_z)
-        } else {
-            (&node.child_min_z, &node.child_max_z)
-        };
-        let sx = _mm_set1_ps(f.scale.x);
-        let sy = _mm_set1_ps(f.scale.y);
-        let sz = _mm_set1_ps(f.scale.z);
-        let lx = _mm_set1_ps(f.off_lo.x);
-        let ly = _mm_set1_ps(f.off_lo.y);
-        let lz = _mm_set1_ps(f.off_lo.z);
-        let hx = _mm_set1_ps(f.off_hi.x);
-        let hy = _mm_set1_ps(f.off_hi.y);
-        let hz = _mm_set1_ps(f.off_hi.z);
-        let (nx0, nx1) = load8(near_x);
-        let (fx0, fx1) = load8(far_x);
-        let (ny0, ny1) = load8(near_y);
-        let (fy0, fy1) = load8(far_y);
-        let (nz0, nz1) = load8(near_z);
-        let (fz0, fz1) = load8(far_z);
-        let t0 = _mm_set1_ps(r.tmin);
-        let t1 = _mm_set1_ps(tmax);
-        // A NaN ray may enter boxes here (SSE max/min pass NaN through unevenly); it then misses
-        // every triangle, so only time is lost on input that is invalid anyway.
-        let enter0 = _mm_max_ps(
-            _mm_max_ps(t0, _mm_add_ps(_mm_mul_ps(nx0, sx), lx)),
-            _mm_max_ps(
-                _mm_add_ps(_mm_mul_ps(ny0, sy), ly),
-                _mm_add_ps(_mm_mul_ps(nz0, sz), lz),
-            ),
-        );
-        let exit0 = _mm_min_ps(
-            _mm_min_ps(t1, _mm_add_ps(_mm_mul_ps(fx0, sx), hx)),
-            _mm_min_ps(
-                _mm_add_ps(_mm_mul_ps(fy0, sy), hy),
-                _mm_add_ps(_mm_mul_ps(fz0, sz), hz),
-            ),
-        );
-        let enter1 = _mm_max_ps(
-            _mm_max_ps(t0, _mm_add_ps(_mm_mul_ps(nx1, sx), lx)),
-            _mm_max_ps(
-                _mm_add_ps(_mm_mul_ps(ny1, sy), ly),
-                _mm_add_ps(_mm_mul_ps(nz1, sz), lz),
-            ),
-        );
-        let exit1 = _mm_min_ps(
-            _mm_min_ps(t1, _mm_add_ps(_mm_mul_ps(fx1, sx), hx)),
-            _mm_min_ps(
-                _mm_add_ps(_mm_mul_ps(fy1, sy), hy),
-                _mm_add_ps(_mm_mul_ps(fz1, sz), hz),
-            ),
-        );
-        let m0 = _mm_movemask_ps(_mm_cmple_ps(enter0, exit0)) as u32;
-        let m1 = _mm_movemask_ps(_mm_cmple_ps(enter1, exit1)) as u32;
+        let [nx, ny, nz, fx, fy, fz] = r.rows.planes(node);
+        let (on, of, ni) = (r.o_near, r.o_far, r.ninv);
+        let mut hits = 0;
         let mut enter = [0.0; 8];
-        _mm_storeu_ps(enter.as_mut_ptr(), enter0);
-        _mm_storeu_ps(enter.as_mut_ptr().add(4), enter1);
-        (m0 | (m1 << 4), enter)
+        for half in 0..2 {
+            let k = 4 * half;
+            let slab = |o: f32, row: &[f32; 8], ninv: f32| {
+                _mm_mul_ps(
+                    _mm_sub_ps(_mm_set1_ps(o), _mm_loadu_ps(row.as_ptr().add(k))),
+                    _mm_set1_ps(ninv),
+                )
+            };
+            // A NaN ray may enter boxes here (SSE max/min pass NaN through unevenly); it then
+            // misses every triangle, so only time is lost on input that is invalid anyway.
+            let e = _mm_max_ps(
+                _mm_max_ps(_mm_set1_ps(r.tmin), slab(on.x, nx, ni.x)),
+                _mm_max_ps(slab(on.y, ny, ni.y), slab(on.z, nz, ni.z)),
+            );
+            let x = _mm_min_ps(
+                _mm_min_ps(_mm_set1_ps(tmax), slab(of.x, fx, ni.x)),
+                _mm_min_ps(slab(of.y, fy, ni.y), slab(of.z, fz, ni.z)),
+            );
+            hits |= (_mm_movemask_ps(_mm_cmple_ps(e, x)) as u32) << k;
+            _mm_storeu_ps(enter.as_mut_ptr().add(k), e);
+        }
+        (hits, enter)
     }
 }
 
 /// The box test one child at a time: the whole test on targets without the SIMD paths, and
-/// the reference those paths are checked against.
+/// the reference those paths are checked against (the same operations in the same order).
 #[cfg(any(test, not(target_arch = "x86_64")))]
 #[inline(always)]
-fn child_hits_scalar(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> (u32, [f32; 8]) {
-    child_hits_scalar_with::<false>(node, r, f, tmax)
-}
-
-/// [`child_hits_scalar`], with the slab distances fused (`mul_add`) when `FMA`: the reference of
-/// the AVX2 path.
-#[cfg(any(test, not(target_arch = "x86_64")))]
-#[inline(always)]
-fn child_hits_scalar_with<const FMA: bool>(
-    node: &CwBvhNode,
-    r: &BoxRay,
-    f: &NodeFrame,
-    tmax: f32,
-) -> (u32, [f32; 8]) {
+fn child_hits_scalar(node: &Node, r: &BoxRay, tmax: f32) -> (u32, [f32; 8]) {
+    let [nx, ny, nz, fx, fy, fz] = r.rows.planes(node);
+    let (on, of, ni) = (r.o_near, r.o_far, r.ninv);
     let mut hit8 = 0;
     let mut enters = [0.0; 8];
-    let lo = [&node.child_min_x, &node.child_min_y, &node.child_min_z];
-    let hi = [&node.child_max_x, &node.child_max_y, &node.child_max_z];
-    let scale = f.scale.to_array();
-    let off_lo = f.off_lo.to_array();
-    let off_hi = f.off_hi.to_array();
     for c in 0..8 {
-        let mut enter = r.tmin;
-        let mut exit = tmax;
-        for a in 0..3 {
-            let (n, fa) = if r.neg[a] {
-                (hi[a][c], lo[a][c])
-            } else {
-                (lo[a][c], hi[a][c])
-            };
-            let (tn, tf) = if FMA {
-                (
-                    (n as f32).mul_add(scale[a], off_lo[a]),
-                    (fa as f32).mul_add(scale[a], off_hi[a]),
-                )
-            } else {
-                (
-                    n as f32 * scale[a] + off_lo[a],
-                    fa as f32 * scale[a] + off_hi[a],
-                )
-            };
-            enter = enter.max(tn);
-            exit = exit.min(tf);
-        }
+        // `max`/`min` as the SSE instructions: the second operand when either is NaN.
+        let max = |a: f32, b: f32| if a > b { a } else { b };
+        let min = |a: f32, b: f32| if a < b { a } else { b };
+        let enter = max(
+            max(r.tmin, (on.x - nx[c]) * ni.x),
+            max((on.y - ny[c]) * ni.y, (on.z - nz[c]) * ni.z),
+        );
+        let exit = min(
+            min(tmax, (of.x - fx[c]) * ni.x),
+            min((of.y - fy[c]) * ni.y, (of.z - fz[c]) * ni.z),
+        );
         if enter <= exit {
             hit8 |= 1 << c;
         }
@@ -566,21 +422,8 @@ fn child_hits_scalar_with<const FMA: bool>(
 
 #[cfg(not(target_arch = "x86_64"))]
 #[inline(always)]
-fn child_hits(node: &CwBvhNode, r: &BoxRay, f: &NodeFrame, tmax: f32) -> (u32, [f32; 8]) {
-    child_hits_scalar(node, r, f, tmax)
-}
-
-/// Scalar reference of the same test, for unit tests.
-#[cfg(test)]
-pub(crate) fn child_hits_reference(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
-    let f = frame(node, r);
-    child_hits_scalar(node, r, &f, tmax).0
-}
-
-#[cfg(test)]
-pub(crate) fn child_hits_fast(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> u32 {
-    let f = frame(node, r);
-    child_hits(node, r, &f, tmax).0
+fn child_hits(node: &Node, r: &BoxRay, tmax: f32) -> (u32, [f32; 8]) {
+    child_hits_scalar(node, r, tmax)
 }
 
 #[cfg(test)]

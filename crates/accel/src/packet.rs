@@ -7,7 +7,7 @@
 //! each triangle for all of them at once ([`crate::triangle::lanes`], the scalar test's bits
 //! lane by lane). The lanes' set-up is done for the eight rays at once too ([`rays`]), and rays
 //! that miss the scene's bounds are culled eight at a time ([`cull`]). Children are ordered
-//! by the packet's common direction octant. The node decode, the stack and the child ordering
+//! by the packet's common direction octant. The node loads, the stack and the child ordering
 //! are paid once per packet instead of once per ray; rays that would have skipped a node pay its
 //! box test in their lane. Closest hits are the one-ray answers exactly, since
 //! [`ClosestLeaf`](crate::walk::ClosestLeaf) breaks ties in `t` by primitive, independently of
@@ -20,6 +20,7 @@
 //! (neighbouring rays are mostly blocked by the same triangle, and any blocker gives the same
 //! answer): a packet it blocks whole needs no walk.
 
+use crate::node::Node;
 #[cfg(target_arch = "x86_64")]
 use crate::triangle::lanes::{intersect_lanes, transpose, TriLanes};
 #[cfg(target_arch = "x86_64")]
@@ -28,7 +29,6 @@ use crate::walk::{stack_for, take_child, BlasLeaf, Group, InlineStack, Leaf, INL
 use crate::{Accel, Hit, Ray};
 #[cfg(target_arch = "x86_64")]
 use glam::Vec3A;
-use obvhs::cwbvh::node::CwBvhNode;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::__m128;
 use std::mem::MaybeUninit;
@@ -91,58 +91,26 @@ fn coherent(rays: &[Ray]) -> bool {
     })
 }
 
-/// The node's slab constants in each lane, per axis: `e * inv` and `(p - o) * inv ∓ slack` (the
-/// one-ray test's `frame`, lane by lane).
-///
-/// # Safety
-/// As for [`node_lanes_avx2`].
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-unsafe fn lane_frame(node: &CwBvhNode, r: &PacketRays) -> [[std::arch::x86_64::__m256; 3]; 3] {
-    use std::arch::x86_64::*;
-    // SAFETY: AVX2 is guaranteed by the caller; every load reads one `[f32; 8]` in full.
-    unsafe {
-        macro_rules! axis {
-            ($a:expr) => {{
-                let e = _mm256_set1_ps(f32::from_bits((node.e[$a] as u32) << 23));
-                let inv = _mm256_loadu_ps(r.inv[$a].as_ptr());
-                let slack = _mm256_loadu_ps(r.slack[$a].as_ptr());
-                let o = _mm256_loadu_ps(r.origin[$a].as_ptr());
-                let off = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(node.p[$a]), o), inv);
-                (
-                    _mm256_mul_ps(e, inv),
-                    _mm256_sub_ps(off, slack),
-                    _mm256_add_ps(off, slack),
-                )
-            }};
-        }
-        let (s0, l0, h0) = axis!(0);
-        let (s1, l1, h1) = axis!(1);
-        let (s2, l2, h2) = axis!(2);
-        [[s0, s1, s2], [l0, l1, l2], [h0, h1, h2]]
-    }
-}
-
 /// One node's box test for the packet's `active` lanes: per child slot, the lanes whose ray
 /// hits it within `[tmin, tmax]` (bit `i` for lane `i`), and the slots some lane hits.
 ///
 /// Each lane computes exactly what [`crate::node::intersect_node_avx2`] computes for its ray:
-/// `fma(q, e * inv, (p - o) * inv ∓ slack)`, clamped by `tmin` and `tmax`.
+/// `(o - b) * -inv` from the widened origins, clamped by `tmin` and `tmax`.
 ///
 /// # Safety
 /// The CPU must support AVX2 and FMA, and the caller must be compiled for them (inlined into
-/// the AVX2 queries, as `node::child_hits_avx2_wide`).
+/// the AVX2 queries, as `node::node_test_avx2`).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 unsafe fn node_lanes_avx2(
-    node: &CwBvhNode,
+    node: &Node,
     r: &PacketRays,
     tmax: &[f32; PACKET_LANES],
     active: u32,
 ) -> ([u8; 8], u32) {
     use std::arch::x86_64::*;
-    // SAFETY: AVX2 and FMA are guaranteed by the caller; every load reads one `[f32; 8]` or
-    // one `[u8; 8]` field in full.
+    // SAFETY: AVX2 is guaranteed by the caller; every load reads one `[f32; 8]` or one
+    // `[u8; 8]` field in full, or one float of a row.
     unsafe {
         // Macros, not closures: closures do not inherit the target features (a call per
         // intrinsic).
@@ -151,26 +119,12 @@ unsafe fn node_lanes_avx2(
                 _mm256_loadu_ps($v.as_ptr())
             };
         }
-        macro_rules! q {
-            ($b:expr) => {
-                _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(
-                    $b.as_ptr() as *const __m128i
-                )))
-            };
-        }
-        macro_rules! pick {
-            ($neg:expr, $min:expr, $max:expr) => {
-                if $neg {
-                    (q!($max), q!($min))
-                } else {
-                    (q!($min), q!($max))
-                }
-            };
-        }
-        let [scale, lo, hi] = lane_frame(node, r);
-        let (nx, fx) = pick!(r.neg[0], node.child_min_x, node.child_max_x);
-        let (ny, fy) = pick!(r.neg[1], node.child_min_y, node.child_max_y);
-        let (nz, fz) = pick!(r.neg[2], node.child_min_z, node.child_max_z);
+        let [nx, ny, nz, fx, fy, fz] = r.rows.planes(node);
+        let (on, of, ni) = (
+            r.o_near.each_ref().map(|v| load!(v)),
+            r.o_far.each_ref().map(|v| load!(v)),
+            r.ninv.each_ref().map(|v| load!(v)),
+        );
         let tmin = load!(r.tmin);
         let tmax = load!(tmax);
         let mut out = [0u8; 8];
@@ -180,31 +134,24 @@ unsafe fn node_lanes_avx2(
         let mut valid =
             !(_mm_movemask_epi8(_mm_cmpeq_epi8(meta, _mm_setzero_si128())) as u32) & 0xff;
         while valid != 0 {
-            let c = valid.trailing_zeros();
+            let c = valid.trailing_zeros() as usize & 7;
             valid &= valid - 1;
-            let at = _mm256_set1_epi32(c as i32);
-            macro_rules! b {
-                ($v:expr) => {
-                    _mm256_permutevar8x32_ps($v, at)
+            macro_rules! slab {
+                ($o:expr, $row:expr, $ninv:expr) => {
+                    _mm256_mul_ps(_mm256_sub_ps($o, _mm256_set1_ps($row[c])), $ninv)
                 };
             }
             let enter = _mm256_max_ps(
-                _mm256_max_ps(tmin, _mm256_fmadd_ps(b!(nx), scale[0], lo[0])),
-                _mm256_max_ps(
-                    _mm256_fmadd_ps(b!(ny), scale[1], lo[1]),
-                    _mm256_fmadd_ps(b!(nz), scale[2], lo[2]),
-                ),
+                _mm256_max_ps(tmin, slab!(on[0], nx, ni[0])),
+                _mm256_max_ps(slab!(on[1], ny, ni[1]), slab!(on[2], nz, ni[2])),
             );
             let exit = _mm256_min_ps(
-                _mm256_min_ps(tmax, _mm256_fmadd_ps(b!(fx), scale[0], hi[0])),
-                _mm256_min_ps(
-                    _mm256_fmadd_ps(b!(fy), scale[1], hi[1]),
-                    _mm256_fmadd_ps(b!(fz), scale[2], hi[2]),
-                ),
+                _mm256_min_ps(tmax, slab!(of[0], fx, ni[0])),
+                _mm256_min_ps(slab!(of[1], fy, ni[1]), slab!(of[2], fz, ni[2])),
             );
             let hit = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)) as u32;
             let hit = hit & active;
-            out[c as usize] = hit as u8;
+            out[c] = hit as u8;
             any |= u32::from(hit != 0) << c;
         }
         (out, any)
@@ -292,7 +239,7 @@ unsafe fn leaf_lanes<'s, L: BlasLeaf<'s>>(
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 unsafe fn walk_packet<'s, L: BlasLeaf<'s>>(
-    nodes: &[CwBvhNode],
+    nodes: &[Node],
     r: &PacketRays,
     tmax: &mut [f32; PACKET_LANES],
     leaves: &mut [L; PACKET_LANES],

@@ -74,12 +74,13 @@ impl Accel {
         if !(o.is_finite() && ray.dir.is_finite()) {
             return false;
         }
-        let br = BoxRay::new(o, ray.dir, ray.tmin, (lo, hi));
+        let inv = crate::node::clamped_inv(ray.dir);
         let o = glam::Vec3A::from(o);
-        let t0 = (glam::Vec3A::from(lo) - o) * br.inv;
-        let t1 = (glam::Vec3A::from(hi) - o) * br.inv;
-        let near = t0.min(t1) - br.slack;
-        let far = t0.max(t1) + br.slack;
+        let slack = inv.abs() * crate::node::reach(o, (lo, hi));
+        let t0 = (glam::Vec3A::from(lo) - o) * inv;
+        let t1 = (glam::Vec3A::from(hi) - o) * inv;
+        let near = t0.min(t1) - slack;
+        let far = t0.max(t1) + slack;
         // `f32::max`/`min` pass over a NaN `tmin`/`tmax`: a wider segment, never a false miss.
         let enter = near.max_element().max(ray.tmin);
         let exit = far.min_element().min(ray.tmax);

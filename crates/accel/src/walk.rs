@@ -4,9 +4,9 @@
 //! every batch) and [`group`] (obvhs' node groups in octant order; one-ray occlusion, packets).
 
 use crate::node::BoxRay;
+use crate::node::Node;
 use crate::triangle::TriRay;
 use crate::{Accel, Blas, Entry, Hit, Ray, Tri};
-use obvhs::cwbvh::node::CwBvhNode;
 use std::mem::MaybeUninit;
 
 mod group;
@@ -304,7 +304,7 @@ impl<'a, const AVX: bool> BlasLeaf<'a> for AnyLeaf<'a, AVX> {
 /// (interleaved, the ordered walk is faster for both).
 #[inline(always)]
 pub(crate) fn traverse<const AVX2: bool, L: Leaf>(
-    nodes: &[CwBvhNode],
+    nodes: &[Node],
     r: &BoxRay,
     tmax: &mut f32,
     stack: &mut [MaybeUninit<Group>],
@@ -342,7 +342,7 @@ pub(crate) trait Walks<L> {
 /// its parent's test) that leaves most of the core idle; independent chains fill it.
 #[inline(always)]
 pub(crate) fn interleave<const AVX2: bool, L: Leaf + Copy>(
-    nodes: &[CwBvhNode],
+    nodes: &[Node],
     n: usize,
     walks: &mut impl Walks<L>,
 ) {

@@ -1,8 +1,19 @@
 //! Tests of the box test against its scalar reference.
 
+use super::layout::nodes_from_cwbvh;
 use super::*;
 use obvhs::{aabb::Aabb, cwbvh::builder::build_cwbvh, BvhBuildParams};
 use std::time::Duration;
+
+/// Our nodes over `boxes` (obvhs' fast build).
+fn tree(boxes: &[Aabb]) -> Vec<Node> {
+    let cw = build_cwbvh(
+        boxes,
+        BvhBuildParams::fast_build(),
+        &mut Duration::default(),
+    );
+    nodes_from_cwbvh(&cw.nodes, &cw.primitive_indices, boxes)
+}
 
 fn lcg(s: &mut u64) -> f32 {
     *s = s
@@ -21,11 +32,7 @@ fn simd_matches_scalar_reference() {
             Aabb::new(c - h, c + h)
         })
         .collect();
-    let bvh = build_cwbvh(
-        &boxes,
-        BvhBuildParams::fast_build(),
-        &mut Duration::default(),
-    );
+    let nodes = tree(&boxes);
     let mut nonzero = 0;
     for i in 0..2000 {
         let o = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 120.0 - 10.0;
@@ -40,35 +47,28 @@ fn simd_matches_scalar_reference() {
             (Vec3::splat(-10.0), Vec3::splat(110.0)),
         );
         let tmax = if i % 4 == 0 { 50.0 } else { f32::INFINITY };
-        for node in &bvh.nodes {
-            let a = child_hits_fast(node, &r, tmax);
-            assert_eq!(a, child_hits_reference(node, &r, tmax));
-            // The ordered walk's test: the same hits, the scalar entries, obvhs' leaf bits.
-            let f = frame(node, &r);
+        for node in &nodes {
+            let (a, enter) = child_hits_scalar(node, &r, tmax);
+            let bits = |e: [f32; 8]| e.map(f32::to_bits);
+            let (fast, fast_enter) = child_hits(node, &r, tmax);
+            assert_eq!((fast, bits(fast_enter)), (a, bits(enter)));
+            // The ordered walk's test: the same hits and entries, obvhs' leaf bits.
             let ordered = child_hits_enter(node, &r, tmax);
-            assert_eq!(ordered.hits, a);
-            let enter = child_hits_scalar(node, &r, &f, tmax).1;
-            assert_eq!(ordered.enter.map(f32::to_bits), enter.map(f32::to_bits));
+            assert_eq!((ordered.hits, bits(ordered.enter)), (a, bits(enter)));
             let mask = hitmask_from_children(node, r.oct_inv4, a);
             assert_eq!(ordered.prims, mask & 0x00ff_ffff);
+            assert_eq!(intersect_node(node, &r, tmax), mask);
             #[cfg(target_arch = "x86_64")]
             if std::arch::is_x86_feature_detected!("avx2")
                 && std::arch::is_x86_feature_detected!("fma")
             {
-                let (fused, fused_enter) = child_hits_scalar_with::<true>(node, &r, &f, tmax);
-                // SAFETY: AVX2 and FMA were detected.
-                assert_eq!(fused, unsafe { child_hits_avx2(node, &r, &f, tmax) });
                 // SAFETY: AVX2 and FMA were detected.
                 let full = unsafe { intersect_node_avx2(node, &r, tmax) };
-                assert_eq!(full, hitmask_from_children(node, r.oct_inv4, fused));
+                assert_eq!(full, mask);
                 // SAFETY: AVX2 and FMA were detected.
                 let ordered = unsafe { child_hits_enter_avx2(node, &r, tmax) };
-                assert_eq!(ordered.hits, fused);
-                assert_eq!(
-                    ordered.enter.map(f32::to_bits),
-                    fused_enter.map(f32::to_bits)
-                );
-                assert_eq!(ordered.prims, full & 0x00ff_ffff);
+                assert_eq!((ordered.hits, bits(ordered.enter)), (a, bits(enter)));
+                assert_eq!(ordered.prims, mask & 0x00ff_ffff);
             }
             nonzero += (a != 0) as usize;
         }
@@ -98,12 +98,17 @@ fn lane_wise_setup_matches_per_axis() {
                 let r = BoxRay::new(Vec3::ZERO, d, 0.0, (Vec3::ZERO, Vec3::ONE));
                 let want = BoxRay::inv_reference(d);
                 assert_eq!(
-                    r.inv.to_array().map(f32::to_bits),
+                    (-r.ninv).to_array().map(f32::to_bits),
                     want.to_array().map(f32::to_bits),
                     "{d}"
                 );
                 let neg = want.to_array().map(|i| i < 0.0);
-                assert_eq!(r.neg, neg, "{d}");
+                let bits = neg
+                    .iter()
+                    .enumerate()
+                    .map(|(a, &n)| u32::from(n) << a)
+                    .sum();
+                assert_eq!(r.rows, Rows::new(bits), "{d}");
                 let oct = (if neg[0] { 0 } else { 0x0404_0404 })
                     | (if neg[1] { 0 } else { 0x0202_0202 })
                     | (if neg[2] { 0 } else { 0x0101_0101 });
@@ -120,12 +125,8 @@ fn honours_tmin() {
         Aabb::new(Vec3A::new(0.0, -1.0, -1.0), Vec3A::new(1.0, 1.0, 1.0)),
         Aabb::new(Vec3A::new(10.0, -1.0, -1.0), Vec3A::new(11.0, 1.0, 1.0)),
     ];
-    let bvh = build_cwbvh(
-        &boxes,
-        BvhBuildParams::fast_build(),
-        &mut Duration::default(),
-    );
-    let root = &bvh.nodes[0];
+    let nodes = tree(&boxes);
+    let root = &nodes[0];
     // A ray along +x through both boxes, starting at x = -5, over [tmin, tmax].
     let hits = |tmin: f32, tmax: f32| {
         let r = BoxRay::new(
@@ -134,7 +135,7 @@ fn honours_tmin() {
             tmin,
             (Vec3::splat(-1.0), Vec3::splat(11.0)),
         );
-        child_hits_fast(root, &r, tmax)
+        child_hits(root, &r, tmax).0
     };
     let all = hits(0.0, f32::INFINITY);
     let late = hits(8.0, f32::INFINITY);
@@ -143,4 +144,125 @@ fn honours_tmin() {
     assert_eq!(late.count_ones(), 1);
     assert_eq!(early.count_ones(), 1);
     assert_ne!(late, early);
+}
+
+/// Wherever a ray's exact segment (in `f64`) enters a child's box, the test says so, and it says
+/// so elsewhere only within twice its slack: scenes near and far from the origin and at several
+/// scales, rays from inside and outside, along axes, and aimed exactly at box corners (grazing).
+#[test]
+fn never_misses_a_box_the_exact_ray_enters() {
+    let mut s = 11u64;
+    for (offset, scale) in [
+        (0.0, 1.0),
+        (1e5, 1.0),
+        (-3e3, 1e-3),
+        (0.0, 1e4),
+        (7e6, 50.0),
+    ] {
+        let offset = Vec3A::splat(offset);
+        let boxes: Vec<Aabb> = (0..300)
+            .map(|_| {
+                let c = Vec3A::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 100.0 * scale;
+                let h = Vec3A::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 3.0 * scale;
+                Aabb::new(offset + c - h, offset + c + h)
+            })
+            .collect();
+        let nodes = tree(&boxes);
+        let all = boxes.iter().fold(Aabb::empty(), |a, b| a.union(b));
+        let bounds = (Vec3::from(all.min), Vec3::from(all.max));
+        let (mut entered, mut loose) = (0, 0);
+        for i in 0..400 {
+            let u = |s: &mut u64| Vec3A::new(lcg(s), lcg(s), lcg(s));
+            let far = if i % 7 == 0 { 30.0 } else { 1.0 };
+            let o = offset + (u(&mut s) * 140.0 - 20.0) * scale * far;
+            // Aimed at a corner of some box, or a random direction (now and then along an axis).
+            let d = if i % 2 == 0 {
+                let b = &boxes[i % boxes.len()];
+                let k = lcg(&mut s);
+                Vec3A::new(
+                    if k < 0.5 { b.min.x } else { b.max.x },
+                    if !(0.25..=0.75).contains(&k) {
+                        b.min.y
+                    } else {
+                        b.max.y
+                    },
+                    if lcg(&mut s) < 0.5 { b.min.z } else { b.max.z },
+                ) - o
+            } else {
+                let mut d = u(&mut s) - 0.5;
+                if i % 5 == 1 {
+                    d.y = 0.0;
+                    d.z = 0.0;
+                }
+                d
+            };
+            let (tmin, tmax) = if i % 3 == 0 {
+                (0.0, f32::INFINITY)
+            } else {
+                (0.1, 0.9)
+            };
+            let r = BoxRay::new(o.into(), d.into(), tmin, bounds);
+            // Twice the slack in space, with the two ulps of the origin's coordinates.
+            let slack =
+                2.0 * f64::from(reach(o, bounds) + 2.0 * f32::EPSILON * o.abs().max_element());
+            let (o, d) = (o.as_dvec3(), d.as_dvec3());
+            for node in &nodes {
+                let (hits, _) = child_hits_scalar(node, &r, tmax);
+                for slot in 0..8 {
+                    if node.child_meta[slot] == 0 {
+                        continue;
+                    }
+                    // The exact segment inside the box, and the same for the box grown by
+                    // twice the slack.
+                    let segment = |grow: f64| {
+                        let (mut t0, mut t1) = (f64::from(tmin), f64::from(tmax));
+                        for a in 0..3 {
+                            let lo = f64::from(node.bounds[2 * a][slot]) - grow;
+                            let hi = f64::from(node.bounds[2 * a + 1][slot]) + grow;
+                            if d[a] == 0.0 {
+                                if o[a] < lo || o[a] > hi {
+                                    t0 = f64::INFINITY;
+                                }
+                                continue;
+                            }
+                            let (x, y) = ((lo - o[a]) / d[a], (hi - o[a]) / d[a]);
+                            t0 = t0.max(x.min(y));
+                            t1 = t1.min(x.max(y));
+                        }
+                        t0 <= t1
+                    };
+                    let hit = hits & (1 << slot) != 0;
+                    if segment(0.0) {
+                        entered += 1;
+                        assert!(hit, "offset {offset} scale {scale} ray {i} slot {slot}");
+                    } else if hit {
+                        loose += 1;
+                        assert!(
+                            segment(slack),
+                            "offset {offset} scale {scale} ray {i} slot {slot}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(
+            entered > 500 && loose < entered,
+            "entered {entered}, loose {loose}"
+        );
+    }
+}
+
+/// A ray's rows are its near planes then its far planes: the minimum rows on positive axes.
+#[test]
+fn rows_pick_near_then_far_planes() {
+    let mut node = tree(&[Aabb::new(Vec3A::ZERO, Vec3A::ONE)])[0];
+    for (k, row) in node.bounds.iter_mut().enumerate() {
+        *row = [k as f32; 8];
+    }
+    for neg_bits in 0..8u32 {
+        let got = Rows::new(neg_bits).planes(&node).map(|row| row[0] as usize);
+        let near = |a: usize| 2 * a + (neg_bits as usize >> a & 1);
+        let far = |a: usize| 2 * a + 1 - (neg_bits as usize >> a & 1);
+        assert_eq!(got, [near(0), near(1), near(2), far(0), far(1), far(2)]);
+    }
 }

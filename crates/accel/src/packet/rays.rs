@@ -11,12 +11,13 @@ use std::arch::x86_64::*;
 #[derive(Clone, Copy)]
 #[repr(C, align(32))]
 pub(super) struct PacketRays {
-    pub(super) origin: [[f32; PACKET_LANES]; 3],
-    pub(super) inv: [[f32; PACKET_LANES]; 3],
-    pub(super) slack: [[f32; PACKET_LANES]; 3],
+    pub(super) o_near: [[f32; PACKET_LANES]; 3],
+    pub(super) o_far: [[f32; PACKET_LANES]; 3],
+    pub(super) ninv: [[f32; PACKET_LANES]; 3],
     pub(super) tmin: [f32; PACKET_LANES],
-    /// The packet's common direction signs and child-ordering key.
-    pub(super) neg: [bool; 3],
+    /// Where the packet's planes are in a node (its rays share their direction signs), and its
+    /// child-ordering key.
+    pub(super) rows: crate::node::Rows,
     pub(super) oct_inv4: u32,
 }
 
@@ -27,18 +28,18 @@ impl PacketRays {
     #[inline(always)]
     pub(super) fn new(rays: &[BoxRay; PACKET_LANES]) -> Self {
         let mut p = Self {
-            origin: [[0.0; PACKET_LANES]; 3],
-            inv: [[0.0; PACKET_LANES]; 3],
-            slack: [[0.0; PACKET_LANES]; 3],
+            o_near: [[0.0; PACKET_LANES]; 3],
+            o_far: [[0.0; PACKET_LANES]; 3],
+            ninv: [[0.0; PACKET_LANES]; 3],
             tmin: [0.0; PACKET_LANES],
-            neg: rays[0].neg,
+            rows: rays[0].rows,
             oct_inv4: rays[0].oct_inv4,
         };
         for (i, r) in rays.iter().enumerate() {
             for a in 0..3 {
-                p.origin[a][i] = r.origin[a];
-                p.inv[a][i] = r.inv[a];
-                p.slack[a][i] = r.slack[a];
+                p.o_near[a][i] = r.o_near[a];
+                p.o_far[a][i] = r.o_far[a];
+                p.ninv[a][i] = r.ninv[a];
             }
             p.tmin[i] = r.tmin;
         }
@@ -47,11 +48,14 @@ impl PacketRays {
 }
 
 /// What `BoxRay::new` computes for eight rays (origins and directions by lane, tree bounds
-/// `(lo, hi)`), with its operations lane by lane: the clamped reciprocal and the slack per axis,
-/// and which lanes have a finite origin and direction (only there is the slack's maximum
-/// independent of its order of operations).
+/// `(lo, hi)`), with its operations lane by lane: the clamped reciprocal, the slack in space
+/// and per axis in `t`, and which lanes have a finite origin and direction (only there is the
+/// slack's maximum independent of its order of operations).
 pub(super) struct BoxLanes {
     pub(super) inv: [__m256; 3],
+    /// `SLACK * M`: the slack in space (`crate::node` module docs).
+    pub(super) reach: __m256,
+    /// `|inv| * reach` per axis: the slack in `t`.
     pub(super) slack: [__m256; 3],
     /// All ones in the lanes whose origin and direction are finite.
     pub(super) finite: __m256,
@@ -98,7 +102,12 @@ pub(super) unsafe fn box_lanes(
         let m = _mm256_add_ps(reach, _mm256_set1_ps(3.0 * (hi - lo).max_element()));
         let scale = _mm256_mul_ps(_mm256_set1_ps(crate::node::SLACK), m);
         let slack = inv.map(|i| _mm256_mul_ps(_mm256_andnot_ps(sign, i), scale));
-        BoxLanes { inv, slack, finite }
+        BoxLanes {
+            inv,
+            reach: scale,
+            slack,
+            finite,
+        }
     }
 }
 
@@ -124,19 +133,16 @@ impl PacketRays {
                 return None;
             }
             let mut p = Self {
-                origin: [[0.0; PACKET_LANES]; 3],
-                inv: [[0.0; PACKET_LANES]; 3],
-                slack: [[0.0; PACKET_LANES]; 3],
+                o_near: [[0.0; PACKET_LANES]; 3],
+                o_far: [[0.0; PACKET_LANES]; 3],
+                ninv: [[0.0; PACKET_LANES]; 3],
                 tmin,
-                neg: [false; 3],
+                rows: crate::node::Rows::new(0),
                 oct_inv4: 0,
             };
             let mut neg_bits = 0u32;
-            for (a, (o, (inv, slack))) in origin
-                .into_iter()
-                .zip(b.inv.into_iter().zip(b.slack))
-                .enumerate()
-            {
+            let sign = _mm256_set1_ps(-0.0);
+            for (a, (o, inv)) in origin.into_iter().zip(b.inv).enumerate() {
                 let negative =
                     _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(inv, _mm256_setzero_ps()))
                         as u32;
@@ -144,11 +150,20 @@ impl PacketRays {
                     return None;
                 }
                 neg_bits |= (negative & 1) << a;
-                _mm256_storeu_ps(p.origin[a].as_mut_ptr(), o);
-                _mm256_storeu_ps(p.inv[a].as_mut_ptr(), inv);
-                _mm256_storeu_ps(p.slack[a].as_mut_ptr(), slack);
+                // `node::widened_origins`, lane by lane.
+                let w = _mm256_add_ps(
+                    _mm256_mul_ps(
+                        _mm256_andnot_ps(sign, o),
+                        _mm256_set1_ps(2.0 * f32::EPSILON),
+                    ),
+                    b.reach,
+                );
+                let w = _mm256_or_ps(_mm256_andnot_ps(sign, w), _mm256_and_ps(sign, inv));
+                _mm256_storeu_ps(p.o_near[a].as_mut_ptr(), _mm256_add_ps(o, w));
+                _mm256_storeu_ps(p.o_far[a].as_mut_ptr(), _mm256_sub_ps(o, w));
+                _mm256_storeu_ps(p.ninv[a].as_mut_ptr(), _mm256_xor_ps(inv, sign));
             }
-            p.neg = [neg_bits & 1 != 0, neg_bits & 2 != 0, neg_bits & 4 != 0];
+            p.rows = crate::node::Rows::new(neg_bits);
             p.oct_inv4 = crate::node::oct_inv4(neg_bits);
             Some(p)
         }
@@ -220,7 +235,7 @@ mod tests {
                 let [dx, dy, dz, _] = transpose(dirs);
                 PacketRays::from_rays([ox, oy, oz], [dx, dy, dz], tmin, bounds)
             };
-            let same_signs = boxes.iter().all(|b| b.neg == boxes[0].neg);
+            let same_signs = boxes.iter().all(|b| b.rows == boxes[0].rows);
             let Some(got) = got else {
                 assert!(!same_signs, "case {case}: declined a packet of one octant");
                 declined += 1;
@@ -229,13 +244,13 @@ mod tests {
             assert!(same_signs, "case {case}: a packet of mixed octants");
             let want = PacketRays::new(&boxes);
             let bits = |v: &[[f32; PACKET_LANES]; 3]| v.map(|a| a.map(f32::to_bits));
-            assert_eq!(bits(&got.origin), bits(&want.origin), "case {case} origin");
-            assert_eq!(bits(&got.inv), bits(&want.inv), "case {case} inv");
-            assert_eq!(bits(&got.slack), bits(&want.slack), "case {case} slack");
+            assert_eq!(bits(&got.o_near), bits(&want.o_near), "case {case} o_near");
+            assert_eq!(bits(&got.o_far), bits(&want.o_far), "case {case} o_far");
+            assert_eq!(bits(&got.ninv), bits(&want.ninv), "case {case} ninv");
             assert_eq!(got.tmin.map(f32::to_bits), want.tmin.map(f32::to_bits));
             assert_eq!(
-                (got.neg, got.oct_inv4),
-                (want.neg, want.oct_inv4),
+                (got.rows, got.oct_inv4),
+                (want.rows, want.oct_inv4),
                 "case {case}"
             );
             built += 1;

@@ -4,10 +4,10 @@
 use super::{Group, Leaf};
 
 use crate::node::BoxRay;
-use obvhs::cwbvh::node::CwBvhNode;
+use crate::node::Node;
 use std::mem::MaybeUninit;
 
-/// A walk of a CWBVH (obvhs layout) in progress, front to back in obvhs' octant order: the
+/// A walk of a tree of [`Node`]s in progress, front to back in obvhs' octant order: the
 /// traversal of one ray as a state that advances one step at a time (the walk batches took
 /// before the ordered walk). [`traverse_groups`] runs one walk to its end.
 ///
@@ -42,7 +42,7 @@ impl GroupWalk {
     #[inline(always)]
     fn step<const AVX2: bool>(
         &mut self,
-        nodes: &[CwBvhNode],
+        nodes: &[Node],
         r: &BoxRay,
         tmax: &mut f32,
         stack: &mut [MaybeUninit<Group>],
@@ -116,12 +116,12 @@ pub(crate) fn take_child(
     current.0 + (hits & !(u32::MAX << slot)).count_ones()
 }
 
-/// Walks a CWBVH (obvhs layout) in obvhs' octant order for `r`, calling `leaf.visit(primitive, &mut tmax)`
+/// Walks a tree of [`Node`]s in obvhs' octant order for `r`, calling `leaf.visit(primitive, &mut tmax)`
 /// for every primitive in a hit leaf. Returns whether `leaf` stopped it. `stack` needs one entry
 /// per tree level.
 #[inline(always)]
 pub(crate) fn traverse_groups<const AVX2: bool>(
-    nodes: &[CwBvhNode],
+    nodes: &[Node],
     r: &BoxRay,
     tmax: &mut f32,
     stack: &mut [MaybeUninit<Group>],

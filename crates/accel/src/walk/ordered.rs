@@ -2,11 +2,11 @@
 //! closest hits, one-ray and interleaved.
 
 use super::{Group, Leaf};
+use crate::node::Node;
 use crate::node::{BoxRay, ChildHits};
-use obvhs::cwbvh::node::CwBvhNode;
 use std::mem::MaybeUninit;
 
-/// A walk of a CWBVH (obvhs layout) in progress: the traversal of one ray as a state that
+/// A walk of a tree of [`Node`]s in progress: the traversal of one ray as a state that
 /// advances one node at a time, so that several rays' walks can be interleaved on one thread
 /// (see [`crate::Accel::intersect_batch`]). [`traverse`] runs one walk to its end.
 ///
@@ -60,7 +60,7 @@ impl Walk {
     #[inline(always)]
     pub(super) fn step<const AVX2: bool, L: Leaf>(
         &mut self,
-        nodes: &[CwBvhNode],
+        nodes: &[Node],
         r: &BoxRay,
         tmax: &mut f32,
         stack: &mut [MaybeUninit<Group>],
@@ -192,7 +192,7 @@ fn pop<L: Leaf>(stack: &[MaybeUninit<Group>], sp: &mut usize, tmax: f32) -> Opti
 
 /// The node test of the walk: AVX2 or SSE2.
 #[inline(always)]
-fn child_hits<const AVX2: bool>(node: &CwBvhNode, r: &BoxRay, tmax: f32) -> ChildHits {
+fn child_hits<const AVX2: bool>(node: &Node, r: &BoxRay, tmax: f32) -> ChildHits {
     #[cfg(target_arch = "x86_64")]
     if AVX2 {
         // SAFETY: `AVX2` is true only when `detect_avx2` found AVX2 and FMA on this CPU.
@@ -233,7 +233,7 @@ fn nearest(slots: u32, enter: &[f32; 8]) -> u32 {
     best
 }
 
-/// Walks a CWBVH (obvhs layout) for `r`, calling `leaf.visit(primitive, &mut tmax)` for every
+/// Walks a tree of [`Node`]s for `r`, calling `leaf.visit(primitive, &mut tmax)` for every
 /// primitive in a hit leaf (nearest child first for closest hits, see [`Walk`]). Returns whether
 /// `leaf` stopped it. `stack` needs [`super::stack_len`] entries for the tree's depth.
 ///
@@ -241,7 +241,7 @@ fn nearest(slots: u32, enter: &[f32; 8]) -> u32 {
 /// a ray gains nothing from deferring (measured: 4–10 % slower on closest hits).
 #[inline(always)]
 pub(super) fn traverse<const AVX2: bool, L: Leaf>(
-    nodes: &[CwBvhNode],
+    nodes: &[Node],
     r: &BoxRay,
     tmax: &mut f32,
     stack: &mut [MaybeUninit<Group>],
