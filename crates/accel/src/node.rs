@@ -2,8 +2,9 @@
 //! [`layout`]) and the conservative ray test against its eight child boxes.
 //!
 //! The boxes are exact: a leaf's is the union of its primitives' boxes (a triangle's own `f32`
-//! coordinates; an instance's world bounds), an internal child's the union of its children's. (obvhs quantises them
-//! to 8 bits relative to the parent, which both widens them and costs a decode per node test.)
+//! coordinates; an instance's world bounds), an internal child's the union of its children's.
+//! (obvhs quantises them to 8 bits relative to the parent, which both widens them and costs a
+//! decode per node test.)
 //! The test honours `[tmin, tmax]` and widens every slab by a bound on all rounding errors
 //! involved:
 //! - a slab distance is `(o - b) * -inv`: one rounding in the subtraction, one in the product;

@@ -78,7 +78,7 @@ pub(super) unsafe fn box_lanes(
         let limit = _mm256_set1_ps(crate::node::INV_LIMIT);
         let mut finite = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
         // `(lo - o).abs().max((hi - o).abs()).max_element()` per lane.
-        let mut reach = _mm256_setzero_ps();
+        let mut corner = _mm256_setzero_ps();
         let mut inv = [_mm256_setzero_ps(); 3];
         for a in 0..3 {
             let (o, d) = (origin[a], dir[a]);
@@ -97,9 +97,9 @@ pub(super) unsafe fn box_lanes(
             inv[a] = _mm256_or_ps(_mm256_and_ps(ok, clamped), _mm256_andnot_ps(ok, signed));
             let to_lo = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_set1_ps(lo[a]), o));
             let to_hi = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_set1_ps(hi[a]), o));
-            reach = _mm256_max_ps(reach, _mm256_max_ps(to_lo, to_hi));
+            corner = _mm256_max_ps(corner, _mm256_max_ps(to_lo, to_hi));
         }
-        let m = _mm256_add_ps(reach, _mm256_set1_ps(3.0 * (hi - lo).max_element()));
+        let m = _mm256_add_ps(corner, _mm256_set1_ps(3.0 * (hi - lo).max_element()));
         let scale = _mm256_mul_ps(_mm256_set1_ps(crate::node::SLACK), m);
         let slack = inv.map(|i| _mm256_mul_ps(_mm256_andnot_ps(sign, i), scale));
         BoxLanes {

@@ -116,9 +116,9 @@ pub(crate) fn take_child(
     current.0 + (hits & !(u32::MAX << slot)).count_ones()
 }
 
-/// Walks a tree of [`Node`]s in obvhs' octant order for `r`, calling `leaf.visit(primitive, &mut tmax)`
-/// for every primitive in a hit leaf. Returns whether `leaf` stopped it. `stack` needs one entry
-/// per tree level.
+/// Walks a tree of [`Node`]s in obvhs' octant order for `r`, calling
+/// `leaf.visit(primitive, &mut tmax)` for every primitive in a hit leaf. Returns whether `leaf`
+/// stopped it. `stack` needs one entry per tree level.
 #[inline(always)]
 pub(crate) fn traverse_groups<const AVX2: bool>(
     nodes: &[Node],
