@@ -15,7 +15,7 @@ use obvhs::{
 use rayon::prelude::*;
 
 /// Depth (levels of nodes) of a tree; children always follow their parent in `nodes`.
-fn cwbvh_depth(nodes: &[Node]) -> usize {
+fn tree_depth(nodes: &[Node]) -> usize {
     let mut depth = vec![0u32; nodes.len()];
     let mut max = 0u32;
     for i in 0..nodes.len() {
@@ -149,7 +149,7 @@ fn build_blas(tris: Vec<(Tri, u32)>, quality: BvhQuality, keep_instance: bool) -
     } else {
         Vec::new()
     };
-    let depth = cwbvh_depth(&nodes);
+    let depth = tree_depth(&nodes);
     let box_bounds = bounds.unwrap_or((Vec3::ZERO, Vec3::ZERO));
     Blas {
         nodes,
@@ -586,7 +586,7 @@ impl Accel {
             .map(|b| (Vec3::from(b.min), Vec3::from(b.max)))
             .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
             .unwrap_or((Vec3::ZERO, Vec3::ZERO));
-        let tlas_depth = cwbvh_depth(&tlas);
+        let tlas_depth = tree_depth(&tlas);
         let max_blas_depth = blases.iter().map(|b| b.depth).max().unwrap_or(0);
         Self {
             blases,

@@ -3,8 +3,7 @@
 //! [`ordered`] (children in entry-distance order, pops beyond `tmax` skipped; closest hits, and
 //! every batch) and [`group`] (obvhs' node groups in octant order; one-ray occlusion, packets).
 
-use crate::node::BoxRay;
-use crate::node::Node;
+use crate::node::{BoxRay, Node};
 use crate::triangle::TriRay;
 use crate::{Accel, Blas, Entry, Hit, Ray, Tri};
 use std::mem::MaybeUninit;

@@ -3,8 +3,7 @@
 
 use super::{Group, Leaf};
 
-use crate::node::BoxRay;
-use crate::node::Node;
+use crate::node::{BoxRay, Node};
 use std::mem::MaybeUninit;
 
 /// A walk of a tree of [`Node`]s in progress, front to back in obvhs' octant order: the

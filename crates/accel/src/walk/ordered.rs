@@ -2,8 +2,7 @@
 //! closest hits, one-ray and interleaved.
 
 use super::{Group, Leaf};
-use crate::node::Node;
-use crate::node::{BoxRay, ChildHits};
+use crate::node::{BoxRay, ChildHits, Node};
 use std::mem::MaybeUninit;
 
 /// A walk of a tree of [`Node`]s in progress: the traversal of one ray as a state that
