@@ -26,7 +26,7 @@ use glam::{Vec3, Vec3A};
 
 pub(crate) mod layout;
 
-pub(crate) use layout::Node;
+pub(crate) use layout::{child_index, Node};
 
 /// Relative spatial slack of the box test (see the module docs); 64 ulps at unit scale, which
 /// costs nothing measurable in traversal.
@@ -217,7 +217,7 @@ pub(crate) unsafe fn intersect_node_avx2(node: &Node, r: &BoxRay, tmax: f32) -> 
     // `hitmask_from_children` without its data-dependent loop (one iteration per hit child, a
     // branch that mispredicts often): each lane shifts its child's bits to their index, lanes of
     // missed children are masked off, and the eight lanes are OR-ed together.
-    // The child bits and their indices are `Node::child_and_index_bits` lane by lane (there on
+    // The child bits and their indices are obvhs' `get_child_and_index_bits` lane by lane (there on
     // the eight bytes of a `u64`): a child is internal when bits 3 and 4 of its meta byte are
     // both set; its index is then its slot (low 5 bits) XOR the ray's octant, a leaf's is its
     // first primitive's offset; the bits are the meta byte's top three.

@@ -30,21 +30,42 @@ pub(crate) struct Node {
 }
 
 impl Node {
-    /// obvhs' `CwBvhNode::get_child_and_index_bits`: per slot byte, the bits a hit child sets in
-    /// the node hit mask and the index they are shifted to (for internal children, the slot
-    /// XOR the ray's octant `oct_inv4`, biased by 24).
+    /// obvhs' `CwBvhNode::get_child_and_index_bits` of this node: per slot byte, the bits a hit
+    /// child sets in the node hit mask and the index they are shifted to (for internal
+    /// children, the slot XOR the ray's octant `oct_inv4`, biased by 24). It reads only
+    /// `child_meta`.
     #[inline(always)]
     pub fn child_and_index_bits(&self, oct_inv4: u32) -> (u64, u64) {
-        let mut oct_inv8 = oct_inv4 as u64;
-        oct_inv8 |= oct_inv8 << 32;
-        let meta8 = u64::from_le_bytes(self.child_meta);
-        // Internal children's meta is in [24, 32): bits 3 and 4 both set, never so for leaves.
-        let is_inner8 = (meta8 & (meta8 << 1)) & 0x1010_1010_1010_1010;
-        let inner_mask8 = (is_inner8 >> 4) * 0xff;
-        let bit_index8 = (meta8 ^ (oct_inv8 & inner_mask8)) & 0x1f1f_1f1f_1f1f_1f1f;
-        let child_bits8 = (meta8 >> 5) & 0x0707_0707_0707_0707;
-        (child_bits8, bit_index8)
+        let meta = CwBvhNode {
+            child_meta: self.child_meta,
+            ..CwBvhNode::default()
+        };
+        meta.get_child_and_index_bits(oct_inv4)
     }
+
+    /// The node index of the internal child in `slot` ([`child_index`]).
+    #[inline(always)]
+    pub fn child(&self, slot: u32) -> u32 {
+        child_index(self.child_base_idx, u32::from(self.imask), slot)
+    }
+
+    /// The positions in the primitive order of the primitives of the leaf in `slot` (its meta
+    /// byte holds the first one's offset in its low 5 bits and their count in unary in its top
+    /// 3; an empty slot has none).
+    #[inline(always)]
+    pub fn leaf(&self, slot: usize) -> std::ops::Range<u32> {
+        let meta = self.child_meta[slot & 7];
+        let first = self.primitive_base_idx.wrapping_add(u32::from(meta & 0x1f));
+        first..first.wrapping_add((meta >> 5).count_ones())
+    }
+}
+
+/// The node index of the internal child in `slot` of a node whose first internal child is
+/// `base` and whose internal slots are the low bits of `imask` (higher bits are ignored):
+/// internal children are stored in slot order.
+#[inline(always)]
+pub(crate) fn child_index(base: u32, imask: u32, slot: u32) -> u32 {
+    base.wrapping_add((imask & !(u32::MAX << slot)).count_ones())
 }
 
 /// Our nodes for obvhs' `nodes` over primitives whose boxes are `prim_boxes`, in the order
@@ -84,18 +105,15 @@ pub(crate) fn nodes_from_cwbvh(
         };
         let mut total = Aabb::empty();
         for slot in 0..8 {
-            let meta = n.child_meta[slot];
-            let b = if meta == 0 {
+            let b = if n.child_meta[slot] == 0 {
                 continue;
             } else if n.imask & (1 << slot) != 0 {
-                let rank = (u32::from(n.imask) & ((1 << slot) - 1)).count_ones();
-                let child = n.child_base_idx.wrapping_add(rank) as usize;
+                let child = node.child(slot as u32) as usize;
                 own.get(child).copied().unwrap_or_else(Aabb::empty)
             } else {
-                let first = n.primitive_base_idx.wrapping_add(u32::from(meta & 0x1f));
-                (0..(meta >> 5).count_ones()).fold(Aabb::empty(), |acc, k| {
+                node.leaf(slot).fold(Aabb::empty(), |acc, p| {
                     primitive_indices
-                        .get(first.wrapping_add(k) as usize)
+                        .get(p as usize)
                         .and_then(|&p| prim_boxes.get(p as usize))
                         .map_or(acc, |b| acc.union(b))
                 })
@@ -152,6 +170,7 @@ mod tests {
                 if meta == 0 {
                     continue;
                 }
+                // Decoded here on its own, not with `Node::child`/`Node::leaf`: the check of them.
                 let child = if n.imask & (1 << slot) != 0 {
                     let rank = (n.imask as u32 & ((1 << slot) - 1)).count_ones();
                     below(nodes, order, boxes, (n.child_base_idx + rank) as usize)

@@ -3,7 +3,7 @@
 
 use super::{Group, Leaf};
 
-use crate::node::{BoxRay, Node};
+use crate::node::{child_index, BoxRay, Node};
 use std::mem::MaybeUninit;
 
 /// A walk of a tree of [`Node`]s in progress, front to back in obvhs' octant order: the
@@ -112,7 +112,8 @@ pub(crate) fn take_child(
         *sp += 1;
     }
     let slot = (offset - 24) ^ oct;
-    current.0 + (hits & !(u32::MAX << slot)).count_ones()
+    // The low byte of a group's bits is its node's `imask`.
+    child_index(current.0, hits, slot)
 }
 
 /// Walks a tree of [`Node`]s in obvhs' octant order for `r`, calling

@@ -2,7 +2,7 @@
 //! closest hits, one-ray and interleaved.
 
 use super::{Group, Leaf};
-use crate::node::{BoxRay, ChildHits, Node};
+use crate::node::{child_index, BoxRay, ChildHits, Node};
 use std::mem::MaybeUninit;
 
 /// A walk of a tree of [`Node`]s in progress: the traversal of one ray as a state that
@@ -165,11 +165,10 @@ impl Children<'_> {
         }
     }
 
-    /// The node index of slot `c`: internal children are stored in slot order.
+    /// The node index of slot `c`.
     #[inline(always)]
     fn index(&self, c: u32) -> u32 {
-        let below = self.imask & !(u32::MAX << c);
-        self.base.wrapping_add(below.count_ones())
+        child_index(self.base, self.imask, c)
     }
 }
 
