@@ -256,13 +256,10 @@ pub(super) fn traverse<const AVX2: bool, L: Leaf>(
         // latency before the first triangle; measured 3–5 % slower here).
         let mut leaves = hits.hits & !imask;
         while leaves != 0 {
-            // A leaf's meta byte holds its first primitive's offset (low 5 bits) and its count
-            // in unary (top 3 bits); empty slots' is zero.
-            let meta = node.child_meta[leaves.trailing_zeros() as usize & 7];
+            let prims = node.leaf(leaves.trailing_zeros() as usize);
             leaves &= leaves - 1;
-            let first = node.primitive_base_idx.wrapping_add(u32::from(meta & 0x1f));
-            for k in 0..(meta >> 5).count_ones() {
-                if leaf.visit(first.wrapping_add(k), tmax) {
+            for p in prims {
+                if leaf.visit(p, tmax) {
                     return true;
                 }
             }

@@ -277,7 +277,9 @@ impl Bsdf {
     }
 
     /// Value (without cosine) and solid-angle density for the pair of local directions;
-    /// delta lobes contribute nothing.
+    /// delta lobes contribute nothing. Inline: the clay's arm is a few multiplies, which a call
+    /// and a result passed through memory would cost more than.
+    #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
         if wo.z <= 0.0 {
             return (Vec3::ZERO, 0.0);
@@ -290,7 +292,9 @@ impl Bsdf {
         }
     }
 
-    /// Draws an incident direction for `wo` (local, `wo.z > 0`).
+    /// Draws an incident direction for `wo` (local, `wo.z > 0`). Always inline: a call returns
+    /// the sample through memory, and the clay's few operations wait on that copy.
+    #[inline(always)]
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: [f32; 2]) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;
