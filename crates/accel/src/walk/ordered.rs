@@ -100,8 +100,11 @@ impl Walk {
         self.child_base = node.child_base_idx;
         self.prims = hits.prims;
         self.prim_base = node.primitive_base_idx;
-        self.tested = *tmax;
-        self.enter = hits.enter;
+        // Occlusion reads neither (its order ignores distances, its `tmax` never shrinks).
+        if L::CLOSEST {
+            self.tested = *tmax;
+            self.enter = hits.enter;
+        }
         None
     }
 }
@@ -134,7 +137,12 @@ impl Children<'_> {
             while rest != 0 {
                 let c = rest.trailing_zeros();
                 rest &= rest - 1;
-                let entry = (self.index(c), self.enter[c as usize & 7].to_bits());
+                let enter = if L::CLOSEST {
+                    self.enter[c as usize & 7].to_bits()
+                } else {
+                    0
+                };
+                let entry = (self.index(c), enter);
                 stack[*sp] = MaybeUninit::new(entry);
                 *sp += 1;
             }
