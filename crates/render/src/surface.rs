@@ -242,6 +242,46 @@ impl<'a> Geometry<'a> {
         self.surface_at(instance, triangle, b1, b2, true)
     }
 
+    /// Asks the cache for the corner indices of `triangle` of `instance`'s mesh: the first
+    /// read of [`Geometry::surface_at`], a few paths before it (see [`Geometry::prefetch`]).
+    #[inline(always)]
+    pub(crate) fn prefetch_corners(&self, instance: u32, triangle: u32) {
+        if let Some(mesh) = self.mesh_of(instance) {
+            prefetch(mesh.indices.as_ptr().wrapping_add(triangle as usize));
+        }
+    }
+
+    /// Asks the cache for what [`Geometry::surface_at`] reads at the corners of `triangle` of
+    /// `instance`'s mesh: positions, normals and the first texture coordinates. A wavefront
+    /// shades its paths' hits one after another; each hit's vertex data is a few random
+    /// reads that miss in a large mesh, and asking a few paths ahead overlaps those misses
+    /// with the shading in between. Reads only the corner indices (asked for earlier by
+    /// [`Geometry::prefetch_corners`]); out-of-range indices ask for nothing that is read.
+    #[inline(always)]
+    pub(crate) fn prefetch(&self, instance: u32, triangle: u32) {
+        let Some(mesh) = self.mesh_of(instance) else {
+            return;
+        };
+        let Some(corners) = mesh.indices.get(triangle as usize) else {
+            return;
+        };
+        for &i in corners {
+            let i = i as usize;
+            prefetch(mesh.positions.as_ptr().wrapping_add(i));
+            if !mesh.normals.is_empty() {
+                prefetch(mesh.normals.as_ptr().wrapping_add(i));
+            }
+            if !mesh.uv0.is_empty() {
+                prefetch(mesh.uv0.as_ptr().wrapping_add(i));
+            }
+        }
+    }
+
+    fn mesh_of(&self, instance: u32) -> Option<&aperture_scene::Mesh> {
+        let inst = self.scene.instances.get(instance as usize)?;
+        self.scene.meshes.get(inst.mesh as usize)
+    }
+
     /// [`Geometry::surface`] as a light sample on an emissive triangle reads it: position,
     /// geometric normal, area, material and texture coordinates, bit for bit; the shading
     /// normal is the geometric one (unless that needs it), no tangent, white vertex colour.
@@ -543,4 +583,18 @@ fn material_info(
             0.0
         },
     }
+}
+
+/// A hint to bring the cache line holding `p` closer; never reads `p` (any address is fine).
+#[inline(always)]
+fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch is only a hint: it neither faults nor reads the address into the
+    // program, so any pointer value, even out of bounds, is sound.
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch::<_MM_HINT_T0>(p as *const i8);
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
 }

@@ -15,6 +15,9 @@ use crate::sampler::SampleStream;
 use aperture_accel::{Hit, Ray};
 use glam::Vec3;
 
+/// Paths between asking for a hit's vertex data and shading it.
+const AHEAD: usize = 4;
+
 /// A light sample whose shadow ray is not traced yet.
 pub(crate) struct PendingLight {
     /// The shadow ray.
@@ -119,7 +122,16 @@ impl<const AOV: bool> Wavefront<AOV> {
                 accel.intersect_batch(&self.rays, &mut self.hits);
             }
             self.shadows.clear();
-            for (&i, &hit) in self.live.iter().zip(&self.hits) {
+            let geom = &integrator.geom;
+            for (k, (&i, &hit)) in self.live.iter().zip(&self.hits).enumerate() {
+                // The hit data of later paths, asked for ahead (`Geometry::prefetch`): their
+                // corner indices `2 AHEAD` paths ahead, their vertices `AHEAD` ahead.
+                if let Some(&Some(h)) = self.hits.get(k + 2 * AHEAD) {
+                    geom.prefetch_corners(h.instance, h.triangle);
+                }
+                if let Some(&Some(h)) = self.hits.get(k + AHEAD) {
+                    geom.prefetch(h.instance, h.triangle);
+                }
                 let p = &mut self.paths[i];
                 integrator.advance(p, &starts[i].2, hit);
                 self.shadows.extend(p.shadow_rays());
