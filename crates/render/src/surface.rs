@@ -145,7 +145,16 @@ pub(crate) struct Geometry<'a> {
     pub has_refractive: bool,
     /// True when some surface may be thin-walled transmissive (shadow rays may pass it).
     pub has_thin: bool,
+    /// True when the meshes' vertex data is large enough for a hit's reads to miss the
+    /// caches, so that asking for them ahead ([`Geometry::prefetch`]) pays for itself.
+    pub prefetch_hits: bool,
 }
+
+/// Bytes of vertex data (positions, normals, first texture coordinates, indices) above which
+/// [`Geometry::prefetch_hits`] is set. Measured: the 560 k-triangle interior (13.6 MB) renders
+/// 2–3 % faster with the hints; the 58 k-triangle outdoor scene (1.5 MB) and the helmet
+/// (2.9 MB) run at the same speed with 2 % more instructions.
+const PREFETCH_ABOVE: usize = 8 << 20;
 
 impl<'a> Geometry<'a> {
     /// Hit shading for `scene` with glTF's meaning of transmission.
@@ -200,6 +209,16 @@ impl<'a> Geometry<'a> {
         let has_thin = info
             .iter()
             .any(|i| matches!(i.transmits, Transmits::Thin | Transmits::IfClosed));
+        let vertex_bytes: usize = scene
+            .meshes
+            .iter()
+            .map(|m| {
+                std::mem::size_of_val(m.positions.as_slice())
+                    + std::mem::size_of_val(m.normals.as_slice())
+                    + std::mem::size_of_val(m.uv0.as_slice())
+                    + std::mem::size_of_val(m.indices.as_slice())
+            })
+            .sum();
         Self {
             scene,
             normal_from_object,
@@ -211,6 +230,7 @@ impl<'a> Geometry<'a> {
             closed,
             has_refractive,
             has_thin,
+            prefetch_hits: vertex_bytes > PREFETCH_ABOVE,
         }
     }
 

@@ -126,11 +126,13 @@ impl<const AOV: bool> Wavefront<AOV> {
             for (k, (&i, &hit)) in self.live.iter().zip(&self.hits).enumerate() {
                 // The hit data of later paths, asked for ahead (`Geometry::prefetch`): their
                 // corner indices `2 AHEAD` paths ahead, their vertices `AHEAD` ahead.
-                if let Some(&Some(h)) = self.hits.get(k + 2 * AHEAD) {
-                    geom.prefetch_corners(h.instance, h.triangle);
-                }
-                if let Some(&Some(h)) = self.hits.get(k + AHEAD) {
-                    geom.prefetch(h.instance, h.triangle);
+                if geom.prefetch_hits {
+                    if let Some(&Some(h)) = self.hits.get(k + 2 * AHEAD) {
+                        geom.prefetch_corners(h.instance, h.triangle);
+                    }
+                    if let Some(&Some(h)) = self.hits.get(k + AHEAD) {
+                        geom.prefetch(h.instance, h.triangle);
+                    }
                 }
                 let p = &mut self.paths[i];
                 integrator.advance(p, &starts[i].2, hit);
