@@ -29,6 +29,7 @@ mod environment;
 mod film;
 mod filter;
 mod footprint;
+mod hit_prefetch;
 mod integrator;
 mod light_choice;
 mod lights;

@@ -146,15 +146,9 @@ pub(crate) struct Geometry<'a> {
     /// True when some surface may be thin-walled transmissive (shadow rays may pass it).
     pub has_thin: bool,
     /// True when the meshes' vertex data is large enough for a hit's reads to miss the
-    /// caches, so that asking for them ahead ([`Geometry::prefetch`]) pays for itself.
+    /// caches, so that asking for them ahead (`crate::hit_prefetch`) pays for itself.
     pub prefetch_hits: bool,
 }
-
-/// Bytes of vertex data (positions, normals, first texture coordinates, indices) above which
-/// [`Geometry::prefetch_hits`] is set. Measured: the 560 k-triangle interior (13.6 MB) renders
-/// 2–3 % faster with the hints; the 58 k-triangle outdoor scene (1.5 MB) and the helmet
-/// (2.9 MB) run at the same speed with 2 % more instructions.
-const PREFETCH_ABOVE: usize = 8 << 20;
 
 impl<'a> Geometry<'a> {
     /// Hit shading for `scene` with glTF's meaning of transmission.
@@ -209,16 +203,6 @@ impl<'a> Geometry<'a> {
         let has_thin = info
             .iter()
             .any(|i| matches!(i.transmits, Transmits::Thin | Transmits::IfClosed));
-        let vertex_bytes: usize = scene
-            .meshes
-            .iter()
-            .map(|m| {
-                std::mem::size_of_val(m.positions.as_slice())
-                    + std::mem::size_of_val(m.normals.as_slice())
-                    + std::mem::size_of_val(m.uv0.as_slice())
-                    + std::mem::size_of_val(m.indices.as_slice())
-            })
-            .sum();
         Self {
             scene,
             normal_from_object,
@@ -230,7 +214,7 @@ impl<'a> Geometry<'a> {
             closed,
             has_refractive,
             has_thin,
-            prefetch_hits: vertex_bytes > PREFETCH_ABOVE,
+            prefetch_hits: crate::hit_prefetch::worth_it(scene),
         }
     }
 
@@ -260,46 +244,6 @@ impl<'a> Geometry<'a> {
     /// The surface at barycentrics (`b1`, `b2`) of `triangle` of `instance`.
     pub fn surface(&self, instance: u32, triangle: u32, b1: f32, b2: f32) -> Surface {
         self.surface_at(instance, triangle, b1, b2, true)
-    }
-
-    /// Asks the cache for the corner indices of `triangle` of `instance`'s mesh: the first
-    /// read of [`Geometry::surface_at`], a few paths before it (see [`Geometry::prefetch`]).
-    #[inline(always)]
-    pub(crate) fn prefetch_corners(&self, instance: u32, triangle: u32) {
-        if let Some(mesh) = self.mesh_of(instance) {
-            prefetch(mesh.indices.as_ptr().wrapping_add(triangle as usize));
-        }
-    }
-
-    /// Asks the cache for what [`Geometry::surface_at`] reads at the corners of `triangle` of
-    /// `instance`'s mesh: positions, normals and the first texture coordinates. A wavefront
-    /// shades its paths' hits one after another; each hit's vertex data is a few random
-    /// reads that miss in a large mesh, and asking a few paths ahead overlaps those misses
-    /// with the shading in between. Reads only the corner indices (asked for earlier by
-    /// [`Geometry::prefetch_corners`]); out-of-range indices ask for nothing that is read.
-    #[inline(always)]
-    pub(crate) fn prefetch(&self, instance: u32, triangle: u32) {
-        let Some(mesh) = self.mesh_of(instance) else {
-            return;
-        };
-        let Some(corners) = mesh.indices.get(triangle as usize) else {
-            return;
-        };
-        for &i in corners {
-            let i = i as usize;
-            prefetch(mesh.positions.as_ptr().wrapping_add(i));
-            if !mesh.normals.is_empty() {
-                prefetch(mesh.normals.as_ptr().wrapping_add(i));
-            }
-            if !mesh.uv0.is_empty() {
-                prefetch(mesh.uv0.as_ptr().wrapping_add(i));
-            }
-        }
-    }
-
-    fn mesh_of(&self, instance: u32) -> Option<&aperture_scene::Mesh> {
-        let inst = self.scene.instances.get(instance as usize)?;
-        self.scene.meshes.get(inst.mesh as usize)
     }
 
     /// [`Geometry::surface`] as a light sample on an emissive triangle reads it: position,
@@ -603,18 +547,4 @@ fn material_info(
             0.0
         },
     }
-}
-
-/// A hint to bring the cache line holding `p` closer; never reads `p` (any address is fine).
-#[inline(always)]
-fn prefetch<T>(p: *const T) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch is only a hint: it neither faults nor reads the address into the
-    // program, so any pointer value, even out of bounds, is sound.
-    unsafe {
-        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        _mm_prefetch::<_MM_HINT_T0>(p as *const i8);
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = p;
 }

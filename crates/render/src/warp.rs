@@ -9,11 +9,11 @@ use std::f32::consts::{FRAC_PI_4, PI, TAU};
 /// Shirley–Chiu concentric mapping of the unit square onto the unit disc: continuous and
 /// area-preserving, so strata of the square stay compact strata of the disc.
 ///
-/// Written without a data-dependent branch and with [`sin_cos_quarter_lanes`] for the one angle in
-/// `[-π/4, π/4]` the mapping needs: the lens and every diffuse bounce go through here, and a
-/// 50/50 branch plus libm's `sincosf` cost more than the mapping itself. It runs the lane
-/// version in one lane, because LLVM compiles a scalar `if` on the wedge test into exactly
-/// that branch (7 % of a render's time sat in `Bsdf::sample` behind it).
+/// Written without a data-dependent branch and with the quarter-range `sin`/`cos` kernels for
+/// the one angle in `[-π/4, π/4]` the mapping needs: the lens and every diffuse bounce go
+/// through here, and a 50/50 branch plus libm's `sincosf` cost more than the mapping itself.
+/// It runs the lane version in one lane, because LLVM compiles a scalar `if` on the wedge test
+/// into exactly that branch (7 % of a render's time sat in `Bsdf::sample` behind it).
 #[inline(always)]
 pub fn concentric_disc(u: Vec2) -> Vec2 {
     let (x, y) = concentric_disc_lanes([Vec4::splat(u.x), Vec4::splat(u.y)]);
