@@ -11,7 +11,7 @@ use crate::passes::{Pass, PassSet};
 use glam::Vec3;
 
 /// Sums of one pixel.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::Zeroable)]
 pub struct PixelSum {
     /// Sum of radiance.
     pub rgb: [f64; 3],
@@ -207,11 +207,19 @@ pub(crate) struct Accum {
 }
 
 impl Accum {
-    /// Empty accumulators for `n` pixels.
+    /// Empty accumulators for `n` pixels: what [`Accum::reset`] makes, in zeroed allocations,
+    /// so that a film's pages are first touched when its tiles land (by whichever thread
+    /// merges them) rather than all at once before any tile starts: writing the 3 MB of a
+    /// 320 × 240 film took 1 ms on one thread while the other waited.
     pub fn new(n: usize, layout: AovLayout) -> Self {
-        let mut a = Self::default();
-        a.reset(n, layout);
-        a
+        let crypto = |on: bool| bytemuck::zeroed_vec(if on { n } else { 0 });
+        Self {
+            layout,
+            sums: bytemuck::zeroed_vec(n),
+            aov: vec![0.0; n * layout.stride],
+            crypto_object: crypto(layout.crypto_object),
+            crypto_material: crypto(layout.crypto_material),
+        }
     }
 
     /// Makes these accumulators empty ones for `n` pixels of `layout` (what [`Accum::new`]
@@ -464,6 +472,23 @@ mod tests {
         assert!(!p.add(Vec3::new(0.0, f32::INFINITY, 0.0), false));
         assert!(p.add(Vec3::new(3.0, 2.0, 1.0), false));
         assert_eq!(p.resolve(), [2.0, 2.0, 2.0, 0.5]);
+    }
+
+    #[test]
+    fn new_accumulators_are_reset_ones() {
+        // `new` allocates zeroed memory; `reset` writes each type's default: the two must be
+        // the same empty sums, with and without passes (Cryptomatte included).
+        for passes in [PassSet::default(), PassSet::all()] {
+            let layout = AovLayout::new(passes);
+            for n in [0, 1, 37] {
+                let mut reset = Accum::default();
+                reset.reset(n, layout);
+                let new = Accum::new(n, layout);
+                assert_eq!(new, reset, "{n} pixels");
+                assert_eq!(new.sums.len(), n);
+            }
+        }
+        assert!(AovLayout::new(PassSet::all()).crypto_object);
     }
 
     #[test]
