@@ -27,6 +27,7 @@ impl SpawnPoint {
     /// fixed step guards against, and a fixed step is a large part of a scene measured in units
     /// of 1e-4 (it lost contact shadows there). An `error` of 0 means "not known": then the
     /// fixed step stays, exactly as `offset_ray_origin`.
+    #[inline]
     pub fn origin(&self, n: Vec3) -> Vec3 {
         let n = n.normalize_or_zero();
         if self.error > 0.0 {
