@@ -19,7 +19,8 @@ noise RMSE), then per spp budget the median *render-only* time of ``--repeats`` 
 RMSE / rel. MSE / MAE against that renderer's own reference. ``all`` keeps one process per
 renderer loaded and alternates them, round by round within each budget, so that a machine
 whose speed drifts during the run (this one's moved by 15-40 % within an hour) moves all three
-alike (``series`` times one renderer alone). Written as
+alike (``series`` times one renderer alone); each timed render waits ``--settle`` seconds first,
+so that no other renderer's worker threads still spin. Written as
 ``OUT/<scene>/<renderer>.csv`` in the columns of ``aperture bench``'s results.csv (usable with
 ``aperture bench --series``). ``summary`` prints time to each RMSE target, the ratios and the
 per-sample costs. See README.md ("Three more scenes").
@@ -541,14 +542,22 @@ def alternated_series(workers, name, args):
     renders once, in an order that rotates from round to round: a machine that speeds up or
     slows down during the run moves every renderer's times alike. Writes each renderer's CSV."""
     rows = {r: [] for r in workers}
+
+    def render(r, spp, seed):
+        # The other renderers' thread pools must be asleep: Dr.Jit's workers spin on after a
+        # render, and a render started at once shares the two cores with them (outdoor_dof,
+        # 2 spp: aperture took 33.3 ms right after Mitsuba, 28.0 ms after a 0.3 s pause).
+        time.sleep(args.settle)
+        return workers[r].render(spp, seed)
+
     for spp in [int(s) for s in args.spp.split(",")]:
-        first = {r: w.render(spp, 1)["seconds"] for r, w in workers.items()}
+        first = {r: render(r, spp, 1)["seconds"] for r in workers}
         times = {r: [] for r in workers}
         last = {}
         order = list(workers)
         for k in range(args.repeats):
             for r in order[k % len(order):] + order[:k % len(order)]:
-                last[r] = workers[r].render(spp, 2 + k)
+                last[r] = render(r, spp, 2 + k)
                 times[r].append(last[r]["seconds"])
             if min(sum(t) for t in times.values()) > args.repeat_seconds:
                 break
@@ -591,6 +600,8 @@ def parser():
     ap.add_argument("--repeat-seconds", type=float, default=10.0,
                     help="stop repeating a budget once its timed renders add up to this")
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--settle", type=float, default=0.3,
+                    help="seconds of pause before each timed render, so that no renderer's workers still spin")
     ap.add_argument("--size", default=f"{WIDTH}x{HEIGHT}", help="WxH (smaller for smoke runs)")
     ap.add_argument("--aperture", default=os.path.join(REPO, "target", "release", "aperture"))
     ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant")
