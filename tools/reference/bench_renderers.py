@@ -250,7 +250,12 @@ def aperture_renderer(scene, gltf, binary, size, threads, tmp, bvh="medium"):
                "--bvh-quality", bvh, "--passes", "none", "--quiet", *env]
         subprocess.run(cmd, check=True)
         exr = pattern.replace("####", f"{last:04d}")
-        return read_exr_rgb(exr), exr_render_time(exr)
+        img = read_exr_rgb(exr)
+        # Frames are posed at frame N: a scene that moves would time another image than it
+        # returns for frame 1, so the two must be the same render.
+        if last == 2 and not np.array_equal(img, read_exr_rgb(pattern.replace("####", "0001"))):
+            raise ValueError(f"{gltf}: frames 1 and 2 differ (an animated scene); time it cold")
+        return img, exr_render_time(exr)
 
     return render
 
