@@ -15,6 +15,11 @@ impl Accel {
         self.stats
     }
 
+    /// A box (world space) holding everything a ray can hit; `None` when nothing can be hit.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        (!self.entries.is_empty()).then_some(self.tlas_bounds)
+    }
+
     /// The closest hit in `[ray.tmin, ray.tmax]`, if any.
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
         #[cfg(target_arch = "x86_64")]

@@ -77,6 +77,15 @@ impl Filter {
         Self::Tabulated { width, cdf, guide }
     }
 
+    /// The largest offset from the pixel centre [`Filter::sample`] gives along an axis, in
+    /// pixels.
+    pub fn half_width(&self) -> f32 {
+        match self {
+            Self::Box => 0.5,
+            Self::Tabulated { width, .. } => 0.5 * width,
+        }
+    }
+
     /// Offset from the pixel centre, in pixels, for `u ∈ [0, 1)` along one axis.
     pub fn sample_1d(&self, u: f32) -> f32 {
         match self {
@@ -135,6 +144,26 @@ mod tests {
         let f = Filter::new(FilterKind::Box);
         assert_eq!(f.sample_1d(0.0), -0.5);
         assert!((f.sample_1d(0.75) - 0.25).abs() < 1e-7);
+    }
+
+    #[test]
+    fn samples_stay_within_the_half_width() {
+        for kind in [
+            FilterKind::Box,
+            FilterKind::Gaussian,
+            FilterKind::BlackmanHarris,
+        ] {
+            let f = Filter::new(kind);
+            let h = f.half_width();
+            let widest = (0..=10_000)
+                .map(|i| (i as f32 / 10_000.0).min(1.0f32.next_down()))
+                .map(|u| f.sample_1d(u).abs())
+                .fold(0.0f32, f32::max);
+            assert!(
+                widest <= h && widest > 0.9 * h,
+                "{kind:?}: {widest} against {h}"
+            );
+        }
     }
 
     #[test]

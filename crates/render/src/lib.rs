@@ -19,6 +19,7 @@
 
 pub mod adaptive;
 mod aov;
+mod background;
 mod bsdf;
 pub mod camera;
 mod camera_lanes;

@@ -5,6 +5,7 @@
 //! The values are exactly those of drawing each sample alone: a pure function of (pixel,
 //! index, dimension, seed).
 
+use crate::background::PixelRect;
 use crate::camera::{Camera, CameraRay, CameraSample};
 use crate::camera_lanes::{LensLanes, LANES};
 use crate::filter::Filter;
@@ -30,6 +31,17 @@ pub(crate) struct PrimarySamples<'a> {
     run: PixelRun,
     /// The camera's rays made [`LANES`] at a time, when it is a kind the lanes cover.
     lanes: Option<LensLanes>,
+    /// The pixels whose rays may meet the scene; the others' samples are [`Start::Background`].
+    scene: PixelRect,
+}
+
+/// What a sample's camera gave: a traced ray, no ray, or a ray that provably leaves the scene
+/// at once (its pixel lies outside [`PrimarySamples::with_scene`]'s rectangle; not traced).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Start {
+    Traced,
+    NoRay,
+    Background,
 }
 
 impl<'a> PrimarySamples<'a> {
@@ -53,56 +65,91 @@ impl<'a> PrimarySamples<'a> {
             row: (None, 0),
             centre: Vec2::ZERO,
             run: PixelRun::new(kind, 0, 0),
+            scene: PixelRect::all(camera.width, camera.height),
         }
     }
 
-    /// Takes up to `n` items `(key, x, y, i)` from `items`: appends each one's key and whether
-    /// its camera makes a ray to `run`, and its ray (origin, unit direction) and stream to
-    /// `starts` when it does.
+    /// Samples of pixels outside `scene` become [`Start::Background`], without their numbers or
+    /// rays (the caller knows those rays meet nothing: [`crate::background::scene_pixels`]).
+    pub fn with_scene(self, scene: PixelRect) -> Self {
+        Self { scene, ..self }
+    }
+
+    /// The next item of `items` whose pixel may see the scene; the ones before it go to `run`
+    /// as [`Start::Background`].
+    #[inline(always)]
+    fn next_in_scene<K>(
+        &self,
+        items: &mut impl Iterator<Item = (K, u32, u32, u32)>,
+        run: &mut Vec<(K, Start)>,
+    ) -> Option<(K, u32, u32, u32)> {
+        loop {
+            let item = items.next()?;
+            if self.scene.contains(item.1, item.2) {
+                return Some(item);
+            }
+            run.push((item.0, Start::Background));
+        }
+    }
+
+    /// Takes items `(key, x, y, i)` from `items` until `n` of them are traced or none is left:
+    /// appends each one's key and [`Start`] to `run`, and the ray (origin, unit direction) and
+    /// stream of each traced one to `starts`.
     pub fn fill<K: Copy>(
         &mut self,
         items: &mut impl Iterator<Item = (K, u32, u32, u32)>,
         n: usize,
-        run: &mut Vec<(K, bool)>,
+        run: &mut Vec<(K, Start)>,
         starts: &mut Vec<(Vec3, Vec3, SampleStream)>,
     ) {
         let Some(lanes) = self.lanes else {
-            for (key, x, y, i) in items.take(n) {
+            for _ in 0..n {
+                let Some((key, x, y, i)) = self.next_in_scene(items, run) else {
+                    return;
+                };
                 let (stream, ray) = self.sample(x, y, i);
-                if let Some(r) = &ray {
-                    starts.push((r.origin, r.dir, stream));
-                }
-                run.push((key, ray.is_some()));
+                let start = match &ray {
+                    Some(r) => {
+                        starts.push((r.origin, r.dir, stream));
+                        Start::Traced
+                    }
+                    None => Start::NoRay,
+                };
+                run.push((key, start));
             }
             return;
         };
-        // The usual camera: the rays of `LANES` samples at a time.
+        // The usual camera: the rays of `LANES` samples at a time. Each lane's entry of `run`
+        // is written when it is taken (background samples may follow it) and settled once its
+        // ray is made.
         let mut left = n;
         loop {
             let (mut film, mut lens) = ([[0.0; LANES]; 2], [[0.0; LANES]; 2]);
-            let mut taken: [Option<(K, SampleStream)>; LANES] = [None; LANES];
+            let mut taken: [Option<(usize, SampleStream)>; LANES] = [None; LANES];
             for (l, slot) in taken[..left.min(LANES)].iter_mut().enumerate() {
-                let Some((key, x, y, i)) = items.next() else {
+                let Some((key, x, y, i)) = self.next_in_scene(items, run) else {
                     break;
                 };
                 let (stream, p_film, p_lens) = self.numbers(x, y, i);
                 (film[0][l], film[1][l]) = (p_film.x, p_film.y);
                 (lens[0][l], lens[1][l]) = (p_lens.x, p_lens.y);
-                *slot = Some((key, stream));
+                *slot = Some((run.len(), stream));
+                run.push((key, Start::Traced));
             }
             left = left.saturating_sub(LANES);
             let rays = lanes.rays(film, lens);
             let (o, d) = (&rays.origin, &rays.dir);
             for (l, slot) in taken.iter().enumerate() {
                 // An empty lane: the items or the `n` ran out.
-                let &Some((key, stream)) = slot else {
+                let &Some((at, stream)) = slot else {
                     return;
                 };
                 if rays.made[l] {
                     let origin = Vec3::new(o[0][l], o[1][l], o[2][l]);
                     starts.push((origin, Vec3::new(d[0][l], d[1][l], d[2][l]), stream));
+                } else {
+                    run[at].1 = Start::NoRay;
                 }
-                run.push((key, rays.made[l]));
             }
             if left == 0 {
                 return;
@@ -260,14 +307,50 @@ mod tests {
                         }
                         let mut traced = starts.iter();
                         assert_eq!(run.len(), items.len());
-                        for (&(k, made), want) in run.iter().zip(&want) {
-                            let got = made
+                        for (&(k, start), want) in run.iter().zip(&want) {
+                            assert_ne!(start, Start::Background);
+                            let got = (start == Start::Traced)
                                 .then(|| traced.next())
                                 .flatten()
                                 .map(|&(o, d, s)| (s, Some(CameraRay { origin: o, dir: d })));
                             let (x, y, i) = items[k];
                             let got = got.unwrap_or((want.0, None));
                             assert_eq!(bits(got), bits(*want), "fill: ({x}, {y}) sample {i}");
+                        }
+                        assert!(traced.next().is_none());
+                        // With a rectangle of pixels that see the scene: the others'
+                        // samples are background, in their places; the rest as before.
+                        let scene = PixelRect {
+                            x0: 1,
+                            x1: 2,
+                            y0: 0,
+                            y1: 1,
+                        };
+                        let mut primary = PrimarySamples::new(&camera, &filter, kind, seed, offset)
+                            .with_scene(scene);
+                        let mut it = items.iter().enumerate().map(|(k, &(x, y, i))| (k, x, y, i));
+                        let (mut run, mut starts) = (Vec::new(), Vec::new());
+                        while it.len() > 0 {
+                            let traced = starts.len();
+                            primary.fill(&mut it, 3, &mut run, &mut starts);
+                            assert!(starts.len() - traced <= 3);
+                        }
+                        let mut traced = starts.iter();
+                        assert_eq!(run.len(), items.len());
+                        for (n, (&(k, start), want)) in run.iter().zip(&want).enumerate() {
+                            let (x, y, i) = items[k];
+                            assert_eq!(k, n, "in order");
+                            if !scene.contains(x, y) {
+                                assert_eq!(start, Start::Background, "({x}, {y})");
+                                continue;
+                            }
+                            assert_ne!(start, Start::Background);
+                            let got = (start == Start::Traced)
+                                .then(|| traced.next())
+                                .flatten()
+                                .map(|&(o, d, s)| (s, Some(CameraRay { origin: o, dir: d })));
+                            let got = got.unwrap_or((want.0, None));
+                            assert_eq!(bits(got), bits(*want), "scene: ({x}, {y}) sample {i}");
                         }
                         assert!(traced.next().is_none());
                     }

@@ -287,6 +287,7 @@ pub fn render_window(
         layout: AovLayout::new(opts.passes),
         ids: crypto_ids(scene, opts.passes),
         wavefronts: Spares::default(),
+        backdrop: crate::background::backdrop(&integrator, accel, camera, &filter, &opts.env),
     };
     let mut film = match opts.adaptive {
         Some(a) => render_adaptive(&job, &a, window, progress),

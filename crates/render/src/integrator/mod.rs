@@ -170,6 +170,18 @@ impl Integrator<'_> {
         p.finish()
     }
 
+    /// The sample (radiance, coverage, pass values) of a camera ray along `dir` (unit) that
+    /// meets nothing: a path started and advanced without a hit.
+    pub(crate) fn missed_sample(
+        &self,
+        dir: Vec3,
+        stream: &SampleStream,
+    ) -> (Vec3, bool, SampleAov) {
+        let mut p = self.start_path::<true>(Vec3::ZERO, dir, false);
+        self.advance(&mut p, stream, None);
+        (p.path.l, p.covered, p.path.aov)
+    }
+
     /// A path starting with the primary ray from `origin` along `dir` (unit). With `defer`, its
     /// shadow rays wait in [`PathInFlight`] for [`PathInFlight::resolve`] where the scene lets
     /// them (no alpha-cut or thin-walled surfaces, which shadow rays pass through one hit at a

@@ -120,6 +120,14 @@ impl Integrator<'_> {
         None
     }
 
+    /// The radiance of a sample whose camera ray meets nothing, without pass values: what
+    /// [`Integrator::escape`] adds to a path just started (β = 1, in air, seen by the camera),
+    /// bit for bit, without the path.
+    #[inline]
+    pub(crate) fn background(&self, dir: Vec3) -> Vec3 {
+        Vec3::ZERO + self.clamp.apply(Vec3::ONE * self.env.radiance_seen(dir), 0)
+    }
+
     /// A ray leaving the scene: the environment it sees. Seen by the camera (or after ideal
     /// specular lobes only) it is filtered as a background and weighs fully; a constant
     /// environment is found by BSDF sampling alone (weight 1); an image is also light-sampled,

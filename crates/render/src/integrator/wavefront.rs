@@ -6,7 +6,9 @@
 //! Each path runs exactly the arithmetic it runs alone ([`Integrator::advance`] is the one
 //! vertex step of both): the batch queries return what one-ray queries do, and a path's
 //! pending light samples are added back before its next vertex, in the order they were made.
-//! So every sample's value is bit-identical to tracing it alone.
+//! So every sample's value is bit-identical to tracing it alone. A sample whose camera ray
+//! meets nothing takes no path at all when no pass values are recorded: its radiance is what
+//! the path's one step would add ([`Integrator::background`]).
 
 use super::{Integrator, PathState, Walk};
 use crate::aov::SampleAov;
@@ -94,31 +96,51 @@ impl<const AOV: bool> Wavefront<AOV> {
     /// values, in order.
     pub fn run(&mut self, integrator: &Integrator<'_>, starts: &[(Vec3, Vec3, SampleStream)]) {
         let accel = integrator.accel;
+        // The camera rays first (a pixel's lens samples are coherent: packets), so that a
+        // sample whose ray meets nothing is answered without a path where passes need none.
+        self.rays.clear();
+        let camera_rays = starts.iter().map(|&(o, d, _)| Ray::new(o, d));
+        self.rays.extend(camera_rays);
+        self.hits.clear();
+        self.hits.resize(self.rays.len(), None);
+        accel.intersect_packets(&self.rays, &mut self.hits);
         // Slots are re-initialised in place: their pending lists keep their capacity.
         self.paths.truncate(starts.len());
-        for (k, &(origin, dir, _)) in starts.iter().enumerate() {
-            match self.paths.get_mut(k) {
-                Some(p) => integrator.restart_path(p, origin, dir, true),
-                None => self
-                    .paths
-                    .push(integrator.start_path::<AOV>(origin, dir, true)),
+        self.live.clear();
+        for (k, (&(origin, dir, _), hit)) in starts.iter().zip(&self.hits).enumerate() {
+            if self.paths.len() == k {
+                let fresh = integrator.start_path::<AOV>(origin, dir, true);
+                self.paths.push(fresh);
+            }
+            let p = &mut self.paths[k];
+            if !AOV && hit.is_none() {
+                // A path ended by its camera ray: its slot only holds the result.
+                p.path.l = integrator.background(dir);
+                p.path.pending.clear();
+                (p.covered, p.live) = (false, false);
+            } else {
+                integrator.restart_path(p, origin, dir, true);
+                self.live.push(k);
             }
         }
-        self.live.clear();
-        self.live.extend(0..starts.len());
         let mut camera_rays = true;
         while !self.live.is_empty() {
-            let paths = &self.paths;
-            self.rays.clear();
-            self.rays
-                .extend(self.live.iter().filter_map(|&i| paths[i].ray()));
-            self.hits.clear();
-            self.hits.resize(self.rays.len(), None);
             if camera_rays {
-                // A pixel's lens samples are coherent: packets.
-                accel.intersect_packets(&self.rays, &mut self.hits);
+                // The hits of the live paths' camera rays, in `live` order.
+                let mut j = 0;
+                for &i in &self.live {
+                    self.hits[j] = self.hits[i];
+                    j += 1;
+                }
+                self.hits.truncate(j);
                 camera_rays = false;
             } else {
+                let paths = &self.paths;
+                self.rays.clear();
+                self.rays
+                    .extend(self.live.iter().filter_map(|&i| paths[i].ray()));
+                self.hits.clear();
+                self.hits.resize(self.rays.len(), None);
                 accel.intersect_batch(&self.rays, &mut self.hits);
             }
             self.shadows.clear();

@@ -3,11 +3,12 @@
 
 use super::RenderOptions;
 use crate::aov::SampleAov;
+use crate::background::Backdrop;
 use crate::camera::Camera;
 use crate::film::{AovLayout, CryptoIds};
 use crate::filter::Filter;
 use crate::integrator::{Integrator, Wavefront};
-use crate::primary::PrimarySamples;
+use crate::primary::{PrimarySamples, Start};
 use crate::spares::Spares;
 use glam::Vec3;
 use std::any::Any;
@@ -28,6 +29,8 @@ pub(super) struct Job<'a> {
     /// tile allocated its buffers and grew every slot's pending list again). What a wavefront
     /// holds between runs never reaches a result: [`Wavefront::run`] restarts every slot it uses.
     pub(super) wavefronts: Spares<Box<dyn Any + Send>>,
+    /// Pixels that see only a constant background, and their sample (not traced).
+    pub(super) backdrop: Option<Backdrop>,
 }
 
 impl Job<'_> {
@@ -51,7 +54,9 @@ impl Job<'_> {
 
     /// Calls `f(key, result, record)` for every `(key, x, y, i)` of `items`, in order, where
     /// `result` is the radiance and coverage of sample `i` of pixel `(x, y)` (`None` when the
-    /// camera makes no ray for it) and `record` its pass values (default unless `AOV`).
+    /// camera makes no ray for it) and `record` its pass values (default unless `AOV`). The
+    /// samples of pixels that see only a constant background ([`Job::backdrop`]) are that one
+    /// sample, neither drawn nor traced.
     ///
     /// Why in runs: the paths of [`WAVEFRONT_SAMPLES`] samples advance together through a
     /// [`Wavefront`], so that every ray query is a batch: the lens
@@ -73,6 +78,10 @@ impl Job<'_> {
         let o = self.opts;
         let mut primary =
             PrimarySamples::new(self.camera, self.filter, o.sampler, o.seed, o.sample_offset);
+        if let Some(b) = &self.backdrop {
+            primary = primary.with_scene(b.scene);
+        }
+        let none = SampleAov::default();
         loop {
             if self.opts.cancel.is_cancelled() {
                 break;
@@ -85,11 +94,19 @@ impl Job<'_> {
             }
             wavefront.run(self.integrator, &starts);
             let mut results = wavefront.results();
-            let none = SampleAov::default();
-            for &(key, traced) in &run {
-                match traced.then(|| results.next()).flatten() {
-                    Some((l, covered, record)) => f(key, Some((l, covered)), record),
-                    None => f(key, None, &none),
+            for &(key, start) in &run {
+                match start {
+                    Start::Traced => match results.next() {
+                        Some((l, covered, record)) => f(key, Some((l, covered)), record),
+                        None => f(key, None, &none),
+                    },
+                    Start::NoRay => f(key, None, &none),
+                    Start::Background => {
+                        let b = self.backdrop.as_ref();
+                        let (l, covered) = b.map_or((Vec3::ZERO, false), |b| (b.l, b.covered));
+                        let record = b.filter(|_| AOV).map_or(&none, |b| &b.record);
+                        f(key, Some((l, covered)), record);
+                    }
                 }
             }
         }
@@ -100,6 +117,7 @@ impl Job<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::background::backdrop;
     use crate::environment::Environment;
     use crate::render::tests::busy_scene;
     use crate::render::{build_accel, integrator};
@@ -209,13 +227,15 @@ mod tests {
         }
     }
 
-    /// A job of a thin-lens camera without passes, for tests that trace its samples.
+    /// A job of a thin-lens camera without passes, for tests that trace its samples (pixels
+    /// that see only a constant background are not traced, as in a render).
     fn lens_job<'a>(
         integrator: &'a Integrator<'a>,
         camera: &'a Camera,
         filter: &'a Filter,
         opts: &'a RenderOptions,
     ) -> Job<'a> {
+        let env = &opts.env;
         Job {
             integrator,
             camera,
@@ -224,6 +244,7 @@ mod tests {
             layout: AovLayout::default(),
             ids: CryptoIds::default(),
             wavefronts: Spares::default(),
+            backdrop: backdrop(integrator, integrator.accel, camera, filter, env),
         }
     }
 
@@ -236,6 +257,11 @@ mod tests {
         let camera = Camera::new(&scene.cameras[0], opts.width, opts.height);
         let filter = Filter::new(opts.filter);
         let job = lens_job(integrator, &camera, &filter, opts);
+        // Under the constant environment, part of the view is background only, untraced.
+        let untraced = job.backdrop.as_ref().map(|b| b.scene);
+        let constant = matches!(opts.env, Environment::Constant(_));
+        assert_eq!(untraced.is_some(), constant);
+        let mut background = 0;
         // More items than two runs, in an order that jumps between pixels and samples.
         let items: Vec<(usize, u32, u32, u32)> = (0..opts.height)
             .flat_map(|y| (0..opts.width).map(move |x| (x, y)))
@@ -251,6 +277,7 @@ mod tests {
             assert_eq!(k, seen, "results arrive in order");
             seen += 1;
             let (_, x, y, i) = items[k];
+            background += untraced.is_some_and(|r| !r.contains(x, y)) as u32;
             let (stream, ray) = job.camera_ray(x, y, i);
             let alone = ray.map(|r| integrator.li_alone::<AOV>(r.origin, r.dir, &stream));
             let bits =
@@ -266,7 +293,11 @@ mod tests {
             }
         });
         assert_eq!(seen, items.len());
-        assert!(hits > 0 && misses > 0, "{hits} hits, {misses} misses");
+        assert!(
+            hits > 0 && misses > background,
+            "{hits} hits, {misses} misses"
+        );
+        assert_eq!(background > 0, constant, "{background} background samples");
         assert_eq!(lit_passes > 0, AOV, "light passes recorded only with AOV");
     }
 }
