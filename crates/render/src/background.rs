@@ -122,45 +122,16 @@ pub(crate) fn scene_pixels(
     else {
         return all;
     };
-    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
-    let pad = PAD * ((hi - lo).max_element() + lo.abs().max(hi.abs()).max_element());
-    let (lo, hi) = (lo - DVec3::splat(pad), hi + DVec3::splat(pad));
-    let camera_from_world = dmat(camera).inverse();
-    // Lens half-extents (an anamorphic aperture is squeezed in x by its ratio).
-    let (rx, ry) = lens_half_extents(camera);
-    let inv_f = 1.0 / f64::from(camera.focus_distance);
-    let (mut px, mut py) = (
-        (f64::INFINITY, f64::NEG_INFINITY),
-        (f64::INFINITY, f64::NEG_INFINITY),
-    );
-    let mut spread = 0.0f64;
-    for k in 0..8 {
-        let corner = DVec3::new(
-            if k & 1 == 0 { lo.x } else { hi.x },
-            if k & 2 == 0 { lo.y } else { hi.y },
-            if k & 4 == 0 { lo.z } else { hi.z },
-        );
-        let q = camera_from_world.transform_point3(corner);
-        let s = -q.z;
-        // The box reaches the lens plane (or the camera is inside it, or a value is NaN): no
-        // useful bound.
-        if s.is_nan() || s <= pad {
-            return all;
-        }
-        px = (px.0.min(q.x / s), px.1.max(q.x / s));
-        py = (py.0.min(q.y / s), py.1.max(q.y / s));
-        if rx > 0.0 || ry > 0.0 {
-            spread = spread.max((1.0 / s - inv_f).abs());
-        }
-    }
-    let (sx, sy) = (rx * spread, ry * spread);
+    let Some([x_min, x_max, y_min, y_max]) = screen_window(camera, lo, hi) else {
+        return all;
+    };
     // Screen (image plane at distance 1) to raster: x right, y down.
     let (tx, ty) = (f64::from(tan_half_x), f64::from(tan_half_y));
     let (wf, hf) = (f64::from(w), f64::from(h));
     let raster_x = |p: f64| (p / tx + 1.0) * 0.5 * wf;
     let raster_y = |p: f64| (1.0 - p / ty) * 0.5 * hf;
-    let (x_lo, x_hi) = (raster_x(px.0 - sx), raster_x(px.1 + sx));
-    let (y_lo, y_hi) = (raster_y(py.1 + sy), raster_y(py.0 - sy));
+    let (x_lo, x_hi) = (raster_x(x_min), raster_x(x_max));
+    let (y_lo, y_hi) = (raster_y(y_max), raster_y(y_min));
     // Pixel x samples the film at x + ½ ± filter_half; one more pixel for rounding.
     let m = f64::from(filter_half) + 1.0;
     let rect = [
@@ -180,6 +151,57 @@ pub(crate) fn scene_pixels(
         y0: pixel(rect[2].floor(), h).max(0),
         y1: pixel(rect[3].ceil(), h).min(i64::from(h) - 1),
     }
+}
+
+/// The window of the image plane (at distance 1: `[x_min, x_max, y_min, y_max]`) whose screen
+/// points' rays may meet the box `lo..hi` (padded by [`PAD`]), lens spread included; `None`
+/// when the box reaches the lens plane (no bound there is useful) or a value is not finite.
+fn screen_window(camera: &Camera, lo: Vec3, hi: Vec3) -> Option<[f64; 4]> {
+    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+    let pad = PAD * ((hi - lo).max_element() + lo.abs().max(hi.abs()).max_element());
+    let (lo, hi) = (lo - DVec3::splat(pad), hi + DVec3::splat(pad));
+    let camera_from_world = dmat(camera).inverse();
+    // Lens half-extents (an anamorphic aperture is squeezed in x by its ratio).
+    let (rx, ry) = lens_half_extents(camera);
+    let inv_f = 1.0 / f64::from(camera.focus_distance);
+    let mut window = [
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    let mut spread = 0.0f64;
+    for k in 0..8 {
+        let corner = DVec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        );
+        let q = camera_from_world.transform_point3(corner);
+        let s = -q.z;
+        // The box reaches the lens plane (or the camera is inside it, or a value is NaN).
+        if s.is_nan() || s <= pad {
+            return None;
+        }
+        let (x, y) = (q.x / s, q.y / s);
+        window = [
+            window[0].min(x),
+            window[1].max(x),
+            window[2].min(y),
+            window[3].max(y),
+        ];
+        if rx > 0.0 || ry > 0.0 {
+            spread = spread.max((1.0 / s - inv_f).abs());
+        }
+    }
+    let (sx, sy) = (rx * spread, ry * spread);
+    let window = [
+        window[0] - sx,
+        window[1] + sx,
+        window[2] - sy,
+        window[3] + sy,
+    ];
+    window.iter().all(|v| v.is_finite()).then_some(window)
 }
 
 /// `camera.world_from_camera` in `f64`.
