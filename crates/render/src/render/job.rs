@@ -82,6 +82,12 @@ impl Job<'_> {
             primary = primary.with_scene(b.scene);
         }
         let none = SampleAov::default();
+        // The sample of every background pixel (only `fill` marks any, and only with a
+        // backdrop): looked up once, not per sample.
+        let background = match &self.backdrop {
+            Some(b) => (Some((b.l, b.covered)), if AOV { &b.record } else { &none }),
+            None => (None, &none),
+        };
         loop {
             if self.opts.cancel.is_cancelled() {
                 break;
@@ -101,12 +107,7 @@ impl Job<'_> {
                         None => f(key, None, &none),
                     },
                     Start::NoRay => f(key, None, &none),
-                    Start::Background => {
-                        let b = self.backdrop.as_ref();
-                        let (l, covered) = b.map_or((Vec3::ZERO, false), |b| (b.l, b.covered));
-                        let record = b.filter(|_| AOV).map_or(&none, |b| &b.record);
-                        f(key, Some((l, covered)), record);
-                    }
+                    Start::Background => f(key, background.0, background.1),
                 }
             }
         }
