@@ -55,7 +55,7 @@ impl GroupWalk {
             }
         }
         if self.current.1 & 0xff00_0000 != 0 {
-            let index = take_child(&mut self.current, stack, &mut self.sp, r.oct_inv4 & 0xff);
+            let (index, _) = take_child(&mut self.current, stack, &mut self.sp, r.oct_inv4 & 0xff);
             let Some(node) = nodes.get(index as usize) else {
                 // Unreachable for a well-formed tree (and for an empty one, whose root group is
                 // never read); never read out of bounds.
@@ -95,15 +95,16 @@ impl GroupWalk {
 }
 
 /// Takes the next internal child of the node group `current` (obvhs' priority order for the
-/// octant key `oct`) and returns its node index; the group's other children, if any, are pushed
-/// on `stack` at `sp`. Shared by the one-ray walk and the packets' walk.
+/// octant key `oct`) and returns its node index and its slot in its parent; the group's other
+/// children, if any, are pushed on `stack` at `sp`. Shared by the one-ray walk and the packets'
+/// walk.
 #[inline(always)]
 pub(crate) fn take_child(
     current: &mut Group,
     stack: &mut [MaybeUninit<Group>],
     sp: &mut usize,
     oct: u32,
-) -> u32 {
+) -> (u32, u32) {
     let hits = current.1;
     let offset = 31 - hits.leading_zeros();
     current.1 &= !(1u32 << offset);
@@ -113,7 +114,7 @@ pub(crate) fn take_child(
     }
     let slot = (offset - 24) ^ oct;
     // The low byte of a group's bits is its node's `imask`.
-    child_index(current.0, hits, slot)
+    (child_index(current.0, hits, slot), slot)
 }
 
 /// Walks a tree of [`Node`]s in obvhs' octant order for `r`, calling
