@@ -226,7 +226,10 @@ pub(crate) fn intersect<const AVX: bool>(
     let mut e0 = bx * cy - by * cx;
     let mut e1 = cx * ay - cy * ax;
     let mut e2 = ax * by - ay * bx;
-    if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
+    // `|` and `&`, not `||` and `&&`: one branch per decision instead of a chain of them (the
+    // sign test below decides hit or miss and is taken either way about as often: each link of
+    // a chain was a misprediction to pay).
+    if (e0 == 0.0) | (e1 == 0.0) | (e2 == 0.0) {
         // Exactly zero may be a lost sign: products of two f32 are exact in f64.
         let (ax, ay, bx, by, cx, cy) = (
             ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64,
@@ -235,7 +238,9 @@ pub(crate) fn intersect<const AVX: bool>(
         e1 = (cx * ay - cy * ax) as f32;
         e2 = (ax * by - ay * bx) as f32;
     }
-    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+    let negative = (e0 < 0.0) | (e1 < 0.0) | (e2 < 0.0);
+    let positive = (e0 > 0.0) | (e1 > 0.0) | (e2 > 0.0);
+    if negative & positive {
         return None;
     }
     let det = e0 + e1 + e2;
