@@ -11,9 +11,9 @@
 //! are paid once per packet instead of once per ray. A node is tested only for the lanes that
 //! entered it (its box lies within its parent's, so no other lane can enter it): child by child
 //! for all of them at once, or, when fewer lanes than children remain (rays that have parted),
-//! lane by lane with each ray's eight-child test, as the one-ray walk does. Closest hits are the one-ray answers exactly, since
-//! [`ClosestLeaf`](crate::walk::ClosestLeaf) breaks ties in `t` by primitive, independently of
-//! the visit order.
+//! lane by lane with each ray's eight-child test, as the one-ray walk does. Closest hits are
+//! the one-ray answers exactly, since [`ClosestLeaf`](crate::walk::ClosestLeaf) breaks ties in
+//! `t` by primitive, independently of the visit order.
 //!
 //! Packets apply when the rays share a direction octant and lie in a narrow cone
 //! ([`PACKET_CONE_COS`]); other runs take the interleaved walk ([`Accel::intersect_batch`]).
@@ -218,8 +218,8 @@ unsafe fn node_lanes_by_ray(
 /// The node's non-empty child slots (bit `c` for slot `c`): an empty slot has a zero meta byte.
 #[inline(always)]
 fn valid_slots(node: &Node) -> u32 {
-    // Each byte's high bit set iff the byte is non-zero: `(b | (0x80 - ... ))`-free, via the
-    // 0x7f carry trick: `((b & 0x7f) + 0x7f) | b` has bit 7 set iff `b != 0`.
+    // Per byte `b`, `((b & 0x7f) + 0x7f) | b` has bit 7 set iff `b != 0` (the sum carries into
+    // bit 7 iff a low bit is set, and never out of the byte).
     let x = u64::from_le_bytes(node.child_meta);
     let high = (((x & 0x7f7f_7f7f_7f7f_7f7f) + 0x7f7f_7f7f_7f7f_7f7f) | x) & 0x8080_8080_8080_8080;
     // Gather the eight high bits into the low byte.
