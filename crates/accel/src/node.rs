@@ -251,10 +251,40 @@ unsafe fn node_test_avx2(
     r: &BoxRay,
     tmax: f32,
 ) -> (std::arch::x86_64::__m256, std::arch::x86_64::__m256) {
+    let (on, of, ni) = (r.o_near, r.o_far, r.ninv);
+    // SAFETY: forwarded from the caller.
+    unsafe {
+        slabs_avx2(
+            r.rows.planes(node),
+            [on.x, on.y, on.z],
+            [of.x, of.y, of.z],
+            [ni.x, ni.y, ni.z],
+            [r.tmin, tmax],
+        )
+    }
+}
+
+/// One ray against eight children's boxes (`rows`: the near rows x, y, z, then the far rows,
+/// as [`Rows::planes`] gives them): `(o - b) * -inv` per slab from the widened origins `on`
+/// (near planes) and `of` (far planes), clamped by `[tmin, tmax]`. The hit lanes (all ones for
+/// a hit child) and each child's entry distance. The one-ray walks' node test, and the
+/// packets' lane-by-lane one (so both give the same bits).
+///
+/// # Safety
+/// The CPU must support AVX2, and the caller must be compiled for it (inlined).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(crate) unsafe fn slabs_avx2(
+    rows: [&[f32; 8]; 6],
+    on: [f32; 3],
+    of: [f32; 3],
+    ni: [f32; 3],
+    [tmin, tmax]: [f32; 2],
+) -> (std::arch::x86_64::__m256, std::arch::x86_64::__m256) {
     use std::arch::x86_64::*;
     // SAFETY: AVX2 is guaranteed by the caller; each load reads one `[f32; 8]` row in full.
     unsafe {
-        let [nx, ny, nz, fx, fy, fz] = r.rows.planes(node);
+        let [nx, ny, nz, fx, fy, fz] = rows;
         // Macros, not closures: closures do not inherit the caller's target features.
         macro_rules! slab {
             ($o:expr, $row:expr, $ninv:expr) => {
@@ -264,14 +294,13 @@ unsafe fn node_test_avx2(
                 )
             };
         }
-        let (on, of, ni) = (r.o_near, r.o_far, r.ninv);
         let enter = _mm256_max_ps(
-            _mm256_max_ps(_mm256_set1_ps(r.tmin), slab!(on.x, nx, ni.x)),
-            _mm256_max_ps(slab!(on.y, ny, ni.y), slab!(on.z, nz, ni.z)),
+            _mm256_max_ps(_mm256_set1_ps(tmin), slab!(on[0], nx, ni[0])),
+            _mm256_max_ps(slab!(on[1], ny, ni[1]), slab!(on[2], nz, ni[2])),
         );
         let exit = _mm256_min_ps(
-            _mm256_min_ps(_mm256_set1_ps(tmax), slab!(of.x, fx, ni.x)),
-            _mm256_min_ps(slab!(of.y, fy, ni.y), slab!(of.z, fz, ni.z)),
+            _mm256_min_ps(_mm256_set1_ps(tmax), slab!(of[0], fx, ni[0])),
+            _mm256_min_ps(slab!(of[1], fy, ni[1]), slab!(of[2], fz, ni[2])),
         );
         (_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit), enter)
     }

@@ -71,8 +71,8 @@ pub(super) unsafe fn node_lanes_avx2(
 }
 
 /// [`node_lanes_avx2`] lane by lane: each lane of `lanes` tests its ray against the node's eight
-/// children at once (the same operations on the same values as the child-by-child test, so the
-/// same bits per lane and child), and the per-lane child masks are transposed into per-child
+/// children at once with the one-ray walks' test (`node::slabs_avx2`: the same operations on the
+/// same values as the child-by-child test, so the same bits per lane and child), and the per-lane child masks are transposed into per-child
 /// lane masks. Cheaper when fewer lanes than children are tested: once a packet's rays part,
 /// most nodes are entered by one or two of them.
 ///
@@ -90,30 +90,21 @@ pub(super) unsafe fn node_lanes_by_ray(
     // SAFETY: AVX2 is guaranteed by the caller; every load reads one `[f32; 8]` row in full or
     // one float of a lane.
     unsafe {
-        let [nx, ny, nz, fx, fy, fz] = r.rows.planes(node).map(|row| _mm256_loadu_ps(row.as_ptr()));
+        let rows = r.rows.planes(node);
+        let lane = |v: &[[f32; PACKET_LANES]; 3], i: usize| [v[0][i], v[1][i], v[2][i]];
         let mut by_lane = 0u64;
         let mut each = lanes;
         while each != 0 {
             let i = each.trailing_zeros() as usize % PACKET_LANES;
             each &= each - 1;
-            macro_rules! slab {
-                ($o:expr, $row:expr, $ninv:expr) => {
-                    _mm256_mul_ps(
-                        _mm256_sub_ps(_mm256_set1_ps($o[i]), $row),
-                        _mm256_set1_ps($ninv[i]),
-                    )
-                };
-            }
-            let (on, of, ni) = (&r.o_near, &r.o_far, &r.ninv);
-            let enter = _mm256_max_ps(
-                _mm256_max_ps(_mm256_set1_ps(r.tmin[i]), slab!(on[0], nx, ni[0])),
-                _mm256_max_ps(slab!(on[1], ny, ni[1]), slab!(on[2], nz, ni[2])),
+            let (hit, _) = crate::node::slabs_avx2(
+                rows,
+                lane(&r.o_near, i),
+                lane(&r.o_far, i),
+                lane(&r.ninv, i),
+                [r.tmin[i], tmax[i]],
             );
-            let exit = _mm256_min_ps(
-                _mm256_min_ps(_mm256_set1_ps(tmax[i]), slab!(of[0], fx, ni[0])),
-                _mm256_min_ps(slab!(of[1], fy, ni[1]), slab!(of[2], fz, ni[2])),
-            );
-            let hit = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)) as u64;
+            let hit = _mm256_movemask_ps(hit) as u64;
             by_lane |= (hit & u64::from(valid)) << (8 * i);
         }
         let by_child = transpose_bits(by_lane);
