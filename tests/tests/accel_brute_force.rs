@@ -9,7 +9,7 @@
 mod util;
 
 use aperture_accel::{Accel, BvhQuality, Hit, InstanceInput, Ray, PACKET_CONE_COS, PACKET_LANES};
-use glam::{Affine3A, Vec3};
+use glam::{Affine3A, Quat, Vec3};
 use util::{icosphere, random_rays, random_transform, soup, Rng, Scene};
 
 fn check(scene: &Scene, accel: &Accel, rays: &[Ray]) -> usize {
@@ -393,6 +393,108 @@ fn rays_grazing_the_scene_bounds() {
             "scale {scale}: {hits} of {} hit",
             rays.len()
         );
+    }
+}
+
+/// A floor of coplanar tiles (flat leaves), a sphere drawn twice and a soup.
+fn floor_sphere_soup(rng: &mut Rng, scale: f32) -> Scene {
+    let (mut pos, mut idx) = (Vec::new(), Vec::new());
+    let n = 24;
+    for i in 0..=n {
+        for j in 0..=n {
+            let (x, z) = (i as f32 / n as f32 - 0.5, j as f32 / n as f32 - 0.5);
+            pos.push(Vec3::new(x, 0.0, z) * 20.0 * scale);
+        }
+    }
+    for i in 0..n {
+        for j in 0..n {
+            let k = (i * (n + 1) + j) as u32;
+            let w = n as u32 + 1;
+            idx.push([k, k + 1, k + w]);
+            idx.push([k + 1, k + w + 1, k + w]);
+        }
+    }
+    let (lo, hi) = (
+        Vec3::new(-8.0, 0.2, -8.0) * scale,
+        Vec3::new(8.0, 6.0, 8.0) * scale,
+    );
+    let blob = soup(rng, 400, lo, hi, 0.8 * scale);
+    let at = |c: Vec3, r: f32| {
+        Affine3A::from_scale_rotation_translation(Vec3::splat(r * scale), Quat::IDENTITY, c * scale)
+    };
+    Scene {
+        meshes: vec![(pos, idx), icosphere(3), blob],
+        instances: vec![
+            InstanceInput {
+                mesh: 0,
+                world_from_object: Affine3A::IDENTITY,
+            },
+            InstanceInput {
+                mesh: 1,
+                world_from_object: at(Vec3::new(1.0, 1.5, -2.0), 1.5),
+            },
+            InstanceInput {
+                mesh: 1,
+                world_from_object: at(Vec3::new(-3.0, 1.0, 3.0), 1.0),
+            },
+            InstanceInput {
+                mesh: 2,
+                world_from_object: Affine3A::IDENTITY,
+            },
+        ],
+    }
+}
+
+/// Secondary rays as a path tracer spawns them: from hit points (moved off the surface by
+/// `SpawnPoint::origin`), on the side they leave by (a quarter through the surface), some
+/// grazing it, some towards a point light with a finite `tmax`. They start within the slack
+/// of their own leaf (flat on the floor), where a slack too tight would first show.
+#[test]
+fn rays_leaving_surfaces() {
+    let mut rng = Rng(12);
+    for scale in [1e-2, 1.0, 300.0] {
+        let scene = floor_sphere_soup(&mut rng, scale);
+        for accel in [
+            scene.build(BvhQuality::default()),
+            scene.build_flattened(BvhQuality::default()),
+        ] {
+            let (lo, hi) = (
+                Vec3::new(-9.0, 0.5, -9.0) * scale,
+                Vec3::new(9.0, 8.0, 9.0) * scale,
+            );
+            let light = Vec3::new(2.0, 7.0, 1.0) * scale;
+            let mut rays = Vec::new();
+            for _ in 0..3000 {
+                let from = rng.vec_in(lo, hi) + Vec3::Y * 10.0 * scale;
+                let ray = Ray::new(from, rng.vec_in(lo, hi) - Vec3::Y * 8.0 * scale - from);
+                let Some(hit) = accel.intersect(&ray) else {
+                    continue;
+                };
+                let [a, b, c] = scene.world_triangle(hit.instance, hit.triangle);
+                let mut n = (b - a).cross(c - a).normalize_or_zero();
+                if n.dot(ray.dir) > 0.0 {
+                    n = -n;
+                }
+                let side = if rng.f32() < 0.25 { -n } else { n };
+                let sp = accel.spawn_point(&ray, &hit);
+                let o = sp.origin(side);
+                let mut d = rng.unit_vector();
+                if d.dot(side) < 0.0 {
+                    d = -d;
+                }
+                if rng.f32() < 0.3 {
+                    // Grazing: nearly in the surface's plane.
+                    d = (d - side * d.dot(side) * (1.0 - 1e-3 * rng.f32())).normalize();
+                }
+                rays.push(Ray::new(o, d));
+                let to = light - o;
+                let mut shadow = Ray::new(o, to.normalize());
+                shadow.tmax = to.length() * (1.0 - 1e-4);
+                rays.push(shadow);
+            }
+            let hits = check(&scene, &accel, &rays);
+            assert_mixed(hits, rays.len());
+        }
     }
 }
 

@@ -13,12 +13,20 @@
 //!
 //! All of these are below `K ε M` in space, where `M` bounds the largest coordinate of `|b - o|`.
 //! `M` is taken once per ray and tree as the largest coordinate of `|corner - o|` over the tree's
-//! bounds plus three times its extent (so the slack costs nothing per node and stays tight when
-//! the scene sits far from the world origin). The slack is applied by moving the ray's origin:
-//! towards each near plane and away from each far plane by `K ε M` plus two ulps of the origin's
-//! coordinate (so that the move survives rounding), once per ray ([`BoxRay::new`]). Ize (2013)
-//! scales `tmax` by `1 + 2γ` for the same purpose; an absolute bound also covers rays that start
-//! inside a box.
+//! bounds (so the slack costs nothing per node and stays tight when the scene sits far from the
+//! world origin). The slack is applied by moving the ray's origin: towards each near plane and
+//! away from each far plane by `K ε M` plus two ulps of the origin's coordinate (so that the move
+//! survives rounding), once per ray ([`BoxRay::new`]). Ize (2013) scales `tmax` by `1 + 2γ` for
+//! the same purpose; an absolute bound also covers rays that start inside a box.
+//!
+//! `K` is 16: the slab distances' rounding is below `2 ε M`, and the triangle test was measured
+//! to accept rays at most `0.6 ε M` outside a triangle's box (a million rays aimed just past
+//! edges and vertices; `slack_covers_what_the_triangle_test_accepts` keeps that below `K / 4`).
+//! A looser slack is not free: a ray leaving a flat leaf (a floor, a wall: a box of zero
+//! thickness) enters that leaf again whenever the slack exceeds its origin's offset from the
+//! surface, and tests its triangles for nothing. With `K = 64` and `M` padded by three times
+//! the tree's extent (a margin kept from obvhs' quantised boxes), every bounce and shadow ray
+//! from a floor did (BENCHMARKS.md, "Issue 18, nineteenth session").
 //!
 //! Every path (AVX2, SSE2, scalar) computes the same operations in the same order: the same bits.
 
@@ -28,9 +36,8 @@ pub(crate) mod layout;
 
 pub(crate) use layout::{child_index, Node};
 
-/// Relative spatial slack of the box test (see the module docs); 64 ulps at unit scale, which
-/// costs nothing measurable in traversal.
-pub(crate) const SLACK: f32 = 64.0 * f32::EPSILON;
+/// Relative spatial slack of the box test (see the module docs): 16 ulps at unit scale.
+pub(crate) const SLACK: f32 = 16.0 * f32::EPSILON;
 
 /// Largest magnitude of a reciprocal direction component: zero components become this (keeping
 /// their sign), so slab products stay finite and `0 * inf` never makes a NaN.
@@ -75,7 +82,7 @@ pub(crate) fn clamped_inv(dir: Vec3) -> Vec3A {
 #[inline(always)]
 pub(crate) fn reach(o: Vec3A, (lo, hi): (Vec3, Vec3)) -> f32 {
     let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
-    let m = (lo - o).abs().max((hi - o).abs()).max_element() + 3.0 * (hi - lo).max_element();
+    let m = (lo - o).abs().max((hi - o).abs()).max_element();
     SLACK * m
 }
 

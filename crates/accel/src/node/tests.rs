@@ -266,3 +266,115 @@ fn rows_pick_near_then_far_planes() {
         assert_eq!(got, [near(0), near(1), near(2), far(0), far(1), far(2)]);
     }
 }
+
+/// The slack covers what the triangle test accepts outside a triangle (module docs): rays aimed
+/// just outside an edge or a vertex (by 1/2 to 64 ε M, along the triangle's plane), from near
+/// and far, some grazing the plane, at scales from 1e-2 to 1e4. Wherever the test reports a hit,
+/// the exact ray passes within a quarter of the slack of the triangle's box, `M` taken from that
+/// box alone (the smallest `M` a tree holding the triangle can give).
+#[test]
+fn slack_covers_what_the_triangle_test_accepts() {
+    use crate::triangle::intersect_triangle;
+    use glam::DVec3;
+    let mut s = 5u64;
+    let r = |s: &mut u64| f64::from(lcg(s));
+    let unit = |s: &mut u64| loop {
+        let v = DVec3::new(r(s), r(s), r(s)) * 2.0 - 1.0;
+        if (0.01..1.0).contains(&v.length_squared()) {
+            break v.normalize();
+        }
+    };
+    let eps = f64::from(f32::EPSILON);
+    let (mut worst, mut outside) = (0.0f64, 0);
+    for _ in 0..1_000_000 {
+        let c = unit(&mut s) * 10f64.powf(r(&mut s) * 6.0 - 2.0);
+        let l = 10f64.powf(r(&mut s) * 4.0 - 3.0) * c.length().max(1e-2);
+        let p: [Vec3; 3] = std::array::from_fn(|_| (c + unit(&mut s) * l).as_vec3());
+        let pd = p.map(|v| v.as_dvec3());
+        let n = (pd[1] - pd[0]).cross(pd[2] - pd[0]);
+        if n.length() < 1e-6 * l * l {
+            continue;
+        }
+        let n = n.normalize();
+        // A point of an edge (a vertex one time in five), and the way out of the triangle.
+        let e = (r(&mut s) * 3.0) as usize % 3;
+        let (a, b, other) = (pd[e], pd[(e + 1) % 3], pd[(e + 2) % 3]);
+        let u = if r(&mut s) < 0.2 { 0.0 } else { r(&mut s) };
+        let q0 = a + (b - a) * u;
+        let mut out = n.cross((b - a).normalize());
+        if out.dot(other - q0) > 0.0 {
+            out = -out;
+        }
+        let mut from = unit(&mut s);
+        if r(&mut s) < 0.3 {
+            from = (from - n * from.dot(n) * (1.0 - 1e-3 * r(&mut s))).normalize();
+        }
+        let o = (q0 + from * l * 10f64.powf(r(&mut s) * 3.0)).as_vec3();
+        let od = o.as_dvec3();
+        let lo = pd.iter().fold(DVec3::INFINITY, |m, v| m.min(*v));
+        let hi = pd.iter().fold(DVec3::NEG_INFINITY, |m, v| m.max(*v));
+        let m = f64::from(reach(o.into(), (lo.as_vec3(), hi.as_vec3())) / SLACK);
+        for f in [64.0, 16.0, 4.0, 1.0, 0.5] {
+            let dir = (q0 + out * (f * eps * m) - od).normalize().as_vec3();
+            let ray = crate::Ray {
+                origin: o,
+                dir,
+                tmin: 0.0,
+                tmax: f32::INFINITY,
+            };
+            if intersect_triangle(&ray, p).is_none() {
+                continue;
+            }
+            let grow = least_growth((lo, hi), od, dir.as_dvec3(), eps * m);
+            if grow > 0.0 {
+                outside += 1;
+                worst = worst.max(grow / (eps * m));
+            }
+            break;
+        }
+    }
+    let quarter = f64::from(SLACK / f32::EPSILON) / 4.0;
+    assert!(
+        outside > 100,
+        "only {outside} accepted rays passed outside a box"
+    );
+    assert!(
+        worst <= quarter,
+        "the triangle test accepted a ray {worst:.2} ε M outside the triangle's box"
+    );
+}
+
+/// The least growth of the box `(lo, hi)` that the exact ray from `o` along `d` (`t >= 0`)
+/// enters (0 when it enters the box itself), to about `step / 2^40`.
+fn least_growth(
+    (lo, hi): (glam::DVec3, glam::DVec3),
+    o: glam::DVec3,
+    d: glam::DVec3,
+    step: f64,
+) -> f64 {
+    let enters = |g: f64| {
+        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+        for k in 0..3 {
+            let (x, y) = ((lo[k] - g - o[k]) / d[k], (hi[k] + g - o[k]) / d[k]);
+            t0 = t0.max(x.min(y));
+            t1 = t1.min(x.max(y));
+        }
+        t0 <= t1
+    };
+    if enters(0.0) {
+        return 0.0;
+    }
+    let (mut below, mut above) = (0.0, step);
+    while !enters(above) {
+        (below, above) = (above, 2.0 * above);
+    }
+    for _ in 0..40 {
+        let mid = 0.5 * (below + above);
+        if enters(mid) {
+            above = mid;
+        } else {
+            below = mid;
+        }
+    }
+    above
+}

@@ -99,8 +99,7 @@ pub(super) unsafe fn box_lanes(
             let to_hi = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_set1_ps(hi[a]), o));
             corner = _mm256_max_ps(corner, _mm256_max_ps(to_lo, to_hi));
         }
-        let m = _mm256_add_ps(corner, _mm256_set1_ps(3.0 * (hi - lo).max_element()));
-        let scale = _mm256_mul_ps(_mm256_set1_ps(crate::node::SLACK), m);
+        let scale = _mm256_mul_ps(_mm256_set1_ps(crate::node::SLACK), corner);
         let slack = inv.map(|i| _mm256_mul_ps(_mm256_andnot_ps(sign, i), scale));
         BoxLanes {
             inv,
