@@ -36,6 +36,8 @@ use std::arch::x86_64::__m128;
 use std::mem::MaybeUninit;
 
 #[cfg(target_arch = "x86_64")]
+mod cone;
+#[cfg(target_arch = "x86_64")]
 mod cull;
 #[cfg(target_arch = "x86_64")]
 mod node_lanes;
@@ -76,25 +78,6 @@ fn try_blocker<L: Leaf>(
         }
     }
     stopped
-}
-
-/// Whether `rays` share a direction octant and lie within [`PACKET_CONE_COS`] of the first, in
-/// world space (a first test; the box test's octant is checked once the rays are set up).
-#[inline(always)]
-fn coherent(rays: &[Ray]) -> bool {
-    let Some(first) = rays.first() else {
-        return false;
-    };
-    let sign = |d: glam::Vec3| d.cmplt(glam::Vec3::ZERO).bitmask();
-    // `cos(d, d0) >= PACKET_CONE_COS` without square roots or divisions: `d . d0 >= 0` and
-    // `(d . d0)^2 >= cos^2 |d|^2 |d0|^2`. Which runs are packets only changes the speed: the
-    // answers are the one-ray answers either way.
-    let d0 = first.dir;
-    let cos2_l0 = PACKET_CONE_COS * PACKET_CONE_COS * d0.length_squared();
-    rays.iter().all(|r| {
-        let dot = r.dir.dot(d0);
-        sign(r.dir) == sign(d0) && dot >= 0.0 && dot * dot >= cos2_l0 * r.dir.length_squared()
-    })
 }
 
 /// Lanes at a leaf from which its triangles are tested for all of them at once (fewer take
@@ -334,7 +317,7 @@ impl Accel {
     }
 
     /// The packet queries with leaves of type `L`: runs of [`PACKET_LANES`] rays, each a packet
-    /// when [`coherent`], else interleaved.
+    /// when [`cone::coherent`], else interleaved.
     ///
     /// # Safety
     /// The CPU must support AVX2 and FMA.
@@ -381,7 +364,12 @@ impl Accel {
                 out[at..end].fill_with(L::miss);
                 continue;
             }
-            if run.len() < 2 || !coherent(run) {
+            let coherent = match <&[Ray; PACKET_LANES]>::try_from(run) {
+                // SAFETY: forwarded from the caller.
+                Ok(eight) => unsafe { cone::coherent_lanes(eight) },
+                Err(_) => run.len() >= 2 && cone::coherent(run),
+            };
+            if !coherent {
                 continue;
             }
             // Lanes past the run's end copy its last ray and stay inactive. Loops, not
