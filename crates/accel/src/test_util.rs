@@ -9,3 +9,17 @@ pub(crate) fn mix(mut x: u32) -> u32 {
     x = x.wrapping_mul(0x846c_a68b);
     x ^ (x >> 16)
 }
+
+/// A test coordinate for counter `k`: uniform in `[-scale, scale)`, and one time in sixteen
+/// each exactly zero, negative zero, tiny (times 1e-30), infinite or NaN.
+pub(crate) fn awkward(k: u32, scale: f32) -> f32 {
+    let u = scale * (2.0 * ((mix(k) >> 8) as f32 / (1u32 << 24) as f32) - 1.0);
+    match mix(k ^ 0x3c) % 16 {
+        0 => 0.0,
+        1 => -0.0,
+        2 => u * 1e-30,
+        3 => f32::INFINITY,
+        4 => f32::NAN,
+        _ => u,
+    }
+}

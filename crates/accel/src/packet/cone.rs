@@ -76,29 +76,23 @@ pub(super) unsafe fn coherent_lanes(run: &[Ray; PACKET_LANES]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_util::mix;
+    use crate::test_util::{awkward, mix};
     use glam::Vec3;
 
-    /// A unit-ish value in [-1, 1), now and then exactly zero, negative zero, tiny or NaN.
+    /// A direction component in [-1, 1), now and then zero, tiny or not finite.
     fn value(k: u32) -> f32 {
-        let u = 2.0 * ((mix(k) >> 8) as f32 / (1u32 << 24) as f32) - 1.0;
-        match mix(k ^ 0x5a) % 24 {
-            0 => 0.0,
-            1 => -0.0,
-            2 => u * 1e-30,
-            3 => f32::NAN,
-            _ => u,
-        }
+        awkward(k, 1.0)
     }
 
-    /// Eight lanes decide as the scalar loop, on runs from tight cones (packets) to wide ones.
+    /// Eight lanes decide as the scalar loop, on runs from tight cones (packets) to wide ones
+    /// and on directions with zero, tiny, infinite or NaN components.
     #[test]
     fn lanes_decide_as_the_scalar_test() {
         if !is_x86_feature_detected!("avx2") {
             return;
         }
         let (mut yes, mut no) = (0, 0);
-        for case in 0..40_000u32 {
+        for case in 0..100_000u32 {
             let k = case * 64;
             let base = Vec3::new(value(k), value(k + 1), value(k + 2));
             // Spread from 1e-4 (inside the cone) to 1 (far outside it).
@@ -117,6 +111,6 @@ mod tests {
                 no += 1;
             }
         }
-        assert!(yes > 5_000 && no > 5_000, "coherent {yes}, not {no}");
+        assert!(yes > 2_000 && no > 5_000, "coherent {yes}, not {no}");
     }
 }

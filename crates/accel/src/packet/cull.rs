@@ -58,21 +58,13 @@ impl Accel {
 #[cfg(test)]
 mod tests {
     use super::PACKET_LANES;
-    use crate::test_util::mix;
+    use crate::test_util::{awkward, mix};
     use crate::{Accel, BvhQuality, InstanceInput, MeshInput, Ray};
     use glam::{Affine3A, Vec3};
 
-    /// A coordinate: uniform in [-4, 4), now and then exactly zero, tiny or not finite.
+    /// A coordinate in [-4, 4), now and then zero, tiny or not finite.
     fn coord(k: u32) -> f32 {
-        let u = 8.0 * ((mix(k) >> 8) as f32 / (1u32 << 24) as f32) - 4.0;
-        match mix(k ^ 0x3c) % 16 {
-            0 => 0.0,
-            1 => -0.0,
-            2 => u * 1e-30,
-            3 => f32::INFINITY,
-            4 => f32::NAN,
-            _ => u,
-        }
+        awkward(k, 4.0)
     }
 
     /// Eight rays at once cull exactly the rays `misses_bounds` culls, one by one.
