@@ -347,11 +347,17 @@ impl Accel {
             // only those is answered here, before the coherence test. A run whose first ray
             // starts inside the scene (a camera inside it, shadow rays) is not checked further:
             // culling only saves work, and the runs that gain start outside.
+            // A full run's directions in lanes, transposed once for culling and coherence.
+            let full = match <&[Ray; PACKET_LANES]>::try_from(run) {
+                // SAFETY: forwarded from the caller.
+                Ok(eight) => Some((eight, unsafe { rays::dir_lanes(eight) })),
+                Err(_) => None,
+            };
             let mut active = (1u32 << run.len()) - 1;
             if !self.starts_inside(&run[0]) {
-                if let Ok(eight) = <&[Ray; PACKET_LANES]>::try_from(run) {
+                if let Some((eight, dirs)) = full {
                     // SAFETY: forwarded from the caller.
-                    active &= !unsafe { self.misses_bounds_lanes(eight) };
+                    active &= !unsafe { self.misses_bounds_lanes(eight, dirs) };
                 } else {
                     for (i, ray) in run.iter().enumerate() {
                         active &= !(u32::from(self.misses_bounds(ray)) << i);
@@ -364,10 +370,10 @@ impl Accel {
                 out[at..end].fill_with(L::miss);
                 continue;
             }
-            let coherent = match <&[Ray; PACKET_LANES]>::try_from(run) {
+            let coherent = match full {
                 // SAFETY: forwarded from the caller.
-                Ok(eight) => unsafe { cone::coherent_lanes(eight) },
-                Err(_) => run.len() >= 2 && cone::coherent(run),
+                Some((eight, dirs)) => unsafe { cone::coherent_lanes(eight[0].dir, dirs) },
+                None => run.len() >= 2 && cone::coherent(run),
             };
             if !coherent {
                 continue;

@@ -1,8 +1,9 @@
 //! Whether a run of rays is coherent enough to walk as a packet: one direction octant, and
 //! every direction within [`PACKET_CONE_COS`] of the first.
 
-use super::{PACKET_CONE_COS, PACKET_LANES};
+use super::PACKET_CONE_COS;
 use crate::Ray;
+use std::arch::x86_64::*;
 
 /// Whether `rays` share a direction octant and lie within [`PACKET_CONE_COS`] of the first, in
 /// world space (a first test; the box test's octant is checked once the rays are set up).
@@ -23,21 +24,17 @@ pub(super) fn coherent(rays: &[Ray]) -> bool {
     })
 }
 
-/// [`coherent`] for a full run, its eight rays in AVX2 lanes: the same comparisons on the same
+/// [`coherent`] for a full run whose first direction is `d0` and whose eight directions are
+/// `[dx, dy, dz]` in AVX2 lanes ([`super::rays::dir_lanes`]): the same comparisons on the same
 /// values, so the same decision, for a tenth of the instructions (the scalar loop recomputes
 /// the first ray's octant and runs to the end of every coherent run).
 ///
 /// # Safety
 /// The CPU must support AVX2, and the caller must be compiled for it.
 #[inline(always)]
-pub(super) unsafe fn coherent_lanes(run: &[Ray; PACKET_LANES]) -> bool {
-    use crate::triangle::lanes::transpose;
-    use glam::Vec3A;
-    use std::arch::x86_64::*;
+pub(super) unsafe fn coherent_lanes(d0: glam::Vec3, [dx, dy, dz]: [__m256; 3]) -> bool {
     // SAFETY: AVX2 is guaranteed by the caller; register-only operations.
     unsafe {
-        let [dx, dy, dz, _] = transpose(run.each_ref().map(|r| Vec3A::from(r.dir).into()));
-        let d0 = run[0].dir;
         let cos2_l0 = PACKET_CONE_COS * PACKET_CONE_COS * d0.length_squared();
         let zero = _mm256_setzero_ps();
         // Macros, not closures: closures do not inherit the target features.
@@ -75,6 +72,8 @@ pub(super) unsafe fn coherent_lanes(run: &[Ray; PACKET_LANES]) -> bool {
 
 #[cfg(test)]
 mod tests {
+    use super::super::rays::dir_lanes;
+    use super::super::PACKET_LANES;
     use super::*;
     use crate::test_util::{awkward, mix};
     use glam::Vec3;
@@ -103,7 +102,7 @@ mod tests {
                 Ray::new(Vec3::ZERO, base + jitter)
             });
             // SAFETY: AVX2 checked above.
-            let got = unsafe { coherent_lanes(&run) };
+            let got = unsafe { coherent_lanes(run[0].dir, dir_lanes(&run)) };
             assert_eq!(got, coherent(&run), "case {case}: {run:?}");
             if got {
                 yes += 1;

@@ -9,19 +9,23 @@ use glam::Vec3A;
 use std::arch::x86_64::*;
 
 impl Accel {
-    /// The lanes of `run` (eight rays) that [`Accel::misses_bounds`] culls, bit `i` for ray
-    /// `i`: the same arithmetic lane by lane (a ray that starts inside the bounds, or whose
-    /// origin or direction is not finite, is never culled).
+    /// The lanes of `run` (eight rays, their directions in lanes: [`super::rays::dir_lanes`]) that
+    /// [`Accel::misses_bounds`] culls, bit `i` for ray `i`: the same arithmetic lane by lane (a
+    /// ray that starts inside the bounds, or whose origin or direction is not finite, is never
+    /// culled).
     ///
     /// # Safety
     /// The CPU must support AVX2, and the caller must be compiled for it.
     #[inline(always)]
-    pub(super) unsafe fn misses_bounds_lanes(&self, run: &[Ray; PACKET_LANES]) -> u32 {
+    pub(super) unsafe fn misses_bounds_lanes(
+        &self,
+        run: &[Ray; PACKET_LANES],
+        [dx, dy, dz]: [__m256; 3],
+    ) -> u32 {
         let (lo, hi) = self.tlas_bounds;
         // SAFETY: AVX2 is guaranteed by the caller; register-only operations.
         unsafe {
             let [ox, oy, oz, _] = transpose(run.each_ref().map(|r| Vec3A::from(r.origin).into()));
-            let [dx, dy, dz, _] = transpose(run.each_ref().map(|r| Vec3A::from(r.dir).into()));
             let t = run.each_ref().map(|r| r.tmin);
             let tmin = _mm256_setr_ps(t[0], t[1], t[2], t[3], t[4], t[5], t[6], t[7]);
             let t = run.each_ref().map(|r| r.tmax);
@@ -57,6 +61,7 @@ impl Accel {
 
 #[cfg(test)]
 mod tests {
+    use super::super::rays::dir_lanes;
     use super::PACKET_LANES;
     use crate::test_util::{awkward, mix};
     use crate::{Accel, BvhQuality, InstanceInput, MeshInput, Ray};
@@ -105,7 +110,7 @@ mod tests {
                 r
             });
             // SAFETY: AVX2 checked above.
-            let got = unsafe { accel.misses_bounds_lanes(&run) };
+            let got = unsafe { accel.misses_bounds_lanes(&run, dir_lanes(&run)) };
             for (i, ray) in run.iter().enumerate() {
                 let want = accel.misses_bounds(ray);
                 assert_eq!(got >> i & 1 == 1, want, "case {case} ray {i}: {ray:?}");

@@ -61,6 +61,20 @@ pub(super) struct BoxLanes {
     pub(super) finite: __m256,
 }
 
+/// The directions of a run of eight rays in lanes (x, y, z): transposed once per run for the
+/// culling and coherence tests.
+///
+/// # Safety
+/// The CPU must support AVX, and the caller must be compiled for it.
+#[inline(always)]
+pub(super) unsafe fn dir_lanes(run: &[crate::Ray; PACKET_LANES]) -> [__m256; 3] {
+    // SAFETY: AVX is guaranteed by the caller; register-only operations.
+    let [dx, dy, dz, _] = unsafe {
+        crate::triangle::lanes::transpose(run.each_ref().map(|r| glam::Vec3A::from(r.dir).into()))
+    };
+    [dx, dy, dz]
+}
+
 /// [`BoxLanes`] of eight rays.
 ///
 /// # Safety
