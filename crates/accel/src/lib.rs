@@ -24,6 +24,8 @@
 //!   [`PACKET_LANES`] coherent rays (a pixel's lens samples) as one packet, one AVX2 lane per
 //!   ray, with the same per-ray answers; incoherent runs are interleaved as in the batches.
 //! - **Ray files**: [`rayfile`] reads and writes the Embree anchor's raw `.rays` format.
+//! - **Cover**: [`Accel::cover`] cuts the top of the trees into a few boxes that hold every
+//!   triangle (a renderer finds from them the pixels that can only see the background).
 //!
 //! ```
 //! use aperture_accel::{Accel, BvhQuality, InstanceInput, MeshInput, Ray};
@@ -40,6 +42,7 @@
 //! ```
 
 mod build;
+mod cover;
 mod node;
 mod packet;
 mod query;

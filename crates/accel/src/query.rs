@@ -390,9 +390,13 @@ impl Accel {
                 continue;
             };
             if entry.instance == FLATTENED {
-                let i = (0..blas.tris.len())
-                    .find(|&i| blas.tri_instance[i] == instance && blas.tris[i].prim == triangle)?;
-                return Some(blas.tris[i].p);
+                // The instance may be drawn by another entry: look on.
+                let found = (0..blas.tris.len())
+                    .find(|&i| blas.tri_instance[i] == instance && blas.tris[i].prim == triangle);
+                if let Some(i) = found {
+                    return Some(blas.tris[i].p);
+                }
+                continue;
             }
             if entry.instance == instance {
                 let world_from_object = entry.object_from_world.inverse();

@@ -5,7 +5,7 @@
 //! The values are exactly those of drawing each sample alone: a pure function of (pixel,
 //! index, dimension, seed).
 
-use crate::background::PixelRect;
+use crate::background::PixelMask;
 use crate::camera::{Camera, CameraRay, CameraSample};
 use crate::camera_lanes::{LensLanes, LANES};
 use crate::filter::Filter;
@@ -31,12 +31,13 @@ pub(crate) struct PrimarySamples<'a> {
     run: PixelRun,
     /// The camera's rays made [`LANES`] at a time, when it is a kind the lanes cover.
     lanes: Option<LensLanes>,
-    /// The pixels whose rays may meet the scene; the others' samples are [`Start::Background`].
-    scene: PixelRect,
+    /// The pixels whose rays may meet the scene (all when `None`); the others' samples are
+    /// [`Start::Background`].
+    scene: Option<&'a PixelMask>,
 }
 
 /// What a sample's camera gave: a traced ray, no ray, or a ray that provably leaves the scene
-/// at once (its pixel lies outside [`PrimarySamples::with_scene`]'s rectangle; not traced).
+/// at once (its pixel lies outside [`PrimarySamples::with_scene`]'s pixels; not traced).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Start {
     Traced,
@@ -65,14 +66,17 @@ impl<'a> PrimarySamples<'a> {
             row: (None, 0),
             centre: Vec2::ZERO,
             run: PixelRun::new(kind, 0, 0),
-            scene: PixelRect::all(camera.width, camera.height),
+            scene: None,
         }
     }
 
     /// Samples of pixels outside `scene` become [`Start::Background`], without their numbers or
     /// rays (the caller knows those rays meet nothing: [`crate::background::scene_pixels`]).
-    pub fn with_scene(self, scene: PixelRect) -> Self {
-        Self { scene, ..self }
+    pub fn with_scene(self, scene: &'a PixelMask) -> Self {
+        Self {
+            scene: Some(scene),
+            ..self
+        }
     }
 
     /// The next item of `items` whose pixel may see the scene; the ones before it go to `run`
@@ -85,7 +89,7 @@ impl<'a> PrimarySamples<'a> {
     ) -> Option<(K, u32, u32, u32)> {
         loop {
             let item = items.next()?;
-            if self.scene.contains(item.1, item.2) {
+            if self.scene.is_none_or(|m| m.contains(item.1, item.2)) {
                 return Some(item);
             }
             run.push((item.0, Start::Background));
@@ -224,6 +228,7 @@ pub(crate) fn drawn_alone(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::background::PixelRect;
     use crate::filter::FilterKind;
     use aperture_scene::{Dof, Projection};
 
@@ -318,16 +323,17 @@ mod tests {
                             assert_eq!(bits(got), bits(*want), "fill: ({x}, {y}) sample {i}");
                         }
                         assert!(traced.next().is_none());
-                        // With a rectangle of pixels that see the scene: the others'
+                        // With a set of pixels that see the scene (a rectangle): the others'
                         // samples are background, in their places; the rest as before.
-                        let scene = PixelRect {
+                        let rect = PixelRect {
                             x0: 1,
                             x1: 2,
                             y0: 0,
                             y1: 1,
                         };
+                        let scene = PixelMask::from_rects(camera.width, camera.height, &[rect]);
                         let mut primary = PrimarySamples::new(&camera, &filter, kind, seed, offset)
-                            .with_scene(scene);
+                            .with_scene(&scene);
                         let mut it = items.iter().enumerate().map(|(k, &(x, y, i))| (k, x, y, i));
                         let (mut run, mut starts) = (Vec::new(), Vec::new());
                         while it.len() > 0 {

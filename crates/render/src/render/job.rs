@@ -79,7 +79,7 @@ impl Job<'_> {
         let mut primary =
             PrimarySamples::new(self.camera, self.filter, o.sampler, o.seed, o.sample_offset);
         if let Some(b) = &self.backdrop {
-            primary = primary.with_scene(b.scene);
+            primary = primary.with_scene(&b.scene);
         }
         let none = SampleAov::default();
         // The sample of every background pixel (only `fill` marks any, and only with a
@@ -259,7 +259,7 @@ mod tests {
         let filter = Filter::new(opts.filter);
         let job = lens_job(integrator, &camera, &filter, opts);
         // Under the constant environment, part of the view is background only, untraced.
-        let untraced = job.backdrop.as_ref().map(|b| b.scene);
+        let untraced = job.backdrop.as_ref().map(|b| &b.scene);
         let constant = matches!(opts.env, Environment::Constant(_));
         assert_eq!(untraced.is_some(), constant);
         let mut background = 0;
