@@ -64,6 +64,11 @@ impl Accel {
             };
             children.clear();
             self.children(finer, &mut children);
+            if children.is_empty() {
+                // A node with nothing below it (or out of range): its box stays, unopened.
+                cut[k].1 = Finer::Nothing;
+                continue;
+            }
             if cut.len() - 1 + children.len() > budget {
                 break;
             }
