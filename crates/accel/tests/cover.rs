@@ -4,32 +4,12 @@
 use aperture_accel::{Accel, BvhQuality, FrameHints, InstanceInput, MeshInput};
 use glam::{Affine3A, Quat, Vec3};
 
-/// A bumpy grid of `n × n` quads spanning [-1, 1]² in z = 0.
-fn grid(n: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let mut p = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            let (x, y) = (
-                i as f32 / n as f32 * 2.0 - 1.0,
-                j as f32 / n as f32 * 2.0 - 1.0,
-            );
-            p.push(Vec3::new(x, y, 0.2 * (3.0 * x).sin() * (2.0 * y).cos()));
-        }
-    }
-    let mut t = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let a = j * (n + 1) + i;
-            t.push([a, a + 1, a + n + 2]);
-            t.push([a, a + n + 2, a + n + 1]);
-        }
-    }
-    (p, t)
-}
+mod common;
+use common::grid;
 
 #[test]
 fn the_cut_holds_every_triangle() {
-    let meshes = [grid(9), grid(4), grid(1)];
+    let meshes = [grid(9, 0.2), grid(4, 0.2), grid(1, 0.2)];
     let inputs: Vec<MeshInput> = meshes
         .iter()
         .map(|(p, t)| MeshInput {

@@ -4,31 +4,8 @@
 use aperture_accel::{Accel, BvhQuality, FrameHints, InstanceInput, MeshInput, Ray};
 use glam::{Affine3A, Quat, Vec3};
 
-/// Positions and triangles of one mesh.
-type Geometry = (Vec<Vec3>, Vec<[u32; 3]>);
-
-/// A grid of `n × n` quads in the plane z = 0, spanning [-1, 1]², bumped by `bump`.
-fn grid(n: u32, bump: f32) -> Geometry {
-    let mut p = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            let (x, y) = (
-                i as f32 / n as f32 * 2.0 - 1.0,
-                j as f32 / n as f32 * 2.0 - 1.0,
-            );
-            p.push(Vec3::new(x, y, bump * (3.0 * x).sin() * (2.0 * y).cos()));
-        }
-    }
-    let mut t = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let a = j * (n + 1) + i;
-            t.push([a, a + 1, a + n + 2]);
-            t.push([a, a + n + 2, a + n + 1]);
-        }
-    }
-    (p, t)
-}
+mod common;
+use common::{grid, Geometry};
 
 /// Mesh 0: static, drawn twice (one moving instance); mesh 1: static, drawn once by a still
 /// instance (flattened); mesh 2: static, drawn once by a moving instance; mesh 3: deforming.

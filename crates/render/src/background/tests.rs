@@ -95,31 +95,8 @@ fn rays_of_pixels_outside_never_meet_the_box() {
         let (lo, hi) = (at - half, at + half);
         let filter_half = [0.5, 0.75][case % 2];
         let rect = box_pixels(&cam, lo, hi, filter_half);
-        for y in 0..height {
-            for x in 0..width {
-                if rect.contains(x, y) {
-                    kept += 1;
-                    continue;
-                }
-                culled += 1;
-                for _ in 0..24 {
-                    // Film points over the filter's support, lens points over the square
-                    // around the aperture and its own samples alike.
-                    let off = Vec2::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)) * filter_half;
-                    let s = CameraSample {
-                        p_film: Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + off,
-                        p_lens: Vec2::new(rng.f(), rng.f()),
-                    };
-                    let r = cam
-                        .generate_ray(&s)
-                        .expect("a perspective camera makes rays");
-                    assert!(
-                        !meets(r.origin, r.dir, lo, hi),
-                        "case {case}: pixel ({x}, {y}) outside {rect:?} meets the box"
-                    );
-                }
-            }
-        }
+        let (k, c) = check_left_out(&mut rng, &cam, rect, (lo, hi), filter_half, 24, case);
+        (kept, culled) = (kept + k, culled + c);
     }
     // Both kinds occur, so the test checks something either way.
     assert!(
@@ -206,6 +183,39 @@ fn no_bound_where_none_holds() {
     assert_eq!(scene_pixels(&cam, &[], 0.5).count(), 0);
 }
 
+/// The pixels of `cam` inside `rect` and outside it (kept, culled), checking that `rays` rays
+/// of every pixel outside miss the box `lo..hi`.
+fn check_left_out(
+    rng: &mut Rng,
+    cam: &Camera,
+    rect: PixelRect,
+    (lo, hi): (Vec3, Vec3),
+    filter_half: f32,
+    rays: usize,
+    case: usize,
+) -> (usize, usize) {
+    let (mut kept, mut culled) = (0, 0);
+    for y in 0..cam.height {
+        for x in 0..cam.width {
+            if rect.contains(x, y) {
+                kept += 1;
+                continue;
+            }
+            culled += 1;
+            for _ in 0..rays {
+                let r = cam
+                    .generate_ray(&sample_in(rng, x, y, filter_half))
+                    .expect("a perspective camera makes rays");
+                assert!(
+                    !meets(r.origin, r.dir, lo, hi),
+                    "case {case}: pixel ({x}, {y}) outside {rect:?} meets the box"
+                );
+            }
+        }
+    }
+    (kept, culled)
+}
+
 /// Film and lens points over pixel `(x, y)`'s filter support and the whole aperture square.
 fn sample_in(rng: &mut Rng, x: u32, y: u32, filter_half: f32) -> CameraSample {
     let off = Vec2::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)) * filter_half;
@@ -260,24 +270,8 @@ fn grounds_and_walls_through_the_lens_plane() {
         };
         let rect = box_pixels(&cam, lo, hi, 0.5);
         let before = culled;
-        for y in 0..height {
-            for x in 0..width {
-                if rect.contains(x, y) {
-                    kept += 1;
-                    continue;
-                }
-                culled += 1;
-                for _ in 0..16 {
-                    let r = cam
-                        .generate_ray(&sample_in(&mut rng, x, y, 0.5))
-                        .expect("a ray");
-                    assert!(
-                        !meets(r.origin, r.dir, lo, hi),
-                        "case {case}: pixel ({x}, {y}) outside {rect:?} meets the box"
-                    );
-                }
-            }
-        }
+        let (k, c) = check_left_out(&mut rng, &cam, rect, (lo, hi), 0.5, 16, case);
+        (kept, culled) = (kept + k, culled + c);
         // A camera level with the ground (pitch above −0.2, so the horizon is in view) sees
         // sky above a large ground's far edge.
         if case % 4 != 3 && pitch > -0.2 && extent > 20.0 && culled > before {
