@@ -20,7 +20,9 @@ mod mask;
 mod window;
 
 pub(crate) use mask::PixelMask;
+#[cfg(test)]
 use window::box_pixels;
+use window::LensView;
 pub(crate) use window::PixelRect;
 
 /// The most boxes the scene's geometry is cut into ([`aperture_accel::Accel::cover`]): enough
@@ -71,13 +73,24 @@ pub(crate) fn backdrop(
 
 /// The pixels of `camera`'s image whose rays (any lens point, any film point within
 /// `filter_half` pixels of the pixel's centre) may meet any of `boxes` (world space): the union
-/// of each box's rectangle ([`window::box_pixels`]). No pixel when there is no box.
+/// of each box's rectangle ([`LensView::rect`]). No pixel when there is no box; every pixel at
+/// once when one box's rectangle is the image (a camera inside a room) or the camera has no
+/// bound.
 pub(crate) fn scene_pixels(camera: &Camera, boxes: &[(Vec3, Vec3)], filter_half: f32) -> PixelMask {
-    let rects: Vec<PixelRect> = boxes
-        .iter()
-        .map(|&(lo, hi)| box_pixels(camera, lo, hi, filter_half))
-        .collect();
-    PixelMask::from_rects(camera.width, camera.height, &rects)
+    let (w, h) = (camera.width, camera.height);
+    let all = PixelRect::all(w, h);
+    let Some(view) = LensView::new(camera, filter_half) else {
+        return PixelMask::from_rects(w, h, &[all]);
+    };
+    let mut rects = Vec::with_capacity(boxes.len());
+    for &(lo, hi) in boxes {
+        let rect = view.rect(lo, hi);
+        if rect == all {
+            return PixelMask::from_rects(w, h, &[all]);
+        }
+        rects.push(rect);
+    }
+    PixelMask::from_rects(w, h, &rects)
 }
 
 #[cfg(test)]
