@@ -17,9 +17,9 @@ thin-lens camera). From that one definition the script writes
 For each renderer a series: a reference of two independent halves (``rmse(a, b) / 2`` is its
 noise RMSE), then per spp budget the median *render-only* time of ``--repeats`` renders, with
 RMSE / rel. MSE / MAE against that renderer's own reference. ``all`` keeps one process per
-renderer loaded and alternates them, round by round within each budget, so that a machine
-whose speed drifts during the run (this one's moved by 15-40 % within an hour) moves all three
-alike (``series`` times one renderer alone); each timed render waits ``--settle`` seconds first,
+renderer loaded and alternates them, round by round within each budget, the rounds spread over
+``--sweeps`` passes through the budgets, so that a machine whose speed drifts during the run
+(this one's moved by 15-40 % within an hour) moves all three alike, and all budgets (``series`` times one renderer alone); each timed render waits ``--settle`` seconds first,
 so that no other renderer's worker threads still spin. Written as
 ``OUT/<scene>/<renderer>.csv`` in the columns of ``aperture bench``'s results.csv (usable with
 ``aperture bench --series``). ``summary`` prints time to each RMSE target, the ratios and the
@@ -538,10 +538,15 @@ class Worker:
 
 
 def alternated_series(workers, name, args):
-    """Per budget a first call of each renderer, then `repeats` rounds in which every renderer
-    renders once, in an order that rotates from round to round: a machine that speeds up or
-    slows down during the run moves every renderer's times alike. Writes each renderer's CSV."""
-    rows = {r: [] for r in workers}
+    """Per budget a first call of each renderer, then `repeats` rounds per budget in which every
+    renderer renders once, in an order that rotates from round to round: a machine that speeds
+    up or slows down during the run moves every renderer's times alike. The rounds are spread
+    over `--sweeps` passes through all the budgets, so that a slow spell of the host falls on
+    several budgets rather than all of one budget's renders (a renderer's time to a target
+    weighs the budgets around it unequally: aperture's loosest target on outdoor_dof leans on
+    2 spp, Mitsuba's on 4). Writes each renderer's CSV."""
+    budgets = [int(s) for s in args.spp.split(",")]
+    order = list(workers)
 
     def render(r, spp, seed):
         # The other renderers' thread pools must be asleep: Dr.Jit's workers spin on after a
@@ -550,19 +555,25 @@ def alternated_series(workers, name, args):
         time.sleep(args.settle)
         return workers[r].render(spp, seed)
 
-    for spp in [int(s) for s in args.spp.split(",")]:
-        first = {r: render(r, spp, 1)["seconds"] for r in workers}
-        times = {r: [] for r in workers}
-        last = {}
-        order = list(workers)
-        for k in range(args.repeats):
-            for r in order[k % len(order):] + order[:k % len(order)]:
-                last[r] = render(r, spp, 2 + k)
-                times[r].append(last[r]["seconds"])
-            if min(sum(t) for t in times.values()) > args.repeat_seconds:
-                break
+    first = {spp: {r: render(r, spp, 1)["seconds"] for r in workers} for spp in budgets}
+    times = {spp: {r: [] for r in workers} for spp in budgets}
+    last = {spp: {} for spp in budgets}
+    sweeps = max(1, min(args.sweeps, args.repeats))
+    for sweep in range(sweeps):
+        for spp in budgets:
+            done = len(times[spp][order[0]])
+            # Rounds up to this sweep's share of `repeats`; none once a budget's renders add up
+            # to `repeat_seconds` for every renderer.
+            for k in range(done, args.repeats * (sweep + 1) // sweeps):
+                if k and min(sum(t) for t in times[spp].values()) > args.repeat_seconds:
+                    break
+                for r in order[k % len(order):] + order[:k % len(order)]:
+                    last[spp][r] = render(r, spp, 2 + k)
+                    times[spp][r].append(last[spp][r]["seconds"])
+    rows = {r: [] for r in workers}
+    for spp in budgets:
         for r, w in workers.items():
-            rows[r].append(series_row(r, spp, w.size, args.threads, times[r], first[r], last[r]))
+            rows[r].append(series_row(r, spp, w.size, args.threads, times[spp][r], first[spp][r], last[spp][r]))
     for r, v in rows.items():
         bm.write_series_csv(os.path.join(args.output, name, f"{r}.csv"), v)
 
@@ -599,6 +610,8 @@ def parser():
     ap.add_argument("--repeats", type=int, default=3, help="timed renders per budget (median), after a first call")
     ap.add_argument("--repeat-seconds", type=float, default=10.0,
                     help="stop repeating a budget once its timed renders add up to this")
+    ap.add_argument("--sweeps", type=int, default=3,
+                    help="all: passes through the budgets that the repeats are spread over")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--settle", type=float, default=0.3,
                     help="seconds of pause before each timed render, so that no renderer's workers still spin")
