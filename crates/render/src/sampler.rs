@@ -291,6 +291,7 @@ impl SampleStream {
 
     /// The scattering values of path vertex `k` (0 = the camera ray's hit): dimension set
     /// `1 + 2k`, so no two vertices share a dimension.
+    #[inline]
     pub fn bounce(&self, k: u32) -> BounceSample {
         let a = self.set_4d(1 + 2 * k);
         BounceSample {

@@ -81,6 +81,7 @@ pub(crate) fn view_normal(s: &Surface, shading: &Shading, ng: Vec3, wo: Vec3) ->
 /// given, and the view `wo` in it. `bend_towards` keeps the view above the shading hemisphere;
 /// if rounding still says otherwise, the geometric normal `ng` (on the viewer's side) gives
 /// the frame rather than return black.
+#[inline]
 pub(crate) fn shading_frame(ns: Vec3, ng: Vec3, tangent: Option<Vec3>, wo: Vec3) -> (Frame, Vec3) {
     let mut frame = match tangent {
         Some(t) => Frame::from_normal_tangent(ns, t),
@@ -342,8 +343,17 @@ impl<'a> Geometry<'a> {
             .unwrap_or(&self.default_material)
     }
 
+    #[inline]
     pub(crate) fn lookup(&self, r: &Option<TextureRef>, s: &Surface) -> Vec4 {
-        let Some(r) = r else { return Vec4::ONE };
+        // Most material slots have no texture: that answer without a call.
+        match r {
+            Some(r) => self.lookup_texture(r, s),
+            None => Vec4::ONE,
+        }
+    }
+
+    /// [`Geometry::lookup`] of a slot that has a texture.
+    fn lookup_texture(&self, r: &TextureRef, s: &Surface) -> Vec4 {
         let Some(tex) = self.scene.textures.get(r.texture as usize) else {
             return Vec4::ONE;
         };
@@ -443,6 +453,7 @@ impl<'a> Geometry<'a> {
     }
 
     /// The material evaluated at `s`.
+    #[inline]
     pub fn shade(&self, s: &Surface) -> Shading {
         let m = self.material(s.material);
         let base = self.base_color(m, s).xyz().max(Vec3::ZERO);

@@ -75,7 +75,9 @@ impl Integrator<'_> {
             for light in &self.geom.scene.lights {
                 self.direct_punctual(v, light, beta, path);
             }
-            self.direct_emissive(v, beta, ls, 1.0, path);
+            if self.emissive.is_some() {
+                self.direct_emissive(v, beta, ls, 1.0, path);
+            }
             return;
         };
         match c.pick {
@@ -96,6 +98,7 @@ impl Integrator<'_> {
     }
 
     /// Next-event estimation towards a punctual light (a delta: light sampling only).
+    #[inline]
     fn direct_punctual<const AOV: bool>(
         &self,
         v: &Vertex<'_>,

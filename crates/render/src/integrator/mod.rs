@@ -291,7 +291,11 @@ impl Integrator<'_> {
         } else {
             SurfaceKind::Opaque
         };
-        let (interface, medium) = self.interface(kind, s.material, entering, stream, w);
+        let (interface, medium) = match kind {
+            // Every surface of most scenes: no call.
+            SurfaceKind::Opaque => (Interface::Opaque, None),
+            _ => self.interface(kind, s.material, entering, stream, w),
+        };
         bsdf.prepare(&frame, wo_l, interface, self.energy_compensation);
         if AOV && (path.light_passes || path.features.pending()) {
             let albedos = bsdf.albedos(wo_l);
