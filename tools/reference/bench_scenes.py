@@ -19,8 +19,9 @@ noise RMSE), then per spp budget the median *render-only* time of ``--repeats`` 
 RMSE / rel. MSE / MAE against that renderer's own reference. ``all`` keeps one process per
 renderer loaded and alternates them, round by round within each budget, the rounds spread over
 ``--sweeps`` passes through the budgets, so that a machine whose speed drifts during the run
-(this one's moved by 15-40 % within an hour) moves all three alike, and all budgets (``series`` times one renderer alone); each timed render waits ``--settle`` seconds first,
-so that no other renderer's worker threads still spin. Written as
+(this one's moved by 15-40 % within an hour) moves all three alike, and all budgets
+(``series`` times one renderer alone); each timed render waits ``--settle`` seconds first, so
+that no other renderer's worker threads still spin. Written as
 ``OUT/<scene>/<renderer>.csv`` in the columns of ``aperture bench``'s results.csv (usable with
 ``aperture bench --series``). ``summary`` prints time to each RMSE target, the ratios and the
 per-sample costs. See README.md ("Three more scenes").
