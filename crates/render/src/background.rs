@@ -79,14 +79,15 @@ pub(crate) fn backdrop(
 pub(crate) fn scene_pixels(camera: &Camera, boxes: &[(Vec3, Vec3)], filter_half: f32) -> PixelMask {
     let (w, h) = (camera.width, camera.height);
     let all = PixelRect::all(w, h);
+    let whole = || PixelMask::from_rects(w, h, &[all]);
     let Some(view) = LensView::new(camera, filter_half) else {
-        return PixelMask::from_rects(w, h, &[all]);
+        return whole();
     };
     let mut rects = Vec::with_capacity(boxes.len());
     for &(lo, hi) in boxes {
         let rect = view.rect(lo, hi);
         if rect == all {
-            return PixelMask::from_rects(w, h, &[all]);
+            return whole();
         }
         rects.push(rect);
     }

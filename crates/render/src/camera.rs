@@ -146,6 +146,19 @@ pub enum CameraModel {
     },
 }
 
+impl CameraModel {
+    /// `(tan_half_x, tan_half_y)` of a perspective camera; `None` for an orthographic one.
+    pub fn tan_half(&self) -> Option<(f32, f32)> {
+        match *self {
+            CameraModel::ThinLens {
+                tan_half_x,
+                tan_half_y,
+            } => Some((tan_half_x, tan_half_y)),
+            CameraModel::Orthographic { .. } => None,
+        }
+    }
+}
+
 impl Camera {
     /// The camera of a scene camera for a `width × height` image. The vertical extent comes from
     /// the file (`yfov` or `ymag`); the horizontal one from the image's aspect `width / height`.

@@ -3,7 +3,7 @@
 //! [`Camera::generate_ray`] in the same order (no fused multiply-add, no reassociation), so its
 //! ray has the same bits; on `Vec4`s, whose operations are SIMD instructions.
 
-use crate::camera::{Aperture, Camera, CameraModel};
+use crate::camera::{Aperture, Camera};
 use crate::warp::concentric_disc_lanes;
 use glam::{Affine3A, Vec4};
 
@@ -37,13 +37,7 @@ impl LensLanes {
     /// The lanes of `camera`, or `None` for the cameras they do not cover (orthographic, a
     /// polygonal aperture), which make their rays one at a time.
     pub fn new(camera: &Camera) -> Option<Self> {
-        let CameraModel::ThinLens {
-            tan_half_x,
-            tan_half_y,
-        } = camera.model
-        else {
-            return None;
-        };
+        let (tan_half_x, tan_half_y) = camera.model.tan_half()?;
         let disc = match camera.aperture {
             Aperture::Pinhole => None,
             Aperture::Disc { radius, ratio } => Some((radius, ratio)),
@@ -116,6 +110,7 @@ fn normalize(v: [Vec4; 3]) -> [Vec4; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::camera::CameraModel;
     use crate::camera::{CameraRay, CameraSample};
     use crate::sampler::hash_u32;
     use aperture_scene::Dof;

@@ -1,7 +1,7 @@
 //! The pixels whose camera rays may meet one box: a rectangle of the image, from the box's
 //! corners and its crossings of the lens plane.
 
-use crate::camera::{Camera, CameraModel};
+use crate::camera::Camera;
 use glam::{DAffine3, DVec3, Vec3};
 
 /// Rounding margin: a box grows by this fraction of its size (and of its distance from the
@@ -76,13 +76,7 @@ pub(crate) struct LensView {
 impl LensView {
     /// The view of `camera`, a pixel's samples reaching `filter_half` pixels from its centre.
     pub fn new(camera: &Camera, filter_half: f32) -> Option<Self> {
-        let CameraModel::ThinLens {
-            tan_half_x,
-            tan_half_y,
-        } = camera.model
-        else {
-            return None;
-        };
+        let (tan_half_x, tan_half_y) = camera.model.tan_half()?;
         let (tx, ty) = (f64::from(tan_half_x), f64::from(tan_half_y));
         if !(tx > 0.0 && ty > 0.0 && tx.is_finite() && ty.is_finite()) {
             return None;
