@@ -232,16 +232,19 @@ def imports_of(crates, by_name):
         for file, mpath in c.files.items():
             with open(file) as f:
                 text = strip_comments_and_strings(f.read())
+            spans = inline_spans(text)
+            depth_at = lambda o: sum(1 for a, b in spans if a <= o < b)
             paths = []
             for m in USE_RE.finditer(text):
                 if re.search(r"\bpub(?:\([^)]*\))?\s+$", text[max(0, m.start() - 12):m.start()]):
                     # A re-export is followed where it is used, not counted as an import.
                     continue
-                paths.extend(expand_use(m.group(1)))
-            body = USE_RE.sub("", text)
+                d = depth_at(m.start())
+                paths.extend(lift(p, d) for p in expand_use(m.group(1)))
+            body = USE_RE.sub(lambda m: " " * len(m.group(0)), text)
             for m in PATH_RE.finditer(body):
                 p = re.sub(r"\s+", "", m.group(1)).rstrip(":{").split("::")
-                paths.append([x for x in p if x])
+                paths.append(lift([x for x in p if x], depth_at(m.start())))
             locals_ = {}
             for m in USE_RE.finditer(text):
                 for p in expand_use(m.group(1)):
@@ -259,6 +262,35 @@ def imports_of(crates, by_name):
                 if tgt and tgt != file:
                     graph[file].add(tgt)
     return graph
+
+
+def inline_spans(text):
+    """(start, end) offsets of the bodies of inline `mod x { … }` blocks."""
+    spans = []
+    for m in re.finditer(r"\bmod\s+\w+\s*\{", text):
+        depth, j = 1, m.end()
+        while j < len(text) and depth:
+            depth += {"{": 1, "}": -1}.get(text[j], 0)
+            j += 1
+        spans.append((m.end(), j))
+    return spans
+
+
+def lift(p, depth):
+    """A path written `depth` inline modules deep, as seen from the file's own module: its
+    leading `super`s climb out of the inline modules first (`[]` when it stays in the file)."""
+    if not p or depth == 0:
+        return p
+    if p[0] == "self":
+        return []
+    k = 0
+    while k < len(p) and p[k] == "super":
+        k += 1
+    if k == 0:
+        return p
+    if k <= depth:
+        return []
+    return ["super"] * (k - depth) + p[k:]
 
 
 def sccs(graph):
