@@ -11,7 +11,7 @@
 //! environment (NEE of both kinds), alpha blending and masking, normal maps and textures from
 //! real files, every pass.
 
-use aperture_render::output;
+use aperture_output as output;
 use aperture_render::{
     build_accel, render, test_scenes, EnvImage, EnvSampling, Environment, PassSet, RenderOptions,
 };

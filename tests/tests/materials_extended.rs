@@ -6,7 +6,7 @@
 //! Pixels are attributed to objects by their centre rays (`aperture_tests::probe`).
 
 use aperture_imageio::Image;
-use aperture_render::output;
+use aperture_output as output;
 use aperture_render::{build_accel, render, Camera, Environment, PassSet, RenderOptions};
 use aperture_scene::{LoadOptions, Scene};
 use aperture_tests::probe::{node, node_names, sample, Probe};

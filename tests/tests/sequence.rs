@@ -1,8 +1,9 @@
 //! Frame sequences (SPEC §7): loaded once, each frame rebuilds only the BVHs of what changed,
 //! and `--skip-existing` leaves finished frames alone.
 
-use aperture_render::output::ExrOptions;
-use aperture_render::sequence::{self, FrameFormat, FrameRange, FrameReport, Sequence};
+use aperture_output::sequence::{self, FrameFormat, FrameReport, Sequence};
+use aperture_output::ExrOptions;
+use aperture_render::sequence::FrameRange;
 use aperture_render::RenderOptions;
 use aperture_scene::{Animated, LoadOptions};
 

@@ -234,8 +234,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                 let t0 = Instant::now();
                 let film = aperture_render::render(&scene, &accel, &opts, &|_, _| {})?;
                 let secs = t0.elapsed().as_secs_f64();
-                let image =
-                    aperture_render::output::film_to_image(&film, &scene, &opts, false, secs)?;
+                let image = aperture_output::film_to_image(&film, &scene, &opts, false, secs)?;
                 let path = args.output.join("reference.exr");
                 aperture_imageio::write_image(&path, &image, &Default::default())
                     .with_context(|| format!("writing {}", path.display()))?;

@@ -1,14 +1,14 @@
 //! `aperture bench-rays`: closest-hit and occlusion throughput of each BVH preset on ray sets
 //! made from the scene's thin-lens camera (and on given ray files), one ray at a time and
 //! batched, on one thread and on all. The sets and the timing are the library's
-//! (`aperture_render::raybench`); this file maps the arguments, prints the table and writes
+//! (`aperture_raybench`); this file maps the arguments, prints the table and writes
 //! `bench-rays.csv` and `bench-rays.png`.
 
 use crate::number_args::{non_negative_f32, positive_f32};
 use crate::plot::{load_font, write_png, PALETTE};
 use anyhow::{bail, Context as _};
 use aperture_accel::BvhQuality;
-use aperture_render::raybench::{
+use aperture_raybench::{
     estimated_bytes, generate_sets, load_set, save_sets, time_sets, Mode, QualityRun, RaySet,
     RaySetOptions, Timing, TimingOptions,
 };
@@ -377,8 +377,8 @@ fn categories(runs: &[QualityRun]) -> Vec<String> {
 fn category(t: &Timing) -> String {
     let set = t.set.strip_prefix("primary_").unwrap_or(&t.set);
     let query = match t.query {
-        aperture_render::raybench::Query::Closest => "cl",
-        aperture_render::raybench::Query::Occluded => "occ",
+        aperture_raybench::Query::Closest => "cl",
+        aperture_raybench::Query::Occluded => "occ",
     };
     format!("{set}/{query}")
 }
@@ -409,7 +409,7 @@ fn series(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use aperture_render::raybench::Query;
+    use aperture_raybench::Query;
 
     fn timing(set: &str, query: Query, mode: Mode, threads: usize, m: f64) -> Timing {
         Timing {

@@ -1,10 +1,11 @@
 //! `aperture render --frames A..B[:STEP]`: maps the arguments to
-//! `aperture_render::sequence::render_sequence` and prints a line per frame with an overall ETA.
+//! `aperture_output::sequence::render_sequence` and prints a line per frame with an overall ETA.
 
 use crate::progress::Progress;
 use crate::render_args::RenderArgs;
 use aperture_accel::BvhQuality;
-use aperture_render::sequence::{self, FrameFormat, FrameRange, FrameReport, Sequence};
+use aperture_output::sequence::{self, FrameFormat, FrameReport, Sequence};
+use aperture_render::sequence::FrameRange;
 use aperture_render::RenderOptions;
 use aperture_scene::Animated;
 use std::time::Instant;

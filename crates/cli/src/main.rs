@@ -55,7 +55,7 @@ fn main() -> std::process::ExitCode {
             let interrupted = e.chain().any(|c| {
                 matches!(
                     c.downcast_ref(),
-                    Some(aperture_render::output::OutputError::Interrupted { .. })
+                    Some(aperture_output::OutputError::Interrupted { .. })
                 )
             }) || e.downcast_ref::<render_cmd::Interrupted>().is_some();
             if interrupted {

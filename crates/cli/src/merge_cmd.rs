@@ -1,7 +1,7 @@
 //! `aperture merge`: the parts of a split render (tiles, sample batches) into one EXR.
 
 use anyhow::Context as _;
-use aperture_render::output::merge::{merge_exr, MergeOptions};
+use aperture_output::merge::{merge_exr, MergeOptions};
 use std::path::PathBuf;
 
 /// Arguments of `aperture merge`.

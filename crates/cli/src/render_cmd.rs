@@ -49,15 +49,15 @@ pub struct Interrupted(pub String);
 fn check_footprint(
     args: &RenderArgs,
     opts: &RenderOptions,
-    exr: &aperture_render::output::ExrOptions,
+    exr: &aperture_output::ExrOptions,
     budget: &aperture_budget::MemoryBudget,
 ) -> anyhow::Result<()> {
     let kind = if is_png(&args.output) {
-        aperture_render::OutputKind::Png { sixteen_bit: false }
+        aperture_output::OutputKind::Png { sixteen_bit: false }
     } else {
-        aperture_render::OutputKind::Exr
+        aperture_output::OutputKind::Exr
     };
-    for w in aperture_render::check_output(opts, kind, exr, &args.output, budget)? {
+    for w in aperture_output::check_output(opts, kind, exr, &args.output, budget)? {
         eprintln!("warning: {w}");
     }
     Ok(())
@@ -87,7 +87,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         None => aperture_budget::MemoryBudget::from_system(),
     };
     let load = load_options(&args, budget);
-    let exr = aperture_render::output::ExrOptions {
+    let exr = aperture_output::ExrOptions {
         half: args.half,
         save_partial: args.save_partial,
         ..Default::default()
@@ -138,27 +138,27 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     }
     let pool = pool.build().context("starting worker threads")?;
     // --region/--tile apply to every frame of a sequence too.
-    let exr = aperture_render::output::ExrOptions {
+    let exr = aperture_output::ExrOptions {
         region: part.map(|p| p.window),
         tile: part.and_then(|p| p.tile),
         ..exr
     };
     if let Some(frames) = args.frames {
         let format = if png_out {
-            aperture_render::sequence::FrameFormat::Png {
+            aperture_output::sequence::FrameFormat::Png {
                 png: png_options(&args),
                 transparent: args.transparent,
             }
         } else {
-            aperture_render::sequence::FrameFormat::Exr(exr)
+            aperture_output::sequence::FrameFormat::Exr(exr)
         };
         return crate::frames::run(&args, &animated, frames, format, &opts, quality, &pool);
     }
-    let hints = aperture_render::sequence::SceneHints::new(&animated, &scene);
+    let hints = aperture_render::SceneHints::new(&animated, &scene);
     drop(animated);
     let (summary, load_secs) = pool.install(|| -> anyhow::Result<_> {
         // The same structure a sequence builds for this frame, so their images agree bit for bit.
-        let accel = aperture_render::sequence::build_frame_accel(&scene, quality, &hints, None);
+        let accel = aperture_render::build_frame_accel(&scene, quality, &hints, None);
         let load_secs = t_load.elapsed().as_secs_f64();
         let summary = write_image(&args, &scene, &accel, &opts, &exr, png_out)?;
         Ok((summary, load_secs))
@@ -177,9 +177,9 @@ fn write_image(
     scene: &aperture_scene::Scene,
     accel: &aperture_accel::Accel,
     opts: &RenderOptions,
-    exr: &aperture_render::output::ExrOptions,
+    exr: &aperture_output::ExrOptions,
     png_out: bool,
-) -> anyhow::Result<aperture_render::output::RenderSummary> {
+) -> anyhow::Result<aperture_output::RenderSummary> {
     let progress = Progress::with_mode(args.quiet, args.progress);
     progress.set_samples(
         u64::from(opts.width) * u64::from(opts.height) * u64::from(args.spp),
@@ -187,7 +187,7 @@ fn write_image(
     );
     let report = |done, total| progress.update(done, total);
     let summary = if png_out {
-        aperture_render::output::render_png(
+        aperture_output::render_png(
             scene,
             accel,
             opts,
@@ -197,7 +197,7 @@ fn write_image(
             &report,
         )
     } else {
-        aperture_render::output::render_exr(scene, accel, opts, &args.output, exr, &report)
+        aperture_output::render_exr(scene, accel, opts, &args.output, exr, &report)
     };
     progress.finish();
     let summary = summary.with_context(|| format!("writing {}", args.output.display()))?;
@@ -422,7 +422,7 @@ fn png_options(args: &RenderArgs) -> aperture_imageio::PngOptions {
 fn print_summary(
     args: &RenderArgs,
     opts: &RenderOptions,
-    summary: &aperture_render::output::RenderSummary,
+    summary: &aperture_output::RenderSummary,
     load_secs: f64,
     quality: aperture_accel::BvhQuality,
     part: Option<crate::split_args::ImagePart>,
@@ -456,7 +456,7 @@ fn print_summary(
         let size = match part {
             Some(p) => format!(
                 "region {} of {}x{}",
-                aperture_render::output::header::region_text(&p.window),
+                aperture_output::header::region_text(&p.window),
                 opts.width,
                 opts.height
             ),

@@ -9,30 +9,41 @@
 //! Direct and Indirect by them, so `(Direct + Indirect) × Color` summed over the lobes, plus
 //! Emission and Environment, is the beauty.
 
-use crate::bsdf::{Albedos, LobeSplit};
+use aperture_shading::bsdf::{Albedos, LobeSplit};
 use glam::Vec3;
 
 /// Light pass slots of [`SampleAov::light`], in [`crate::passes::LIGHT_PASSES`] order.
-pub(crate) mod slot {
+pub mod slot {
+    /// Slot of the `Diffuse Direct` pass.
     pub const DIFFUSE_DIRECT: usize = 0;
+    /// Slot of the `Diffuse Indirect` pass.
     pub const DIFFUSE_INDIRECT: usize = 1;
+    /// Slot of the `Diffuse Color` pass.
     pub const DIFFUSE_COLOR: usize = 2;
+    /// Slot of the `Glossy Direct` pass.
     pub const GLOSSY_DIRECT: usize = 3;
+    /// Slot of the `Glossy Indirect` pass.
     pub const GLOSSY_INDIRECT: usize = 4;
+    /// Slot of the `Glossy Color` pass.
     pub const GLOSSY_COLOR: usize = 5;
+    /// Slot of the `Transmission Direct` pass.
     pub const TRANSMISSION_DIRECT: usize = 6;
+    /// Slot of the `Transmission Indirect` pass.
     pub const TRANSMISSION_INDIRECT: usize = 7;
+    /// Slot of the `Transmission Color` pass.
     pub const TRANSMISSION_COLOR: usize = 8;
+    /// Slot of the `Emission` pass.
     pub const EMISSION: usize = 9;
+    /// Slot of the `Environment` pass.
     pub const ENVIRONMENT: usize = 10;
 }
 
 /// No instance or material: the sample's camera ray hit nothing.
-pub(crate) const NONE: u32 = u32::MAX;
+pub const NONE: u32 = u32::MAX;
 
 /// One sample's contribution to the averaged passes and Cryptomatte.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct SampleAov {
+pub struct SampleAov {
     /// World shading normal of the first surface (zero on a miss).
     pub normal: Vec3,
     /// Denoising albedo.
@@ -100,7 +111,7 @@ impl SampleAov {
 
 /// What light seen without scattering came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Seen {
+pub enum Seen {
     /// An emitter or an unlit surface.
     Surface,
     /// The environment.
@@ -110,7 +121,7 @@ pub(crate) enum Seen {
 /// The denoising features still to be written: Cycles follows specular bounces to the first
 /// rough surface, multiplying their albedo in.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Features {
+pub struct Features {
     /// Throughput of the specular bounces followed so far; `None` once written.
     pending: Option<Vec3>,
 }

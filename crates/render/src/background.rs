@@ -9,11 +9,11 @@
 
 use crate::aov::SampleAov;
 use crate::camera::Camera;
-use crate::environment::Environment;
 use crate::filter::Filter;
 use crate::integrator::Integrator;
 use crate::sampler::{SampleStream, SamplerKind};
 use aperture_accel::Accel;
+use aperture_shading::environment::Environment;
 use glam::Vec3;
 
 mod mask;

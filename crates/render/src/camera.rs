@@ -4,8 +4,8 @@
 //! by similar triangles; the primary ray runs from a point on the aperture to that point. A
 //! pinhole (`R = 0`) ignores the lens numbers entirely.
 
-pub use crate::warp::{concentric_disc, polygon_corner, uniform_polygon};
 use aperture_scene::Projection;
+pub use aperture_shading::warp::{concentric_disc, polygon_corner, uniform_polygon};
 use glam::{Affine3A, Vec2, Vec3};
 
 /// The numbers one primary sample gives the camera.

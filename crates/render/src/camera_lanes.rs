@@ -4,7 +4,7 @@
 //! ray has the same bits; on `Vec4`s, whose operations are SIMD instructions.
 
 use crate::camera::{Aperture, Camera};
-use crate::warp::concentric_disc_lanes;
+use aperture_shading::warp::concentric_disc_lanes;
 use glam::{Affine3A, Vec4};
 
 /// Samples whose rays are made together.

@@ -89,7 +89,7 @@ fn json_string(s: &str) -> String {
 /// One pixel's coverage per ID while it accumulates: sample counts per ID bit pattern
 /// (0 = empty slot).
 #[derive(Debug, Clone, Copy, PartialEq, Default, bytemuck::Zeroable)]
-pub(crate) struct CryptoPixel {
+pub struct CryptoPixel {
     ids: [u32; SLOTS],
     counts: [f32; SLOTS],
 }

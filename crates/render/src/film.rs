@@ -141,7 +141,7 @@ impl Window {
 
 /// Which averaged quantities are summed per sample, and where in a pixel's `f64` sums.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub(crate) struct AovLayout {
+pub struct AovLayout {
     /// Offset of the normal sum, if summed.
     pub normal: Option<usize>,
     /// Offset of the denoising albedo.
@@ -191,18 +191,25 @@ impl AovLayout {
 
 /// Cryptomatte IDs (float bits) of each instance's node and of each material.
 #[derive(Debug, Clone, Default)]
-pub(crate) struct CryptoIds {
+pub struct CryptoIds {
+    /// By instance: the ID of its node's name (empty when the pass is off).
     pub object: Vec<u32>,
+    /// By material: the ID of its name (empty when the pass is off).
     pub material: Vec<u32>,
 }
 
 /// Per-pixel accumulators of a set of pixels: the beauty and whatever the passes need.
 #[derive(Debug, Clone, PartialEq, Default)]
-pub(crate) struct Accum {
+pub struct Accum {
+    /// Where each pass sits in a pixel's `aov` values.
     pub layout: AovLayout,
+    /// Each pixel's beauty sum.
     pub sums: Vec<PixelSum>,
+    /// Each pixel's pass sums, `layout.stride` values a pixel.
     pub aov: Vec<f64>,
+    /// Each pixel's Cryptomatte object coverage.
     pub crypto_object: Vec<CryptoPixel>,
+    /// Each pixel's Cryptomatte material coverage.
     pub crypto_material: Vec<CryptoPixel>,
 }
 
@@ -319,14 +326,15 @@ pub struct Film {
     image_width: u32,
     image_height: u32,
     passes: PassSet,
-    pub(crate) accum: Accum,
+    /// The pixels' sums.
+    pub accum: Accum,
     /// Samples each pixel took, dropped ones included (all `spp` unless sampling was adaptive).
     taken: Vec<u32>,
     dropped: u64,
     /// Depth along the view axis of the centre ray's hit (`Depth` pass), or empty.
-    pub(crate) depth: Vec<f32>,
+    pub depth: Vec<f32>,
     /// World position of that hit (`Position` pass), or empty.
-    pub(crate) position: Vec<Vec3>,
+    pub position: Vec<Vec3>,
 }
 
 impl Film {
@@ -336,7 +344,7 @@ impl Film {
     }
 
     /// An empty film of `window` of a `width × height` image, with room for `passes`.
-    pub(crate) fn for_window(window: Window, width: u32, height: u32, passes: PassSet) -> Self {
+    pub fn for_window(window: Window, width: u32, height: u32, passes: PassSet) -> Self {
         let n = window.pixels();
         Self {
             window,
@@ -418,7 +426,7 @@ impl Film {
 
     /// The mean of an averaged pass (Normal, Denoising Albedo or Normal, a light pass before
     /// its division by the Color pass) at pixel index `i`, or `None` when not rendered.
-    pub(crate) fn mean3(&self, i: usize, at: Option<usize>) -> Option<Vec3> {
+    pub fn mean3(&self, i: usize, at: Option<usize>) -> Option<Vec3> {
         let o = at?;
         let s = &self.accum.aov[i * self.accum.layout.stride + o..][..3];
         let n = self.accum.sums[i].count;
@@ -433,7 +441,7 @@ impl Film {
     /// the samples each of its pixels took. Tiles own disjoint pixels and `dropped` is a sum,
     /// so the order of calls does not change the result: the renderer merges each tile as it
     /// finishes.
-    pub(crate) fn merge_tile(
+    pub fn merge_tile(
         &mut self,
         x0: u32,
         y0: u32,
@@ -455,7 +463,7 @@ impl Film {
     }
 
     /// Sample counts of every pixel and the dropped count, for the adaptive renderer.
-    pub(crate) fn counts_mut(&mut self) -> (&mut [u32], &mut u64) {
+    pub fn counts_mut(&mut self) -> (&mut [u32], &mut u64) {
         (&mut self.taken, &mut self.dropped)
     }
 }

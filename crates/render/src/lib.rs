@@ -1,5 +1,5 @@
-//! Camera, sampler, integrator and film: turns a scene and its acceleration structure into an
-//! image.
+//! Camera, sampler, path tracer and film: turns a scene and its acceleration structure into
+//! films, for the whole image, a window of it, or band by band into a sink.
 //!
 //! ```
 //! use aperture_render::{build_accel, render, test_scenes, RenderOptions};
@@ -15,63 +15,51 @@
 //!
 //! The pieces follow pbrt-v4's split: a [`Camera`] turns numbers ([`CameraSample`]) into rays,
 //! a [`SamplerKind`] produces those numbers as pure functions of (pixel, index, dimension,
-//! seed), the path tracer turns rays into radiance and the [`Film`] sums it.
+//! seed), the path tracer turns rays into radiance (with what `aperture_shading` says of each
+//! surface and light) and the [`Film`] sums it. Writing a film out is `aperture_output`'s job:
+//! it hands [`render_bands`] a sink; nothing here knows of files.
 
 pub mod adaptive;
-mod aov;
+pub mod aov;
 mod background;
-mod bsdf;
+pub mod bands;
 pub mod camera;
 mod camera_lanes;
 mod cancel;
-mod color;
 pub mod cryptomatte;
-mod environment;
-mod film;
+pub mod film;
 mod filter;
-mod footprint;
-mod hit_prefetch;
+mod frame_accel;
 mod integrator;
-mod light_choice;
-mod lights;
-mod media;
-pub mod output;
+mod options;
 pub mod passes;
 mod primary;
-pub mod raybench;
 mod render;
 pub mod sampler;
 pub mod sequence;
-mod shade_extended;
 mod spares;
-mod spectrum;
-mod surface;
-pub mod test_scenes;
-mod texture;
-mod transmission;
-mod warp;
 
 pub use adaptive::AdaptiveOptions;
-pub use bsdf::{
-    Albedos, Bsdf, BsdfSample, CoatLayer, Compensation, DeltaSample, Dielectric, Frame, Interface,
-    Lobe, LobeSplit, MetalRough, Principled, SheenLayer, ThinFilm,
-};
 pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, CameraSample};
 pub use cancel::Cancel;
-pub use color::srgb_to_linear;
-pub use environment::{EnvImage, EnvSampling, Environment};
 pub use film::{Film, PixelSum, Window};
 pub use filter::{Filter, FilterKind};
-pub use footprint::{check_output, footprint, Footprint, FootprintError, OutputKind};
+pub use frame_accel::{auto_bvh_quality, build_accel, build_frame_accel, SceneHints};
 pub use integrator::Clamp;
+pub use options::{RenderError, RenderOptions, DEFAULT_MAX_BOUNCES};
 pub use passes::{Pass, PassSet};
 pub use render::{
-    auto_bvh_quality, build_accel, material_name, render, render_window, render_with_camera,
-    scene_camera, RenderError, RenderOptions, DEFAULT_MAX_BOUNCES, DEPTH_BACKGROUND, TILE,
+    material_name, render, render_bands, render_window, render_with_camera, scene_camera,
+    BandTotals, DEPTH_BACKGROUND, TILE,
 };
 pub use sampler::{SampleStream, SamplerKind, MAX_SPP};
-pub use surface::MaterialOverride;
-pub use texture::transform_uv;
-pub use transmission::{
-    transmissive_meshes, ParseTransmissionError, TransmissionMode, TransmissionModel,
+
+// What the options and the public API take from the shading crate, under their old names.
+pub use aperture_shading::{
+    srgb_to_linear, test_scenes, transform_uv, transmissive_meshes, EnvImage, EnvSampling,
+    Environment, MaterialOverride, ParseTransmissionError, TransmissionMode, TransmissionModel,
+};
+pub use aperture_shading::{
+    Albedos, Bsdf, BsdfSample, CoatLayer, Compensation, DeltaSample, Dielectric, Frame, Interface,
+    Lobe, LobeSplit, MetalRough, Principled, SheenLayer, ThinFilm,
 };

@@ -4,7 +4,8 @@
 
 /// One output pass.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-#[non_exhaustive]
+// Not `non_exhaustive`: every crate that matches on it is in this workspace, and a new pass
+// should fail to compile wherever it is not handled.
 pub enum Pass {
     /// Distance along the view axis of the surface seen through the pixel centre and the lens
     /// centre (not anti-aliased, not blurred): what Defocus and ZDefocus nodes expect.

@@ -2,13 +2,13 @@
 //! shadow ray's transmittance.
 
 use super::{Integrator, PathState, PendingLight, MAX_ALPHA_PASSES};
-use crate::bsdf::{Bsdf, Frame, LobeSplit};
-use crate::light_choice::{Candidates, Choice, Pick};
-use crate::lights::punctual_incident;
 use crate::sampler::{SampleStream, VertexLightSample};
-use crate::surface::SurfaceKind;
-use crate::warp::power_heuristic;
 use aperture_accel::{Ray, SpawnPoint};
+use aperture_shading::bsdf::{Bsdf, Frame, LobeSplit};
+use aperture_shading::light_choice::{Candidates, Choice, Pick};
+use aperture_shading::punctual::punctual_incident;
+use aperture_shading::surface::SurfaceKind;
+use aperture_shading::warp::power_heuristic;
 use glam::Vec3;
 
 /// A scattering vertex, as the light-sampling routines see it.

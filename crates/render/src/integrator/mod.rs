@@ -2,7 +2,7 @@
 //! deltas), emissive triangles and environment images by NEE and BSDF sampling combined with
 //! multiple importance sampling (power heuristic). Russian roulette from the fourth vertex on.
 //! Each vertex sends one shadow ray to one light, picked by its importance there among the
-//! punctual lights and the emitters ([`crate::light_choice`]), plus one to an environment image.
+//! punctual lights and the emitters ([`aperture_shading::light_choice`]), plus one to an environment image.
 //!
 //! `max_bounces` has Blender Cycles' meaning: 0 is direct light only (the camera ray's hit is lit
 //! by light sampling and by one BSDF-sampled ray that may find an emitter or the environment).
@@ -23,15 +23,15 @@ use wavefront::PendingLight;
 pub(crate) use wavefront::{PathInFlight, Wavefront};
 
 use crate::aov::{Features, SampleAov, Seen};
-use crate::bsdf::{Interface, LobeSplit};
-use crate::environment::EnvLight;
-use crate::lights::EmissiveLights;
-use crate::media::{Crossing, Medium, MediumStack};
 use crate::sampler::{BounceSample, SampleStream};
-use crate::spectrum;
-use crate::surface::{shading_frame, view_normal, Geometry, SurfaceKind};
-use crate::warp::power_heuristic;
 use aperture_accel::{Accel, Hit, Ray, SpawnPoint};
+use aperture_shading::bsdf::{Interface, LobeSplit};
+use aperture_shading::environment::EnvLight;
+use aperture_shading::lights::EmissiveLights;
+use aperture_shading::media::{Crossing, Medium, MediumStack};
+use aperture_shading::spectrum;
+use aperture_shading::surface::{shading_frame, view_normal, Geometry, SurfaceKind};
+use aperture_shading::warp::power_heuristic;
 use glam::Vec3;
 
 /// Vertices before Russian roulette may end a path.
@@ -54,7 +54,7 @@ pub(crate) struct Integrator<'a> {
     pub light_passes: bool,
     /// Multiple-scattering energy compensation of microfacet lobes (see `bsdf::energy`).
     pub energy_compensation: bool,
-    /// Whether each vertex picks one light to sample (see [`crate::light_choice`]): the scene
+    /// Whether each vertex picks one light to sample (see [`aperture_shading::light_choice`]): the scene
     /// has two candidates or more (punctual lights, and its emitters as one).
     pub pick_light: bool,
 }
@@ -346,8 +346,8 @@ impl Integrator<'_> {
         path: &mut PathState<AOV>,
         w: &Walk,
         hit: Hit,
-        s: &crate::surface::Surface,
-        shading: &crate::surface::Shading,
+        s: &aperture_shading::surface::Surface,
+        shading: &aperture_shading::surface::Shading,
         ng: Vec3,
         ns: Vec3,
     ) -> bool {
@@ -467,7 +467,7 @@ impl Integrator<'_> {
         &self,
         arrival: &Arrival,
         hit: Hit,
-        s: &crate::surface::Surface,
+        s: &aperture_shading::surface::Surface,
         ng: Vec3,
         wo: Vec3,
     ) -> f32 {
@@ -567,7 +567,7 @@ impl<const AOV: bool> PathState<AOV> {
 mod tests {
     use super::*;
 
-    use crate::bsdf::bend_towards;
+    use aperture_shading::bsdf::bend_towards;
 
     #[test]
     fn bent_normals_face_the_viewer() {

@@ -4,11 +4,11 @@
 
 use super::{Integrator, PathState, Walk, MAX_ALPHA_PASSES};
 use crate::aov::Seen;
-use crate::media::Crossing;
 use crate::sampler::SampleStream;
-use crate::surface::{Surface, SurfaceKind};
-use crate::warp::power_heuristic;
 use aperture_accel::{Hit, Ray, SpawnPoint};
+use aperture_shading::media::Crossing;
+use aperture_shading::surface::{Surface, SurfaceKind};
+use aperture_shading::warp::power_heuristic;
 use glam::Vec3;
 
 /// Beer–Lambert transmittance over `t` for absorption `sigma` (1 where σ = 0, even for an

@@ -12,9 +12,9 @@
 
 use super::{Integrator, PathState, Walk};
 use crate::aov::SampleAov;
-use crate::bsdf::LobeSplit;
 use crate::sampler::SampleStream;
 use aperture_accel::{Hit, Ray};
+use aperture_shading::bsdf::LobeSplit;
 use glam::Vec3;
 
 /// Paths between asking for a hit's vertex data and shading it.

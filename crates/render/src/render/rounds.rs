@@ -3,10 +3,10 @@
 
 use super::job::Job;
 use super::tiles::tiles_of;
-use super::RenderOptions;
 use crate::adaptive::{self, AdaptiveOptions};
 use crate::aov::SampleAov;
 use crate::film::{Accum, AovLayout, Film, Window};
+use crate::options::RenderOptions;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};

@@ -2,15 +2,17 @@
 //! [`TILE`]² pixels rendered in parallel, each traced by [`Job::render_tile`].
 
 use super::job::Job;
-use super::TILE;
 use crate::film::{Accum, AovLayout, Film, Window};
 use crate::spares::{lock, Spares};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
+/// Side of a square tile in pixels.
+pub const TILE: u32 = 32;
+
 /// Tiles of at most [`TILE`]² pixels covering `w`, relative to its corner.
-pub(super) fn tiles_of(w: Window) -> Vec<(u32, u32, u32, u32)> {
+pub(crate) fn tiles_of(w: Window) -> Vec<(u32, u32, u32, u32)> {
     (0..w.height.div_ceil(TILE))
         .flat_map(|ty| {
             (0..w.width.div_ceil(TILE)).map(move |tx| {
@@ -164,9 +166,6 @@ impl Job<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::tests::busy_scene;
-    use crate::render::{build_accel, render, RenderOptions};
-    use aperture_scene::Scene;
 
     #[test]
     fn tile_items_are_every_sample_of_every_pixel_in_order() {
@@ -192,82 +191,5 @@ mod tests {
                 "{tw}x{th} at ({x0}, {y0}), {spp} spp"
             );
         }
-    }
-
-    fn render_in_pool(threads: usize, scene: &Scene, opts: &RenderOptions) -> Film {
-        let accel = build_accel(scene, Default::default());
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| render(scene, &accel, opts, &|_, _| {}).unwrap())
-    }
-
-    #[test]
-    fn identical_for_any_thread_count_and_run() {
-        let scene = busy_scene();
-        // Not a multiple of the tile size, so edge tiles are partial.
-        let opts = RenderOptions {
-            width: 45,
-            height: 37,
-            spp: 4,
-            ..RenderOptions::default()
-        };
-        let one = render_in_pool(1, &scene, &opts);
-        let two = render_in_pool(2, &scene, &opts);
-        let again = render_in_pool(2, &scene, &opts);
-        assert_eq!(one, two);
-        assert_eq!(two, again);
-        let px = one.to_rgba();
-        assert!(px.iter().all(|p| p.iter().all(|c| c.is_finite())));
-        assert!(px.iter().any(|p| p[0] != px[0][0]));
-        // Another seed changes the image (the comparison above is not vacuous).
-        let other = render_in_pool(2, &scene, &RenderOptions { seed: 1, ..opts });
-        assert_ne!(one, other);
-    }
-
-    #[test]
-    fn non_finite_samples_are_dropped_and_counted() {
-        let mut scene = busy_scene();
-        // An emitter of infinite strength: every sample that sees it is infinite.
-        scene.materials[1].emissive_strength = f32::INFINITY;
-        let accel = build_accel(&scene, Default::default());
-        let opts = RenderOptions {
-            width: 24,
-            height: 24,
-            spp: 2,
-            ..RenderOptions::default()
-        };
-        let film = render(&scene, &accel, &opts, &|_, _| {}).unwrap();
-        assert!(film.dropped_samples() > 0);
-        assert!(film.to_rgba().iter().flatten().all(|c| c.is_finite()));
-        let sum: u64 = (0..24)
-            .flat_map(|y| (0..24).map(move |x| (x, y)))
-            .map(|(x, y)| film.pixel_sum(x, y).count as u64)
-            .sum();
-        assert_eq!(sum + film.dropped_samples(), 24 * 24 * 2);
-    }
-
-    #[test]
-    fn progress_reports_every_tile() {
-        let scene = busy_scene();
-        let accel = build_accel(&scene, Default::default());
-        let opts = RenderOptions {
-            width: 40,
-            height: 40,
-            spp: 1,
-            ..RenderOptions::default()
-        };
-        let calls = AtomicUsize::new(0);
-        let last = AtomicUsize::new(0);
-        render(&scene, &accel, &opts, &|done, total| {
-            calls.fetch_add(1, Ordering::Relaxed);
-            assert!(done <= total);
-            last.fetch_max(done, Ordering::Relaxed);
-            assert_eq!(total, 4);
-        })
-        .unwrap();
-        assert_eq!(calls.into_inner(), 4);
-        assert_eq!(last.into_inner(), 4);
     }
 }

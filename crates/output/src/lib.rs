@@ -1,0 +1,414 @@
+//! A render written out: the film turned into the plain multi-channel image of SPEC §6 and
+//! handed to `aperture_imageio`, as pbrt's film writes its own image.
+//!
+//! ```
+//! use aperture_output::{render_exr, ExrOptions};
+//! use aperture_render::{build_accel, test_scenes, RenderOptions};
+//! let scene = test_scenes::lit_plane(1.0);
+//! let accel = build_accel(&scene, Default::default());
+//! let opts = RenderOptions { width: 8, height: 8, spp: 2, ..Default::default() };
+//! let path = std::env::temp_dir().join(format!("aperture-doc-{}.exr", std::process::id()));
+//! let summary = render_exr(&scene, &accel, &opts, &path, &ExrOptions::default(), &|_, _| {})?;
+//! assert_eq!(summary.samples, 8 * 8 * 2);
+//! assert!(aperture_imageio::read_exr(&path).is_ok());
+//! # std::fs::remove_file(&path).ok();
+//! # Ok::<(), aperture_output::OutputError>(())
+//! ```
+//!
+//! EXR output is streamed: the image is rendered in bands of whole rows, each band resolved
+//! and written before the next is rendered, so memory holds one band's sums, not the whole
+//! image's (a 4K render with every pass would otherwise need several GB). Bands do not change
+//! a pixel: every sample is a pure function of (pixel, index, dimension, seed), and adaptive
+//! sampling renders the apron its decisions reach (see [`aperture_render::render_window`]). The
+//! renderer drives the writing: [`aperture_render::render_bands`] hands each finished band to
+//! the file's sink; nothing here renders a pixel or knows how.
+
+pub mod channels;
+mod footprint;
+pub mod header;
+pub mod merge;
+pub mod sequence;
+
+pub use footprint::{check_output, footprint, Footprint, FootprintError, OutputKind};
+
+use aperture_accel::Accel;
+use aperture_imageio::{ExrLayout, Image, Layer, MetaValue, Placement, PngOptions};
+use aperture_render::bands::{band_rows, bands};
+use aperture_render::film::{AovLayout, Film, Window};
+use aperture_render::passes::{Pass, PassSet};
+use aperture_render::{render_bands, scene_camera, RenderError, RenderOptions};
+use aperture_scene::Scene;
+use channels::PixelResolver;
+use glam::Mat3;
+use std::path::Path;
+use std::time::Instant;
+
+/// Most bytes the sums of one band may take (the band height follows from it).
+pub const BAND_BYTES: usize = 512 << 20;
+
+/// Why a render could not be written.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum OutputError {
+    /// The render could not start.
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    /// The image could not be written.
+    #[error(transparent)]
+    Image(#[from] aperture_imageio::Error),
+    /// The render was cancelled ([`RenderOptions::cancel`]) and nothing was written
+    /// ([`ExrOptions::save_partial`] writes what was rendered instead).
+    #[error("interrupted after {samples} samples: nothing written")]
+    Interrupted {
+        /// Samples taken before the render stopped.
+        samples: u64,
+    },
+}
+
+/// How an EXR render is written.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExrOptions {
+    /// Colour passes (the beauty, light passes, denoising albedo) as half floats, clamped to
+    /// ±65504; data passes stay float32.
+    pub half: bool,
+    /// Render only this part of the image (a tile); the file's data window is the part and its
+    /// display window the whole image.
+    pub region: Option<Window>,
+    /// `(K, N)` when `region` is band K of N (`--tile K/N`, see [`Window::band`]): recorded
+    /// in the header so `aperture merge` can name a missing tile.
+    pub tile: Option<(u32, u32)>,
+    /// Most bytes the sums of one band of rows may take ([`BAND_BYTES`] by default): lower
+    /// it to render in more, smaller bands with less memory. The pixels do not change.
+    pub band_bytes: usize,
+    /// When the render is cancelled, write the samples taken so far (each pixel's count in
+    /// `Debug Sample Count`, `aperture:interrupted` = 1 in the header) instead of nothing.
+    /// Ask for [`Pass::SampleCount`] in the options' passes, so the file has the counts.
+    pub save_partial: bool,
+}
+
+impl Default for ExrOptions {
+    fn default() -> Self {
+        Self {
+            half: false,
+            region: None,
+            tile: None,
+            band_bytes: BAND_BYTES,
+            save_partial: false,
+        }
+    }
+}
+
+/// What a written render took.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RenderSummary {
+    /// The pixels rendered.
+    pub window: Window,
+    /// Samples taken, dropped ones included.
+    pub samples: u64,
+    /// Samples dropped as NaN or infinite.
+    pub dropped: u64,
+    /// Seconds spent rendering (not writing).
+    pub render_secs: f64,
+    /// Colour values clamped to the half-float range (`--half`).
+    pub half_clamped: u64,
+}
+
+impl RenderSummary {
+    /// Mean samples per pixel.
+    pub fn mean_spp(&self) -> f64 {
+        self.samples as f64 / self.window.pixels().max(1) as f64
+    }
+}
+
+/// Bytes the sums of one pixel take while rendering with `passes`, and while writing it
+/// (`channels` values of its row): what decides a band's height.
+pub fn film_bytes_per_pixel(passes: PassSet, adaptive: bool, channels: usize) -> usize {
+    let layout = AovLayout::new(passes);
+    let crypto = usize::from(layout.crypto_object) + usize::from(layout.crypto_material);
+    let accum =
+        std::mem::size_of::<aperture_render::film::PixelSum>() + 8 * layout.stride + 128 * crypto;
+    let film = accum
+        + 4
+        + 4 * usize::from(passes.contains(Pass::Depth))
+        + 12 * usize::from(passes.contains(Pass::Position));
+    // Adaptive rounds keep their own state (sums, squares, counts, flags) beside the film.
+    let rounds = if adaptive { accum + 24 + 8 + 4 + 3 } else { 0 };
+    film + rounds + 4 * channels
+}
+
+/// Renders `opts` and writes it to `path` as EXR (SPEC §6): the beauty, the passes of
+/// `opts.passes` (plus the sample count where [`channels::file_passes`] adds it) and the
+/// header of [`header::metadata`], band by band.
+pub fn render_exr(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &RenderOptions,
+    path: &Path,
+    exr: &ExrOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<RenderSummary, OutputError> {
+    let camera = scene_camera(scene, opts)?;
+    let whole = Window::whole(opts.width, opts.height);
+    let window = exr.region.unwrap_or(whole);
+    let passes = channels::file_passes(opts.passes, needs_sample_count(opts, window));
+    let opts = RenderOptions {
+        passes,
+        ..opts.clone()
+    };
+    let channels = channels::channels(passes, exr.half);
+    let mut layout = ExrLayout {
+        width: window.width,
+        height: window.height,
+        placement: placement(window, whole),
+        metadata: [
+            header::metadata(scene, &camera, &opts, passes),
+            header::split_metadata(scene, &opts, window, exr.tile),
+        ]
+        .concat(),
+        channels,
+    };
+    if exr.save_partial {
+        let flag = header::late::INTERRUPTED.to_string();
+        layout.metadata.push((flag, MetaValue::Int(0)));
+    }
+    let bpp = film_bytes_per_pixel(passes, opts.adaptive.is_some(), layout.channels.len());
+    let bands = bands(window, band_rows(window, exr.band_bytes, bpp));
+    let world_from_camera = Mat3::from(camera.world_from_camera.matrix3);
+    let world_origin = scene.world_origin.as_vec3();
+    let mut summary = RenderSummary {
+        window,
+        samples: 0,
+        dropped: 0,
+        render_secs: 0.0,
+        half_clamped: 0,
+    };
+    aperture_imageio::write_exr_streamed::<OutputError>(path, &layout, |rows| {
+        let mut sink = |film: Film| -> Result<(), OutputError> {
+            let resolver =
+                PixelResolver::new(&film, passes, exr.half, world_from_camera, world_origin);
+            let (values, clamped) = resolver.rows(layout.channels.len());
+            rows.push_rows(&values)?;
+            summary.half_clamped += clamped;
+            Ok(())
+        };
+        let totals = render_bands(scene, accel, &camera, &opts, &bands, progress, &mut sink)?;
+        summary.samples = totals.samples;
+        summary.dropped = totals.dropped;
+        summary.render_secs = totals.render_secs;
+        if opts.cancel.is_cancelled() && !exr.save_partial {
+            return Err(OutputError::Interrupted {
+                samples: summary.samples,
+            });
+        }
+        let mut late = late_values(&summary, &opts);
+        if exr.save_partial {
+            let interrupted = i32::from(opts.cancel.is_cancelled());
+            late.push((
+                header::late::INTERRUPTED.to_string(),
+                MetaValue::Int(interrupted),
+            ));
+        }
+        Ok(late)
+    })?;
+    Ok(summary)
+}
+
+/// True when a file of `window` rendered with `opts` must say how many samples each pixel
+/// took (SPEC §6): adaptive, a region of the image, or a batch of samples past the first.
+fn needs_sample_count(opts: &RenderOptions, window: Window) -> bool {
+    opts.adaptive.is_some()
+        || window != Window::whole(opts.width, opts.height)
+        || opts.sample_offset > 0
+}
+
+/// The header values known only after rendering.
+fn late_values(summary: &RenderSummary, opts: &RenderOptions) -> Vec<(String, MetaValue)> {
+    let mut late = vec![
+        (
+            header::late::RENDER_TIME.to_string(),
+            MetaValue::Float(summary.render_secs as f32),
+        ),
+        (
+            header::late::DROPPED.to_string(),
+            MetaValue::Int(summary.dropped.min(i32::MAX as u64) as i32),
+        ),
+    ];
+    if opts.adaptive.is_some() {
+        late.push((
+            header::late::MEAN_SPP.to_string(),
+            MetaValue::Float(summary.mean_spp() as f32),
+        ));
+    }
+    late
+}
+
+/// Where `window` sits in the whole image, `None` when it is the whole image.
+fn placement(window: Window, whole: Window) -> Option<Placement> {
+    (window != whole).then_some(Placement {
+        x: window.x0,
+        y: window.y0,
+        full_width: whole.width,
+        full_height: whole.height,
+    })
+}
+
+/// Renders `opts` (beauty only) and writes it to `path` as PNG: exposure and view transform
+/// from `png`; opaque unless `transparent` (RGB is already the radiance over the environment,
+/// associated alpha, so an opaque pixel is the same RGB with A = 1).
+pub fn render_png(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &RenderOptions,
+    path: &Path,
+    png: &PngOptions,
+    transparent: bool,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<RenderSummary, OutputError> {
+    let opts = RenderOptions {
+        passes: PassSet::NONE,
+        ..opts.clone()
+    };
+    let t0 = Instant::now();
+    let film = aperture_render::render(scene, accel, &opts, progress)?;
+    if opts.cancel.is_cancelled() {
+        return Err(OutputError::Interrupted {
+            samples: film.total_samples(),
+        });
+    }
+    let render_secs = t0.elapsed().as_secs_f64();
+    let mut image = Image::new(film.width(), film.height());
+    image.rgba = film.to_rgba();
+    if !transparent {
+        for p in &mut image.rgba {
+            p[3] = 1.0;
+        }
+    }
+    aperture_imageio::write_png(path, &image, png)?;
+    Ok(RenderSummary {
+        window: film.window(),
+        samples: film.total_samples(),
+        dropped: film.dropped_samples(),
+        render_secs,
+        half_clamped: 0,
+    })
+}
+
+/// A rendered film as a plain image with the channels and header of [`render_exr`]
+/// (`render_secs` into the header's render time): the same file, for a film already in
+/// memory.
+pub fn film_to_image(
+    film: &Film,
+    scene: &Scene,
+    opts: &RenderOptions,
+    half: bool,
+    render_secs: f64,
+) -> Result<Image, OutputError> {
+    let camera = scene_camera(scene, opts)?;
+    let whole = Window::whole(opts.width, opts.height);
+    let passes = channels::file_passes(film.passes(), needs_sample_count(opts, film.window()));
+    let specs = channels::channels(passes, half);
+    let mut resolver = PixelResolver::new(
+        film,
+        passes,
+        half,
+        Mat3::from(camera.world_from_camera.matrix3),
+        scene.world_origin.as_vec3(),
+    );
+    let n = film.window().pixels();
+    let mut values = Vec::with_capacity(n * specs.len());
+    for i in 0..n {
+        resolver.pixel(i, &mut values);
+    }
+    let mut image = Image::new(film.width(), film.height());
+    image.beauty_type = specs[0].sample_type;
+    image.placement = placement(film.window(), whole);
+    let stride = specs.len();
+    for (p, px) in image.rgba.iter_mut().enumerate() {
+        px.copy_from_slice(&values[p * stride..p * stride + 4]);
+    }
+    // Channels `Layer.c` of one layer are adjacent: group them.
+    let mut c = 4;
+    while c < stride {
+        let (layer, _) = specs[c].name.rsplit_once('.').expect("dotted pass channel");
+        let count = specs[c..]
+            .iter()
+            .take_while(|s| s.name.rsplit_once('.').map(|x| x.0) == Some(layer))
+            .count();
+        let names: Vec<&str> = specs[c..c + count]
+            .iter()
+            .map(|s| s.name.rsplit_once('.').expect("dotted").1)
+            .collect();
+        let data = (0..n)
+            .flat_map(|p| {
+                values[p * stride + c..p * stride + c + count]
+                    .iter()
+                    .copied()
+            })
+            .collect();
+        let mut l = Layer::new(layer, &names, data);
+        l.sample_type = specs[c].sample_type;
+        image.layers.push(l);
+        c += count;
+    }
+    image.metadata = header::metadata(scene, &camera, opts, passes);
+    image
+        .metadata
+        .extend(header::split_metadata(scene, opts, film.window(), None));
+    let summary = RenderSummary {
+        window: film.window(),
+        samples: film.total_samples(),
+        dropped: film.dropped_samples(),
+        render_secs,
+        half_clamped: resolver.clamped,
+    };
+    for (key, value) in late_values(&summary, opts) {
+        if let Some(slot) = image.metadata.iter_mut().find(|(k, _)| *k == key) {
+            slot.1 = value;
+        }
+    }
+    Ok(image)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aperture_render::TILE;
+
+    #[test]
+    fn the_default_budget_renders_common_sizes_in_one_band() {
+        // The budget is bytes: it was once divided by the width twice, which cut a 320x240
+        // beauty render into four bands and a 1920x1080 one into 34, each rebuilding the
+        // integrator and waiting for its last tile.
+        let beauty = film_bytes_per_pixel(PassSet::NONE, false, 4);
+        let compositing = film_bytes_per_pixel(PassSet::compositing(), false, 40);
+        for (width, height, bpp) in [
+            (320, 240, beauty),
+            (1920, 1080, beauty),
+            (320, 240, compositing),
+            (640, 480, compositing),
+        ] {
+            let w = Window::whole(width, height);
+            assert_eq!(
+                bands(w, band_rows(w, BAND_BYTES, bpp)).len(),
+                1,
+                "{width}x{height}"
+            );
+        }
+        // Past the budget, bands hold whole tile rows within it.
+        let w = Window::whole(8192, 8192);
+        let rows = band_rows(w, BAND_BYTES, compositing);
+        assert!(rows % TILE == 0 && rows < w.height);
+        assert!(rows as usize * w.width as usize * compositing <= BAND_BYTES);
+    }
+
+    #[test]
+    fn bytes_per_pixel_grow_with_passes() {
+        let beauty = film_bytes_per_pixel(PassSet::NONE, false, 4);
+        let default = film_bytes_per_pixel(PassSet::compositing(), false, 40);
+        let all = film_bytes_per_pixel(PassSet::all(), true, 80);
+        assert!(
+            beauty < default && default < all,
+            "{beauty} {default} {all}"
+        );
+    }
+}

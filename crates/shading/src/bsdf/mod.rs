@@ -1,0 +1,666 @@
+//! Scattering at a surface point, in a local frame whose +Z is the shading normal. Callers
+//! orient the frame so `wo.z > 0` (both sides are shaded).
+//!
+//! - [`Bsdf::Lambert`]: the material override's clay.
+//! - [`Bsdf::MetalRough`]: glTF metallic-roughness (Appendix B) with `KHR_materials_ior` and
+//!   `KHR_materials_specular` ([`metal_rough`]), what every material without the extended
+//!   lobes is.
+//! - [`Bsdf::Principled`]: the extended material of SPEC §5 ([`principled`]): transmission,
+//!   volume boundaries, clear coat, sheen, anisotropy, iridescence, diffuse transmission.
+//!
+//! Microfacet lobes are GGX with height-correlated Smith masking ([`ggx`]); directions are
+//! drawn from the visible normals (Heitz 2018). Energy compensation ([`energy`]) is applied by
+//! [`Bsdf::prepare`] at each view.
+
+mod energy;
+mod fresnel;
+mod ggx;
+pub mod metal_rough;
+pub mod principled;
+mod sheen;
+
+pub use metal_rough::{Compensation, MetalRough};
+pub use principled::{CoatLayer, Interface, Principled, SheenLayer, ThinFilm};
+
+pub use crate::warp::cosine_hemisphere;
+
+use ggx::MIN_ALPHA;
+use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
+
+/// An orthonormal frame around a unit normal (Duff et al. 2017, branchless).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Frame {
+    /// Tangent.
+    pub t: Vec3,
+    /// Bitangent.
+    pub b: Vec3,
+    /// Normal.
+    pub n: Vec3,
+}
+
+impl Frame {
+    /// A frame whose +Z is `n` (unit length).
+    pub fn from_normal(n: Vec3) -> Self {
+        let sign = 1.0f32.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        Self {
+            t: Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+            b: Vec3::new(b, sign + n.y * n.y * a, -n.y),
+            n,
+        }
+    }
+
+    /// World to local.
+    pub fn to_local(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
+    }
+
+    /// Local to world.
+    pub fn to_world(&self, v: Vec3) -> Vec3 {
+        v.x * self.t + v.y * self.b + v.z * self.n
+    }
+
+    /// A frame whose +Z is `n` (unit) and whose +X follows `t` projected onto the plane of
+    /// `n`; [`Frame::from_normal`] when `t` is (nearly) parallel to `n`.
+    pub fn from_normal_tangent(n: Vec3, t: Vec3) -> Self {
+        match (t - n * n.dot(t)).try_normalize() {
+            Some(t) => Self {
+                t,
+                b: n.cross(t),
+                n,
+            },
+            None => Self::from_normal(n),
+        }
+    }
+}
+
+/// A surface's scattering function.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Bsdf {
+    /// Ideal diffuse reflection (the material override's clay).
+    Lambert {
+        /// Reflectance.
+        albedo: Vec3,
+    },
+    /// glTF metallic-roughness.
+    MetalRough(MetalRough),
+    /// The extended material (transmission, coat, sheen, anisotropy, iridescence …), boxed:
+    /// it is five times the size of the others, and every hit moves a `Bsdf` around (a
+    /// measured 1.5 % of an opaque scene's instructions when it was inline).
+    Principled(Box<Principled>),
+}
+
+/// Dielectric Fresnel parameters of `KHR_materials_ior` and `KHR_materials_specular`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Dielectric {
+    /// Index of refraction (glTF default 1.5).
+    pub ior: f32,
+    /// Specular weight (`specularFactor` × texture alpha).
+    pub specular: f32,
+    /// Specular F0 tint (`specularColorFactor` × texture).
+    pub specular_color: Vec3,
+}
+
+impl Default for Dielectric {
+    /// glTF's defaults: IOR 1.5 (F0 = 0.04), untinted, full weight.
+    fn default() -> Self {
+        Self {
+            ior: 1.5,
+            specular: 1.0,
+            specular_color: Vec3::ONE,
+        }
+    }
+}
+
+impl Dielectric {
+    /// F0 and weight: `min(((ior − 1)/(ior + 1))² · colour, 1)` and the weight clamped to [0, 1].
+    /// Bad values (NaN, negative) fall back to the defaults instead of poisoning the image.
+    fn f0_and_weight(&self) -> (Vec3, f32) {
+        // KHR_materials_ior allows ior = 0 to mean "infinitely reflective" (F0 = 1).
+        let r = if self.ior == 0.0 {
+            1.0
+        } else if self.ior.is_finite() && self.ior >= 1.0 {
+            ((self.ior - 1.0) / (self.ior + 1.0)).powi(2)
+        } else {
+            0.04
+        };
+        let tint = if self.specular_color.is_finite() {
+            self.specular_color.max(Vec3::ZERO)
+        } else {
+            Vec3::ONE
+        };
+        let w = if self.specular.is_finite() {
+            self.specular.clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        ((r * tint).min(Vec3::ONE), w)
+    }
+}
+
+/// The lobe an ideal (delta) sample came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Lobe {
+    /// Diffuse reflection or transmission.
+    Diffuse,
+    /// Specular reflection (base or coat).
+    Glossy,
+    /// Specular transmission.
+    Transmission,
+}
+
+/// An ideal specular direction: no density exists, only the throughput it carries.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DeltaSample {
+    /// `f · |cos| / pdf` of the sample.
+    pub weight: Vec3,
+    /// Which lobe.
+    pub lobe: Lobe,
+    /// True when the direction is the view's continuation (`wi = −wo`, thin-walled
+    /// transmission): the path goes on along a straight line.
+    pub straight: bool,
+    /// True for total internal reflection: the only way light could go, not a choice.
+    pub internal: bool,
+}
+
+impl BsdfSample {
+    /// An ideal specular sample in direction `wi` carrying `weight`.
+    pub fn ideal(wi: Vec3, weight: Vec3, lobe: Lobe, straight: bool) -> Self {
+        Self {
+            wi,
+            f: Vec3::ZERO,
+            pdf: 0.0,
+            delta: Some(DeltaSample {
+                weight,
+                lobe,
+                straight,
+                internal: false,
+            }),
+        }
+    }
+}
+
+/// A sampled direction with its value and density.
+#[derive(Debug, Clone, Copy)]
+pub struct BsdfSample {
+    /// Incident direction, local (below the surface for transmission).
+    pub wi: Vec3,
+    /// BSDF value (without the cosine); zero for a delta sample.
+    pub f: Vec3,
+    /// Solid-angle density of `wi`; zero for a delta sample.
+    pub pdf: f32,
+    /// Set when the direction is an ideal specular one.
+    pub delta: Option<DeltaSample>,
+}
+
+impl BsdfSample {
+    /// The throughput the sample carries: `f · |cos| / pdf`, or the delta weight.
+    pub fn weight(&self) -> Vec3 {
+        match self.delta {
+            Some(d) => d.weight,
+            None => self.f * (self.wi.z.abs() / self.pdf),
+        }
+    }
+}
+
+/// Smallest cosine between the view and a shading normal.
+pub const MIN_VIEW_COS: f32 = 0.02;
+
+/// A shading normal bent just far enough towards the viewer `wo` that `wo` is above its
+/// hemisphere. Normal maps and interpolated normals can face away from the viewer; shading with
+/// such a normal would see the view below the surface and return black. Bending (instead of
+/// switching to the geometric normal) keeps the result continuous as the normal crosses over.
+pub fn bend_towards(n: Vec3, wo: Vec3) -> Vec3 {
+    let c = n.dot(wo);
+    if c >= MIN_VIEW_COS {
+        return n;
+    }
+    (n + wo * (MIN_VIEW_COS - c)).try_normalize().unwrap_or(wo)
+}
+
+impl Bsdf {
+    /// glTF metallic-roughness from its factors (roughness is perceptual).
+    pub fn metal_rough(base: Vec3, metallic: f32, roughness: f32) -> Self {
+        Self::metal_rough_dielectric(base, metallic, roughness, &Dielectric::default())
+    }
+
+    /// glTF metallic-roughness with the dielectric layer of `KHR_materials_ior` and
+    /// `KHR_materials_specular`.
+    pub fn metal_rough_dielectric(
+        base: Vec3,
+        metallic: f32,
+        roughness: f32,
+        dielectric: &Dielectric,
+    ) -> Self {
+        let r = roughness.clamp(0.0, 1.0);
+        let (f0, spec_weight) = dielectric.f0_and_weight();
+        let metallic = if metallic.is_nan() { 0.0 } else { metallic };
+        if metallic <= 0.0 && spec_weight == 0.0 {
+            // No specular layer at all (`KHR_materials_specular` factor 0 on a dielectric): the
+            // glTF BSDF is exactly Lambert. Saying so skips the GGX terms in every evaluation
+            // and stops the 10 % of samples the lobe mixture would send to a lobe of weight 0.
+            return Self::Lambert { albedo: base };
+        }
+        Self::MetalRough(MetalRough {
+            base,
+            metallic: metallic.clamp(0.0, 1.0),
+            alpha: (r * r).max(MIN_ALPHA),
+            f0,
+            spec_weight,
+            compensation: None,
+        })
+    }
+
+    /// Computes what depends on the view `wo` (local to `frame`, `wo.z > 0`): energy
+    /// compensation when `energy`, and for the extended material its layers' weights, the
+    /// `interface` its transmission crosses and its coat normal in `frame`.
+    pub fn prepare(&mut self, frame: &Frame, wo: Vec3, interface: Interface, energy: bool) {
+        match self {
+            Self::Lambert { .. } => {}
+            Self::MetalRough(m) => {
+                if energy {
+                    m.compensate(wo.z);
+                }
+            }
+            Self::Principled(p) => p.prepare(frame, wo, interface, energy),
+        }
+    }
+
+    /// True when some lobe may send light through the surface (both hemispheres matter).
+    pub fn transmits(&self) -> bool {
+        match self {
+            Self::Principled(p) => p.transmits(),
+            _ => false,
+        }
+    }
+
+    /// Value (without cosine) and solid-angle density for the pair of local directions;
+    /// delta lobes contribute nothing. Inline: the clay's arm is a few multiplies, which a call
+    /// and a result passed through memory would cost more than.
+    #[inline]
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
+        if wo.z <= 0.0 {
+            return (Vec3::ZERO, 0.0);
+        }
+        match self {
+            Self::Principled(p) => p.eval(wo, wi),
+            _ if wi.z <= 0.0 => (Vec3::ZERO, 0.0),
+            Self::Lambert { albedo } => (*albedo * FRAC_1_PI, wi.z * FRAC_1_PI),
+            Self::MetalRough(m) => m.eval(wo, wi),
+        }
+    }
+
+    /// Draws an incident direction for `wo` (local, `wo.z > 0`). Always inline: a call returns
+    /// the sample through memory, and the clay's few operations wait on that copy.
+    #[inline(always)]
+    pub fn sample(&self, wo: Vec3, u_lobe: f32, u: [f32; 2]) -> Option<BsdfSample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let wi = match self {
+            Self::Lambert { .. } => cosine_hemisphere(u),
+            Self::MetalRough(m) => m.sample_direction(wo, u_lobe, u),
+            Self::Principled(p) => return p.sample(wo, u_lobe, u),
+        };
+        let (f, pdf) = self.eval(wo, wi);
+        (pdf > 0.0 && wi.z > 0.0).then_some(BsdfSample {
+            wi,
+            f,
+            pdf,
+            delta: None,
+        })
+    }
+
+    /// Throughput of light passing straight through the surface along the view (thin-walled
+    /// ideal transmission); zero for every other surface.
+    pub fn straight_transmittance(&self, wo: Vec3) -> Vec3 {
+        match self {
+            Self::Principled(p) => p.straight_transmittance(wo),
+            _ => Vec3::ZERO,
+        }
+    }
+}
+
+/// Per-channel fractions of a BSDF value that belong to each lobe (they sum to 1 where the
+/// value is not zero): how light passes split a contribution, as Cycles splits its
+/// Diffuse/Glossy/Transmission passes by closure.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LobeSplit {
+    /// Diffuse fraction.
+    pub diffuse: Vec3,
+    /// Glossy (specular reflection) fraction.
+    pub glossy: Vec3,
+    /// Transmission fraction.
+    pub transmission: Vec3,
+}
+
+impl LobeSplit {
+    /// Everything diffuse.
+    pub const DIFFUSE: LobeSplit = LobeSplit {
+        diffuse: Vec3::ONE,
+        glossy: Vec3::ZERO,
+        transmission: Vec3::ZERO,
+    };
+}
+
+/// Directional albedos of a BSDF's lobes for one view direction (the "Color" passes and the
+/// denoising albedo).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Albedos {
+    /// Diffuse lobe.
+    pub diffuse: Vec3,
+    /// Specular reflection lobe, Fresnel included.
+    pub glossy: Vec3,
+    /// Transmission lobe.
+    pub transmission: Vec3,
+}
+
+impl LobeSplit {
+    /// The per-channel shares of three lobe values (zero where their sum is).
+    pub fn from_parts(diffuse: Vec3, glossy: Vec3, transmission: Vec3) -> Self {
+        let total = diffuse + glossy + transmission;
+        let frac = |v: Vec3| {
+            Vec3::select(
+                total.cmpgt(Vec3::ZERO),
+                (v / total).clamp(Vec3::ZERO, Vec3::ONE),
+                Vec3::ZERO,
+            )
+        };
+        Self {
+            diffuse: frac(diffuse),
+            glossy: frac(glossy),
+            transmission: frac(transmission),
+        }
+    }
+
+    /// All of it in one lobe.
+    pub fn pure(lobe: Lobe) -> Self {
+        let mut s = Self {
+            diffuse: Vec3::ZERO,
+            glossy: Vec3::ZERO,
+            transmission: Vec3::ZERO,
+        };
+        *match lobe {
+            Lobe::Diffuse => &mut s.diffuse,
+            Lobe::Glossy => &mut s.glossy,
+            Lobe::Transmission => &mut s.transmission,
+        } = Vec3::ONE;
+        s
+    }
+}
+
+impl Bsdf {
+    /// How the value at (`wo`, `wi`) splits between the lobes.
+    pub fn lobe_split(&self, wo: Vec3, wi: Vec3) -> LobeSplit {
+        match self {
+            Self::Lambert { .. } => LobeSplit::DIFFUSE,
+            Self::MetalRough(m) => m.lobe_split(wo, wi),
+            Self::Principled(p) => p.lobe_split(wo, wi),
+        }
+    }
+
+    /// Each lobe's directional albedo seen from `wo` (local, `wo.z > 0`).
+    pub fn albedos(&self, wo: Vec3) -> Albedos {
+        match self {
+            Self::Lambert { albedo } => Albedos {
+                diffuse: *albedo,
+                ..Albedos::default()
+            },
+            Self::MetalRough(m) => m.albedos(wo),
+            Self::Principled(p) => p.albedos(wo),
+        }
+    }
+
+    /// True when the specular lobe is rough enough to count as a surface for denoising
+    /// features (Cycles: α > 0.075); a sharper one is followed to what it reflects.
+    pub fn glossy_is_rough(&self) -> bool {
+        match self {
+            Self::Lambert { .. } => true,
+            Self::MetalRough(m) => m.alpha > ROUGH_ALPHA,
+            Self::Principled(p) => p.glossy_is_rough(),
+        }
+    }
+}
+
+/// Directional albedo of a GGX lobe with reflectance `f0` at view cosine `nv`, from Karis'
+/// analytic fit of the split-sum integral (perceptual roughness `r`): the colour a pass shows,
+/// not a term of the estimator.
+pub fn env_brdf(f0: Vec3, r: f32, nv: f32) -> Vec3 {
+    let (c0, c1) = ([-1.0, -0.0275, -0.572, 0.022], [1.0, 0.0425, 1.04, -0.04]);
+    let v: [f32; 4] = std::array::from_fn(|i| r * c0[i] + c1[i]);
+    let a004 = (v[0] * v[0]).min((-9.28 * nv).exp2()) * v[0] + v[1];
+    let (a, b) = (-1.04 * a004 + v[2], 1.04 * a004 + v[3]);
+    f0 * a + Vec3::splat(b)
+}
+
+/// Cycles' line between specular and rough lobes for its denoising features: α above 0.075.
+pub const ROUGH_ALPHA: f32 = 0.075;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f32::consts::TAU;
+
+    fn grid(n: u32) -> impl Iterator<Item = [f32; 2]> {
+        (0..n * n).map(move |i| {
+            [
+                ((i % n) as f32 + 0.5) / n as f32,
+                ((i / n) as f32 + 0.5) / n as f32,
+            ]
+        })
+    }
+
+    /// Albedo estimated by importance sampling: ∫ f cos dω ≈ mean(f cos / pdf).
+    fn albedo_is(b: &Bsdf, wo: Vec3) -> Vec3 {
+        let mut sum = Vec3::ZERO;
+        let n = 128;
+        for (k, u) in grid(n).enumerate() {
+            let lobe = ((k as u32).wrapping_mul(2654435761) >> 8) as f32 / (1u32 << 24) as f32;
+            if let Some(s) = b.sample(wo, lobe, u) {
+                sum += s.f * s.wi.z / s.pdf;
+            }
+        }
+        sum / (n * n) as f32
+    }
+
+    /// The same integral by brute-force uniform hemisphere quadrature.
+    fn albedo_quadrature(b: &Bsdf, wo: Vec3) -> Vec3 {
+        let n = 512;
+        let mut sum = Vec3::ZERO;
+        for u in grid(n) {
+            let z = u[0];
+            let r = (1.0 - z * z).sqrt();
+            let phi = TAU * u[1];
+            let wi = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+            sum += b.eval(wo, wi).0 * wi.z;
+        }
+        sum * TAU / (n * n) as f32
+    }
+
+    /// A dielectric without a specular layer is Lambert: the same values, and pure cosine
+    /// sampling.
+    #[test]
+    fn no_specular_layer_is_lambert() {
+        let base = Vec3::new(0.8, 0.5, 0.2);
+        let no_spec = Dielectric {
+            specular: 0.0,
+            ..Dielectric::default()
+        };
+        let b = Bsdf::metal_rough_dielectric(base, 0.0, 0.4, &no_spec);
+        assert!(
+            matches!(b, Bsdf::Lambert { albedo } if albedo == base),
+            "{b:?}"
+        );
+        // The general form with the same factors evaluates to the same value.
+        let general = Bsdf::MetalRough(MetalRough {
+            base,
+            metallic: 0.0,
+            alpha: 0.16,
+            f0: Vec3::splat(0.04),
+            spec_weight: 0.0,
+            compensation: None,
+        });
+        let (wo, wi) = (
+            Vec3::new(0.3, 0.1, 0.9).normalize(),
+            Vec3::new(-0.5, 0.2, 0.6).normalize(),
+        );
+        assert!(
+            (b.eval(wo, wi).0 - general.eval(wo, wi).0)
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        // Any metal, or any specular weight, keeps the microfacet lobe.
+        assert!(matches!(
+            Bsdf::metal_rough_dielectric(base, 0.01, 0.4, &no_spec),
+            Bsdf::MetalRough(_)
+        ));
+        assert!(matches!(
+            Bsdf::metal_rough(base, 0.0, 0.4),
+            Bsdf::MetalRough(_)
+        ));
+    }
+
+    #[test]
+    fn lambert_white_reflects_everything() {
+        let b = Bsdf::Lambert { albedo: Vec3::ONE };
+        let a = albedo_is(&b, Vec3::new(0.3, 0.1, 0.9).normalize());
+        assert!((a - Vec3::ONE).abs().max_element() < 1e-3, "{a}");
+    }
+
+    #[test]
+    fn sampling_agrees_with_evaluation() {
+        let wo = Vec3::new(0.5, -0.2, 0.6).normalize();
+        for b in [
+            Bsdf::metal_rough(Vec3::new(0.8, 0.5, 0.2), 0.0, 0.5),
+            Bsdf::metal_rough(Vec3::new(0.9, 0.6, 0.3), 1.0, 0.6),
+            Bsdf::metal_rough(Vec3::new(0.2, 0.7, 0.4), 0.5, 0.8),
+        ] {
+            let is = albedo_is(&b, wo);
+            let q = albedo_quadrature(&b, wo);
+            assert!((is - q).abs().max_element() < 0.01, "{b:?}: {is} vs {q}");
+            // Energy is not created.
+            assert!(q.max_element() <= 1.0, "{q}");
+        }
+    }
+
+    /// The density over the upper hemisphere integrates to the probability that sampling
+    /// succeeds (visible normals may reflect below the horizon; those samples are rejected).
+    #[test]
+    fn pdf_integrates_to_the_acceptance_rate() {
+        let wo = Vec3::new(0.1, 0.4, 0.5).normalize();
+        let b = Bsdf::metal_rough(Vec3::new(0.5, 0.5, 0.5), 0.3, 0.7);
+        let m = 256;
+        let mut accepted = 0;
+        for (k, u) in grid(m).enumerate() {
+            let lobe = (k % 97) as f32 / 97.0;
+            accepted += usize::from(b.sample(wo, lobe, u).is_some());
+        }
+        let rate = accepted as f32 / (m * m) as f32;
+        assert!(rate > 0.5);
+        let n = 512;
+        let mut sum = 0.0;
+        for u in grid(n) {
+            let z = u[0];
+            let r = (1.0 - z * z).sqrt();
+            let phi = TAU * u[1];
+            sum += b.eval(wo, Vec3::new(r * phi.cos(), r * phi.sin(), z)).1;
+        }
+        let total = sum * TAU / (n * n) as f32;
+        assert!((total - rate).abs() < 0.01, "{total} vs {rate}");
+    }
+
+    /// IOR and specular change only the dielectric Fresnel term: the glTF default equals
+    /// IOR 1.5; a higher IOR reflects more at normal incidence; specular 0 leaves pure diffuse;
+    /// metals ignore both.
+    #[test]
+    fn ior_and_specular_change_the_dielectric_fresnel() {
+        let base = Vec3::new(0.5, 0.4, 0.3);
+        let wo = Vec3::Z;
+        let mirror = Vec3::new(0.01, 0.0, 1.0).normalize();
+        let d = |ior, specular, specular_color| Dielectric {
+            ior,
+            specular,
+            specular_color,
+        };
+        let default = Bsdf::metal_rough(base, 0.0, 0.3);
+        let ior15 = Bsdf::metal_rough_dielectric(base, 0.0, 0.3, &d(1.5, 1.0, Vec3::ONE));
+        assert_eq!(default, ior15);
+        let ior2 = Bsdf::metal_rough_dielectric(base, 0.0, 0.3, &d(2.0, 1.0, Vec3::ONE));
+        assert!(ior2.eval(wo, mirror).0.x > default.eval(wo, mirror).0.x);
+        if let Bsdf::MetalRough(MetalRough { f0, .. }) = ior2 {
+            assert!((f0.x - 1.0 / 9.0).abs() < 1e-6, "{f0}");
+        }
+        // Specular weight 0: exactly Lambert of the base colour.
+        let off = Bsdf::metal_rough_dielectric(base, 0.0, 0.3, &d(1.5, 0.0, Vec3::ONE));
+        let wi = Vec3::new(0.3, 0.2, 0.9).normalize();
+        assert!((off.eval(wo, wi).0 - base * FRAC_1_PI).abs().max_element() < 1e-6);
+        // A red specular tint reflects red more than blue in the highlight.
+        let tinted = Bsdf::metal_rough_dielectric(Vec3::ZERO, 0.0, 0.3, &d(1.5, 1.0, Vec3::X));
+        let f = tinted.eval(wo, mirror).0;
+        assert!(f.x > 0.0 && f.x > 100.0 * f.z, "{f}");
+        // Energy is still conserved for a strong, tinted layer.
+        let strong = Bsdf::metal_rough_dielectric(
+            Vec3::ONE,
+            0.0,
+            0.5,
+            &d(3.0, 1.0, Vec3::new(2.0, 1.0, 0.5)),
+        );
+        let q = albedo_quadrature(&strong, Vec3::new(0.4, 0.0, 0.6).normalize());
+        assert!(q.max_element() <= 1.0 + 1e-3, "{q}");
+        let is = albedo_is(&strong, Vec3::new(0.4, 0.0, 0.6).normalize());
+        assert!((is - q).abs().max_element() < 0.01, "{is} vs {q}");
+        // Metals ignore the dielectric layer.
+        let metal = Bsdf::metal_rough(base, 1.0, 0.3);
+        let metal2 = Bsdf::metal_rough_dielectric(base, 1.0, 0.3, &d(2.5, 0.2, Vec3::X));
+        assert_eq!(metal.eval(wo, wi).0, metal2.eval(wo, wi).0);
+    }
+
+    /// The lobe split sums to one and agrees with the pure cases; albedos stay in [0, 1] and
+    /// follow the material (a white metal's glossy albedo near 1 when smooth).
+    #[test]
+    fn lobes_split_and_albedos_are_sane() {
+        let wo = Vec3::new(0.3, 0.1, 0.9).normalize();
+        let wi = Vec3::new(-0.4, 0.3, 0.8).normalize();
+        let lambert = Bsdf::Lambert {
+            albedo: Vec3::splat(0.5),
+        };
+        assert_eq!(lambert.lobe_split(wo, wi), LobeSplit::DIFFUSE);
+        let metal = Bsdf::metal_rough(Vec3::ONE, 1.0, 0.05);
+        let s = metal.lobe_split(wo, wi);
+        assert_eq!(s.diffuse, Vec3::ZERO);
+        assert!(metal.albedos(wo).glossy.min_element() > 0.9);
+        assert!(!metal.glossy_is_rough());
+        for b in [
+            Bsdf::metal_rough(Vec3::new(0.8, 0.4, 0.1), 0.0, 0.5),
+            Bsdf::metal_rough(Vec3::new(0.8, 0.4, 0.1), 0.4, 0.9),
+        ] {
+            let s = b.lobe_split(wo, wi);
+            let sum = s.diffuse + s.glossy + s.transmission;
+            assert!((sum - Vec3::ONE).abs().max_element() < 1e-6, "{s:?}");
+            assert!(s.diffuse.min_element() > 0.0 && s.glossy.min_element() > 0.0);
+            let a = b.albedos(wo);
+            let total = a.diffuse + a.glossy;
+            assert!(
+                total.max_element() <= 1.0 && total.min_element() > 0.0,
+                "{a:?}"
+            );
+            assert!(b.glossy_is_rough());
+        }
+    }
+
+    #[test]
+    fn frame_is_orthonormal() {
+        for n in [Vec3::Z, Vec3::NEG_Z, Vec3::new(0.3, -0.8, 0.2).normalize()] {
+            let f = Frame::from_normal(n);
+            assert!(f.t.dot(f.b).abs() < 1e-6 && f.t.dot(n).abs() < 1e-6);
+            let v = Vec3::new(0.2, 0.5, -0.7);
+            assert!((f.to_world(f.to_local(v)) - v).length() < 1e-6);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests_principled;
