@@ -3,6 +3,8 @@
 mod bench;
 mod bench_rays;
 mod frames;
+#[cfg(test)]
+mod frames_tests;
 mod info;
 mod interrupt;
 mod material_args;

@@ -8,6 +8,7 @@ use crate::color::luminance;
 use crate::light_choice::EmitterBounds;
 use crate::surface::Geometry;
 use crate::warp::AliasTable;
+#[cfg(test)]
 use glam::Vec3;
 
 /// One emissive triangle.

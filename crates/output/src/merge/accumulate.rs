@@ -1,8 +1,8 @@
 //! The pixels of a merge: parts read one at a time, pasted into the output or summed into
 //! the window they share, by what each pass holds.
 
+use super::options::MergeError;
 use super::plan::{Group, Part, Plan};
-use super::MergeError;
 use aperture_imageio::{Image, Layer, Placement, SampleType};
 use aperture_render::cryptomatte::{CryptoPixel, RANKS};
 use aperture_render::film::Window;

@@ -1,7 +1,7 @@
 //! What a merge will do, decided from the parts' headers alone, before any pixel is read:
 //! which parts belong together, which are pasted and which averaged, and every refusal.
 
-use super::{MergeError, MergeOptions};
+use super::options::{MergeError, MergeOptions};
 use crate::header::{region_text, split};
 use aperture_imageio::{ChannelSpec, ExrHeader, MetaValue};
 use aperture_render::film::Window;

@@ -1,7 +1,8 @@
 //! Next-event estimation: one routine per light kind sharing one contribution helper, and the
 //! shadow ray's transmittance.
 
-use super::{Integrator, PathState, PendingLight, MAX_ALPHA_PASSES};
+use super::path::{PathState, PendingLight, MAX_ALPHA_PASSES};
+use super::Integrator;
 use crate::sampler::{SampleStream, VertexLightSample};
 use aperture_accel::{Ray, SpawnPoint};
 use aperture_shading::bsdf::{Bsdf, Frame, LobeSplit};

@@ -16,10 +16,12 @@
 //! Inside a refractive body the path is absorbed by Beer–Lambert (its [`MediumStack`]).
 
 mod direct;
+mod path;
 mod trace;
 mod wavefront;
 
-use wavefront::PendingLight;
+pub use path::Clamp;
+use path::{Arrival, PathState, Walk, MAX_INTERNAL, RR_START};
 pub(crate) use wavefront::{PathInFlight, Wavefront};
 
 use crate::aov::{Features, SampleAov, Seen};
@@ -28,18 +30,11 @@ use aperture_accel::{Accel, Hit, Ray, SpawnPoint};
 use aperture_shading::bsdf::{Interface, LobeSplit};
 use aperture_shading::environment::EnvLight;
 use aperture_shading::lights::EmissiveLights;
-use aperture_shading::media::{Crossing, Medium, MediumStack};
+use aperture_shading::media::{Crossing, Medium};
 use aperture_shading::spectrum;
 use aperture_shading::surface::{shading_frame, view_normal, Geometry, SurfaceKind};
 use aperture_shading::warp::power_heuristic;
 use glam::Vec3;
-
-/// Vertices before Russian roulette may end a path.
-const RR_START: u32 = 3;
-/// Surfaces a single ray may pass through by alpha before it is stopped.
-const MAX_ALPHA_PASSES: u32 = 64;
-/// Total internal reflections one path may take (they are not bounces).
-const MAX_INTERNAL: u32 = 256;
 
 /// Everything a path needs, shared by all threads.
 pub(crate) struct Integrator<'a> {
@@ -57,98 +52,6 @@ pub(crate) struct Integrator<'a> {
     /// Whether each vertex picks one light to sample (see [`aperture_shading::light_choice`]): the scene
     /// has two candidates or more (punctual lights, and its emitters as one).
     pub pick_light: bool,
-}
-
-/// Blender Cycles' "Clamp Direct" / "Clamp Indirect": the largest value one sample's
-/// contribution may add, as the sum of its R, G and B (0 = no limit). Clamping trades bias
-/// (bright caustics and highlights come out darker) for the removal of rare, very bright
-/// samples that unidirectional path tracing otherwise converges on very slowly.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Clamp {
-    /// Limit for light reaching the camera after at most one scattering (the camera ray's hit
-    /// seen directly, and that hit lit by a light or emitter).
-    pub direct: f32,
-    /// Limit for light that scattered more than once.
-    pub indirect: f32,
-}
-
-impl Clamp {
-    /// No clamping: the unbiased estimate.
-    pub const OFF: Clamp = Clamp {
-        direct: 0.0,
-        indirect: 0.0,
-    };
-
-    /// `c` scaled down (hue kept) so that its channel sum is at most the limit for light that
-    /// scattered `scatterings` times before reaching the camera (Cycles' `kernel_accum_clamp`).
-    #[inline]
-    fn apply(self, c: Vec3, scatterings: u32) -> Vec3 {
-        let limit = if scatterings <= 1 {
-            self.direct
-        } else {
-            self.indirect
-        };
-        // Off (the default) costs one comparison per contribution on this hot path.
-        if limit <= 0.0 {
-            return c;
-        }
-        let sum = c.x.abs() + c.y.abs() + c.z.abs();
-        if sum > limit {
-            c * (limit / sum)
-        } else {
-            c
-        }
-    }
-}
-
-/// How the path reached the current vertex: what MIS at an emitter found there needs.
-#[derive(Debug, Clone, Copy)]
-struct Arrival {
-    /// The last scattering vertex's position.
-    p: Vec3,
-    /// Solid-angle density of the direction it drew; ∞ for the camera and delta lobes (no
-    /// light sample could have found the emitter: weight 1).
-    pdf: f32,
-    /// Probability that light sampling picked the emitters there (1 without a choice).
-    emitters: f32,
-}
-
-/// Where a path is between vertices.
-struct Walk {
-    beta: Vec3,
-    ray: Ray,
-    arrival: Arrival,
-    /// Surface interactions so far: selects the sampler dimensions.
-    vertex: u32,
-    /// Scatterings so far (Cycles' bounces): a straight pass through thin glass after the
-    /// first hit is not one.
-    scatter: u32,
-    media: MediumStack,
-    /// The wavelength a dispersive refraction chose (nm), once chosen.
-    wavelength: Option<f32>,
-    /// Total internal reflections so far.
-    internal: u32,
-}
-
-impl Walk {
-    /// The walk of a path whose primary ray leaves `origin` along `dir` (unit).
-    #[inline]
-    fn start(origin: Vec3, dir: Vec3) -> Self {
-        Walk {
-            beta: Vec3::ONE,
-            ray: Ray::new(origin, dir),
-            arrival: Arrival {
-                p: origin,
-                pdf: f32::INFINITY,
-                emitters: 1.0,
-            },
-            vertex: 0,
-            scatter: 0,
-            media: MediumStack::default(),
-            wavelength: None,
-            internal: 0,
-        }
-    }
 }
 
 impl Integrator<'_> {
@@ -526,43 +429,6 @@ impl Integrator<'_> {
     }
 }
 
-/// One path's running sums.
-struct PathState<const AOV: bool> {
-    /// Radiance so far.
-    l: Vec3,
-    /// The sample's pass values (untouched unless `AOV`).
-    aov: SampleAov,
-    /// How the first vertex's sampled direction split among the lobes.
-    first_split: LobeSplit,
-    features: Features,
-    light_passes: bool,
-    /// Light samples wait for their shadow rays in `pending` rather than tracing them.
-    defer: bool,
-    /// Light samples of the current vertex whose shadow rays are not traced yet.
-    pending: Vec<PendingLight>,
-}
-
-impl<const AOV: bool> PathState<AOV> {
-    /// Adds light that reached the camera after `scatterings` scatterings.
-    #[inline]
-    fn add(&mut self, c: Vec3, scatterings: u32, seen: Seen) {
-        self.l += c;
-        if AOV && self.light_passes {
-            self.aov.add_light(c, scatterings, &self.first_split, seen);
-        }
-    }
-
-    /// Adds a light sample's contribution `lit` (after `scatterings` scatterings, split among
-    /// the lobes as `split`).
-    #[inline]
-    fn add_lit(&mut self, lit: Vec3, scatterings: u32, split: &LobeSplit) {
-        self.l += lit;
-        if AOV && self.light_passes {
-            self.aov.add_light(lit, scatterings, split, Seen::Surface);
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -584,25 +450,5 @@ mod tests {
             assert!(b.is_finite() && (b.length() - 1.0).abs() < 1e-5, "{b}");
             assert!(b.dot(wo) > 0.0, "{n} -> {b}");
         }
-    }
-
-    #[test]
-    fn clamp_scales_by_channel_sum_and_keeps_hue() {
-        let c = Clamp {
-            direct: 3.0,
-            indirect: 1.0,
-        };
-        let v = Vec3::new(4.0, 2.0, 0.0);
-        // Direct: the camera ray's hit (0 scatterings) and its lighting (1).
-        for n in [0, 1] {
-            let d = c.apply(v, n);
-            assert!((d.x + d.y + d.z - 3.0).abs() < 1e-6, "{d}");
-            assert!((d.x / d.y - 2.0).abs() < 1e-6);
-        }
-        let i = c.apply(v, 2);
-        assert!((i.x + i.y + i.z - 1.0).abs() < 1e-6, "{i}");
-        // Below the limit, or with no limit: unchanged.
-        assert_eq!(c.apply(Vec3::splat(0.2), 2), Vec3::splat(0.2));
-        assert_eq!(Clamp::OFF.apply(v * 1e6, 5), v * 1e6);
     }
 }

@@ -2,7 +2,8 @@
 //! interfaces of nested dielectrics, absorbed on the way inside a medium), and what a ray
 //! leaving the scene sees.
 
-use super::{Integrator, PathState, Walk, MAX_ALPHA_PASSES};
+use super::path::{PathState, Walk, MAX_ALPHA_PASSES};
+use super::Integrator;
 use crate::aov::Seen;
 use crate::sampler::SampleStream;
 use aperture_accel::{Hit, Ray, SpawnPoint};

@@ -10,29 +10,15 @@
 //! meets nothing takes no path at all when no pass values are recorded: its radiance is what
 //! the path's one step would add ([`Integrator::background`]).
 
-use super::{Integrator, PathState, Walk};
+use super::path::{PathState, Walk};
+use super::Integrator;
 use crate::aov::SampleAov;
 use crate::sampler::SampleStream;
 use aperture_accel::{Hit, Ray};
-use aperture_shading::bsdf::LobeSplit;
 use glam::Vec3;
 
 /// Paths between asking for a hit's vertex data and shading it.
 const AHEAD: usize = 4;
-
-/// A light sample whose shadow ray is not traced yet.
-pub(crate) struct PendingLight {
-    /// The shadow ray.
-    pub ray: Ray,
-    /// The contribution, clamped, if nothing blocks the ray.
-    pub clamped: Vec3,
-    /// The transmittance of the medium the ray crosses.
-    pub absorbed: Vec3,
-    /// Scatterings of the light on its way to the camera.
-    pub scatterings: u32,
-    /// How the contribution splits among the lobes (light passes).
-    pub split: LobeSplit,
-}
 
 /// A path between vertices: its walk and running sums.
 pub(crate) struct PathInFlight<const AOV: bool> {
