@@ -14,7 +14,7 @@
 //!     world_from_object: glam::Affine3A::IDENTITY,
 //!     node: 1,
 //! });
-//! let geom = Geometry::with_transmission(&scene, MaterialOverride::None, TransmissionModel::Thin);
+//! let geom = Geometry::with_transmission(&scene, MaterialOverride::None, TransmissionModel::Gltf);
 //! assert!(EmissiveLights::build(&geom).is_some());
 //! ```
 //!
