@@ -176,6 +176,14 @@ pub fn metadata(
         let f_number = dof.lens_mm * 0.001 / (2.0 * radius);
         meta.push(("aperture".into(), MetaValue::Float(f_number)));
     }
+    meta.extend(sampling_metadata(opts));
+    meta.extend(cryptomatte_metadata(scene, passes));
+    meta
+}
+
+/// The header values of adaptive sampling and of Cycles' clamps, when they are on.
+fn sampling_metadata(opts: &RenderOptions) -> Vec<(String, MetaValue)> {
+    let mut meta = Vec::new();
     if let Some(a) = opts.adaptive {
         meta.push((
             "aperture:noiseThreshold".into(),
@@ -193,6 +201,14 @@ pub fn metadata(
             meta.push((key.to_string(), MetaValue::Float(v)));
         }
     }
+    meta
+}
+
+/// The Cryptomatte layers' header values (name, hash, conversion, manifest) for the
+/// Cryptomatte passes among `passes`.
+fn cryptomatte_metadata(scene: &Scene, passes: PassSet) -> Vec<(String, MetaValue)> {
+    let text = |s: &str| MetaValue::Text(s.to_owned());
+    let mut meta = Vec::new();
     for pass in [Pass::CryptoObject, Pass::CryptoMaterial] {
         if !passes.contains(pass) {
             continue;

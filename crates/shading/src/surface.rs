@@ -176,7 +176,6 @@ pub fn prefetch_worth_it(scene: &Scene) -> bool {
 
 impl<'a> Geometry<'a> {
     /// Hit shading for `scene` with glTF's meaning of transmission.
-
     #[cfg(test)]
     pub fn new(scene: &'a Scene, material_override: MaterialOverride) -> Self {
         Self::with_transmission(scene, material_override, TransmissionModel::Gltf)

@@ -85,19 +85,6 @@ fn refuse_overwriting_a_part(parts: &[PathBuf], out: &Path) -> Result<(), MergeE
 /// render's totals (time, dropped samples, mean spp) of the merged result.
 fn merged_metadata(plan: &Plan, parts: &[Part], image: &Image) -> Vec<(String, MetaValue)> {
     let reference = &parts[plan.groups[0].parts[0]];
-    let totals = |key: &str| -> (f64, i64, bool) {
-        let mut f = 0.0;
-        let mut i = 0i64;
-        let mut any = false;
-        for p in parts {
-            match p.meta(key) {
-                Some(MetaValue::Float(v)) => (f, any) = (f + f64::from(*v), true),
-                Some(MetaValue::Int(v)) => (i, any) = (i + i64::from(*v), true),
-                _ => {}
-            }
-        }
-        (f, i, any)
-    };
     let merged_parts: i64 = parts
         .iter()
         .map(|p| match p.meta(split::MERGED_PARTS) {
@@ -116,30 +103,22 @@ fn merged_metadata(plan: &Plan, parts: &[Part], image: &Image) -> Vec<(String, M
         })
         .cloned()
         .collect();
-    let set = |meta: &mut Vec<(String, MetaValue)>, key: &str, value: MetaValue| match meta
-        .iter_mut()
-        .find(|(k, _)| k == key)
-    {
-        Some(slot) => slot.1 = value,
-        None => meta.push((key.to_string(), value)),
-    };
-    let clamp = |v: i64| MetaValue::Int(v.clamp(0, i64::from(i32::MAX)) as i32);
     set(
         &mut meta,
         split::SPP,
-        clamp(i64::from(plan.ranges.samples())),
+        clamped_int(i64::from(plan.ranges.samples())),
     );
     set(
         &mut meta,
         split::SAMPLE_OFFSET,
-        clamp(i64::from(plan.ranges.first())),
+        clamped_int(i64::from(plan.ranges.first())),
     );
     set(
         &mut meta,
         split::SAMPLE_RANGES,
         MetaValue::Text(plan.ranges.to_string()),
     );
-    set(&mut meta, split::MERGED_PARTS, clamp(merged_parts));
+    set(&mut meta, split::MERGED_PARTS, clamped_int(merged_parts));
     if plan.window != Window::whole(plan.full.0, plan.full.1) {
         set(
             &mut meta,
@@ -147,27 +126,60 @@ fn merged_metadata(plan: &Plan, parts: &[Part], image: &Image) -> Vec<(String, M
             MetaValue::Text(header::region_text(&plan.window)),
         );
     }
+    set_totals(&mut meta, reference, parts, image);
+    meta.sort_by(|a, b| a.0.cmp(&b.0));
+    meta
+}
+
+/// Sets `key` in `meta` to `value`, adding it when absent.
+fn set(meta: &mut Vec<(String, MetaValue)>, key: &str, value: MetaValue) {
+    match meta.iter_mut().find(|(k, _)| k == key) {
+        Some(slot) => slot.1 = value,
+        None => meta.push((key.to_string(), value)),
+    }
+}
+
+/// `v` as a header integer, clamped to `0 ..= i32::MAX`.
+fn clamped_int(v: i64) -> MetaValue {
+    MetaValue::Int(v.clamp(0, i64::from(i32::MAX)) as i32)
+}
+
+/// The late values of the merged render: the parts' render times and dropped samples summed,
+/// and the mean spp of the merged sample counts (when the reference part has one).
+fn set_totals(
+    meta: &mut Vec<(String, MetaValue)>,
+    reference: &Part,
+    parts: &[Part],
+    image: &Image,
+) {
+    let totals = |key: &str| -> (f64, i64, bool) {
+        let mut f = 0.0;
+        let mut i = 0i64;
+        let mut any = false;
+        for p in parts {
+            match p.meta(key) {
+                Some(MetaValue::Float(v)) => (f, any) = (f + f64::from(*v), true),
+                Some(MetaValue::Int(v)) => (i, any) = (i + i64::from(*v), true),
+                _ => {}
+            }
+        }
+        (f, i, any)
+    };
     if let (secs, _, true) = totals(header::late::RENDER_TIME) {
         set(
-            &mut meta,
+            meta,
             header::late::RENDER_TIME,
             MetaValue::Float(secs as f32),
         );
     }
     if let (_, dropped, true) = totals(header::late::DROPPED) {
-        set(&mut meta, header::late::DROPPED, clamp(dropped));
+        set(meta, header::late::DROPPED, clamped_int(dropped));
     }
     if reference.meta(header::late::MEAN_SPP).is_some() {
         if let Some(counts) = image.layer(accumulate::SAMPLE_COUNT_LAYER) {
             let mean = counts.data.iter().map(|&c| f64::from(c)).sum::<f64>()
                 / counts.data.len().max(1) as f64;
-            set(
-                &mut meta,
-                header::late::MEAN_SPP,
-                MetaValue::Float(mean as f32),
-            );
+            set(meta, header::late::MEAN_SPP, MetaValue::Float(mean as f32));
         }
     }
-    meta.sort_by(|a, b| a.0.cmp(&b.0));
-    meta
 }

@@ -144,24 +144,8 @@ impl Part {
             Some(other) => return Err(bad(split::SAMPLE_RANGES, format!("{other:?}"), "text")),
             None => SampleRanges::union(std::iter::once(offset..offset.saturating_add(spp))),
         };
-        let tile = match h.meta(split::TILE) {
-            Some(MetaValue::Text(t)) => t
-                .split_once('/')
-                .and_then(|(k, n)| Some((k.parse().ok()?, n.parse().ok()?))),
-            _ => None,
-        };
-        let (window, full) = match h.placement {
-            Some(p) => (
-                Window {
-                    x0: p.x,
-                    y0: p.y,
-                    width: h.width,
-                    height: h.height,
-                },
-                (p.full_width, p.full_height),
-            ),
-            None => (Window::whole(h.width, h.height), (h.width, h.height)),
-        };
+        let tile = tile_of(&h);
+        let (window, full) = window_of(&h);
         let channels = h
             .channels
             .into_iter()
@@ -185,6 +169,32 @@ impl Part {
     /// The header value under `key`.
     pub fn meta(&self, key: &str) -> Option<&MetaValue> {
         self.metadata.iter().find(|(k, _)| k == key).map(|(_, v)| v)
+    }
+}
+
+/// The `--tile K/N` a part's header records, if any.
+fn tile_of(h: &ExrHeader) -> Option<(u32, u32)> {
+    match h.meta(split::TILE) {
+        Some(MetaValue::Text(t)) => t
+            .split_once('/')
+            .and_then(|(k, n)| Some((k.parse().ok()?, n.parse().ok()?))),
+        _ => None,
+    }
+}
+
+/// The pixels a part holds and the size of the whole image, from its data and display windows.
+fn window_of(h: &ExrHeader) -> (Window, (u32, u32)) {
+    match h.placement {
+        Some(p) => (
+            Window {
+                x0: p.x,
+                y0: p.y,
+                width: h.width,
+                height: h.height,
+            },
+            (p.full_width, p.full_height),
+        ),
+        None => (Window::whole(h.width, h.height), (h.width, h.height)),
     }
 }
 

@@ -21,7 +21,7 @@ mod trace;
 mod wavefront;
 
 pub use path::Clamp;
-use path::{Arrival, PathState, Walk, MAX_INTERNAL, RR_START};
+use path::{Arrival, PathState, Walk};
 pub(crate) use wavefront::{PathInFlight, Wavefront};
 
 use crate::aov::{Features, SampleAov, Seen};
@@ -201,12 +201,7 @@ impl Integrator<'_> {
         };
         bsdf.prepare(&frame, wo_l, interface, self.energy_compensation);
         if AOV && (path.light_passes || path.features.pending()) {
-            let albedos = bsdf.albedos(wo_l);
-            if w.vertex == 0 {
-                path.aov.set_colours(&albedos);
-            }
-            let rough = bsdf.glossy_is_rough();
-            path.features.at_surface(&mut path.aov, &albedos, rough, ns);
+            path.record_surface(&bsdf, wo_l, w.vertex, ns);
         }
         let two_sided = bsdf.transmits() && kind != SurfaceKind::Refractive;
         let ls = alpha_ls.or_else(|| {
@@ -331,15 +326,7 @@ impl Integrator<'_> {
                 emitters: v.emitters,
             };
         }
-        if w.vertex >= RR_START {
-            // Survive with probability q and divide by it: unbiased.
-            let q = w.beta.max_element().min(1.0);
-            if bs.rr >= q || q.is_nan() {
-                return false;
-            }
-            w.beta /= q;
-        }
-        if w.beta == Vec3::ZERO {
+        if !w.survives_roulette(bs.rr) {
             return false;
         }
         let o = if transmitted {
@@ -347,22 +334,7 @@ impl Integrator<'_> {
         } else {
             v.p_out
         };
-        w.ray = Ray::new(o, wi);
-        w.vertex += 1;
-        // A straight pass through a pane is a scattering only as the camera's first hit
-        // (so what is seen through glass fills the Transmission passes, as in Cycles).
-        // Total internal reflection is no choice of the light's: it does not count
-        // against `max_bounces` (a glass wall guiding light would go dark at the limit),
-        // but a path takes at most `MAX_INTERNAL` of them.
-        if internal {
-            w.internal += 1;
-            if w.internal > MAX_INTERNAL {
-                return false;
-            }
-        } else if !straight || w.scatter == 0 {
-            w.scatter += 1;
-        }
-        true
+        w.step(Ray::new(o, wi), internal, straight)
     }
 
     /// The MIS weight of an emitter at `s` found by a path that arrived as `arrival` says.

@@ -4,7 +4,7 @@
 
 use crate::aov::{Features, SampleAov, Seen};
 use aperture_accel::Ray;
-use aperture_shading::bsdf::LobeSplit;
+use aperture_shading::bsdf::{Bsdf, LobeSplit};
 use aperture_shading::media::MediumStack;
 use glam::Vec3;
 
@@ -105,6 +105,43 @@ impl Walk {
             internal: 0,
         }
     }
+
+    /// Russian roulette from vertex [`RR_START`] on, with the uniform number `u`: the walk
+    /// survives with probability `q` and its throughput is divided by it (unbiased). False
+    /// ends the path, as does a throughput of zero.
+    #[inline(always)]
+    pub(super) fn survives_roulette(&mut self, u: f32) -> bool {
+        if self.vertex >= RR_START {
+            let q = self.beta.max_element().min(1.0);
+            if u >= q || q.is_nan() {
+                return false;
+            }
+            self.beta /= q;
+        }
+        self.beta != Vec3::ZERO
+    }
+
+    /// Moves the walk on to its next vertex along `ray`, counting what the step was; false
+    /// ends the path.
+    #[inline(always)]
+    pub(super) fn step(&mut self, ray: Ray, internal: bool, straight: bool) -> bool {
+        self.ray = ray;
+        self.vertex += 1;
+        // A straight pass through a pane is a scattering only as the camera's first hit
+        // (so what is seen through glass fills the Transmission passes, as in Cycles).
+        // Total internal reflection is no choice of the light's: it does not count
+        // against `max_bounces` (a glass wall guiding light would go dark at the limit),
+        // but a path takes at most `MAX_INTERNAL` of them.
+        if internal {
+            self.internal += 1;
+            if self.internal > MAX_INTERNAL {
+                return false;
+            }
+        } else if !straight || self.scatter == 0 {
+            self.scatter += 1;
+        }
+        true
+    }
 }
 
 /// One path's running sums.
@@ -141,6 +178,18 @@ impl<const AOV: bool> PathState<AOV> {
         if AOV && self.light_passes {
             self.aov.add_light(lit, scatterings, split, Seen::Surface);
         }
+    }
+
+    /// Records a surface's albedos and roughness for the passes (the colour passes at the
+    /// camera's hit, the denoising features where they are still pending).
+    #[inline(always)]
+    pub(super) fn record_surface(&mut self, bsdf: &Bsdf, wo_l: Vec3, vertex: u32, ns: Vec3) {
+        let albedos = bsdf.albedos(wo_l);
+        if vertex == 0 {
+            self.aov.set_colours(&albedos);
+        }
+        let rough = bsdf.glossy_is_rough();
+        self.features.at_surface(&mut self.aov, &albedos, rough, ns);
     }
 }
 

@@ -14,7 +14,7 @@ use super::path::{PathState, Walk};
 use super::Integrator;
 use crate::aov::SampleAov;
 use crate::sampler::SampleStream;
-use aperture_accel::{Hit, Ray};
+use aperture_accel::{Accel, Hit, Ray};
 use glam::Vec3;
 
 /// Paths between asking for a hit's vertex data and shading it.
@@ -82,33 +82,7 @@ impl<const AOV: bool> Wavefront<AOV> {
     /// values, in order.
     pub fn run(&mut self, integrator: &Integrator<'_>, starts: &[(Vec3, Vec3, SampleStream)]) {
         let accel = integrator.accel;
-        // The camera rays first (a pixel's lens samples are coherent: packets), so that a
-        // sample whose ray meets nothing is answered without a path where passes need none.
-        self.rays.clear();
-        let camera_rays = starts.iter().map(|&(o, d, _)| Ray::new(o, d));
-        self.rays.extend(camera_rays);
-        self.hits.clear();
-        self.hits.resize(self.rays.len(), None);
-        accel.intersect_packets(&self.rays, &mut self.hits);
-        // Slots are re-initialised in place: their pending lists keep their capacity.
-        self.paths.truncate(starts.len());
-        self.live.clear();
-        for (k, (&(origin, dir, _), hit)) in starts.iter().zip(&self.hits).enumerate() {
-            if self.paths.len() == k {
-                let fresh = integrator.start_path::<AOV>(origin, dir, true);
-                self.paths.push(fresh);
-            }
-            let p = &mut self.paths[k];
-            if !AOV && hit.is_none() {
-                // A path ended by its camera ray: its slot only holds the result.
-                p.path.l = integrator.background(dir);
-                p.path.pending.clear();
-                (p.covered, p.live) = (false, false);
-            } else {
-                integrator.restart_path(p, origin, dir, true);
-                self.live.push(k);
-            }
-        }
+        self.start_paths(integrator, starts);
         let mut camera_rays = true;
         while !self.live.is_empty() {
             if camera_rays {
@@ -146,20 +120,57 @@ impl<const AOV: bool> Wavefront<AOV> {
                 integrator.advance(p, &starts[i].2, hit);
                 self.shadows.extend(p.shadow_rays());
             }
-            if !self.shadows.is_empty() {
-                self.blocked.clear();
-                self.blocked.resize(self.shadows.len(), false);
-                accel.occluded_packets(&self.shadows, &mut self.blocked);
-                let mut at = 0;
-                for &i in &self.live {
-                    let p = &mut self.paths[i];
-                    let n = p.path.pending.len();
-                    p.resolve(&self.blocked[at..at + n]);
-                    at += n;
-                }
-            }
+            self.resolve_shadows(accel);
             let paths = &self.paths;
             self.live.retain(|&i| paths[i].live);
+        }
+    }
+
+    /// Traces the camera rays of `starts` (a pixel's lens samples are coherent: packets) and
+    /// sets up a path for each; a sample whose ray meets nothing is answered at once, without a
+    /// path, where no pass needs one. The live paths' camera hits are left in `hits`.
+    fn start_paths(&mut self, integrator: &Integrator<'_>, starts: &[(Vec3, Vec3, SampleStream)]) {
+        let accel = integrator.accel;
+        self.rays.clear();
+        let camera_rays = starts.iter().map(|&(o, d, _)| Ray::new(o, d));
+        self.rays.extend(camera_rays);
+        self.hits.clear();
+        self.hits.resize(self.rays.len(), None);
+        accel.intersect_packets(&self.rays, &mut self.hits);
+        // Slots are re-initialised in place: their pending lists keep their capacity.
+        self.paths.truncate(starts.len());
+        self.live.clear();
+        for (k, (&(origin, dir, _), hit)) in starts.iter().zip(&self.hits).enumerate() {
+            if self.paths.len() == k {
+                let fresh = integrator.start_path::<AOV>(origin, dir, true);
+                self.paths.push(fresh);
+            }
+            let p = &mut self.paths[k];
+            if !AOV && hit.is_none() {
+                // A path ended by its camera ray: its slot only holds the result.
+                p.path.l = integrator.background(dir);
+                p.path.pending.clear();
+                (p.covered, p.live) = (false, false);
+            } else {
+                integrator.restart_path(p, origin, dir, true);
+                self.live.push(k);
+            }
+        }
+    }
+
+    /// Traces the shadow rays of this round's light samples and hands each path its answers.
+    fn resolve_shadows(&mut self, accel: &Accel) {
+        if !self.shadows.is_empty() {
+            self.blocked.clear();
+            self.blocked.resize(self.shadows.len(), false);
+            accel.occluded_packets(&self.shadows, &mut self.blocked);
+            let mut at = 0;
+            for &i in &self.live {
+                let p = &mut self.paths[i];
+                let n = p.path.pending.len();
+                p.resolve(&self.blocked[at..at + n]);
+                at += n;
+            }
         }
     }
 

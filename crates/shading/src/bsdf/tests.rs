@@ -162,12 +162,8 @@ fn ior_and_specular_change_the_dielectric_fresnel() {
     let f = tinted.eval(wo, mirror).0;
     assert!(f.x > 0.0 && f.x > 100.0 * f.z, "{f}");
     // Energy is still conserved for a strong, tinted layer.
-    let strong = Bsdf::metal_rough_dielectric(
-        Vec3::ONE,
-        0.0,
-        0.5,
-        &d(3.0, 1.0, Vec3::new(2.0, 1.0, 0.5)),
-    );
+    let strong =
+        Bsdf::metal_rough_dielectric(Vec3::ONE, 0.0, 0.5, &d(3.0, 1.0, Vec3::new(2.0, 1.0, 0.5)));
     let q = albedo_quadrature(&strong, Vec3::new(0.4, 0.0, 0.6).normalize());
     assert!(q.max_element() <= 1.0 + 1e-3, "{q}");
     let is = albedo_is(&strong, Vec3::new(0.4, 0.0, 0.6).normalize());
