@@ -4,7 +4,7 @@
     tools/hostile/make_nodes.py N OUT.glb [--chain]
 
 Flat by default (N roots in the scene); --chain nests each node in the previous one (a
-hierarchy N deep). Used to measure the loader's per-node cost (BENCHMARKS.md, "Hostile inputs").
+hierarchy N deep). Used to measure the loader's per-node cost (BENCHMARKS.md, "Memory budgets").
 """
 import json
 import struct

@@ -236,8 +236,8 @@ def aperture_renderer(scene, gltf, binary, size, threads, tmp, bvh="medium"):
     for bit) and the second render is the one timed, so that aperture is timed as Mitsuba and
     Cycles are, after a first call in the same process (a fresh process's render pays its film's
     page faults, its thread pool's start and its tables' first use: 0.2-3.9 % of the time
-    measured, BENCHMARKS.md). Renders above `WARM_MAX_SPP` (the references, whose time is not
-    used) render once."""
+    measured, BENCHMARKS.md, "Frame sequences"). Renders above `WARM_MAX_SPP` (the references,
+    whose time is not used) render once."""
     env = ["--env", ",".join(repr(float(c)) for c in scene["env"])] if scene["env"] else []
     # Whether frames 1 and 2 were seen to be the same render: the scene does not change between
     # calls, so one comparison (one more EXR read) settles it for all of them.

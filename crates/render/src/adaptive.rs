@@ -10,7 +10,7 @@
 //! itself, `√(mean_rgb s²/n / (μ² + ε))`: the relative error that compositors see after grading
 //! and that `aperture bench` measures. Dividing by `√μ` stops dark pixels at a relative error of
 //! `t/√μ` (5× the threshold at μ = 0.04); on the demo scene those dark pixels held most of the
-//! error left at relative MSE 1e-3 (see BENCHMARKS.md).
+//! error left at relative MSE 1e-3 (BENCHMARKS.md, "Adaptive sampling").
 //!
 //! Determinism: a pixel's samples are always a prefix `0..n` of its own sequence (so Sobol's
 //! strata stay intact for power-of-two counts), and decisions happen between rounds over the

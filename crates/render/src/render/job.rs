@@ -66,9 +66,9 @@ impl Job<'_> {
     /// Why in runs: the paths of [`WAVEFRONT_SAMPLES`] samples advance together through a
     /// [`Wavefront`], so that every ray query is a batch: the lens
     /// samples of a pixel (or a row of pixels at low sample counts) are traced as packets of
-    /// eight, bounce and shadow rays interleaved (1.2–1.4× the rays per second of one-ray
-    /// queries, packets more; `BENCHMARKS.md`). The results are exactly those of tracing each
-    /// sample alone.
+    /// eight, and bounce and shadow rays interleaved (one ray's walk is a chain of dependent
+    /// loads; several in flight keep the core busy). The results are exactly those of tracing
+    /// each sample alone.
     pub(super) fn samples<K: Copy, const AOV: bool>(
         &self,
         items: impl IntoIterator<Item = (K, u32, u32, u32)>,

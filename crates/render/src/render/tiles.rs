@@ -35,7 +35,7 @@ pub(super) fn render_uniform(
     let done = AtomicUsize::new(0);
     // One job per tile: rayon's adaptive splitting otherwise runs chunks of up to a quarter of
     // the tiles (with two threads) as one job that cannot be stolen, leaving a core idle at the
-    // end (2 threads were 1.78–1.88× one on `outdoor_dof`; `BENCHMARKS.md`).
+    // end (BENCHMARKS.md, "Threads").
     // Each tile goes into the film as it finishes (tiles own disjoint pixels, so the order
     // does not matter), and its buffers serve the next tile: a tile's own fresh accumulators
     // cost page faults, and copying all of them after the last tile ran on one thread.
