@@ -151,7 +151,7 @@ fn generated_sets(
     scene: &aperture_scene::Scene,
 ) -> anyhow::Result<Vec<RaySet>> {
     let index = match &args.camera {
-        Some(c) => crate::render_cmd::find_camera(c, scene).map_err(anyhow::Error::msg)?,
+        Some(c) => crate::render_opts::find_camera(c, scene).map_err(anyhow::Error::msg)?,
         None => 0,
     };
     let Some(cam) = scene.cameras.get(index) else {
