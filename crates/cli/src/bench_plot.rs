@@ -1,7 +1,7 @@
 //! `aperture bench`'s log-log plot of relative MSE against render time.
 
 use crate::bench_results::Series;
-use crate::plot::{load_font, tick_label, write_png, PALETTE};
+use crate::plot::{draw_legend, load_font, tick_label, write_png, PALETTE};
 use anyhow::bail;
 use std::path::Path;
 
@@ -99,12 +99,5 @@ fn draw_plot<DB: plotters::prelude::DrawingBackend>(
             });
         chart.draw_series(p.iter().map(|&q| Circle::new(q, 5, color.filled())))?;
     }
-    chart
-        .configure_series_labels()
-        .label_font(("sans-serif", 18))
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()?;
-    Ok(())
+    draw_legend(&mut chart, 18)
 }
