@@ -5,7 +5,7 @@
 //! `bench-rays.csv` and `bench-rays.png`.
 
 use crate::number_args::{non_negative_f32, positive_f32};
-use crate::plot::{load_font, write_png, PALETTE};
+use crate::plot::{draw_legend, load_font, write_png, PALETTE};
 use anyhow::{bail, Context as _};
 use aperture_accel::BvhQuality;
 use aperture_raybench::{
@@ -151,7 +151,7 @@ fn generated_sets(
     scene: &aperture_scene::Scene,
 ) -> anyhow::Result<Vec<RaySet>> {
     let index = match &args.camera {
-        Some(c) => crate::render_cmd::find_camera(c, scene).map_err(anyhow::Error::msg)?,
+        Some(c) => crate::render_opts::find_camera(c, scene).map_err(anyhow::Error::msg)?,
         None => 0,
     };
     let Some(cam) = scene.cameras.get(index) else {
@@ -348,14 +348,7 @@ fn plot<DB: plotters::prelude::DrawingBackend>(
                 .draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled())))
                 .map_err(err)?;
         }
-        chart
-            .configure_series_labels()
-            .label_font(("sans-serif", 13))
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(err)?;
+        draw_legend(&mut chart, 13).map_err(err)?;
     }
     Ok(())
 }

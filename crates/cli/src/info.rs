@@ -222,32 +222,46 @@ fn report(s: &Scene, mode: aperture_render::TransmissionMode) -> Value {
     })
 }
 
+/// The report as text: one section after another.
 fn print_text(path: &std::path::Path, r: &Value) {
-    let n = |v: &Value| v.as_u64().unwrap_or(0);
+    println!("{}", path.display());
+    print_counts(r);
+    print_skipped_and_warnings(r);
+    print_materials(r);
+    print_time(r);
+    print_cameras(r);
+}
+
+/// A JSON count (0 when missing).
+fn count(v: &Value) -> u64 {
+    v.as_u64().unwrap_or(0)
+}
+
+/// Nodes, meshes, triangles, materials, lights, bounds and the world origin.
+fn print_counts(r: &Value) {
     let t = &r["triangles"];
     let l = &r["lights"];
-    println!("{}", path.display());
     println!(
         "  nodes {}  meshes {}  instances {}  primitives {}",
-        n(&r["nodes"]),
-        n(&r["meshes"]),
-        n(&r["instances"]),
-        n(&r["primitives"])
+        count(&r["nodes"]),
+        count(&r["meshes"]),
+        count(&r["instances"]),
+        count(&r["primitives"])
     );
     println!(
         "  triangles: {} unique, {} drawn, {} emissive (drawn), {} degenerate",
-        n(&t["unique"]),
-        n(&t["drawn"]),
-        n(&t["emissive_drawn"]),
-        n(&t["degenerate"])
+        count(&t["unique"]),
+        count(&t["drawn"]),
+        count(&t["emissive_drawn"]),
+        count(&t["degenerate"])
     );
     println!(
         "  materials {}  textures {}  lights: {} point, {} spot, {} directional",
-        n(&r["materials"]),
-        n(&r["textures"]),
-        n(&l["point"]),
-        n(&l["spot"]),
-        n(&l["directional"])
+        count(&r["materials"]),
+        count(&r["textures"]),
+        count(&l["point"]),
+        count(&l["spot"]),
+        count(&l["directional"])
     );
     println!(
         "  bounds: min {} max {}",
@@ -259,11 +273,15 @@ fn print_text(path: &std::path::Path, r: &Value) {
             r["world_origin"]
         );
     }
+}
+
+/// What the loader left out, and its warnings.
+fn print_skipped_and_warnings(r: &Value) {
     let skipped = &r["skipped"];
-    if n(&skipped["primitives"]) > 0 {
+    if count(&skipped["primitives"]) > 0 {
         println!(
             "  skipped: {} non-triangle primitive(s)",
-            n(&skipped["primitives"])
+            count(&skipped["primitives"])
         );
     }
     for f in skipped["features"].as_array().into_iter().flatten() {
@@ -272,13 +290,17 @@ fn print_text(path: &std::path::Path, r: &Value) {
     for w in r["warnings"].as_array().into_iter().flatten() {
         println!("  warning: {}", w.as_str().unwrap_or_default());
     }
+}
+
+/// Which transmission applies, and the material variants.
+fn print_materials(r: &Value) {
     let tr = &r["transmission"];
     println!(
         "  transmission: {} ({}); {} refractive and {} thin-walled transmissive mesh(es)",
         tr["applies"].as_str().unwrap_or_default(),
         tr["why"].as_str().unwrap_or_default(),
-        n(&tr["refractive_meshes"]),
-        n(&tr["thin_walled_meshes"]),
+        count(&tr["refractive_meshes"]),
+        count(&tr["thin_walled_meshes"]),
     );
     let variants = r["variants"].as_array().cloned().unwrap_or_default();
     if !variants.is_empty() {
@@ -294,6 +316,10 @@ fn print_text(path: &std::path::Path, r: &Value) {
                 .map_or("the default materials".into(), |v| format!("{v:?}"))
         );
     }
+}
+
+/// The time the scene is posed at, and its animations.
+fn print_time(r: &Value) {
     match r["time"].as_f64() {
         Some(t) => println!("  posed at {t} s"),
         None => println!("  posed as stored (no time given)"),
@@ -315,6 +341,10 @@ fn print_text(path: &std::path::Path, r: &Value) {
             }
         );
     }
+}
+
+/// Each camera: its projection and depth of field.
+fn print_cameras(r: &Value) {
     let cams = r["cameras"].as_array().cloned().unwrap_or_default();
     println!("  cameras: {}", cams.len());
     for c in &cams {

@@ -1,7 +1,9 @@
 //! `aperture`: render glTF scenes with physically based depth of field.
 
 mod bench;
+mod bench_plot;
 mod bench_rays;
+mod bench_results;
 mod frames;
 #[cfg(test)]
 mod frames_tests;
@@ -14,8 +16,11 @@ mod plot;
 mod progress;
 mod render_args;
 mod render_cmd;
+mod render_opts;
+mod render_summary;
 mod split_args;
 mod time_args;
+mod workers;
 
 use clap::{Parser, Subcommand};
 

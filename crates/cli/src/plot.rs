@@ -2,8 +2,12 @@
 //! palette, and PNG output through plotters' bitmap backend.
 
 use anyhow::Context as _;
-use plotters::coord::Shift;
-use plotters::prelude::{BitMapBackend, DrawingArea, IntoDrawingArea, RGBColor};
+use plotters::coord::{CoordTranslate, Shift};
+use plotters::drawing::DrawingAreaErrorKind;
+use plotters::prelude::{
+    BitMapBackend, ChartContext, Color as _, DrawingArea, DrawingBackend, IntoDrawingArea,
+    RGBColor, SeriesLabelPosition, BLACK, WHITE,
+};
 use std::path::{Path, PathBuf};
 
 /// Line colours (matplotlib's first seven), in the order series take them.
@@ -89,4 +93,19 @@ pub(crate) fn tick_label(v: f64) -> String {
     } else {
         String::new()
     }
+}
+
+/// Draws the chart's legend (each series' label) in its upper right corner, in `font_size`
+/// pixel text on a white box.
+pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    font_size: u32,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    chart
+        .configure_series_labels()
+        .label_font(("sans-serif", font_size))
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
 }

@@ -30,6 +30,22 @@ const SETS: [&str; 4] = ["primary_tile", "primary_random", "diffuse", "shadow"];
 fn bench_rays_writes_every_row_and_the_ray_files() {
     let dir = Scratch::new("bench-rays");
     let scene = common::demo_scene();
+    let rows = run_generated_sets(&dir, &scene);
+    assert_every_row_once(&rows);
+    assert!(rows.iter().all(|r| r["scene"] == "demo.glb"));
+    assert_ray_files_hold_every_ray(&dir, &rows);
+    assert!(
+        std::fs::metadata(dir.path("out/bench-rays.png"))
+            .unwrap()
+            .len()
+            > 0
+    );
+    assert_saved_shadow_rays_give_the_same_answers(&dir, &scene, &rows);
+}
+
+/// Runs `bench-rays` on the generated sets of a 20x12 image with 3 lens samples, saving the
+/// rays in `rays/`; the CSV's rows.
+fn run_generated_sets(dir: &Scratch, scene: &std::path::Path) -> Vec<HashMap<String, String>> {
     let o = aperture(
         &[
             "bench-rays",
@@ -54,7 +70,11 @@ fn bench_rays_writes_every_row_and_the_ray_files() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("primary_random"));
     let csv = std::fs::read_to_string(dir.path("out/bench-rays.csv")).unwrap();
-    let rows = parse_csv(&csv);
+    parse_csv(&csv)
+}
+
+/// One row for every (quality, set, query, mode, threads), none twice.
+fn assert_every_row_once(rows: &[HashMap<String, String>]) {
     let keys: BTreeSet<(String, String, String, String, String)> = rows
         .iter()
         .map(|r| {
@@ -82,8 +102,10 @@ fn bench_rays_writes_every_row_and_the_ray_files() {
     }
     // quality × set × query × mode × threads
     assert_eq!(rows.len(), 3 * 4 * 2 * 3 * 2);
-    assert!(rows.iter().all(|r| r["scene"] == "demo.glb"));
-    // The primary sets hold every lens sample of every pixel.
+}
+
+/// The primary sets hold every lens sample of every pixel, and each saved file 24 bytes a ray.
+fn assert_ray_files_hold_every_ray(dir: &Scratch, rows: &[HashMap<String, String>]) {
     let rays_of = |set: &str| -> u64 {
         rows.iter().find(|r| r["set"] == set).unwrap()["rays"]
             .parse()
@@ -96,14 +118,14 @@ fn bench_rays_writes_every_row_and_the_ray_files() {
             .len();
         assert_eq!(len, 24 * rays_of(set), "{set}");
     }
-    assert!(
-        std::fs::metadata(dir.path("out/bench-rays.png"))
-            .unwrap()
-            .len()
-            > 0
-    );
+}
 
-    // The saved shadow rays timed again (with their tmax sidecar) give the same answers.
+/// The saved shadow rays timed again (with their tmax sidecar) give the same answers.
+fn assert_saved_shadow_rays_give_the_same_answers(
+    dir: &Scratch,
+    scene: &std::path::Path,
+    rows: &[HashMap<String, String>],
+) {
     let o = aperture(
         &[
             "bench-rays",

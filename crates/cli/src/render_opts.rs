@@ -1,0 +1,288 @@
+//! What `aperture render`'s arguments ask for, as the options the loader, the renderer and the
+//! PNG writer take; a flag value that cannot work is a usage error (exit code 2).
+
+use crate::render_args::{BvhQualityArg, EnvArg, OverrideArg, RenderArgs, SamplerArg, ViewArg};
+use anyhow::Context as _;
+use aperture_render::{
+    EnvImage, EnvSampling, Environment, MaterialOverride, Pass, RenderOptions, SamplerKind,
+};
+use aperture_scene::{DofOverrides, LoadOptions};
+use clap::error::ErrorKind;
+use clap::CommandFactory as _;
+use glam::Vec3;
+
+/// A usage error in clap's format, exit code 2 (as clap's own parse errors).
+pub(crate) fn usage_error(msg: impl std::fmt::Display) -> ! {
+    let mut cli = crate::Cli::command();
+    let mut cmd = match cli.find_subcommand_mut("render") {
+        Some(render) => render.clone().bin_name("aperture render"),
+        None => cli,
+    };
+    cmd.error(ErrorKind::InvalidValue, msg).exit()
+}
+
+/// Whether the output is a PNG (else an EXR); any other extension is a usage error.
+pub(crate) fn output_is_png(args: &RenderArgs) -> bool {
+    let ext = args
+        .output
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("png") => true,
+        Some("exr") => false,
+        _ => usage_error(format!(
+            "invalid value '{}' for '--output <OUTPUT>': the file must end in .exr or .png",
+            args.output.display()
+        )),
+    }
+}
+
+/// `--max-memory`, else what the machine (or the job's limit) has.
+pub(crate) fn memory_budget(args: &RenderArgs) -> aperture_budget::MemoryBudget {
+    match args.max_memory {
+        Some(bytes) => aperture_budget::MemoryBudget::fixed(bytes),
+        None => aperture_budget::MemoryBudget::from_system(),
+    }
+}
+
+/// `--passes`, with the sample count when `--samples-pass` or `--save-partial` asks for it.
+pub(crate) fn passes(args: &RenderArgs) -> aperture_render::PassSet {
+    match args.samples_pass || args.save_partial {
+        true => args.passes.with(Pass::SampleCount),
+        false => args.passes,
+    }
+}
+
+/// `--region`/`--tile` as the part of the `width`×`height` image to render; they need EXR
+/// output.
+pub(crate) fn image_part(
+    args: &RenderArgs,
+    width: u32,
+    height: u32,
+    png_out: bool,
+) -> Option<crate::split_args::ImagePart> {
+    let part = args
+        .split
+        .window(width, height)
+        .unwrap_or_else(|e| usage_error(e));
+    if part.is_some() && png_out {
+        usage_error(
+            "--region and --tile need .exr output: its data window records where the pixels belong",
+        );
+    }
+    part
+}
+
+/// How a sequence's frames are written: PNG (`--exposure`, `--view`, `--transparent`) or EXR.
+pub(crate) fn frame_format(
+    args: &RenderArgs,
+    png_out: bool,
+    exr: aperture_output::ExrOptions,
+) -> aperture_output::sequence::FrameFormat {
+    if png_out {
+        aperture_output::sequence::FrameFormat::Png {
+            png: png_options(args),
+            transparent: args.transparent,
+        }
+    } else {
+        aperture_output::sequence::FrameFormat::Exr(exr)
+    }
+}
+
+/// What the loader needs of the arguments.
+pub(crate) fn load_options(
+    args: &RenderArgs,
+    memory: aperture_budget::MemoryBudget,
+) -> LoadOptions {
+    LoadOptions {
+        scene: args.scene_index,
+        dof_overrides: DofOverrides {
+            use_dof: args.no_dof.then_some(false),
+            aperture_radius: args.aperture_radius,
+            aperture_fstop: args.fstop,
+            focus_distance: args.focus_distance,
+            focus_object: args.focus_object.clone(),
+        },
+        skip_textures: false,
+        variant: args.materials.variant.clone(),
+        time: args.when.seconds(),
+        animation: args.when.selection(),
+        memory,
+    }
+}
+
+/// `--camera` (a name, else an index) as an index into the scene's cameras.
+pub(crate) fn camera_index(args: &RenderArgs, scene: &aperture_scene::Scene) -> usize {
+    match &args.camera {
+        None => 0,
+        Some(c) => find_camera(c, scene).unwrap_or_else(|e| usage_error(e)),
+    }
+}
+
+/// A camera given by name, else by index, as an index into the scene's cameras; the error
+/// lists the cameras there are.
+pub(crate) fn find_camera(c: &str, scene: &aperture_scene::Scene) -> Result<usize, String> {
+    if let Some(i) = scene.cameras.iter().position(|cam| cam.name == c) {
+        return Ok(i);
+    }
+    match c.parse::<usize>() {
+        Ok(i) if i < scene.cameras.len() => Ok(i),
+        _ => Err(format!(
+            "invalid value '{c}' for '--camera': the scene's cameras are {}",
+            scene
+                .cameras
+                .iter()
+                .enumerate()
+                .map(|(i, c)| format!("{i} ({:?})", c.name))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
+    }
+}
+
+/// `--width`/`--height`, the missing side (or both) from the camera's aspect.
+pub(crate) fn image_size(args: &RenderArgs, cam: &aperture_scene::Camera) -> (u32, u32) {
+    match (args.width, args.height) {
+        (Some(w), Some(h)) => (w, h),
+        (Some(w), None) => (w, aperture_render::default_height(cam, w)),
+        (None, Some(h)) => {
+            // The camera's aspect from the default 960-wide frame.
+            let aspect = 960.0 / aperture_render::default_height(cam, 960) as f32;
+            (((h as f32 * aspect).round() as u32).max(1), h)
+        }
+        (None, None) => (960, aperture_render::default_height(cam, 960)),
+    }
+}
+
+/// `--bvh-quality`; `auto` chooses from the triangles and the samples to trace.
+pub(crate) fn bvh_quality(
+    args: &RenderArgs,
+    scene: &aperture_scene::Scene,
+    width: u32,
+    height: u32,
+) -> aperture_accel::BvhQuality {
+    match args.bvh_quality {
+        BvhQualityArg::Auto => aperture_render::auto_bvh_quality(
+            scene.unique_triangle_count(),
+            u64::from(width) * u64::from(height) * u64::from(args.spp),
+        ),
+        BvhQualityArg::Fast => aperture_accel::BvhQuality::Fast,
+        BvhQualityArg::Medium => aperture_accel::BvhQuality::Medium,
+        BvhQualityArg::High => aperture_accel::BvhQuality::High,
+    }
+}
+
+/// Combinations of sample counts and splitting flags that cannot work: usage errors.
+pub(crate) fn check_split_and_spp(args: &RenderArgs) {
+    if args.min_spp.is_some_and(|m| m > args.spp) {
+        usage_error(format!(
+            "invalid value '{}' for '--min-spp': must be at most --spp ({})",
+            args.min_spp.unwrap_or(0),
+            args.spp
+        ));
+    }
+    if args.split.sample_offset > 0 && args.noise_threshold.is_some() {
+        usage_error(
+            "--sample-offset cannot be used with --noise-threshold: adaptive sampling decides from \
+             every sample of a pixel from the first (split an adaptive render with --tile instead)",
+        );
+    }
+    if u64::from(args.split.sample_offset) + u64::from(args.spp) > 65536 {
+        usage_error(format!(
+            "invalid value '{}' for '--sample-offset': with --spp {} it passes the sampler's 65536 samples",
+            args.split.sample_offset, args.spp
+        ));
+    }
+}
+
+/// The render options the arguments give, less the image size, camera, passes, environment and
+/// cancellation (which need the scene or the machine).
+pub(crate) fn render_options(args: &RenderArgs) -> RenderOptions {
+    RenderOptions {
+        adaptive: args
+            .noise_threshold
+            .map(|threshold| aperture_render::AdaptiveOptions {
+                threshold,
+                min_spp: args
+                    .min_spp
+                    .unwrap_or_else(|| aperture_render::AdaptiveOptions::auto_min_spp(args.spp)),
+            }),
+        spp: args.spp,
+        sample_offset: args.split.sample_offset,
+        seed: args.seed,
+        max_bounces: args.tracing.max_bounces,
+        clamp: args.tracing.clamp(),
+        filter: args.tracing.filter.into(),
+        transmission: args.materials.transmission,
+        energy_compensation: !args.materials.no_energy_compensation,
+        sampler: match args.sampler {
+            SamplerArg::Sobol => SamplerKind::Sobol,
+            SamplerArg::Random => SamplerKind::Random,
+        },
+        material_override: match args.override_material {
+            Some(OverrideArg::Diffuse) => MaterialOverride::Diffuse,
+            None => MaterialOverride::None,
+        },
+        ..RenderOptions::default()
+    }
+}
+
+/// `--env`, `--env-rotation`, `--env-strength`; an image is held to `max_bytes`.
+pub(crate) fn environment(args: &RenderArgs, max_bytes: u64) -> anyhow::Result<Environment> {
+    Ok(match &args.env {
+        None => Environment::Constant(Vec3::ZERO),
+        Some(EnvArg::Color(c)) => Environment::Constant(*c * args.env_strength),
+        Some(EnvArg::File(path)) => {
+            let (width, height, texels) = load_env_image(path, max_bytes)
+                .with_context(|| format!("reading the environment {}", path.display()))?;
+            Environment::Image(std::sync::Arc::new(EnvImage {
+                width,
+                height,
+                texels,
+                rotation: args.env_rotation.to_radians(),
+                strength: args.env_strength,
+                sampling: EnvSampling::Importance,
+            }))
+        }
+    })
+}
+
+/// `--exposure`, `--view`.
+pub(crate) fn png_options(args: &RenderArgs) -> aperture_imageio::PngOptions {
+    aperture_imageio::PngOptions {
+        exposure: args.exposure,
+        view: match args.view {
+            ViewArg::Standard => aperture_imageio::ViewTransform::Standard,
+            ViewArg::Agx => aperture_imageio::ViewTransform::AgX,
+        },
+        ..Default::default()
+    }
+}
+
+/// Reads an equirectangular environment image (HDR or EXR, by content) as linear RGB
+/// texels, rows top to bottom, refusing one whose texels would not fit `max_bytes`.
+fn load_env_image(path: &std::path::Path, max_bytes: u64) -> anyhow::Result<(u32, u32, Vec<Vec3>)> {
+    let im = aperture_imageio::read_env_image(path, max_bytes)?;
+    let (w, h) = (im.width, im.height);
+    let texels: Vec<Vec3> = im
+        .rgba
+        .iter()
+        .map(|p| Vec3::new(p[0], p[1], p[2]))
+        .collect();
+    if w == 0 || h == 0 {
+        anyhow::bail!("the image has no pixels");
+    }
+    // Non-finite or negative texels would poison every sample that sees them.
+    let texels = texels
+        .into_iter()
+        .map(|t: Vec3| {
+            if t.is_finite() {
+                t.max(Vec3::ZERO)
+            } else {
+                Vec3::ZERO
+            }
+        })
+        .collect();
+    Ok((w, h, texels))
+}
