@@ -17,10 +17,12 @@ use serde_json::Value;
 use glam::{DAffine3, DQuat, DVec3, Vec3};
 
 use crate::animation::{self, AnimationInfo, Animations, NodeProperty, Target};
+use crate::buffers::load_buffers;
 use crate::camera::{self, CameraData};
-use crate::load::{load_buffers, node_graph, recentre, NodeGraph};
 use crate::material::Materials;
 use crate::mesh::LoadedMesh;
+use crate::nodes::{node_graph, NodeGraph};
+use crate::origin::recentre;
 use crate::pointer::Pointer;
 use crate::skin::Skin;
 use crate::{
@@ -270,7 +272,7 @@ impl Animated {
             options: options.clone(),
             stats,
             draws_nothing: doc.meshes().len() > 0,
-            source_hash: crate::load::content_hash(bytes),
+            source_hash: crate::hash::content_hash(bytes),
         };
         // The typed document and the kept JSON are done with: freed before posing, which
         // holds every node's world transform (for two million nodes, 0.5 GB less at the peak).

@@ -14,6 +14,8 @@ use crate::accessor::{read_f32, Buffers};
 use crate::pointer::{self, Pointer};
 use crate::Error;
 
+pub(crate) use crate::pointer::NodeProperty;
+
 /// Which animations a time evaluates (`--animation NAME|INDEX`).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub enum AnimationSelection {
@@ -59,15 +61,6 @@ pub(crate) enum Target {
     Node(usize, NodeProperty),
     /// Anything else `KHR_animation_pointer` can point at that aperture evaluates.
     Pointer(Pointer),
-}
-
-/// The animatable properties of a node.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum NodeProperty {
-    Translation,
-    Rotation,
-    Scale,
-    Weights,
 }
 
 /// Keys of one sampler: `times` ascending; `values` holds `width` floats per key (three times

@@ -6,8 +6,9 @@ use glam::{Affine3A, DAffine3, DVec3, Vec3};
 use super::{Animated, LightData, Pose, Shape, LUMENS_PER_WATT};
 use crate::camera::{self, CameraData};
 use crate::dof::NodeInfo;
-use crate::load::{finite_world, to_f32, world_origin, NodeData};
 use crate::mesh::LoadedMesh;
+use crate::nodes::{finite_world, to_f32, NodeData};
+use crate::origin::world_origin;
 use crate::pointer::{self, CameraProperty, LightProperty, Pointer};
 use crate::{Error, Instance, Light, LightKind, Material, Mesh, Projection, Scene, Texture};
 
