@@ -16,6 +16,7 @@ use serde_json::Value;
 
 use glam::{DAffine3, DQuat, DVec3, Vec3};
 
+use crate::accessor::Buffers;
 use crate::animation::{self, AnimationInfo, Animations, NodeProperty, Target};
 use crate::buffers::load_buffers;
 use crate::camera::{self, CameraData};
@@ -183,11 +184,7 @@ impl Animated {
         let root = prepared.root;
         let mut stats = SceneStats {
             skipped_features: prepared.skipped,
-            warnings: prepared
-                .ignored_extensions
-                .iter()
-                .map(|e| format!("extension {e} is used but not implemented: ignored"))
-                .collect(),
+            warnings: ignored_extension_warnings(&prepared.ignored_extensions),
             ..SceneStats::default()
         };
         stats.generator = doc.as_json().asset.generator.clone();
@@ -211,37 +208,9 @@ impl Animated {
         stats.animations = animations.info.clone();
 
         let mut materials = Materials::default();
-        let mut meshes = HashMap::new();
-        for &ni in &order {
-            let Some(m) = doc.nodes().nth(ni).and_then(|n| n.mesh()) else {
-                continue;
-            };
-            if meshes.contains_key(&m.index()) {
-                continue;
-            }
-            let loaded = mesh::load_mesh(&doc, &m, &buffers, &mut stats, variant, &mut |mi| {
-                materials.get(&doc, mi)
-            })?;
-            meshes.insert(m.index(), loaded);
-        }
+        let mut meshes = read_meshes(&doc, &order, &buffers, &mut stats, variant, &mut materials)?;
         let material_index = materials.gltf_indices();
-        // MikkTSpace tangents for normal-mapped meshes, on the rest shape (deformed with it).
-        let mut keys: Vec<usize> = meshes.keys().copied().collect();
-        keys.sort_unstable();
-        let mut tmp = Scene {
-            meshes: keys
-                .iter()
-                .filter_map(|k| meshes.get_mut(k).map(|m| std::mem::take(&mut m.mesh)))
-                .collect(),
-            materials: materials.materials.clone(),
-            ..Scene::default()
-        };
-        crate::tangents::generate_missing_tangents(&mut tmp);
-        for (k, m) in keys.iter().zip(tmp.meshes) {
-            if let Some(l) = meshes.get_mut(k) {
-                l.mesh = m;
-            }
-        }
+        generate_tangents(&mut meshes, &materials.materials);
         let material_list = std::mem::take(&mut materials.materials);
         stats.warnings.append(&mut materials.warnings);
         let textures = materials.textures(
@@ -543,4 +512,58 @@ fn read_lights(doc: &gltf::Document) -> Result<Vec<LightData>, Error> {
             },
         })
         .collect())
+}
+
+/// The warnings for extensions the file uses that aperture ignores.
+fn ignored_extension_warnings(ignored: &[String]) -> Vec<String> {
+    ignored
+        .iter()
+        .map(|e| format!("extension {e} is used but not implemented: ignored"))
+        .collect()
+}
+
+/// Every mesh the drawn nodes use, read once each (by glTF mesh index), its materials gathered
+/// into `materials`.
+fn read_meshes(
+    doc: &gltf::Document,
+    order: &[usize],
+    buffers: &Buffers,
+    stats: &mut SceneStats,
+    variant: Option<usize>,
+    materials: &mut Materials,
+) -> Result<HashMap<usize, LoadedMesh>, Error> {
+    let mut meshes = HashMap::new();
+    for &ni in order {
+        let Some(m) = doc.nodes().nth(ni).and_then(|n| n.mesh()) else {
+            continue;
+        };
+        if meshes.contains_key(&m.index()) {
+            continue;
+        }
+        let loaded = mesh::load_mesh(doc, &m, buffers, stats, variant, &mut |mi| {
+            materials.get(doc, mi)
+        })?;
+        meshes.insert(m.index(), loaded);
+    }
+    Ok(meshes)
+}
+
+/// MikkTSpace tangents for normal-mapped meshes, on the rest shape (deformed with it).
+fn generate_tangents(meshes: &mut HashMap<usize, LoadedMesh>, materials: &[Material]) {
+    let mut keys: Vec<usize> = meshes.keys().copied().collect();
+    keys.sort_unstable();
+    let mut tmp = Scene {
+        meshes: keys
+            .iter()
+            .filter_map(|k| meshes.get_mut(k).map(|m| std::mem::take(&mut m.mesh)))
+            .collect(),
+        materials: materials.to_vec(),
+        ..Scene::default()
+    };
+    crate::tangents::generate_missing_tangents(&mut tmp);
+    for (k, m) in keys.iter().zip(tmp.meshes) {
+        if let Some(l) = meshes.get_mut(k) {
+            l.mesh = m;
+        }
+    }
 }
