@@ -284,25 +284,13 @@ fn apply_sparse<T>(
         gltf::accessor::sparse::IndexType::U32 => DataType::U32,
     };
     let isize = component_size(itype) as u64;
-    let ibytes = view_bytes(&indices.view(), buffers)?;
     let ineeded = indices.offset() as u64 + n * isize;
-    if ineeded > ibytes.len() as u64 {
-        return Err(Error::OutOfBounds {
-            at: format!("{sat}.indices"),
-            needed: ineeded,
-            available: ibytes.len() as u64,
-        });
-    }
+    let ibytes = sparse_bytes(&indices.view(), buffers, ineeded, || {
+        format!("{sat}.indices")
+    })?;
     let values = sparse.values();
-    let vbytes = view_bytes(&values.view(), buffers)?;
     let vneeded = values.offset() as u64 + n * elem;
-    if vneeded > vbytes.len() as u64 {
-        return Err(Error::OutOfBounds {
-            at: format!("{sat}.values"),
-            needed: vneeded,
-            available: vbytes.len() as u64,
-        });
-    }
+    let vbytes = sparse_bytes(&values.view(), buffers, vneeded, || format!("{sat}.values"))?;
     let (isize, elem) = (isize as usize, elem as usize);
     for k in 0..n as usize {
         let target = to_u32(itype, &ibytes[indices.offset() + k * isize..][..isize]) as usize;
@@ -319,6 +307,24 @@ fn apply_sparse<T>(
         }
     }
     Ok(())
+}
+
+/// The bytes of a sparse accessor's indices or values view, checked to hold `needed` bytes.
+fn sparse_bytes<'a>(
+    view: &gltf::buffer::View<'_>,
+    buffers: &'a Buffers,
+    needed: u64,
+    at: impl FnOnce() -> String,
+) -> Result<&'a [u8], Error> {
+    let bytes = view_bytes(view, buffers)?;
+    if needed > bytes.len() as u64 {
+        return Err(Error::OutOfBounds {
+            at: at(),
+            needed,
+            available: bytes.len() as u64,
+        });
+    }
+    Ok(bytes)
 }
 
 /// Reads an accessor as floats: `dims` components per element, flattened. Normalized integers

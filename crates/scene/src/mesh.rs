@@ -135,7 +135,34 @@ pub(crate) fn load_mesh(
     variant: Option<usize>,
     material_of: &mut dyn FnMut(Option<usize>) -> u32,
 ) -> Result<LoadedMesh, Error> {
-    let parts = read_parts(doc, mesh, buffers, stats, variant, material_of)?;
+    let mut parts = Vec::new();
+    for prim in mesh.primitives() {
+        let at = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
+        if matches!(
+            prim.mode(),
+            Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip
+        ) {
+            stats.skipped_primitives += 1;
+            stats.warnings.push(format!(
+                "{at}: {:?} primitive skipped (not triangles)",
+                prim.mode()
+            ));
+            continue;
+        }
+        let material = material_of(
+            variant
+                .and_then(|v| variant_material(&prim, v))
+                .or(prim.material().index()),
+        );
+        parts.push(read_part(doc, &prim, buffers, &at, material)?);
+        stats.primitives += 1;
+    }
+    merge_parts(mesh, parts)
+}
+
+/// The primitives of `mesh` merged into one mesh: attributes any primitive has are filled
+/// with defaults where others lack them, indices offset, morph targets and influences merged.
+fn merge_parts(mesh: &gltf::Mesh<'_>, parts: Vec<Part>) -> Result<LoadedMesh, Error> {
     let vertices: usize = parts.iter().map(|p| p.positions.len()).sum();
     if u32::try_from(vertices).is_err() {
         return Err(Error::BadAccessor {
@@ -200,38 +227,4 @@ pub(crate) fn load_mesh(
         flat,
         weights: mesh.weights().map(<[f32]>::to_vec).unwrap_or_default(),
     })
-}
-
-/// The mesh's triangle primitives read in order; points and lines are counted and warned about.
-fn read_parts(
-    doc: &gltf::Document,
-    mesh: &gltf::Mesh<'_>,
-    buffers: &Buffers,
-    stats: &mut SceneStats,
-    variant: Option<usize>,
-    material_of: &mut dyn FnMut(Option<usize>) -> u32,
-) -> Result<Vec<Part>, Error> {
-    let mut parts = Vec::new();
-    for prim in mesh.primitives() {
-        let at = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
-        if matches!(
-            prim.mode(),
-            Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip
-        ) {
-            stats.skipped_primitives += 1;
-            stats.warnings.push(format!(
-                "{at}: {:?} primitive skipped (not triangles)",
-                prim.mode()
-            ));
-            continue;
-        }
-        let material = material_of(
-            variant
-                .and_then(|v| variant_material(&prim, v))
-                .or(prim.material().index()),
-        );
-        parts.push(read_part(doc, &prim, buffers, &at, material)?);
-        stats.primitives += 1;
-    }
-    Ok(parts)
 }
