@@ -339,11 +339,16 @@ def long_functions(file):
         if not m:
             continue
         # Find the body's opening brace (or a `;` for a declaration without a body).
-        depth, j, started = 0, i, False
+        depth, j, started, nest = 0, i, False, 0
         while j < len(lines):
             seg = lines[j] if j != i else line[m.end():]
             for ch in seg:
-                if ch == ";" and not started and depth == 0:
+                # A `;` inside the signature's brackets (`[f32; 4]`) does not end it.
+                if not started and ch in "([":
+                    nest += 1
+                elif not started and ch in ")]":
+                    nest -= 1
+                if ch == ";" and not started and depth == 0 and nest == 0:
                     break
                 if ch == "{":
                     depth += 1

@@ -149,6 +149,15 @@ fn to_u32(t: DataType, b: &[u8]) -> u32 {
     }
 }
 
+/// An accessor's element layout: component size and count, element size in bytes, elements.
+#[derive(Clone, Copy)]
+struct Shape {
+    csize: usize,
+    dims: usize,
+    elem: u64,
+    count: u64,
+}
+
 /// Reads every element of an accessor as `dims` components, converted with `conv`.
 fn read<T: Copy + Default>(
     acc: &gltf::Accessor<'_>,
@@ -156,117 +165,166 @@ fn read<T: Copy + Default>(
     at: &str,
     conv: impl Fn(&[u8]) -> T,
 ) -> Result<Vec<T>, Error> {
-    let ctype = acc.data_type();
-    let csize = component_size(ctype);
+    let csize = component_size(acc.data_type());
     let dims = dimension_count(acc.dimensions());
-    let elem = (csize * dims) as u64;
-    let count = acc.count() as u64;
+    let shape = Shape {
+        csize,
+        dims,
+        elem: (csize * dims) as u64,
+        count: acc.count() as u64,
+    };
     // Charged once the count is known to be backed (so a lying count gets the precise error).
     let charge = || {
         buffers.charge(
             at,
-            count
+            shape
+                .count
                 .saturating_mul(dims as u64)
                 .saturating_mul(std::mem::size_of::<T>() as u64),
         )
     };
     let mut out: Vec<T> = match acc.view() {
-        Some(view) => {
-            let bytes = view_bytes(&view, buffers)?;
-            let stride = view.stride().map_or(elem, |s| s as u64);
-            if stride < elem {
-                return Err(Error::BadAccessor {
-                    at: at.into(),
-                    reason: format!(
-                        "bufferViews[{}].byteStride {stride} is smaller than the {elem}-byte element",
-                        view.index()
-                    ),
-                });
-            }
-            let offset = acc.offset() as u64;
-            let needed = if count == 0 {
-                offset
-            } else {
-                (count - 1)
-                    .checked_mul(stride)
-                    .and_then(|x| x.checked_add(offset + elem))
-                    .unwrap_or(u64::MAX)
-            };
-            if needed > bytes.len() as u64 {
-                return Err(out_of_bounds(at, acc.index(), needed, bytes.len() as u64));
-            }
-            charge()?;
-            // Safe to allocate: every element is backed by bytes we hold.
-            let (offset, stride, elem) = (offset as usize, stride as usize, elem as usize);
-            let mut out = Vec::with_capacity(count as usize * dims);
-            for i in 0..count as usize {
-                let e = &bytes[offset + i * stride..][..elem];
-                out.extend(e.chunks_exact(csize).map(&conv));
-            }
-            out
-        }
+        Some(view) => read_view(acc, &view, buffers, at, shape, charge, &conv)?,
         None => {
             let budget = buffers.total * UNBACKED_FACTOR + UNBACKED_SLACK;
-            let size = count.saturating_mul(elem);
+            let size = shape.count.saturating_mul(shape.elem);
             if size > budget {
                 return Err(out_of_bounds(at, acc.index(), size, budget));
             }
             charge()?;
-            vec![T::default(); count as usize * dims]
+            vec![T::default(); shape.count as usize * dims]
         }
     };
     if let Some(sparse) = acc.sparse() {
-        let sat = format!("{at} (accessors[{}].sparse)", acc.index());
-        let n = sparse.count() as u64;
-        if n > count {
-            return Err(Error::BadAccessor {
-                at: sat,
-                reason: format!("{n} sparse values for {count} elements"),
-            });
-        }
-        let indices = sparse.indices();
-        let itype = match indices.index_type() {
-            gltf::accessor::sparse::IndexType::U8 => DataType::U8,
-            gltf::accessor::sparse::IndexType::U16 => DataType::U16,
-            gltf::accessor::sparse::IndexType::U32 => DataType::U32,
-        };
-        let isize = component_size(itype) as u64;
-        let ibytes = view_bytes(&indices.view(), buffers)?;
-        let ineeded = indices.offset() as u64 + n * isize;
-        if ineeded > ibytes.len() as u64 {
-            return Err(Error::OutOfBounds {
-                at: format!("{sat}.indices"),
-                needed: ineeded,
-                available: ibytes.len() as u64,
-            });
-        }
-        let values = sparse.values();
-        let vbytes = view_bytes(&values.view(), buffers)?;
-        let vneeded = values.offset() as u64 + n * elem;
-        if vneeded > vbytes.len() as u64 {
-            return Err(Error::OutOfBounds {
-                at: format!("{sat}.values"),
-                needed: vneeded,
-                available: vbytes.len() as u64,
-            });
-        }
-        let (isize, elem) = (isize as usize, elem as usize);
-        for k in 0..n as usize {
-            let target = to_u32(itype, &ibytes[indices.offset() + k * isize..][..isize]) as usize;
-            if target as u64 >= count {
-                return Err(Error::IndexOutOfRange {
-                    at: format!("{sat}.indices[{k}]"),
-                    index: target as u64,
-                    vertices: count as usize,
-                });
-            }
-            let e = &vbytes[values.offset() + k * elem..][..elem];
-            for (c, comp) in e.chunks_exact(csize).enumerate() {
-                out[target * dims + c] = conv(comp);
-            }
-        }
+        apply_sparse(acc, &sparse, buffers, at, shape, &mut out, &conv)?;
     }
     Ok(out)
+}
+
+/// The dense elements of an accessor stored in `view`, checked to lie inside it before
+/// anything is allocated (`charge` is called once they do).
+fn read_view<T>(
+    acc: &gltf::Accessor<'_>,
+    view: &gltf::buffer::View<'_>,
+    buffers: &Buffers,
+    at: &str,
+    shape: Shape,
+    charge: impl FnOnce() -> Result<(), Error>,
+    conv: &impl Fn(&[u8]) -> T,
+) -> Result<Vec<T>, Error> {
+    let Shape {
+        csize,
+        dims,
+        elem,
+        count,
+    } = shape;
+    let bytes = view_bytes(view, buffers)?;
+    let stride = view.stride().map_or(elem, |s| s as u64);
+    if stride < elem {
+        return Err(Error::BadAccessor {
+            at: at.into(),
+            reason: format!(
+                "bufferViews[{}].byteStride {stride} is smaller than the {elem}-byte element",
+                view.index()
+            ),
+        });
+    }
+    let offset = acc.offset() as u64;
+    let needed = if count == 0 {
+        offset
+    } else {
+        (count - 1)
+            .checked_mul(stride)
+            .and_then(|x| x.checked_add(offset + elem))
+            .unwrap_or(u64::MAX)
+    };
+    if needed > bytes.len() as u64 {
+        return Err(out_of_bounds(at, acc.index(), needed, bytes.len() as u64));
+    }
+    charge()?;
+    // Safe to allocate: every element is backed by bytes we hold.
+    let (offset, stride, elem) = (offset as usize, stride as usize, elem as usize);
+    let mut out = Vec::with_capacity(count as usize * dims);
+    for i in 0..count as usize {
+        let e = &bytes[offset + i * stride..][..elem];
+        out.extend(e.chunks_exact(csize).map(conv));
+    }
+    Ok(out)
+}
+
+/// Writes an accessor's sparse values over `out`, indices and values checked against their views
+/// and the element count.
+fn apply_sparse<T>(
+    acc: &gltf::Accessor<'_>,
+    sparse: &gltf::accessor::sparse::Sparse<'_>,
+    buffers: &Buffers,
+    at: &str,
+    shape: Shape,
+    out: &mut [T],
+    conv: &impl Fn(&[u8]) -> T,
+) -> Result<(), Error> {
+    let Shape {
+        csize,
+        dims,
+        elem,
+        count,
+    } = shape;
+    let sat = format!("{at} (accessors[{}].sparse)", acc.index());
+    let n = sparse.count() as u64;
+    if n > count {
+        return Err(Error::BadAccessor {
+            at: sat,
+            reason: format!("{n} sparse values for {count} elements"),
+        });
+    }
+    let indices = sparse.indices();
+    let itype = match indices.index_type() {
+        gltf::accessor::sparse::IndexType::U8 => DataType::U8,
+        gltf::accessor::sparse::IndexType::U16 => DataType::U16,
+        gltf::accessor::sparse::IndexType::U32 => DataType::U32,
+    };
+    let isize = component_size(itype) as u64;
+    let ineeded = indices.offset() as u64 + n * isize;
+    let ibytes = sparse_bytes(&indices.view(), buffers, ineeded, || {
+        format!("{sat}.indices")
+    })?;
+    let values = sparse.values();
+    let vneeded = values.offset() as u64 + n * elem;
+    let vbytes = sparse_bytes(&values.view(), buffers, vneeded, || format!("{sat}.values"))?;
+    let (isize, elem) = (isize as usize, elem as usize);
+    for k in 0..n as usize {
+        let target = to_u32(itype, &ibytes[indices.offset() + k * isize..][..isize]) as usize;
+        if target as u64 >= count {
+            return Err(Error::IndexOutOfRange {
+                at: format!("{sat}.indices[{k}]"),
+                index: target as u64,
+                vertices: count as usize,
+            });
+        }
+        let e = &vbytes[values.offset() + k * elem..][..elem];
+        for (c, comp) in e.chunks_exact(csize).enumerate() {
+            out[target * dims + c] = conv(comp);
+        }
+    }
+    Ok(())
+}
+
+/// The bytes of a sparse accessor's indices or values view, checked to hold `needed` bytes.
+fn sparse_bytes<'a>(
+    view: &gltf::buffer::View<'_>,
+    buffers: &'a Buffers,
+    needed: u64,
+    at: impl FnOnce() -> String,
+) -> Result<&'a [u8], Error> {
+    let bytes = view_bytes(view, buffers)?;
+    if needed > bytes.len() as u64 {
+        return Err(Error::OutOfBounds {
+            at: at(),
+            needed,
+            available: bytes.len() as u64,
+        });
+    }
+    Ok(bytes)
 }
 
 /// Reads an accessor as floats: `dims` components per element, flattened. Normalized integers

@@ -16,11 +16,14 @@ use serde_json::Value;
 
 use glam::{DAffine3, DQuat, DVec3, Vec3};
 
+use crate::accessor::Buffers;
 use crate::animation::{self, AnimationInfo, Animations, NodeProperty, Target};
+use crate::buffers::load_buffers;
 use crate::camera::{self, CameraData};
-use crate::load::{load_buffers, node_graph, recentre, NodeGraph};
 use crate::material::Materials;
 use crate::mesh::LoadedMesh;
+use crate::nodes::{node_graph, NodeGraph};
+use crate::origin::recentre;
 use crate::pointer::Pointer;
 use crate::skin::Skin;
 use crate::{
@@ -181,11 +184,7 @@ impl Animated {
         let root = prepared.root;
         let mut stats = SceneStats {
             skipped_features: prepared.skipped,
-            warnings: prepared
-                .ignored_extensions
-                .iter()
-                .map(|e| format!("extension {e} is used but not implemented: ignored"))
-                .collect(),
+            warnings: ignored_extension_warnings(&prepared.ignored_extensions),
             ..SceneStats::default()
         };
         stats.generator = doc.as_json().asset.generator.clone();
@@ -209,37 +208,9 @@ impl Animated {
         stats.animations = animations.info.clone();
 
         let mut materials = Materials::default();
-        let mut meshes = HashMap::new();
-        for &ni in &order {
-            let Some(m) = doc.nodes().nth(ni).and_then(|n| n.mesh()) else {
-                continue;
-            };
-            if meshes.contains_key(&m.index()) {
-                continue;
-            }
-            let loaded = mesh::load_mesh(&doc, &m, &buffers, &mut stats, variant, &mut |mi| {
-                materials.get(&doc, mi)
-            })?;
-            meshes.insert(m.index(), loaded);
-        }
+        let mut meshes = read_meshes(&doc, &order, &buffers, &mut stats, variant, &mut materials)?;
         let material_index = materials.gltf_indices();
-        // MikkTSpace tangents for normal-mapped meshes, on the rest shape (deformed with it).
-        let mut keys: Vec<usize> = meshes.keys().copied().collect();
-        keys.sort_unstable();
-        let mut tmp = Scene {
-            meshes: keys
-                .iter()
-                .filter_map(|k| meshes.get_mut(k).map(|m| std::mem::take(&mut m.mesh)))
-                .collect(),
-            materials: materials.materials.clone(),
-            ..Scene::default()
-        };
-        crate::tangents::generate_missing_tangents(&mut tmp);
-        for (k, m) in keys.iter().zip(tmp.meshes) {
-            if let Some(l) = meshes.get_mut(k) {
-                l.mesh = m;
-            }
-        }
+        generate_tangents(&mut meshes, &materials.materials);
         let material_list = std::mem::take(&mut materials.materials);
         stats.warnings.append(&mut materials.warnings);
         let textures = materials.textures(
@@ -270,7 +241,7 @@ impl Animated {
             options: options.clone(),
             stats,
             draws_nothing: doc.meshes().len() > 0,
-            source_hash: crate::load::content_hash(bytes),
+            source_hash: crate::hash::content_hash(bytes),
         };
         // The typed document and the kept JSON are done with: freed before posing, which
         // holds every node's world transform (for two million nodes, 0.5 GB less at the peak).
@@ -541,4 +512,58 @@ fn read_lights(doc: &gltf::Document) -> Result<Vec<LightData>, Error> {
             },
         })
         .collect())
+}
+
+/// The warnings for extensions the file uses that aperture ignores.
+fn ignored_extension_warnings(ignored: &[String]) -> Vec<String> {
+    ignored
+        .iter()
+        .map(|e| format!("extension {e} is used but not implemented: ignored"))
+        .collect()
+}
+
+/// Every mesh the drawn nodes use, read once each (by glTF mesh index), its materials gathered
+/// into `materials`.
+fn read_meshes(
+    doc: &gltf::Document,
+    order: &[usize],
+    buffers: &Buffers,
+    stats: &mut SceneStats,
+    variant: Option<usize>,
+    materials: &mut Materials,
+) -> Result<HashMap<usize, LoadedMesh>, Error> {
+    let mut meshes = HashMap::new();
+    for &ni in order {
+        let Some(m) = doc.nodes().nth(ni).and_then(|n| n.mesh()) else {
+            continue;
+        };
+        if meshes.contains_key(&m.index()) {
+            continue;
+        }
+        let loaded = mesh::load_mesh(doc, &m, buffers, stats, variant, &mut |mi| {
+            materials.get(doc, mi)
+        })?;
+        meshes.insert(m.index(), loaded);
+    }
+    Ok(meshes)
+}
+
+/// MikkTSpace tangents for normal-mapped meshes, on the rest shape (deformed with it).
+fn generate_tangents(meshes: &mut HashMap<usize, LoadedMesh>, materials: &[Material]) {
+    let mut keys: Vec<usize> = meshes.keys().copied().collect();
+    keys.sort_unstable();
+    let mut tmp = Scene {
+        meshes: keys
+            .iter()
+            .filter_map(|k| meshes.get_mut(k).map(|m| std::mem::take(&mut m.mesh)))
+            .collect(),
+        materials: materials.to_vec(),
+        ..Scene::default()
+    };
+    crate::tangents::generate_missing_tangents(&mut tmp);
+    for (k, m) in keys.iter().zip(tmp.meshes) {
+        if let Some(l) = meshes.get_mut(k) {
+            l.mesh = m;
+        }
+    }
 }

@@ -14,6 +14,8 @@ use crate::accessor::{read_f32, Buffers};
 use crate::pointer::{self, Pointer};
 use crate::Error;
 
+pub(crate) use crate::pointer::NodeProperty;
+
 /// Which animations a time evaluates (`--animation NAME|INDEX`).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub enum AnimationSelection {
@@ -59,15 +61,6 @@ pub(crate) enum Target {
     Node(usize, NodeProperty),
     /// Anything else `KHR_animation_pointer` can point at that aperture evaluates.
     Pointer(Pointer),
-}
-
-/// The animatable properties of a node.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum NodeProperty {
-    Translation,
-    Rotation,
-    Scale,
-    Weights,
 }
 
 /// Keys of one sampler: `times` ascending; `values` holds `width` floats per key (three times
@@ -379,7 +372,6 @@ pub(crate) fn parse(
     let mut out = Animations::default();
     let mut name_taken = false;
     for (a, anim) in list.iter().enumerate() {
-        let at = format!("animations[{a}]");
         let name = anim.get("name").and_then(Value::as_str);
         let mut selected = chosen(a, name);
         if let AnimationSelection::Name(_) = selection {
@@ -387,88 +379,8 @@ pub(crate) fn parse(
             selected &= !name_taken;
             name_taken |= selected;
         }
-        let samplers = anim
-            .get("samplers")
-            .and_then(Value::as_array)
-            .cloned()
-            .unwrap_or_default();
-        let channels = anim
-            .get("channels")
-            .and_then(Value::as_array)
-            .cloned()
-            .unwrap_or_default();
-        let mut read = Vec::with_capacity(samplers.len());
-        for (s, sampler) in samplers.iter().enumerate() {
-            read.push(Some(read_sampler(
-                doc,
-                buffers,
-                sampler,
-                &format!("{at}.samplers[{s}]"),
-            )?));
-        }
-        let (mut start, mut end) = (f32::INFINITY, f32::NEG_INFINITY);
-        for (c, channel) in channels.iter().enumerate() {
-            let cat = format!("{at}.channels[{c}]");
-            let s = index_of(
-                channel.get("sampler").unwrap_or(&Value::Null),
-                &format!("{cat}.sampler"),
-            )?;
-            let Some(Some((times, values, dims, interpolation))) = read.get(s) else {
-                return Err(invalid(
-                    format!("{cat}.sampler"),
-                    format!("sampler {s} does not exist"),
-                ));
-            };
-            start = start.min(times[0]);
-            end = end.max(times[times.len() - 1]);
-            let Some(target) = read_target(channel, &cat, root, &mut out.ignored_pointers)? else {
-                continue;
-            };
-            let keys = times.len()
-                * if *interpolation == Interpolation::CubicSpline {
-                    3
-                } else {
-                    1
-                };
-            let floats = values.len();
-            let width = match target_width(&target) {
-                Some(w) => w,
-                None if floats % keys == 0 => floats / keys,
-                None => 0,
-            };
-            if width == 0 || floats != keys * width {
-                return Err(invalid(
-                    format!("{at}.samplers[{s}].output"),
-                    format!(
-                        "{floats} values ({dims} per element) for {} keys of {} floats each ({interpolation:?})",
-                        times.len(),
-                        width.max(1)
-                    ),
-                ));
-            }
-            if selected {
-                out.channels.push(Channel {
-                    target,
-                    sampler: Sampler {
-                        times: times.clone(),
-                        values: values.clone(),
-                        width,
-                        interpolation: *interpolation,
-                    },
-                });
-            }
-        }
-        if !start.is_finite() {
-            (start, end) = (0.0, 0.0);
-        }
-        out.info.push(AnimationInfo {
-            index: a,
-            name: name.map(str::to_owned),
-            start,
-            end,
-            channels: channels.len(),
-            selected,
-        });
+        let info = read_animation(doc, buffers, root, anim, a, selected, &mut out)?;
+        out.info.push(info);
     }
     match selection {
         AnimationSelection::Index(i) if *i >= list.len() => {
@@ -486,6 +398,122 @@ pub(crate) fn parse(
         _ => {}
     }
     Ok(out)
+}
+
+/// A sampler as read: key times, values, components per element and interpolation.
+type SamplerKeys = (Vec<f32>, Vec<f32>, usize, Interpolation);
+
+/// Reads animation `a` (`anim`), adding its channels to `out` when `selected`; its listing.
+fn read_animation(
+    doc: &gltf::Document,
+    buffers: &Buffers,
+    root: &Value,
+    anim: &Value,
+    a: usize,
+    selected: bool,
+    out: &mut Animations,
+) -> Result<AnimationInfo, Error> {
+    let at = format!("animations[{a}]");
+    let name = anim.get("name").and_then(Value::as_str);
+    let samplers = anim
+        .get("samplers")
+        .and_then(Value::as_array)
+        .cloned()
+        .unwrap_or_default();
+    let channels = anim
+        .get("channels")
+        .and_then(Value::as_array)
+        .cloned()
+        .unwrap_or_default();
+    let mut read = Vec::with_capacity(samplers.len());
+    for (s, sampler) in samplers.iter().enumerate() {
+        read.push(Some(read_sampler(
+            doc,
+            buffers,
+            sampler,
+            &format!("{at}.samplers[{s}]"),
+        )?));
+    }
+    let (mut start, mut end) = (f32::INFINITY, f32::NEG_INFINITY);
+    for (c, channel) in channels.iter().enumerate() {
+        let (first, last) = read_channel(channel, &at, c, &read, root, selected, out)?;
+        start = start.min(first);
+        end = end.max(last);
+    }
+    if !start.is_finite() {
+        (start, end) = (0.0, 0.0);
+    }
+    Ok(AnimationInfo {
+        index: a,
+        name: name.map(str::to_owned),
+        start,
+        end,
+        channels: channels.len(),
+        selected,
+    })
+}
+
+/// Reads channel `c` of the animation at `at`, checking its sampler's keys against its target,
+/// and adds it to `out` when `selected` and aperture animates its target. Returns the first and
+/// last key times of its sampler.
+fn read_channel(
+    channel: &Value,
+    at: &str,
+    c: usize,
+    read: &[Option<SamplerKeys>],
+    root: &Value,
+    selected: bool,
+    out: &mut Animations,
+) -> Result<(f32, f32), Error> {
+    let cat = format!("{at}.channels[{c}]");
+    let s = index_of(
+        channel.get("sampler").unwrap_or(&Value::Null),
+        &format!("{cat}.sampler"),
+    )?;
+    let Some(Some((times, values, dims, interpolation))) = read.get(s) else {
+        return Err(invalid(
+            format!("{cat}.sampler"),
+            format!("sampler {s} does not exist"),
+        ));
+    };
+    let span = (times[0], times[times.len() - 1]);
+    let Some(target) = read_target(channel, &cat, root, &mut out.ignored_pointers)? else {
+        return Ok(span);
+    };
+    let keys = times.len()
+        * if *interpolation == Interpolation::CubicSpline {
+            3
+        } else {
+            1
+        };
+    let floats = values.len();
+    let width = match target_width(&target) {
+        Some(w) => w,
+        None if floats % keys == 0 => floats / keys,
+        None => 0,
+    };
+    if width == 0 || floats != keys * width {
+        return Err(invalid(
+            format!("{at}.samplers[{s}].output"),
+            format!(
+                "{floats} values ({dims} per element) for {} keys of {} floats each ({interpolation:?})",
+                times.len(),
+                width.max(1)
+            ),
+        ));
+    }
+    if selected {
+        out.channels.push(Channel {
+            target,
+            sampler: Sampler {
+                times: times.clone(),
+                values: values.clone(),
+                width,
+                interpolation: *interpolation,
+            },
+        });
+    }
+    Ok(span)
 }
 
 /// The animations as `0 "Walk", 1 (unnamed)` for messages.

@@ -51,17 +51,7 @@ pub(crate) fn decode(
     at: &str,
 ) -> Result<Decoded, Error> {
     let eat = format!("{at}.extensions.KHR_draco_mesh_compression");
-    let view_index = ext
-        .get("bufferView")
-        .and_then(Value::as_u64)
-        .ok_or_else(|| invalid(&format!("{eat}.bufferView"), "missing or not an index"))?;
-    let view = doc.views().nth(view_index as usize).ok_or_else(|| {
-        invalid(
-            &format!("{eat}.bufferView"),
-            format!("bufferView {view_index} does not exist"),
-        )
-    })?;
-    let bytes = view_bytes(&view, buffers)?;
+    let bytes = stream_bytes(doc, ext, buffers, &eat)?;
     let ids = ext
         .get("attributes")
         .and_then(Value::as_object)
@@ -81,6 +71,49 @@ pub(crate) fn decode(
             count: corners,
         });
     }
+    let mesh = decode_mesh(bytes, points, corners, &eat)?;
+    let mut indices = Vec::with_capacity(corners);
+    for f in 0..mesh.num_faces() {
+        indices.extend(mesh.face(FaceIndex(f as u32)).map(|p| p.0));
+    }
+    let mut attributes = HashMap::new();
+    for (semantic, id) in ids {
+        let values = read_attribute(prim, &mesh, semantic, id, points, at, &eat)?;
+        attributes.insert(semantic.clone(), values);
+    }
+    Ok(Decoded {
+        indices,
+        attributes,
+    })
+}
+
+/// The bytes of the buffer view holding the Draco stream (`eat` names the extension object).
+fn stream_bytes<'a>(
+    doc: &gltf::Document,
+    ext: &Value,
+    buffers: &'a Buffers,
+    eat: &str,
+) -> Result<&'a [u8], Error> {
+    let view_index = ext
+        .get("bufferView")
+        .and_then(Value::as_u64)
+        .ok_or_else(|| invalid(&format!("{eat}.bufferView"), "missing or not an index"))?;
+    let view = doc.views().nth(view_index as usize).ok_or_else(|| {
+        invalid(
+            &format!("{eat}.bufferView"),
+            format!("bufferView {view_index} does not exist"),
+        )
+    })?;
+    view_bytes(&view, buffers)
+}
+
+/// The decoded Draco mesh, limited to and checked against the counts the accessors state.
+fn decode_mesh(
+    bytes: &[u8],
+    points: usize,
+    corners: usize,
+    eat: &str,
+) -> Result<draco_core::Mesh, Error> {
     // The accessors state the decoded sizes: the decoder may not allocate more.
     let limits = DecodeLimits::default()
         .with_max_points(points as u64)
@@ -90,12 +123,12 @@ pub(crate) fn decode(
     MeshDecoder::new()
         .decode(&mut input, &mut mesh)
         .map_err(|e| Error::Compressed {
-            at: eat.clone(),
+            at: eat.into(),
             reason: format!("Draco stream: {e}"),
         })?;
     if mesh.num_points() != points || mesh.num_faces() * 3 != corners {
         return Err(Error::Compressed {
-            at: eat,
+            at: eat.into(),
             reason: format!(
                 "the Draco stream holds {} points and {} triangles; the accessors say {points} \
                  and {}",
@@ -105,51 +138,54 @@ pub(crate) fn decode(
             ),
         });
     }
-    let mut indices = Vec::with_capacity(corners);
-    for f in 0..mesh.num_faces() {
-        indices.extend(mesh.face(FaceIndex(f as u32)).map(|p| p.0));
+    Ok(mesh)
+}
+
+/// The values of the compressed attribute `semantic` (Draco attribute `id`), `dims` per point as
+/// its accessor says, normalised integers mapped to [0, 1] or [-1, 1].
+fn read_attribute(
+    prim: &gltf::Primitive<'_>,
+    mesh: &draco_core::Mesh,
+    semantic: &str,
+    id: &Value,
+    points: usize,
+    at: &str,
+    eat: &str,
+) -> Result<(Vec<f32>, usize), Error> {
+    let aat = format!("{eat}.attributes.{semantic}");
+    let id = id
+        .as_u64()
+        .and_then(|i| u32::try_from(i).ok())
+        .ok_or_else(|| invalid(&aat, format!("{id} is not an attribute id")))?;
+    let accessor = prim
+        .attributes()
+        .find(|(s, _)| s.to_string() == *semantic)
+        .map(|(_, a)| a)
+        .ok_or_else(|| invalid(&aat, "the primitive has no such attribute"))?;
+    if accessor.count() != points {
+        return Err(Error::BadAccessor {
+            at: format!("{at}.attributes.{semantic}"),
+            reason: format!(
+                "accessors[{}] has {} elements, POSITION has {points}",
+                accessor.index(),
+                accessor.count()
+            ),
+        });
     }
-    let mut attributes = HashMap::new();
-    for (semantic, id) in ids {
-        let aat = format!("{eat}.attributes.{semantic}");
-        let id = id
-            .as_u64()
-            .and_then(|i| u32::try_from(i).ok())
-            .ok_or_else(|| invalid(&aat, format!("{id} is not an attribute id")))?;
-        let accessor = prim
-            .attributes()
-            .find(|(s, _)| s.to_string() == *semantic)
-            .map(|(_, a)| a)
-            .ok_or_else(|| invalid(&aat, "the primitive has no such attribute"))?;
-        if accessor.count() != points {
-            return Err(Error::BadAccessor {
-                at: format!("{at}.attributes.{semantic}"),
-                reason: format!(
-                    "accessors[{}] has {} elements, POSITION has {points}",
-                    accessor.index(),
-                    accessor.count()
-                ),
-            });
-        }
-        let attr = mesh
-            .attribute_by_unique_id(id)
-            .ok_or_else(|| Error::Compressed {
-                at: aat.clone(),
-                reason: format!("the Draco stream has no attribute {id}"),
-            })?;
-        let dims = accessor.dimensions().multiplicity();
-        let mut values = attr.read_f32s(points, dims);
-        if accessor.normalized() || attr.normalized() {
-            if let Some(d) = norm_divisor(attr.data_type()) {
-                for v in &mut values {
-                    *v = (*v / d).max(-1.0);
-                }
+    let attr = mesh
+        .attribute_by_unique_id(id)
+        .ok_or_else(|| Error::Compressed {
+            at: aat.clone(),
+            reason: format!("the Draco stream has no attribute {id}"),
+        })?;
+    let dims = accessor.dimensions().multiplicity();
+    let mut values = attr.read_f32s(points, dims);
+    if accessor.normalized() || attr.normalized() {
+        if let Some(d) = norm_divisor(attr.data_type()) {
+            for v in &mut values {
+                *v = (*v / d).max(-1.0);
             }
         }
-        attributes.insert(semantic.clone(), (values, dims));
     }
-    Ok(Decoded {
-        indices,
-        attributes,
-    })
+    Ok((values, dims))
 }

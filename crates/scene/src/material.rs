@@ -240,41 +240,8 @@ impl Materials {
         skip: bool,
         budget: &aperture_budget::MemoryBudget,
     ) -> Result<Vec<Texture>, Error> {
-        let sampler_of = |s: Option<usize>| {
-            s.and_then(|i| doc.samplers().nth(i))
-                .map_or(Sampler::default(), |s| {
-                    let wrap = |w| match w {
-                        gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
-                        gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
-                        gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
-                    };
-                    Sampler {
-                        wrap_u: wrap(s.wrap_s()),
-                        wrap_v: wrap(s.wrap_t()),
-                        mag_filter: match s.mag_filter() {
-                            Some(gltf::texture::MagFilter::Nearest) => Filter::Nearest,
-                            _ => Filter::Linear,
-                        },
-                    }
-                })
-        };
-        let image_name = |i: usize| {
-            doc.images().nth(i).and_then(|im| {
-                im.name().map(str::to_owned).or(match im.source() {
-                    gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
-                        Some(uri.to_owned())
-                    }
-                    _ => None,
-                })
-            })
-        };
-        let color_space = |srgb| {
-            if srgb {
-                ColorSpace::Srgb
-            } else {
-                ColorSpace::Linear
-            }
-        };
+        let sampler_of = |s| sampler_of(doc, s);
+        let image_name = |i| image_name(doc, i);
         if skip {
             return Ok(self
                 .keys
@@ -328,5 +295,46 @@ impl Materials {
             });
         }
         Ok(out)
+    }
+}
+
+/// The sampler at index `s` of the file (the glTF default without one).
+fn sampler_of(doc: &gltf::Document, s: Option<usize>) -> Sampler {
+    s.and_then(|i| doc.samplers().nth(i))
+        .map_or(Sampler::default(), |s| {
+            let wrap = |w| match w {
+                gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+                gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+                gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+            };
+            Sampler {
+                wrap_u: wrap(s.wrap_s()),
+                wrap_v: wrap(s.wrap_t()),
+                mag_filter: match s.mag_filter() {
+                    Some(gltf::texture::MagFilter::Nearest) => Filter::Nearest,
+                    _ => Filter::Linear,
+                },
+            }
+        })
+}
+
+/// An image's name for messages and listings: its `name`, else its external URI.
+fn image_name(doc: &gltf::Document, i: usize) -> Option<String> {
+    doc.images().nth(i).and_then(|im| {
+        im.name().map(str::to_owned).or(match im.source() {
+            gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
+                Some(uri.to_owned())
+            }
+            _ => None,
+        })
+    })
+}
+
+/// The colour space of a texture used as colour (`srgb`) or as data.
+fn color_space(srgb: bool) -> ColorSpace {
+    if srgb {
+        ColorSpace::Srgb
+    } else {
+        ColorSpace::Linear
     }
 }

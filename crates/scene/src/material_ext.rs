@@ -99,25 +99,10 @@ impl Materials {
             });
         }
         if let Some(v) = ext.get("KHR_materials_volume") {
-            out.volume = Some(Volume {
-                thickness_factor: non_negative(v, "thicknessFactor", 0.0),
-                thickness_texture: self.texture_json(doc, v, "thicknessTexture", false),
-                attenuation_distance: Some(num(v, "attenuationDistance", f32::INFINITY))
-                    .filter(|d| *d > 0.0)
-                    .unwrap_or(f32::INFINITY),
-                attenuation_color: colour(v, "attenuationColor", Vec3::ONE),
-            });
+            out.volume = Some(self.volume(doc, v));
         }
         if let Some(v) = ext.get("KHR_materials_clearcoat") {
-            let normal = v.get("clearcoatNormalTexture");
-            out.clearcoat = Some(Clearcoat {
-                factor: unit(v, "clearcoatFactor", 0.0),
-                texture: self.texture_json(doc, v, "clearcoatTexture", false),
-                roughness_factor: unit(v, "clearcoatRoughnessFactor", 0.0),
-                roughness_texture: self.texture_json(doc, v, "clearcoatRoughnessTexture", false),
-                normal_texture: self.texture_json(doc, v, "clearcoatNormalTexture", false),
-                normal_scale: normal.map_or(1.0, |n| num(n, "scale", 1.0)),
-            });
+            out.clearcoat = Some(self.clearcoat(doc, v));
         }
         if let Some(v) = ext.get("KHR_materials_sheen") {
             out.sheen = Some(Sheen {
@@ -135,16 +120,7 @@ impl Materials {
             });
         }
         if let Some(v) = ext.get("KHR_materials_iridescence") {
-            out.iridescence = Some(Iridescence {
-                factor: unit(v, "iridescenceFactor", 0.0),
-                texture: self.texture_json(doc, v, "iridescenceTexture", false),
-                ior: Some(num(v, "iridescenceIor", 1.3))
-                    .filter(|x| *x >= 1.0)
-                    .unwrap_or(1.3),
-                thickness_min: non_negative(v, "iridescenceThicknessMinimum", 100.0),
-                thickness_max: non_negative(v, "iridescenceThicknessMaximum", 400.0),
-                thickness_texture: self.texture_json(doc, v, "iridescenceThicknessTexture", false),
-            });
+            out.iridescence = Some(self.iridescence(doc, v));
         }
         if let Some(v) = ext.get("KHR_materials_dispersion") {
             out.dispersion = non_negative(v, "dispersion", 0.0);
@@ -166,6 +142,45 @@ impl Materials {
             out.metallic_factor = 0.0;
             out.metallic_roughness_texture = None;
             out.specular_glossiness = Some(sg);
+        }
+    }
+
+    /// `KHR_materials_volume` from its JSON object.
+    fn volume(&mut self, doc: &gltf::Document, v: &Value) -> Volume {
+        Volume {
+            thickness_factor: non_negative(v, "thicknessFactor", 0.0),
+            thickness_texture: self.texture_json(doc, v, "thicknessTexture", false),
+            attenuation_distance: Some(num(v, "attenuationDistance", f32::INFINITY))
+                .filter(|d| *d > 0.0)
+                .unwrap_or(f32::INFINITY),
+            attenuation_color: colour(v, "attenuationColor", Vec3::ONE),
+        }
+    }
+
+    /// `KHR_materials_clearcoat` from its JSON object.
+    fn clearcoat(&mut self, doc: &gltf::Document, v: &Value) -> Clearcoat {
+        let normal = v.get("clearcoatNormalTexture");
+        Clearcoat {
+            factor: unit(v, "clearcoatFactor", 0.0),
+            texture: self.texture_json(doc, v, "clearcoatTexture", false),
+            roughness_factor: unit(v, "clearcoatRoughnessFactor", 0.0),
+            roughness_texture: self.texture_json(doc, v, "clearcoatRoughnessTexture", false),
+            normal_texture: self.texture_json(doc, v, "clearcoatNormalTexture", false),
+            normal_scale: normal.map_or(1.0, |n| num(n, "scale", 1.0)),
+        }
+    }
+
+    /// `KHR_materials_iridescence` from its JSON object.
+    fn iridescence(&mut self, doc: &gltf::Document, v: &Value) -> Iridescence {
+        Iridescence {
+            factor: unit(v, "iridescenceFactor", 0.0),
+            texture: self.texture_json(doc, v, "iridescenceTexture", false),
+            ior: Some(num(v, "iridescenceIor", 1.3))
+                .filter(|x| *x >= 1.0)
+                .unwrap_or(1.3),
+            thickness_min: non_negative(v, "iridescenceThicknessMinimum", 100.0),
+            thickness_max: non_negative(v, "iridescenceThicknessMaximum", 400.0),
+            thickness_texture: self.texture_json(doc, v, "iridescenceThicknessTexture", false),
         }
     }
 

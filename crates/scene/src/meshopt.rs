@@ -189,8 +189,29 @@ fn decode_view(
         ));
     }
     let (count, stride) = (count as usize, stride as usize);
+    let mut bytes = decode_stream(mode, source, count, stride, at)?;
+    if let Some(f) = ext.get("filter").and_then(Value::as_str) {
+        if mode != "ATTRIBUTES" && f != "NONE" {
+            return Err(invalid(
+                &format!("{at}.filter"),
+                "filters apply to ATTRIBUTES only",
+            ));
+        }
+        filter(f, &mut bytes, stride, at)?;
+    }
+    Ok(bytes)
+}
+
+/// The bytes of a compressed stream decoded in `mode` (`ATTRIBUTES`, `TRIANGLES` or `INDICES`).
+fn decode_stream(
+    mode: &str,
+    source: &[u8],
+    count: usize,
+    stride: usize,
+    at: &str,
+) -> Result<Vec<u8>, Error> {
     let failed = |e: meshopt::Error| compressed(at, format!("{mode} stream does not decode: {e}"));
-    let mut bytes = match (mode, stride) {
+    Ok(match (mode, stride) {
         ("ATTRIBUTES", s) => decode_vertices(source, count, s)
             .ok_or_else(|| {
                 invalid(
@@ -229,17 +250,7 @@ fn decode_view(
                 format!("mode {m:?} with byteStride {s} and count {count} is not defined"),
             ))
         }
-    };
-    if let Some(f) = ext.get("filter").and_then(Value::as_str) {
-        if mode != "ATTRIBUTES" && f != "NONE" {
-            return Err(invalid(
-                &format!("{at}.filter"),
-                "filters apply to ATTRIBUTES only",
-            ));
-        }
-        filter(f, &mut bytes, stride, at)?;
-    }
-    Ok(bytes)
+    })
 }
 
 /// ` (read by meshes[0].primitives[1].attributes.POSITION, …)`: the primitives whose data a view

@@ -6,7 +6,6 @@
 use glam::{Vec2, Vec3, Vec4};
 use serde_json::Value;
 
-use crate::animation::NodeProperty;
 use crate::{Material, TextureRef, TextureTransform};
 
 /// A parsed pointer.
@@ -24,6 +23,15 @@ pub(crate) enum Pointer {
     Light(usize, LightProperty),
     /// `/materials/{i}/...`.
     Material(usize, MaterialProperty),
+}
+
+/// The animatable properties of a node.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum NodeProperty {
+    Translation,
+    Rotation,
+    Scale,
+    Weights,
 }
 
 /// Animatable camera values.

@@ -6,8 +6,9 @@ use glam::{Affine3A, DAffine3, DVec3, Vec3};
 use super::{Animated, LightData, Pose, Shape, LUMENS_PER_WATT};
 use crate::camera::{self, CameraData};
 use crate::dof::NodeInfo;
-use crate::load::{finite_world, to_f32, world_origin, NodeData};
 use crate::mesh::LoadedMesh;
+use crate::nodes::{finite_world, to_f32, NodeData};
+use crate::origin::world_origin;
 use crate::pointer::{self, CameraProperty, LightProperty, Pointer};
 use crate::{Error, Instance, Light, LightKind, Material, Mesh, Projection, Scene, Texture};
 
@@ -52,25 +53,9 @@ impl Animated {
 
         let origin = world_origin(&out.meshes, &placed, &mut stats);
         out.world_origin = origin;
-        let relative = |m: DAffine3| DAffine3 {
-            matrix3: m.matrix3,
-            translation: m.translation - origin,
-        };
-        out.instances = placed
-            .iter()
-            .map(|&(mesh, world, node)| {
-                Ok(Instance {
-                    mesh,
-                    world_from_object: finite_world(node as usize, to_f32(relative(world)))?,
-                    node,
-                })
-            })
-            .collect::<Result<_, Error>>()?;
-        for (light, &(node, p)) in out.lights.iter_mut().zip(&light_positions) {
-            let position = (p - origin).as_vec3();
-            finite_world(node, Affine3A::from_translation(position))?;
-            light.position = position;
-        }
+        let relative = |m: DAffine3| relative_to(m, origin);
+        out.instances = instances(&placed, origin)?;
+        place_lights(&mut out.lights, &light_positions, origin)?;
         // Every node's origin (a focus object may be any node); whole transforms only for the
         // camera nodes that need them (48 bytes a node less for large scenes).
         let world_from_node = |ni: usize| to_f32(relative(pose.world[ni]));
@@ -302,4 +287,40 @@ fn punctual_light(li: usize, light: &LightData, world: DAffine3) -> Result<Light
             .unwrap_or(Vec3::NEG_Z),
         intensity,
     })
+}
+
+/// `m` with `origin` subtracted from its translation (in f64, before rounding to f32).
+fn relative_to(m: DAffine3, origin: DVec3) -> DAffine3 {
+    DAffine3 {
+        matrix3: m.matrix3,
+        translation: m.translation - origin,
+    }
+}
+
+/// The instances of the placed meshes (mesh, world transform, node), relative to `origin`.
+fn instances(placed: &[(u32, DAffine3, u32)], origin: DVec3) -> Result<Vec<Instance>, Error> {
+    placed
+        .iter()
+        .map(|&(mesh, world, node)| {
+            Ok(Instance {
+                mesh,
+                world_from_object: finite_world(node as usize, to_f32(relative_to(world, origin)))?,
+                node,
+            })
+        })
+        .collect()
+}
+
+/// Sets each light's position, relative to `origin`, from its node's world position.
+fn place_lights(
+    lights: &mut [Light],
+    positions: &[(usize, DVec3)],
+    origin: DVec3,
+) -> Result<(), Error> {
+    for (light, &(node, p)) in lights.iter_mut().zip(positions) {
+        let position = (p - origin).as_vec3();
+        finite_world(node, Affine3A::from_translation(position))?;
+        light.position = position;
+    }
+    Ok(())
 }

@@ -328,40 +328,15 @@ pub fn bounds(doc: &Doc, t: Option<f64>) -> ([f64; 3], [f64; 3]) {
                 w.iter().map(|x| x.as_f64().unwrap()).collect()
             })
         });
-        let joints: Option<Vec<M4>> = node["skin"].as_u64().map(|s| {
-            let skin = &doc.json["skins"][s as usize];
-            let ibm = skin["inverseBindMatrices"]
-                .as_u64()
-                .map(|a| doc.accessor(a));
-            skin["joints"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .enumerate()
-                .map(|(k, j)| {
-                    let b: M4 = ibm
-                        .as_ref()
-                        .map_or(identity(), |m| std::array::from_fn(|i| m[k][i]));
-                    mul(&world[j.as_u64().unwrap() as usize], &b)
-                })
-                .collect()
-        });
+        let joints = node["skin"]
+            .as_u64()
+            .map(|s| joint_matrices(doc, s, &world));
         for prim in mesh["primitives"].as_array().unwrap() {
             if prim["mode"].as_u64().is_some_and(|m| m < 4) {
                 continue;
             }
             let a = &prim["attributes"];
-            let mut pos = doc.accessor(a["POSITION"].as_u64().unwrap());
-            for (k, target) in prim["targets"].as_array().into_iter().flatten().enumerate() {
-                let w = weights.get(k).copied().unwrap_or(0.0);
-                if let (Some(ti), true) = (target["POSITION"].as_u64(), w != 0.0) {
-                    for (p, d) in pos.iter_mut().zip(doc.accessor(ti)) {
-                        for c in 0..3 {
-                            p[c] += w * d[c];
-                        }
-                    }
-                }
-            }
+            let pos = morphed_positions(doc, prim, &weights);
             let sets: Vec<(Rows, Rows)> = (0..)
                 .map_while(|s| {
                     Some((
@@ -373,19 +348,7 @@ pub fn bounds(doc: &Doc, t: Option<f64>) -> ([f64; 3], [f64; 3]) {
             for (v, p) in pos.iter().enumerate() {
                 let p = [p[0], p[1], p[2]];
                 let q = match (&joints, sets.is_empty()) {
-                    (Some(jm), false) => {
-                        let total: f64 = sets.iter().map(|(_, w)| w[v].iter().sum::<f64>()).sum();
-                        let mut acc = [0.0; 3];
-                        for (j, w) in &sets {
-                            for c in 0..4 {
-                                let x = apply(&jm[j[v][c] as usize], p);
-                                for d in 0..3 {
-                                    acc[d] += w[v][c] / total * x[d];
-                                }
-                            }
-                        }
-                        acc
-                    }
+                    (Some(jm), false) => skinned(jm, &sets, v, p),
                     _ => apply(&world[ni], p),
                 };
                 for d in 0..3 {
@@ -396,4 +359,56 @@ pub fn bounds(doc: &Doc, t: Option<f64>) -> ([f64; 3], [f64; 3]) {
         }
     }
     (lo, hi)
+}
+
+/// Skin `s`'s joint matrices: each joint's world matrix times its inverse bind matrix.
+fn joint_matrices(doc: &Doc, s: u64, world: &[M4]) -> Vec<M4> {
+    let skin = &doc.json["skins"][s as usize];
+    let ibm = skin["inverseBindMatrices"]
+        .as_u64()
+        .map(|a| doc.accessor(a));
+    skin["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .enumerate()
+        .map(|(k, j)| {
+            let b: M4 = ibm
+                .as_ref()
+                .map_or(identity(), |m| std::array::from_fn(|i| m[k][i]));
+            mul(&world[j.as_u64().unwrap() as usize], &b)
+        })
+        .collect()
+}
+
+/// A primitive's positions with its morph targets applied at `weights`.
+fn morphed_positions(doc: &Doc, prim: &Value, weights: &[f64]) -> Rows {
+    let a = &prim["attributes"];
+    let mut pos = doc.accessor(a["POSITION"].as_u64().unwrap());
+    for (k, target) in prim["targets"].as_array().into_iter().flatten().enumerate() {
+        let w = weights.get(k).copied().unwrap_or(0.0);
+        if let (Some(ti), true) = (target["POSITION"].as_u64(), w != 0.0) {
+            for (p, d) in pos.iter_mut().zip(doc.accessor(ti)) {
+                for c in 0..3 {
+                    p[c] += w * d[c];
+                }
+            }
+        }
+    }
+    pos
+}
+
+/// Vertex `v` at `p` skinned by the joint matrices `jm`, its weights normalised to sum to one.
+fn skinned(jm: &[M4], sets: &[(Rows, Rows)], v: usize, p: [f64; 3]) -> [f64; 3] {
+    let total: f64 = sets.iter().map(|(_, w)| w[v].iter().sum::<f64>()).sum();
+    let mut acc = [0.0; 3];
+    for (j, w) in sets {
+        for c in 0..4 {
+            let x = apply(&jm[j[v][c] as usize], p);
+            for d in 0..3 {
+                acc[d] += w[v][c] / total * x[d];
+            }
+        }
+    }
+    acc
 }

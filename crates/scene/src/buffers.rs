@@ -1,0 +1,57 @@
+//! Every buffer of a file read into memory: the GLB BIN chunk, `data:` URIs or files beside the
+//! scene.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use serde_json::Value;
+
+use crate::accessor::Buffers;
+use crate::{uri, Error};
+
+/// Reads every buffer: the GLB BIN chunk, `data:` URIs or files beside the scene.
+pub(crate) fn load_buffers(
+    doc: &gltf::Document,
+    root: &Value,
+    bin: Option<&[u8]>,
+    base_dir: &Path,
+    budget: &aperture_budget::MemoryBudget,
+) -> Result<Buffers, Error> {
+    let mut data = Vec::with_capacity(doc.buffers().len());
+    for b in doc.buffers() {
+        let at = format!("buffers[{}]", b.index());
+        if crate::meshopt::is_fallback(root, b.index()) {
+            // EXT_meshopt_compression's placeholder: no bytes; its views are decoded instead.
+            data.push(Vec::new());
+            continue;
+        }
+        let mut bytes = match b.source() {
+            gltf::buffer::Source::Bin => bin
+                .ok_or_else(|| Error::Invalid {
+                    at: at.clone(),
+                    reason: "refers to the GLB BIN chunk, which is missing".into(),
+                })?
+                .to_vec(),
+            gltf::buffer::Source::Uri(u) => uri::load(base_dir, u, &format!("{at}.uri"))?,
+        };
+        let claimed = b.length() as u64;
+        if (bytes.len() as u64) < claimed {
+            return Err(Error::BufferTooShort {
+                buffer: b.index(),
+                claimed,
+                actual: bytes.len() as u64,
+            });
+        }
+        // Padding past byteLength is not part of the buffer.
+        bytes.truncate(b.length());
+        data.push(bytes);
+    }
+    let total = data.iter().map(|d| d.len() as u64).sum();
+    Ok(Buffers {
+        data,
+        total,
+        decoded: HashMap::new(),
+        charged: Default::default(),
+        budget: *budget,
+    })
+}
