@@ -212,12 +212,7 @@ fn read_view<T>(
     charge: impl FnOnce() -> Result<(), Error>,
     conv: &impl Fn(&[u8]) -> T,
 ) -> Result<Vec<T>, Error> {
-    let Shape {
-        csize,
-        dims,
-        elem,
-        count,
-    } = shape;
+    let (csize, dims, elem, count) = (shape.csize, shape.dims, shape.elem, shape.count);
     let bytes = view_bytes(view, buffers)?;
     let stride = view.stride().map_or(elem, |s| s as u64);
     if stride < elem {
@@ -263,12 +258,7 @@ fn apply_sparse<T>(
     out: &mut [T],
     conv: &impl Fn(&[u8]) -> T,
 ) -> Result<(), Error> {
-    let Shape {
-        csize,
-        dims,
-        elem,
-        count,
-    } = shape;
+    let (csize, dims, elem, count) = (shape.csize, shape.dims, shape.elem, shape.count);
     let sat = format!("{at} (accessors[{}].sparse)", acc.index());
     let n = sparse.count() as u64;
     if n > count {

@@ -110,55 +110,6 @@ pub(crate) fn parse_extras(extras: Option<&Value>, ctx: &Ctx<'_>) -> Result<Laye
     Ok(l)
 }
 
-/// `use_dof`: Blender stores booleans of older custom properties as 0/1 integers.
-fn use_dof(key: &str, v: &Value, ctx: &Ctx<'_>) -> Result<bool, Error> {
-    Ok(match v {
-        Value::Bool(b) => *b,
-        Value::Number(n) if n.as_u64() == Some(0) => false,
-        Value::Number(n) if n.as_u64() == Some(1) => true,
-        _ => return Err(ctx.err(key, v, "expected true or false")),
-    })
-}
-
-/// `sensor_fit`: `AUTO`, `HORIZONTAL` or `VERTICAL`, in any case.
-fn sensor_fit(key: &str, v: &Value, ctx: &Ctx<'_>) -> Result<SensorFit, Error> {
-    Ok(match v.as_str().map(str::to_ascii_uppercase).as_deref() {
-        Some("AUTO") => SensorFit::Auto,
-        Some("HORIZONTAL") => SensorFit::Horizontal,
-        Some("VERTICAL") => SensorFit::Vertical,
-        _ => return Err(ctx.err(key, v, "expected \"AUTO\", \"HORIZONTAL\" or \"VERTICAL\"")),
-    })
-}
-
-/// `focus_object`: a node name, a node index or Blender's `{"name": ..., "type": "Object"}`.
-fn focus_object(key: &str, v: &Value, ctx: &Ctx<'_>) -> Result<FocusTarget, Error> {
-    Ok(match v {
-        Value::String(s) => FocusTarget::Name(s.clone()),
-        Value::Number(n) => FocusTarget::Index(
-            n.as_u64()
-                .and_then(|i| usize::try_from(i).ok())
-                .ok_or_else(|| ctx.err(key, v, "a node index must be an integer >= 0"))?,
-        ),
-        Value::Object(o) => match o.get("name") {
-            Some(Value::String(s)) => FocusTarget::Name(s.clone()),
-            _ => return Err(ctx.err(key, v, "expected {\"name\": \"...\", \"type\": \"Object\"}")),
-        },
-        _ => return Err(ctx.err(key, v, "expected a node name, index or {\"name\": ...}")),
-    })
-}
-
-/// `aperture_blades`: 0 (round) or a polygon of at least 3 blades.
-fn blades(key: &str, v: &Value, ctx: &Ctx<'_>) -> Result<u32, Error> {
-    let n = v
-        .as_f64()
-        .filter(|x| x.fract() == 0.0 && *x >= 0.0 && *x <= u32::MAX as f64)
-        .ok_or_else(|| ctx.err(key, v, "expected an integer 0 or >= 3"))? as u32;
-    if n == 1 || n == 2 {
-        return Err(ctx.err(key, v, "a polygon needs at least 3 blades (0 = round)"));
-    }
-    Ok(n)
-}
-
 /// Parses the draft `EXT_camera_physical` (metres) into Blender's units (mm for lens and sensor).
 pub(crate) fn parse_physical(ext: Option<&Value>, ctx: &Ctx<'_>) -> Result<Layer, Error> {
     let mut l = Layer::default();
@@ -213,4 +164,53 @@ pub(crate) fn parse_overrides(o: &DofOverrides, ctx: &Ctx<'_>) -> Result<Layer, 
         l.use_dof = Some(true);
     }
     Ok(l)
+}
+
+/// `use_dof`: Blender stores booleans of older custom properties as 0/1 integers.
+fn use_dof(key: &str, v: &Value, ctx: &Ctx<'_>) -> Result<bool, Error> {
+    Ok(match v {
+        Value::Bool(b) => *b,
+        Value::Number(n) if n.as_u64() == Some(0) => false,
+        Value::Number(n) if n.as_u64() == Some(1) => true,
+        _ => return Err(ctx.err(key, v, "expected true or false")),
+    })
+}
+
+/// `sensor_fit`: `AUTO`, `HORIZONTAL` or `VERTICAL`, in any case.
+fn sensor_fit(key: &str, v: &Value, ctx: &Ctx<'_>) -> Result<SensorFit, Error> {
+    Ok(match v.as_str().map(str::to_ascii_uppercase).as_deref() {
+        Some("AUTO") => SensorFit::Auto,
+        Some("HORIZONTAL") => SensorFit::Horizontal,
+        Some("VERTICAL") => SensorFit::Vertical,
+        _ => return Err(ctx.err(key, v, "expected \"AUTO\", \"HORIZONTAL\" or \"VERTICAL\"")),
+    })
+}
+
+/// `focus_object`: a node name, a node index or Blender's `{"name": ..., "type": "Object"}`.
+fn focus_object(key: &str, v: &Value, ctx: &Ctx<'_>) -> Result<FocusTarget, Error> {
+    Ok(match v {
+        Value::String(s) => FocusTarget::Name(s.clone()),
+        Value::Number(n) => FocusTarget::Index(
+            n.as_u64()
+                .and_then(|i| usize::try_from(i).ok())
+                .ok_or_else(|| ctx.err(key, v, "a node index must be an integer >= 0"))?,
+        ),
+        Value::Object(o) => match o.get("name") {
+            Some(Value::String(s)) => FocusTarget::Name(s.clone()),
+            _ => return Err(ctx.err(key, v, "expected {\"name\": \"...\", \"type\": \"Object\"}")),
+        },
+        _ => return Err(ctx.err(key, v, "expected a node name, index or {\"name\": ...}")),
+    })
+}
+
+/// `aperture_blades`: 0 (round) or a polygon of at least 3 blades.
+fn blades(key: &str, v: &Value, ctx: &Ctx<'_>) -> Result<u32, Error> {
+    let n = v
+        .as_f64()
+        .filter(|x| x.fract() == 0.0 && *x >= 0.0 && *x <= u32::MAX as f64)
+        .ok_or_else(|| ctx.err(key, v, "expected an integer 0 or >= 3"))? as u32;
+    if n == 1 || n == 2 {
+        return Err(ctx.err(key, v, "a polygon needs at least 3 blades (0 = round)"));
+    }
+    Ok(n)
 }
