@@ -4,8 +4,9 @@
 //! cargo run -p aperture-tests --example make_demo
 //! ```
 //!
-//! The bytes are a pure function of `tests/src/demo.rs`; the test `demo_scene` fails when the
-//! committed asset differs from them, so rerun this after changing the scene.
+//! The bytes are a pure function of `tests/src/demo.rs` (and `tests/src/demo/`); the test
+//! `demo_scene` fails when the committed asset differs from them, so rerun this after changing
+//! the scene.
 
 use std::path::PathBuf;
 

@@ -93,14 +93,15 @@ pub enum IndexMode {
     Indices,
 }
 
-/// The compressed copy of a GLB (JSON and BIN), and how many views it compressed.
-pub fn compress(json: &Value, bin: &[u8], index_mode: IndexMode) -> (Value, Vec<u8>, usize) {
-    let mut json = json.clone();
-    let mut bin = bin.to_vec();
-    // Per view: Some(true) = vertex data, Some(false) = triangle indices, None = mixed/other.
+/// What a buffer view holds: `Some(true)` vertex data, `Some(false)` triangle indices, `None`
+/// mixed or other data.
+type Role = Option<bool>;
+
+/// Each buffer view's role, `None` for a view no mesh uses.
+fn view_roles(json: &Value, accessors: &Value) -> Vec<Option<Role>> {
     let views = json["bufferViews"].as_array().map_or(0, Vec::len);
-    let mut role: Vec<Option<Option<bool>>> = vec![None; views];
-    let mark = |acc: &Value, vertex: bool, role: &mut Vec<Option<Option<bool>>>| {
+    let mut role: Vec<Option<Role>> = vec![None; views];
+    let mark = |acc: &Value, vertex: bool, role: &mut Vec<Option<Role>>| {
         if let Some(v) = acc["bufferView"].as_u64() {
             let r = &mut role[v as usize];
             *r = match *r {
@@ -110,7 +111,6 @@ pub fn compress(json: &Value, bin: &[u8], index_mode: IndexMode) -> (Value, Vec<
             };
         }
     };
-    let accessors = json["accessors"].clone();
     for mesh in json["meshes"].as_array().into_iter().flatten() {
         for prim in mesh["primitives"].as_array().into_iter().flatten() {
             for (_, a) in prim["attributes"].as_object().into_iter().flatten() {
@@ -126,6 +126,71 @@ pub fn compress(json: &Value, bin: &[u8], index_mode: IndexMode) -> (Value, Vec<
             }
         }
     }
+    role
+}
+
+/// A view's compressed stream with its `byteStride`, `count` and `mode`.
+type Stream = (Vec<u8>, usize, usize, &'static str);
+
+/// The vertex view `plain` compressed, if its stride is one the encoder takes and every accessor
+/// on it agrees with that stride.
+fn vertex_stream(view: &Value, users: &[&Value], plain: &[u8]) -> Option<Stream> {
+    let length = plain.len();
+    let stride = view["byteStride"]
+        .as_u64()
+        .map_or_else(|| size(users[0]), |s| s as usize);
+    if length % stride != 0
+        || users
+            .iter()
+            .any(|a| view["byteStride"].is_null() && size(a) != stride)
+    {
+        return None;
+    }
+    let s = encode_vertices(plain, stride)?;
+    Some((s, stride, length / stride, "ATTRIBUTES"))
+}
+
+/// The index view `plain` (read by its one accessor `a`) compressed, if it holds 16- or 32-bit
+/// indices and nothing else.
+fn index_stream(a: &Value, plain: &[u8], index_mode: IndexMode) -> Option<Stream> {
+    let stride = size(a);
+    let count = a["count"].as_u64().unwrap() as usize;
+    if count * stride != plain.len() || stride == 1 {
+        return None;
+    }
+    let indices: Vec<u32> = plain
+        .chunks_exact(stride)
+        .map(|c| {
+            if stride == 2 {
+                u16::from_le_bytes([c[0], c[1]]) as u32
+            } else {
+                u32::from_le_bytes(c.try_into().unwrap())
+            }
+        })
+        .collect();
+    let vertices = indices.iter().max().map_or(0, |m| *m as usize + 1);
+    Some(match index_mode {
+        IndexMode::Triangles => (
+            meshopt::encoding::encode_index_buffer(&indices, vertices).unwrap(),
+            stride,
+            count,
+            "TRIANGLES",
+        ),
+        IndexMode::Indices => (
+            meshopt::encoding::encode_index_sequence(&indices, vertices).unwrap(),
+            stride,
+            count,
+            "INDICES",
+        ),
+    })
+}
+
+/// The compressed copy of a GLB (JSON and BIN), and how many views it compressed.
+pub fn compress(json: &Value, bin: &[u8], index_mode: IndexMode) -> (Value, Vec<u8>, usize) {
+    let mut json = json.clone();
+    let mut bin = bin.to_vec();
+    let accessors = json["accessors"].clone();
+    let role = view_roles(&json, &accessors);
     let mut compressed = 0;
     for (v, r) in role.iter().enumerate() {
         let view = json["bufferViews"][v].clone();
@@ -140,59 +205,17 @@ pub fn compress(json: &Value, bin: &[u8], index_mode: IndexMode) -> (Value, Vec<
             .filter(|a| a["bufferView"].as_u64() == Some(v as u64))
             .collect();
         let plain = &bin[offset..offset + length];
-        let (stream, stride, count, mode) = match r {
-            Some(Some(true)) => {
-                let stride = view["byteStride"]
-                    .as_u64()
-                    .map_or_else(|| size(users[0]), |s| s as usize);
-                if length % stride != 0
-                    || users
-                        .iter()
-                        .any(|a| view["byteStride"].is_null() && size(a) != stride)
-                {
-                    continue;
-                }
-                let Some(s) = encode_vertices(plain, stride) else {
-                    continue;
-                };
-                (s, stride, length / stride, "ATTRIBUTES")
-            }
+        let stream = match r {
+            Some(Some(true)) => vertex_stream(&view, &users, plain),
             Some(Some(false))
                 if users.len() == 1 && users[0]["byteOffset"].as_u64().unwrap_or(0) == 0 =>
             {
-                let a = users[0];
-                let stride = size(a);
-                let count = a["count"].as_u64().unwrap() as usize;
-                if count * stride != length || stride == 1 {
-                    continue;
-                }
-                let indices: Vec<u32> = plain
-                    .chunks_exact(stride)
-                    .map(|c| {
-                        if stride == 2 {
-                            u16::from_le_bytes([c[0], c[1]]) as u32
-                        } else {
-                            u32::from_le_bytes(c.try_into().unwrap())
-                        }
-                    })
-                    .collect();
-                let vertices = indices.iter().max().map_or(0, |m| *m as usize + 1);
-                match index_mode {
-                    IndexMode::Triangles => (
-                        meshopt::encoding::encode_index_buffer(&indices, vertices).unwrap(),
-                        stride,
-                        count,
-                        "TRIANGLES",
-                    ),
-                    IndexMode::Indices => (
-                        meshopt::encoding::encode_index_sequence(&indices, vertices).unwrap(),
-                        stride,
-                        count,
-                        "INDICES",
-                    ),
-                }
+                index_stream(users[0], plain, index_mode)
             }
-            _ => continue,
+            _ => None,
+        };
+        let Some((stream, stride, count, mode)) = stream else {
+            continue;
         };
         bin[offset..offset + length].fill(0);
         while bin.len() % 4 != 0 {

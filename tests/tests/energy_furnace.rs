@@ -77,82 +77,86 @@ fn white(roughness: f32) -> Material {
     }
 }
 
-#[test]
-fn every_lobe_combination_stays_white_with_compensation() {
+/// Every lobe combination, white, at roughness `r`.
+fn lobe_cases(r: f32) -> [(&'static str, Material); 7] {
     let transmission = Some(Transmission {
         factor: 1.0,
         texture: None,
     });
+    let glass = Material {
+        transmission,
+        volume: Some(Volume {
+            thickness_factor: 1.0,
+            thickness_texture: None,
+            attenuation_distance: f32::INFINITY,
+            attenuation_color: Vec3::ONE,
+        }),
+        ..white(r)
+    };
+    [
+        (
+            "metal",
+            Material {
+                metallic_factor: 1.0,
+                ..white(r)
+            },
+        ),
+        ("dielectric", white(r)),
+        ("refractive glass", glass),
+        (
+            "thin glass",
+            Material {
+                transmission,
+                ..white(r)
+            },
+        ),
+        (
+            "coat",
+            Material {
+                clearcoat: Some(Clearcoat {
+                    factor: 1.0,
+                    texture: None,
+                    roughness_factor: r,
+                    roughness_texture: None,
+                    normal_texture: None,
+                    normal_scale: 1.0,
+                }),
+                ..white(r)
+            },
+        ),
+        (
+            "sheen",
+            Material {
+                sheen: Some(Sheen {
+                    color_factor: Vec3::ONE,
+                    color_texture: None,
+                    roughness_factor: r,
+                    roughness_texture: None,
+                }),
+                ..white(r)
+            },
+        ),
+        (
+            "anisotropic metal",
+            Material {
+                metallic_factor: 1.0,
+                anisotropy: Some(Anisotropy {
+                    strength: 0.8,
+                    rotation: 0.0,
+                    texture: None,
+                }),
+                ..white(r)
+            },
+        ),
+    ]
+}
+
+#[test]
+fn every_lobe_combination_stays_white_with_compensation() {
     let mut worst = (1.0f64, 1.0f64);
     let mut loss_without = 1.0f64;
     for r in [0.05f32, 0.25, 0.5, 0.75, 1.0] {
-        let glass = Material {
-            transmission,
-            volume: Some(Volume {
-                thickness_factor: 1.0,
-                thickness_texture: None,
-                attenuation_distance: f32::INFINITY,
-                attenuation_color: Vec3::ONE,
-            }),
-            ..white(r)
-        };
-        let cases = [
-            (
-                "metal",
-                Material {
-                    metallic_factor: 1.0,
-                    ..white(r)
-                },
-            ),
-            ("dielectric", white(r)),
-            ("refractive glass", glass),
-            (
-                "thin glass",
-                Material {
-                    transmission,
-                    ..white(r)
-                },
-            ),
-            (
-                "coat",
-                Material {
-                    clearcoat: Some(Clearcoat {
-                        factor: 1.0,
-                        texture: None,
-                        roughness_factor: r,
-                        roughness_texture: None,
-                        normal_texture: None,
-                        normal_scale: 1.0,
-                    }),
-                    ..white(r)
-                },
-            ),
-            (
-                "sheen",
-                Material {
-                    sheen: Some(Sheen {
-                        color_factor: Vec3::ONE,
-                        color_texture: None,
-                        roughness_factor: r,
-                        roughness_texture: None,
-                    }),
-                    ..white(r)
-                },
-            ),
-            (
-                "anisotropic metal",
-                Material {
-                    metallic_factor: 1.0,
-                    anisotropy: Some(Anisotropy {
-                        strength: 0.8,
-                        rotation: 0.0,
-                        texture: None,
-                    }),
-                    ..white(r)
-                },
-            ),
-        ];
-        for (name, m) in cases {
+        for (name, m) in lobe_cases(r) {
             let spp = if name.contains("glass") { 96 } else { 32 };
             let (on, off) = furnace(&m, spp);
             println!("furnace {name:<18} roughness {r:.2}: {on:.4} compensated, {off:.4} without");

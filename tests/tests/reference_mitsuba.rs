@@ -155,13 +155,9 @@ fn downsample(im: &Image, k: u32) -> Image {
     image_of(w, h, out)
 }
 
-fn measure(name: &str) -> Agreement {
-    let entry = manifest_entry(name);
-    let dir = reference_dir();
-    let gltf = dir.join(entry["gltf"].as_str().expect("gltf is a string"));
-    let exr = dir.join(entry["exr"].as_str().expect("exr is a string"));
-    let (width, height) = (as_u32(&entry, "width"), as_u32(&entry, "height"));
-    let env = match &entry["env"] {
+/// The manifest's constant environment radiance (`null`: black).
+fn env_of(name: &str, entry: &Value) -> Vec3 {
+    match &entry["env"] {
         Value::Null => Vec3::ZERO,
         Value::Array(c) => {
             let c: Vec<f32> = c
@@ -171,28 +167,17 @@ fn measure(name: &str) -> Agreement {
             Vec3::new(c[0], c[1], c[2])
         }
         other => panic!("{name}: env must be null or [r, g, b], got {other}"),
-    };
+    }
+}
 
-    let reference = read_exr(&exr).unwrap_or_else(|e| panic!("{name}: {e}"));
-    assert_eq!((reference.width, reference.height), (width, height));
-
-    let scene = aperture_scene::load(&gltf, &LoadOptions::default())
-        .unwrap_or_else(|e| panic!("{name}: {e}"));
-    // The aperture comes from the camera's extras; make sure it reached the camera.
-    let radius = scene.cameras[0].dof.effective_radius();
-    let want_radius = as_f64(&entry, "aperture_radius") as f32;
-    assert!(
-        (radius - want_radius).abs() <= 1e-6,
-        "{name}: camera aperture radius {radius}, manifest says {want_radius}"
-    );
-    let accel = build_accel(&scene, Default::default());
-    // Samples per pixel of each of our renders (manifest `test_spp`, 64: the four scenes × two
-    // seeds × 160×120 px take about 25 s in the dev profile on two cores) and the two seeds
-    // whose disagreement measures our noise.
+/// The options of our renders, one per seed: samples per pixel (manifest `test_spp`, 64: the
+/// four scenes × two seeds × 160×120 px take about 25 s in the dev profile on two cores) and
+/// the two seeds whose disagreement measures our noise.
+fn render_options(name: &str, entry: &Value) -> Vec<RenderOptions> {
     // `APERTURE_REFERENCE_SPP` raises it to look closer (the tolerances scale with the noise).
     let spp = match std::env::var("APERTURE_REFERENCE_SPP") {
         Ok(v) => v.parse().expect("APERTURE_REFERENCE_SPP is a number"),
-        Err(_) => as_u32(&entry, "test_spp"),
+        Err(_) => as_u32(entry, "test_spp"),
     };
     let seeds: Vec<u32> = entry["test_seeds"]
         .as_array()
@@ -212,28 +197,69 @@ fn measure(name: &str) -> Agreement {
         other => panic!("{name}: material_override must be null or a string, got {other}"),
     };
     let energy_compensation = entry["energy_compensation"].as_bool().unwrap_or(true);
-    let renders: Vec<Image> = seeds
+    let env = env_of(name, entry);
+    seeds
         .iter()
-        .map(|&seed| {
-            let opts = RenderOptions {
-                width,
-                height,
-                spp,
-                seed,
-                max_bounces: as_u32(&entry, "max_bounces"),
-                filter: FilterKind::Box,
-                env: aperture_render::Environment::Constant(env),
-                material_override,
-                energy_compensation,
-                ..RenderOptions::default()
-            };
-            let film =
-                render(&scene, &accel, &opts, &|_, _| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
-            assert_eq!(film.dropped_samples(), 0, "{name}: dropped samples");
-            image_of(width, height, film.to_rgba())
+        .map(|&seed| RenderOptions {
+            width: as_u32(entry, "width"),
+            height: as_u32(entry, "height"),
+            spp,
+            seed,
+            max_bounces: as_u32(entry, "max_bounces"),
+            filter: FilterKind::Box,
+            env: aperture_render::Environment::Constant(env),
+            material_override,
+            energy_compensation,
+            ..RenderOptions::default()
         })
-        .collect();
-    let (a, b) = (&renders[0], &renders[1]);
+        .collect()
+}
+
+/// Our two renders of the scene `gltf`, one per seed.
+fn render_ours(name: &str, entry: &Value, gltf: &Path) -> Vec<Image> {
+    let scene = aperture_scene::load(gltf, &LoadOptions::default())
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    // The aperture comes from the camera's extras; make sure it reached the camera.
+    let radius = scene.cameras[0].dof.effective_radius();
+    let want_radius = as_f64(entry, "aperture_radius") as f32;
+    assert!(
+        (radius - want_radius).abs() <= 1e-6,
+        "{name}: camera aperture radius {radius}, manifest says {want_radius}"
+    );
+    let accel = build_accel(&scene, Default::default());
+    render_options(name, entry)
+        .iter()
+        .map(|opts| {
+            let film =
+                render(&scene, &accel, opts, &|_, _| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(film.dropped_samples(), 0, "{name}: dropped samples");
+            image_of(opts.width, opts.height, film.to_rgba())
+        })
+        .collect()
+}
+
+fn measure(name: &str) -> Agreement {
+    let entry = manifest_entry(name);
+    let dir = reference_dir();
+    let gltf = dir.join(entry["gltf"].as_str().expect("gltf is a string"));
+    let exr = dir.join(entry["exr"].as_str().expect("exr is a string"));
+    let (width, height) = (as_u32(&entry, "width"), as_u32(&entry, "height"));
+
+    let reference = read_exr(&exr).unwrap_or_else(|e| panic!("{name}: {e}"));
+    assert_eq!((reference.width, reference.height), (width, height));
+    let renders = render_ours(name, &entry, &gltf);
+    compare(
+        name,
+        &renders[0],
+        &renders[1],
+        &reference,
+        as_f64(&entry, "reference_noise_rmse"),
+    )
+}
+
+/// Our renders `a` and `b` (and their average, written for a look) against the reference.
+fn compare(name: &str, a: &Image, b: &Image, reference: &Image, noise_ref: f64) -> Agreement {
+    let (width, height) = (reference.width, reference.height);
     let average = image_of(
         width,
         height,
@@ -249,8 +275,7 @@ fn measure(name: &str) -> Agreement {
     aperture_imageio::write_exr(&out.join(format!("{name}.exr")), &average)
         .unwrap_or_else(|e| panic!("{name}: {e}"));
 
-    let noise_ref = as_f64(&entry, "reference_noise_rmse");
-    let full = Comparison::new(a, b, &average, &reference, noise_ref);
+    let full = Comparison::new(a, b, &average, reference, noise_ref);
     // Mitsuba's independent sampler makes its pixel errors independent, so a k×k block mean
     // carries exactly 1/k of the per-pixel noise RMSE; ours is measured, as at full size.
     let ds = |im: &Image| downsample(im, BLOCK);
@@ -258,11 +283,11 @@ fn measure(name: &str) -> Agreement {
         &ds(a),
         &ds(b),
         &ds(&average),
-        &ds(&reference),
+        &ds(reference),
         noise_ref / f64::from(BLOCK),
     );
     let ours = metrics::mean_rgb(&average).expect("finite");
-    let theirs = metrics::mean_rgb(&reference).expect("finite");
+    let theirs = metrics::mean_rgb(reference).expect("finite");
     let ratios = std::array::from_fn(|c| ours[c] / theirs[c]);
     // The scenes are asymmetric: against the left-right mirrored reference the error must be far
     // above the noise, so a mirrored camera frame (Mitsuba's +X points left) cannot pass.

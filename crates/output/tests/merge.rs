@@ -189,6 +189,66 @@ fn rel_px(a: &[f32], b: &[f32]) -> f64 {
     }
 }
 
+/// The largest relative difference between a merge and the one render, and where: averaged
+/// passes to rounding; per-pixel passes (depth, position) and Cryptomatte IDs exactly (asserted).
+fn worst_difference(merged: &Image, whole: &Image) -> (f64, String) {
+    let mut worst = (0.0f64, String::new());
+    let mut note = |d: f64, what: &str| {
+        if d > worst.0 {
+            worst = (d, what.to_string());
+        }
+    };
+    for (m, w) in merged.rgba.iter().zip(&whole.rgba) {
+        for c in 0..4 {
+            note(rel(m[c], w[c]), "beauty");
+        }
+    }
+    for layer in &whole.layers {
+        let m = &merged.layer(&layer.name).unwrap().data;
+        if layer.name.starts_with("Crypto") {
+            for (i, (a, b)) in m.iter().zip(&layer.data).enumerate() {
+                if i % 2 == 0 {
+                    assert_eq!(a.to_bits(), b.to_bits(), "{} id at {i}", layer.name);
+                } else {
+                    note(rel(*a, *b), &layer.name);
+                }
+            }
+        } else if matches!(layer.name.as_str(), "Depth" | "Position") {
+            assert!(bits(m) == bits(&layer.data), "{}", layer.name);
+        } else {
+            let n = layer.channels.len();
+            for (a, b) in m.chunks_exact(n).zip(layer.data.chunks_exact(n)) {
+                note(rel_px(a, b), &layer.name);
+            }
+        }
+    }
+    worst
+}
+
+/// The merged light passes still add up to the merged beauty (as each render's do).
+fn assert_light_passes_add_up(merged: &Image) {
+    let rgb = |name: &str, p: usize| {
+        let l = merged.layer(name).unwrap();
+        Vec3::from_slice(&l.data[p * 3..p * 3 + 3])
+    };
+    let mut lit = 0;
+    for (p, px) in merged.rgba.iter().enumerate() {
+        let mut sum = rgb("Emission", p) + rgb("Environment", p);
+        for lobe in ["Diffuse", "Glossy", "Transmission"] {
+            let colour = rgb(&format!("{lobe} Color"), p);
+            sum +=
+                (rgb(&format!("{lobe} Direct"), p) + rgb(&format!("{lobe} Indirect"), p)) * colour;
+        }
+        let beauty = Vec3::new(px[0], px[1], px[2]);
+        assert!(
+            (sum - beauty).abs().max_element() <= 1e-4 * beauty.max_element().max(1.0),
+            "pixel {p}: passes {sum} vs beauty {beauty}"
+        );
+        lit += usize::from(beauty.max_element() > 0.0);
+    }
+    assert!(lit > 100);
+}
+
 #[test]
 fn sample_batches_merge_into_the_longer_render() {
     let dir = Scratch::new("batches");
@@ -230,64 +290,14 @@ fn sample_batches_merge_into_the_longer_render() {
         .iter()
         .all(|&c| c == 24.0));
 
-    // Averaged passes to rounding; per-pixel passes and Cryptomatte IDs exactly.
-    let mut worst = (0.0f64, String::new());
-    let mut note = |d: f64, what: &str| {
-        if d > worst.0 {
-            worst = (d, what.to_string());
-        }
-    };
-    for (m, w) in merged.rgba.iter().zip(&whole.rgba) {
-        for c in 0..4 {
-            note(rel(m[c], w[c]), "beauty");
-        }
-    }
-    for layer in &whole.layers {
-        let m = &merged.layer(&layer.name).unwrap().data;
-        if layer.name.starts_with("Crypto") {
-            for (i, (a, b)) in m.iter().zip(&layer.data).enumerate() {
-                if i % 2 == 0 {
-                    assert_eq!(a.to_bits(), b.to_bits(), "{} id at {i}", layer.name);
-                } else {
-                    note(rel(*a, *b), &layer.name);
-                }
-            }
-        } else if matches!(layer.name.as_str(), "Depth" | "Position") {
-            assert!(bits(m) == bits(&layer.data), "{}", layer.name);
-        } else {
-            let n = layer.channels.len();
-            for (a, b) in m.chunks_exact(n).zip(layer.data.chunks_exact(n)) {
-                note(rel_px(a, b), &layer.name);
-            }
-        }
-    }
+    let worst = worst_difference(&merged, &whole);
     eprintln!(
         "largest relative difference, 3 batches vs one render: {:.3e} ({})",
         worst.0, worst.1
     );
     assert!(worst.0 < 1e-6, "{worst:?}");
 
-    // The merged light passes still add up to the merged beauty (as each render's do).
-    let rgb = |name: &str, p: usize| {
-        let l = merged.layer(name).unwrap();
-        Vec3::from_slice(&l.data[p * 3..p * 3 + 3])
-    };
-    let mut lit = 0;
-    for (p, px) in merged.rgba.iter().enumerate() {
-        let mut sum = rgb("Emission", p) + rgb("Environment", p);
-        for lobe in ["Diffuse", "Glossy", "Transmission"] {
-            let colour = rgb(&format!("{lobe} Color"), p);
-            sum +=
-                (rgb(&format!("{lobe} Direct"), p) + rgb(&format!("{lobe} Indirect"), p)) * colour;
-        }
-        let beauty = Vec3::new(px[0], px[1], px[2]);
-        assert!(
-            (sum - beauty).abs().max_element() <= 1e-4 * beauty.max_element().max(1.0),
-            "pixel {p}: passes {sum} vs beauty {beauty}"
-        );
-        lit += usize::from(beauty.max_element() > 0.0);
-    }
-    assert!(lit > 100);
+    assert_light_passes_add_up(&merged);
 }
 
 #[test]
@@ -367,9 +377,10 @@ fn refused(dir: &Scratch, parts: &[PathBuf], culprit: &str) -> MergeError {
     err
 }
 
-#[test]
-fn merge_refuses_parts_that_do_not_belong_together() {
-    let dir = Scratch::new("refusals");
+/// A small render of the passes scene (4 samples, compositing passes) in three tiles, in a
+/// new scratch folder: the scene, its options, the folder and the tiles.
+fn refusal_tiles(name: &str) -> (Scene, RenderOptions, Scratch, Vec<PathBuf>) {
+    let dir = Scratch::new(name);
     let s = test_scenes::passes();
     let small = RenderOptions {
         spp: 4,
@@ -377,7 +388,13 @@ fn merge_refuses_parts_that_do_not_belong_together() {
         ..opts()
     };
     let tiles = render_tiles(&s, &small, &dir, 3);
+    (s, small, dir, tiles)
+}
 
+/// Parts of another scene, pose or options are refused, each named.
+#[test]
+fn merge_refuses_parts_that_do_not_belong_together() {
+    let (s, small, dir, tiles) = refusal_tiles("refusals");
     // Another scene.
     let mut other = s.clone();
     other.source_hash ^= 1;
@@ -416,7 +433,12 @@ fn merge_refuses_parts_that_do_not_belong_together() {
         "seed-7.exr",
     );
     assert!(matches!(err, MergeError::OtherOptions { .. }), "{err}");
+}
 
+/// Overlapping samples or windows and missing tiles or batches are refused, each named.
+#[test]
+fn merge_refuses_overlaps_and_gaps() {
+    let (s, small, dir, tiles) = refusal_tiles("refusals-overlaps");
     // Overlapping sample ranges: 0..4 and 2..6.
     let overlap = dir.path("offset-2.exr");
     let o = RenderOptions {
@@ -455,7 +477,12 @@ fn merge_refuses_parts_that_do_not_belong_together() {
         matches!(err, MergeError::OverlappingRegions { .. }),
         "{err}"
     );
+}
 
+/// With --allow-partial, a merge with a tile missing writes what there is.
+#[test]
+fn partial_merge_leaves_missing_tiles_empty() {
+    let (_, _, dir, tiles) = refusal_tiles("refusals-partial");
     // With --allow-partial, what there is: the bounding box, uncovered pixels empty.
     let out = dir.path("partial.exr");
     let partial = MergeOptions {

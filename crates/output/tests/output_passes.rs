@@ -11,10 +11,9 @@ use aperture_render::{
 use aperture_scene::{Material, Scene};
 use glam::{Affine3A, Vec3};
 
-/// [`test_scenes::passes`] with glass: a refractive ball (with a volume), a thin-walled pane and a
-/// coated ball with sheen, so the Transmission passes fill.
-fn glass_scene() -> Scene {
-    let mut s = test_scenes::passes();
+/// The glass scene's materials: a refractive glass with a volume, a thin-walled pane and a
+/// coated velvet with sheen.
+fn glass_materials() -> [Material; 3] {
     let transmission = Some(aperture_scene::Transmission {
         factor: 1.0,
         texture: None,
@@ -62,8 +61,15 @@ fn glass_scene() -> Scene {
         }),
         ..Material::default()
     };
+    [glass, pane, velvet]
+}
+
+/// [`test_scenes::passes`] with glass: a refractive ball (with a volume), a thin-walled pane and a
+/// coated ball with sheen, so the Transmission passes fill.
+fn glass_scene() -> Scene {
+    let mut s = test_scenes::passes();
     let first = s.materials.len() as u32;
-    s.materials.extend([glass, pane, velvet]);
+    s.materials.extend(glass_materials());
     let place = |mesh: aperture_scene::Mesh, scale: f32, t: Vec3| {
         (
             mesh,

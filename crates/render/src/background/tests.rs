@@ -284,11 +284,9 @@ fn grounds_and_walls_through_the_lens_plane() {
     );
 }
 
-#[test]
-fn pixels_outside_the_cut_see_no_triangle() {
-    // A scene as a BVH cuts it: a ground reaching behind the camera, objects on it, one far
-    // away. Every ray of a pixel outside the union of the cut's rectangles misses everything.
-    use aperture_accel::{BvhQuality, InstanceInput, MeshInput, Ray};
+/// A scene as a BVH cuts it: a ground reaching behind the camera, objects on it, one far away.
+fn cut_scene() -> aperture_accel::Accel {
+    use aperture_accel::{BvhQuality, InstanceInput, MeshInput};
     let (mut p, mut t) = (Vec::new(), Vec::new());
     for j in 0..=8u32 {
         for i in 0..=8u32 {
@@ -334,37 +332,50 @@ fn pixels_outside_the_cut_see_no_triangle() {
         at(0, 2.0, 4.0, 3.0, -15.0),
         at(0, 1.0, -8.0, 6.0, -25.0),
     ];
-    let accel = aperture_accel::Accel::build(&meshes, &instances, BvhQuality::Medium);
+    aperture_accel::Accel::build(&meshes, &instances, BvhQuality::Medium)
+}
+
+/// A random thin-lens camera above the cut scene's ground; aperture radius by `case`.
+fn cut_camera(rng: &mut Rng, case: usize) -> Camera {
+    let (width, height) = (48, 32);
+    Camera {
+        world_from_camera: Affine3A::from_rotation_translation(
+            Quat::from_euler(
+                glam::EulerRot::YXZ,
+                rng.range(-0.4, 0.4),
+                rng.range(-0.3, 0.05),
+                0.0,
+            ),
+            Vec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(0.8, 2.5),
+                rng.range(4.0, 8.0),
+            ),
+        ),
+        model: CameraModel::ThinLens {
+            tan_half_x: 0.6,
+            tan_half_y: 0.4,
+        },
+        aperture: Aperture::Disc {
+            radius: [0.0, 0.1, 0.4][case % 3],
+            ratio: 1.0,
+        },
+        focus_distance: rng.range(2.0, 12.0),
+        width,
+        height,
+    }
+}
+
+#[test]
+fn pixels_outside_the_cut_see_no_triangle() {
+    // Every ray of a pixel outside the union of the cut's rectangles misses everything.
+    use aperture_accel::Ray;
+    let accel = cut_scene();
     let mut rng = Rng(99);
     let (mut culled, mut total) = (0usize, 0usize);
     for case in 0..24 {
-        let (width, height) = (48, 32);
-        let cam = Camera {
-            world_from_camera: Affine3A::from_rotation_translation(
-                Quat::from_euler(
-                    glam::EulerRot::YXZ,
-                    rng.range(-0.4, 0.4),
-                    rng.range(-0.3, 0.05),
-                    0.0,
-                ),
-                Vec3::new(
-                    rng.range(-1.0, 1.0),
-                    rng.range(0.8, 2.5),
-                    rng.range(4.0, 8.0),
-                ),
-            ),
-            model: CameraModel::ThinLens {
-                tan_half_x: 0.6,
-                tan_half_y: 0.4,
-            },
-            aperture: Aperture::Disc {
-                radius: [0.0, 0.1, 0.4][case % 3],
-                ratio: 1.0,
-            },
-            focus_distance: rng.range(2.0, 12.0),
-            width,
-            height,
-        };
+        let cam = cut_camera(&mut rng, case);
+        let (width, height) = (cam.width, cam.height);
         let boxes = accel.cover(64);
         let mask = scene_pixels(&cam, &boxes, 0.5);
         for y in 0..height {
