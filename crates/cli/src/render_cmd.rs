@@ -2,11 +2,7 @@
 
 use crate::progress::Progress;
 use crate::render_args::RenderArgs;
-use crate::render_opts::{
-    bvh_quality, camera_index, check_split_and_spp, environment, frame_format, image_part,
-    image_size, load_options, memory_budget, output_is_png, passes, png_options, render_options,
-    usage_error,
-};
+use crate::render_opts::{after_load, before_load, frame_format, png_options, usage_error};
 use crate::render_summary::print_summary;
 use anyhow::Context as _;
 use aperture_render::RenderOptions;
@@ -18,95 +14,47 @@ use std::time::Instant;
 #[error("interrupted: {0} holds the samples taken so far (--save-partial)")]
 pub struct Interrupted(pub String);
 
-/// Checks the film and file of a `width`×`height` render against the memory and disk the job
-/// has, printing the warnings; an error says what it needs and what there is.
-fn check_footprint(
-    args: &RenderArgs,
-    opts: &RenderOptions,
-    exr: &aperture_output::ExrOptions,
-    budget: &aperture_budget::MemoryBudget,
-) -> anyhow::Result<()> {
-    let kind = if is_png(&args.output) {
-        aperture_output::OutputKind::Png { sixteen_bit: false }
-    } else {
-        aperture_output::OutputKind::Exr
-    };
-    for w in aperture_output::check_output(opts, kind, exr, &args.output, budget)? {
-        eprintln!("warning: {w}");
-    }
-    Ok(())
-}
-
-fn is_png(path: &std::path::Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("png"))
-}
-
 /// Runs `aperture render`.
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
-    let png_out = output_is_png(&args);
-    let budget = memory_budget(&args);
-    let load = load_options(&args, budget);
-    let exr = aperture_output::ExrOptions {
-        half: args.half,
-        save_partial: args.save_partial,
-        ..Default::default()
-    };
-    let passes = passes(&args);
-    if let (Some(width), Some(height)) = (args.width, args.height) {
-        // Both sides known: checked before the scene is read.
-        let early = RenderOptions {
-            width,
-            height,
-            passes,
-            ..render_options(&args)
-        };
-        check_footprint(&args, &early, &exr, &budget)?;
-    }
+    let before = before_load(&args)?;
     let t_load = Instant::now();
-    let (animated, scene) = load_posed(&args, &load)?;
-    let camera = camera_index(&args, &scene);
-    let (width, height) = image_size(&args, &scene.cameras[camera]);
-    let quality = bvh_quality(&args, &scene, width, height);
-    check_split_and_spp(&args);
-    let part = image_part(&args, width, height, png_out);
-    let opts = RenderOptions {
-        camera,
-        width,
-        height,
-        passes,
-        env: environment(&args, budget.limit)?,
-        cancel: crate::interrupt::install()?,
-        ..render_options(&args)
-    };
-    check_footprint(&args, &opts, &exr, &budget)?;
+    let (animated, scene) = load_posed(&args, &before.load)?;
+    let plan = after_load(&args, &before, &scene)?;
 
     let pool = crate::workers::worker_pool(args.threads)?;
-    // --region/--tile apply to every frame of a sequence too.
-    let exr = aperture_output::ExrOptions {
-        region: part.map(|p| p.window),
-        tile: part.and_then(|p| p.tile),
-        ..exr
-    };
     if let Some(frames) = args.frames {
-        let format = frame_format(&args, png_out, exr);
-        return crate::frames::run(&args, &animated, frames, format, &opts, quality, &pool);
+        let format = frame_format(&args, before.png_out, plan.exr);
+        return crate::frames::run(
+            &args,
+            &animated,
+            frames,
+            format,
+            &plan.opts,
+            plan.quality,
+            &pool,
+        );
     }
     let hints = aperture_render::SceneHints::new(&animated, &scene);
     drop(animated);
     let (summary, load_secs) = pool.install(|| -> anyhow::Result<_> {
         // The same structure a sequence builds for this frame, so their images agree bit for bit.
-        let accel = aperture_render::build_frame_accel(&scene, quality, &hints, None);
+        let accel = aperture_render::build_frame_accel(&scene, plan.quality, &hints, None);
         let load_secs = t_load.elapsed().as_secs_f64();
-        let summary = write_image(&args, &scene, &accel, &opts, &exr, png_out)?;
+        let summary = write_image(&args, &scene, &accel, &plan.opts, &plan.exr, before.png_out)?;
         Ok((summary, load_secs))
     })?;
 
-    if opts.cancel.is_cancelled() {
+    if plan.opts.cancel.is_cancelled() {
         return Err(Interrupted(args.output.display().to_string()).into());
     }
-    print_summary(&args, &opts, &summary, load_secs, quality, part);
+    print_summary(
+        &args,
+        &plan.opts,
+        &summary,
+        load_secs,
+        plan.quality,
+        plan.part,
+    );
     Ok(())
 }
 

@@ -21,8 +21,119 @@ pub(crate) fn usage_error(msg: impl std::fmt::Display) -> ! {
     cmd.error(ErrorKind::InvalidValue, msg).exit()
 }
 
+/// What the arguments give before the scene is read: the output kind, the memory budget, the
+/// loader's options, the EXR writer's options and the passes.
+pub(crate) struct BeforeLoad {
+    pub png_out: bool,
+    pub budget: aperture_budget::MemoryBudget,
+    pub load: LoadOptions,
+    pub exr: aperture_output::ExrOptions,
+    pub passes: aperture_render::PassSet,
+}
+
+/// The arguments read before the scene: usage errors first, and the film and file checked
+/// against the machine when both sides of the image are given.
+pub(crate) fn before_load(args: &RenderArgs) -> anyhow::Result<BeforeLoad> {
+    let png_out = output_is_png(args);
+    let budget = memory_budget(args);
+    let load = load_options(args, budget);
+    let exr = aperture_output::ExrOptions {
+        half: args.half,
+        save_partial: args.save_partial,
+        ..Default::default()
+    };
+    let passes = passes(args);
+    if let (Some(width), Some(height)) = (args.width, args.height) {
+        // Both sides known: checked before the scene is read.
+        let early = RenderOptions {
+            width,
+            height,
+            passes,
+            ..render_options(args)
+        };
+        check_footprint(args, &early, &exr, &budget)?;
+    }
+    Ok(BeforeLoad {
+        png_out,
+        budget,
+        load,
+        exr,
+        passes,
+    })
+}
+
+/// What the arguments ask of the loaded scene: the render's options, the EXR writer's (with the
+/// part of the image), the BVH quality and the part.
+pub(crate) struct RenderPlan {
+    pub opts: RenderOptions,
+    pub exr: aperture_output::ExrOptions,
+    pub quality: aperture_accel::BvhQuality,
+    pub part: Option<crate::split_args::ImagePart>,
+}
+
+/// The arguments read against the loaded scene (camera, image size, BVH quality, the part of the
+/// image, the environment), checked against the machine's memory and disk.
+pub(crate) fn after_load(
+    args: &RenderArgs,
+    before: &BeforeLoad,
+    scene: &aperture_scene::Scene,
+) -> anyhow::Result<RenderPlan> {
+    let camera = camera_index(args, scene);
+    let (width, height) = image_size(args, &scene.cameras[camera]);
+    let quality = bvh_quality(args, scene, width, height);
+    check_split_and_spp(args);
+    let part = image_part(args, width, height, before.png_out);
+    let opts = RenderOptions {
+        camera,
+        width,
+        height,
+        passes: before.passes,
+        env: environment(args, before.budget.limit)?,
+        cancel: crate::interrupt::install()?,
+        ..render_options(args)
+    };
+    check_footprint(args, &opts, &before.exr, &before.budget)?;
+    // --region/--tile apply to every frame of a sequence too.
+    let exr = aperture_output::ExrOptions {
+        region: part.map(|p| p.window),
+        tile: part.and_then(|p| p.tile),
+        ..before.exr
+    };
+    Ok(RenderPlan {
+        opts,
+        exr,
+        quality,
+        part,
+    })
+}
+
+/// Checks the film and file of a `width`×`height` render against the memory and disk the job
+/// has, printing the warnings; an error says what it needs and what there is.
+fn check_footprint(
+    args: &RenderArgs,
+    opts: &RenderOptions,
+    exr: &aperture_output::ExrOptions,
+    budget: &aperture_budget::MemoryBudget,
+) -> anyhow::Result<()> {
+    let kind = if is_png(&args.output) {
+        aperture_output::OutputKind::Png { sixteen_bit: false }
+    } else {
+        aperture_output::OutputKind::Exr
+    };
+    for w in aperture_output::check_output(opts, kind, exr, &args.output, budget)? {
+        eprintln!("warning: {w}");
+    }
+    Ok(())
+}
+
+fn is_png(path: &std::path::Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"))
+}
+
 /// Whether the output is a PNG (else an EXR); any other extension is a usage error.
-pub(crate) fn output_is_png(args: &RenderArgs) -> bool {
+fn output_is_png(args: &RenderArgs) -> bool {
     let ext = args
         .output
         .extension()
@@ -39,7 +150,7 @@ pub(crate) fn output_is_png(args: &RenderArgs) -> bool {
 }
 
 /// `--max-memory`, else what the machine (or the job's limit) has.
-pub(crate) fn memory_budget(args: &RenderArgs) -> aperture_budget::MemoryBudget {
+fn memory_budget(args: &RenderArgs) -> aperture_budget::MemoryBudget {
     match args.max_memory {
         Some(bytes) => aperture_budget::MemoryBudget::fixed(bytes),
         None => aperture_budget::MemoryBudget::from_system(),
@@ -47,7 +158,7 @@ pub(crate) fn memory_budget(args: &RenderArgs) -> aperture_budget::MemoryBudget 
 }
 
 /// `--passes`, with the sample count when `--samples-pass` or `--save-partial` asks for it.
-pub(crate) fn passes(args: &RenderArgs) -> aperture_render::PassSet {
+fn passes(args: &RenderArgs) -> aperture_render::PassSet {
     match args.samples_pass || args.save_partial {
         true => args.passes.with(Pass::SampleCount),
         false => args.passes,
@@ -56,7 +167,7 @@ pub(crate) fn passes(args: &RenderArgs) -> aperture_render::PassSet {
 
 /// `--region`/`--tile` as the part of the `width`×`height` image to render; they need EXR
 /// output.
-pub(crate) fn image_part(
+fn image_part(
     args: &RenderArgs,
     width: u32,
     height: u32,
@@ -91,7 +202,7 @@ pub(crate) fn frame_format(
 }
 
 /// What the loader needs of the arguments.
-pub(crate) fn load_options(
+fn load_options(
     args: &RenderArgs,
     memory: aperture_budget::MemoryBudget,
 ) -> LoadOptions {
@@ -113,7 +224,7 @@ pub(crate) fn load_options(
 }
 
 /// `--camera` (a name, else an index) as an index into the scene's cameras.
-pub(crate) fn camera_index(args: &RenderArgs, scene: &aperture_scene::Scene) -> usize {
+fn camera_index(args: &RenderArgs, scene: &aperture_scene::Scene) -> usize {
     match &args.camera {
         None => 0,
         Some(c) => find_camera(c, scene).unwrap_or_else(|e| usage_error(e)),
@@ -142,7 +253,7 @@ pub(crate) fn find_camera(c: &str, scene: &aperture_scene::Scene) -> Result<usiz
 }
 
 /// `--width`/`--height`, the missing side (or both) from the camera's aspect.
-pub(crate) fn image_size(args: &RenderArgs, cam: &aperture_scene::Camera) -> (u32, u32) {
+fn image_size(args: &RenderArgs, cam: &aperture_scene::Camera) -> (u32, u32) {
     match (args.width, args.height) {
         (Some(w), Some(h)) => (w, h),
         (Some(w), None) => (w, aperture_render::default_height(cam, w)),
@@ -156,7 +267,7 @@ pub(crate) fn image_size(args: &RenderArgs, cam: &aperture_scene::Camera) -> (u3
 }
 
 /// `--bvh-quality`; `auto` chooses from the triangles and the samples to trace.
-pub(crate) fn bvh_quality(
+fn bvh_quality(
     args: &RenderArgs,
     scene: &aperture_scene::Scene,
     width: u32,
@@ -174,7 +285,7 @@ pub(crate) fn bvh_quality(
 }
 
 /// Combinations of sample counts and splitting flags that cannot work: usage errors.
-pub(crate) fn check_split_and_spp(args: &RenderArgs) {
+fn check_split_and_spp(args: &RenderArgs) {
     if args.min_spp.is_some_and(|m| m > args.spp) {
         usage_error(format!(
             "invalid value '{}' for '--min-spp': must be at most --spp ({})",
@@ -198,7 +309,7 @@ pub(crate) fn check_split_and_spp(args: &RenderArgs) {
 
 /// The render options the arguments give, less the image size, camera, passes, environment and
 /// cancellation (which need the scene or the machine).
-pub(crate) fn render_options(args: &RenderArgs) -> RenderOptions {
+fn render_options(args: &RenderArgs) -> RenderOptions {
     RenderOptions {
         adaptive: args
             .noise_threshold
@@ -229,7 +340,7 @@ pub(crate) fn render_options(args: &RenderArgs) -> RenderOptions {
 }
 
 /// `--env`, `--env-rotation`, `--env-strength`; an image is held to `max_bytes`.
-pub(crate) fn environment(args: &RenderArgs, max_bytes: u64) -> anyhow::Result<Environment> {
+fn environment(args: &RenderArgs, max_bytes: u64) -> anyhow::Result<Environment> {
     Ok(match &args.env {
         None => Environment::Constant(Vec3::ZERO),
         Some(EnvArg::Color(c)) => Environment::Constant(*c * args.env_strength),
