@@ -75,7 +75,7 @@ pub(crate) fn view_bytes<'a>(
             reason: "buffer missing".into(),
         })?;
     let start = view.offset() as u64;
-    let end = start + view.length() as u64;
+    let end = start.saturating_add(view.length() as u64);
     if end > buffer.len() as u64 {
         return Err(Error::OutOfBounds {
             at,
@@ -189,7 +189,7 @@ fn read<T: Copy + Default>(
             } else {
                 (count - 1)
                     .checked_mul(stride)
-                    .and_then(|x| x.checked_add(offset + elem))
+                    .and_then(|x| x.checked_add(offset.checked_add(elem)?))
                     .unwrap_or(u64::MAX)
             };
             if needed > bytes.len() as u64 {
@@ -232,7 +232,7 @@ fn read<T: Copy + Default>(
         };
         let isize = component_size(itype) as u64;
         let ibytes = view_bytes(&indices.view(), buffers)?;
-        let ineeded = indices.offset() as u64 + n * isize;
+        let ineeded = (indices.offset() as u64).saturating_add(n * isize);
         if ineeded > ibytes.len() as u64 {
             return Err(Error::OutOfBounds {
                 at: format!("{sat}.indices"),
@@ -242,7 +242,7 @@ fn read<T: Copy + Default>(
         }
         let values = sparse.values();
         let vbytes = view_bytes(&values.view(), buffers)?;
-        let vneeded = values.offset() as u64 + n * elem;
+        let vneeded = (values.offset() as u64).saturating_add(n * elem);
         if vneeded > vbytes.len() as u64 {
             return Err(Error::OutOfBounds {
                 at: format!("{sat}.values"),
