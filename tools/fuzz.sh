@@ -14,13 +14,14 @@
 # -set_cover_merge=1 keeps a smallest set of inputs with the same coverage; inputs above
 # 16 KiB are left out; the seed-* files stay).
 #
-# Needs the nightly toolchain and cargo-fuzz (`cargo install cargo-fuzz`). CI does not fuzz:
-# it replays the committed corpus on stable (fuzz/harness/tests/corpus_replay.rs).
+# Needs the nightly toolchain and cargo-fuzz (`cargo install cargo-fuzz`). CI runs every target
+# for 20 s (tools/fuzz-smoke.sh) and replays the committed corpus on stable
+# (fuzz/harness/tests/corpus_replay.rs); run this before a change to a decoder lands.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 if [[ $# -lt 2 ]]; then
-    sed -n 2,18p "$0" | sed 's/^# \{0,1\}//'
+    sed -n 2,19p "$0" | sed 's/^# \{0,1\}//'
     exit 2
 fi
 target=$1

@@ -80,9 +80,9 @@ pub fn decode_env_image(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Ima
 }
 
 fn check_size(path: &Path, width: u32, height: u32, max_bytes: u64) -> Result<(), Error> {
-    // Saturating: u32 × u32 × 28 overflows u64 for the largest sizes a header can claim.
-    let needed = (u64::from(width) * u64::from(height)).saturating_mul(BYTES_PER_TEXEL);
-    if needed > max_bytes {
+    // u128: u32 × u32 × 28 overflows u64 for the largest sizes a header can claim.
+    let needed = u128::from(width) * u128::from(height) * u128::from(BYTES_PER_TEXEL);
+    if needed > u128::from(max_bytes) {
         return Err(Error::TooLarge {
             path: path.to_path_buf(),
             width,

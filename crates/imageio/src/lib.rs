@@ -22,16 +22,18 @@
 //!
 //! Every writer is atomic: the file appears whole, under its final name, or not at all.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 mod atomic;
 mod env;
+mod error;
 mod exr;
 pub mod metrics;
 mod png;
 pub mod view;
 
 pub use crate::env::{decode_env_image, read_env_image, EnvFormat};
+pub use crate::error::{Error, NameKind};
 pub use crate::exr::{
     decode_exr, decode_exr_within, encode_exr, read_exr, read_exr_header, write_exr,
     write_exr_streamed, ChannelSpec, ExrHeader, ExrLayout, LateValues, RowWriter,
@@ -324,158 +326,6 @@ impl Default for PngOptions {
     }
 }
 
-/// What kind of name an [`Error::InvalidName`] is about.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum NameKind {
-    /// A layer name.
-    Layer,
-    /// A channel name (within a layer, or the full `layer.channel`).
-    Channel,
-    /// A metadata key.
-    Metadata,
-}
-
-impl std::fmt::Display for NameKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            NameKind::Layer => "layer",
-            NameKind::Channel => "channel",
-            NameKind::Metadata => "metadata key",
-        })
-    }
-}
-
-/// Errors of image input and output.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum Error {
-    /// The extension is neither `.exr` nor `.png`.
-    #[error("{path}: unknown image format (use .exr or .png)")]
-    UnknownFormat {
-        /// The offending path.
-        path: PathBuf,
-    },
-    /// Reading or writing failed.
-    #[error("{path}: {message}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// What went wrong.
-        message: String,
-    },
-    /// The image has no pixels; neither EXR nor PNG can hold that.
-    #[error("empty image ({width}x{height})")]
-    EmptyImage {
-        /// Width.
-        width: u32,
-        /// Height.
-        height: u32,
-    },
-    /// A pixel buffer does not have the size `width * height` (times channels) promises.
-    #[error("{what}: {found} values, expected {expected}")]
-    BufferSize {
-        /// Which buffer (`rgba`, `layer 0 (`depth`)`).
-        what: String,
-        /// Values expected.
-        expected: usize,
-        /// Values found.
-        found: usize,
-    },
-    /// A layer, channel or metadata name cannot be written.
-    #[error("{kind} `{name}`: {reason}")]
-    InvalidName {
-        /// What the name names.
-        kind: NameKind,
-        /// The name.
-        name: String,
-        /// Why it is refused.
-        reason: &'static str,
-    },
-    /// An option is out of range.
-    #[error("option {option} = {value}: {reason}")]
-    InvalidOption {
-        /// The option (`exposure`).
-        option: &'static str,
-        /// Its value, printed.
-        value: String,
-        /// Why it is refused.
-        reason: &'static str,
-    },
-    /// The EXR file is damaged, or the EXR encoder refused the data.
-    #[error("{path}: EXR: {message}")]
-    Exr {
-        /// The file.
-        path: PathBuf,
-        /// The decoder's or encoder's message.
-        message: String,
-    },
-    /// The EXR file is valid but holds something this reader does not handle.
-    #[error("{path}: unsupported EXR: {what}")]
-    UnsupportedExr {
-        /// The file.
-        path: PathBuf,
-        /// What is not supported.
-        what: String,
-    },
-    /// The EXR file has no beauty: no `R`,`G`,`B` (nor `Y`) channels.
-    #[error("{path}: no R, G, B (or Y) channels; channels are: {channels}")]
-    NoBeauty {
-        /// The file.
-        path: PathBuf,
-        /// The channels the file has, comma-separated.
-        channels: String,
-    },
-    /// The PNG encoder failed.
-    #[error("{path}: PNG: {message}")]
-    Png {
-        /// The file.
-        path: PathBuf,
-        /// The encoder's message.
-        message: String,
-    },
-    /// A Radiance HDR (or other non-EXR) image could not be decoded.
-    #[error("{path}: {message}")]
-    Decode {
-        /// The file.
-        path: PathBuf,
-        /// The decoder's message.
-        message: String,
-    },
-    /// Decoding the image would take more memory than allowed.
-    #[error("{path}: a {width}x{height} image needs {} decoded, more than the {} allowed", human(*.needed), human(*.limit))]
-    TooLarge {
-        /// The file.
-        path: PathBuf,
-        /// Width the file claims.
-        width: u32,
-        /// Height the file claims.
-        height: u32,
-        /// Bytes decoding needs.
-        needed: u64,
-        /// Bytes allowed.
-        limit: u64,
-    },
-    /// Two images compared by a metric differ in size.
-    #[error("images differ in size: {left:?} vs {right:?}")]
-    SizeMismatch {
-        /// (width, height) of the first image.
-        left: (u32, u32),
-        /// (width, height) of the second image.
-        right: (u32, u32),
-    },
-}
-
-/// Bytes in words for errors ("1.2 GB"), decimal units.
-fn human(bytes: u64) -> String {
-    match bytes {
-        0..1000 => format!("{bytes} B"),
-        1000..1_000_000 => format!("{:.1} kB", bytes as f64 / 1e3),
-        1_000_000..1_000_000_000 => format!("{:.1} MB", bytes as f64 / 1e6),
-        _ => format!("{:.1} GB", bytes as f64 / 1e9),
-    }
-}
-
 /// The formats [`write_image`] chooses between.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
@@ -515,92 +365,4 @@ pub fn write_image(path: &Path, image: &Image, png: &PngOptions) -> Result<(), E
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn format_by_extension_is_case_insensitive() {
-        assert_eq!(Format::from_path("a/b.EXR".as_ref()).unwrap(), Format::Exr);
-        assert_eq!(Format::from_path("b.Png".as_ref()).unwrap(), Format::Png);
-        for bad in ["b.jpg", "b", "exr", "b.exr.tmp", ".png.x"] {
-            assert!(
-                matches!(
-                    Format::from_path(bad.as_ref()),
-                    Err(Error::UnknownFormat { .. })
-                ),
-                "{bad}"
-            );
-        }
-    }
-
-    #[test]
-    fn write_image_refuses_unknown_extension_and_writes_nothing() {
-        let dir = atomic::tests::scratch_dir("unknown-ext");
-        let path = dir.join("out.jpg");
-        let err = write_image(&path, &Image::new(1, 1), &PngOptions::default()).unwrap_err();
-        assert!(matches!(err, Error::UnknownFormat { .. }));
-        assert!(atomic::tests::entries(&dir).is_empty());
-    }
-
-    #[test]
-    fn validate_catches_bad_buffers_and_names() {
-        let good = Image::new(2, 1);
-        good.validate().unwrap();
-
-        let mut short = good.clone();
-        short.rgba.pop();
-        assert!(matches!(
-            short.validate(),
-            Err(Error::BufferSize {
-                expected: 2,
-                found: 1,
-                ..
-            })
-        ));
-
-        assert!(matches!(
-            Image::new(0, 3).validate(),
-            Err(Error::EmptyImage { .. })
-        ));
-
-        let layer =
-            |name: &str, channels: &[&str], n: usize| Layer::new(name, channels, vec![0.0; n]);
-        let cases = [
-            (layer("depth", &["Z"], 3), "data size"),
-            (layer("depth", &["a.b"], 2), "dot in channel"),
-            (layer("depth", &[""], 2), "empty channel"),
-            (layer("", &["R"], 2), "clashes with beauty"),
-            (layer("n", &[], 0), "no channels"),
-        ];
-        for (bad, why) in cases {
-            let mut image = good.clone();
-            image.layers.push(bad);
-            assert!(image.validate().is_err(), "{why}");
-        }
-
-        let mut twice = good.clone();
-        twice.layers.push(layer("depth", &["Z"], 2));
-        twice.layers.push(layer("depth", &["Z"], 2));
-        assert!(matches!(
-            twice.validate(),
-            Err(Error::InvalidName {
-                kind: NameKind::Channel,
-                ..
-            })
-        ));
-
-        let mut meta = good.clone();
-        meta.metadata.push(("k".into(), MetaValue::Int(1)));
-        meta.metadata.push(("k".into(), MetaValue::Int(2)));
-        assert!(matches!(
-            meta.validate(),
-            Err(Error::InvalidName {
-                kind: NameKind::Metadata,
-                ..
-            })
-        ));
-        meta.metadata.truncate(1);
-        meta.metadata.push((String::new(), MetaValue::Int(2)));
-        assert!(meta.validate().is_err());
-    }
-}
+mod tests;

@@ -75,7 +75,7 @@ pub(crate) fn view_bytes<'a>(
             reason: "buffer missing".into(),
         })?;
     let start = view.offset() as u64;
-    let end = start + view.length() as u64;
+    let end = start.saturating_add(view.length() as u64);
     if end > buffer.len() as u64 {
         return Err(Error::OutOfBounds {
             at,
@@ -230,7 +230,7 @@ fn read_view<T>(
     } else {
         (count - 1)
             .checked_mul(stride)
-            .and_then(|x| x.checked_add(offset + elem))
+            .and_then(|x| x.checked_add(offset.checked_add(elem)?))
             .unwrap_or(u64::MAX)
     };
     if needed > bytes.len() as u64 {
@@ -274,12 +274,12 @@ fn apply_sparse<T>(
         gltf::accessor::sparse::IndexType::U32 => DataType::U32,
     };
     let isize = component_size(itype) as u64;
-    let ineeded = indices.offset() as u64 + n * isize;
+    let ineeded = (indices.offset() as u64).saturating_add(n * isize);
     let ibytes = sparse_bytes(&indices.view(), buffers, ineeded, || {
         format!("{sat}.indices")
     })?;
     let values = sparse.values();
-    let vneeded = values.offset() as u64 + n * elem;
+    let vneeded = (values.offset() as u64).saturating_add(n * elem);
     let vbytes = sparse_bytes(&values.view(), buffers, vneeded, || format!("{sat}.values"))?;
     let (isize, elem) = (isize as usize, elem as usize);
     for k in 0..n as usize {

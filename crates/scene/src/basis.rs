@@ -79,9 +79,10 @@ fn check_level_index(bytes: &[u8], image: usize) -> Result<(), Error> {
     for level in 0..levels.min(32) {
         let entry = 80 + 24 * level as usize;
         let claimed = u64_at(entry + 16).ok_or_else(truncated)?;
-        let blocks = |side: u32| u64::from((side >> level).max(1).div_ceil(4));
+        // u128: a 2^32-1 square level holds 2^64 bytes, one more than a u64 counts.
+        let blocks = |side: u32| u128::from((side >> level).max(1).div_ceil(4));
         let most = 16 * blocks(width) * blocks(height.max(1));
-        if claimed > most {
+        if u128::from(claimed) > most {
             return Err(invalid(
                 image,
                 format!(
@@ -120,8 +121,8 @@ fn transcode(bytes: &[u8], image: usize) -> Result<(u32, u32, Vec<[u8; 4]>), Err
                 format!("KTX2 ({:?}) to RGBA: {e:?}", t.source_format()),
             )
         })?;
-    let texels = u64::from(width) * u64::from(height);
-    if rgba.len() as u64 != 4 * texels {
+    let texels = u128::from(width) * u128::from(height);
+    if rgba.len() as u128 != 4 * texels {
         return Err(invalid(
             image,
             format!(

@@ -77,6 +77,17 @@ fn header(bytes: &[u8], image: usize) -> Result<Header, Error> {
             reason: "image has no texels".into(),
         });
     }
+    // Every size below is a product of the header's, up to `peak`: it must fit a u64.
+    let peak = u128::from(h.texels()) * u128::from(h.native + 2 * h.stored);
+    if u64::try_from(peak).is_err() {
+        return Err(Error::Invalid {
+            at: format!("images[{image}]"),
+            reason: format!(
+                "a {}x{} image needs {peak} bytes to decode, more than 64 bits count",
+                h.width, h.height
+            ),
+        });
+    }
     Ok(h)
 }
 
@@ -89,12 +100,12 @@ fn decoder_header(bytes: &[u8], image: usize) -> Result<Header, Error> {
     let d = decoder(bytes, image)?;
     let (width, height) = d.dimensions();
     let claimed =
-        u64::from(width) * u64::from(height) * u64::from(d.color_type().bytes_per_pixel());
+        u128::from(width) * u128::from(height) * u128::from(d.color_type().bytes_per_pixel());
     let bounded = matches!(
         format,
         Some(image::ImageFormat::Png | image::ImageFormat::Jpeg)
     );
-    if bounded && claimed > MAX_RATIO * bytes.len() as u64 + (1 << 20) {
+    if bounded && claimed > u128::from(MAX_RATIO) * bytes.len() as u128 + (1 << 20) {
         return Err(Error::Invalid {
             at: format!("images[{image}]"),
             reason: format!(
@@ -225,7 +236,7 @@ fn image_bytes<'a>(
                     at: format!("bufferViews[{}]", view.index()),
                     reason: "buffer missing".into(),
                 })?;
-            let end = view.offset() as u64 + view.length() as u64;
+            let end = (view.offset() as u64).saturating_add(view.length() as u64);
             if end > buffer.len() as u64 {
                 return Err(Error::OutOfBounds {
                     at: format!("{at}.bufferView (bufferViews[{}])", view.index()),
@@ -260,12 +271,16 @@ pub(crate) fn decode_images(
         .collect::<Result<_, _>>()?;
     // Kept: every use's texels. Transient: every decoder's buffers at once (the worst case of
     // parallel decoding).
-    let kept: u64 = headers
+    // u128: each image's sizes fit a u64 ([`header`]), their sum over many uses may not.
+    let kept: u128 = headers
         .iter()
         .zip(uses)
-        .map(|(h, &n)| h.texels() * h.stored * n as u64)
+        .map(|(h, &n)| u128::from(h.texels() * h.stored) * n as u128)
         .sum();
-    let transient: u64 = headers.iter().map(|h| h.texels() * h.native).sum();
+    let transient: u128 = headers
+        .iter()
+        .map(|h| u128::from(h.texels() * h.native))
+        .sum();
     let largest = headers
         .iter()
         .zip(images)
@@ -279,7 +294,7 @@ pub(crate) fn decode_images(
                 images.len(),
                 uses.iter().sum::<usize>()
             ),
-            kept + transient,
+            u64::try_from(kept + transient).unwrap_or(u64::MAX),
         )
         .map_err(|source| Error::OverBudget {
             at: "textures".into(),

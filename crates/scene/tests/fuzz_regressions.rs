@@ -35,3 +35,55 @@ fn a_jpeg_claiming_more_than_its_bytes_can_hold_is_refused_from_its_header() {
     let e = aperture_scene::decode_texture(&bytes, 0, u64::MAX).expect_err("a bomb");
     assert!(e.to_string().contains("decompression bomb"), "{e}");
 }
+
+/// A KTX2 header (the identifier, then the fields `basis.rs` reads: pixel width at byte 20,
+/// height at 24, level count at 40, and each level's uncompressed length at 80 + 24 × level
+/// + 16), with nothing after its level index.
+fn ktx2_header(width: u32, height: u32, uncompressed: &[u64]) -> Vec<u8> {
+    let mut bytes = vec![0u8; 80 + 24 * uncompressed.len()];
+    bytes[..12].copy_from_slice(&[
+        0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A,
+    ]);
+    bytes[20..24].copy_from_slice(&width.to_le_bytes());
+    bytes[24..28].copy_from_slice(&height.to_le_bytes());
+    bytes[40..44].copy_from_slice(&(uncompressed.len() as u32).to_le_bytes());
+    for (level, claimed) in uncompressed.iter().enumerate() {
+        let at = 80 + 24 * level + 16;
+        bytes[at..at + 8].copy_from_slice(&claimed.to_le_bytes());
+    }
+    bytes
+}
+
+/// Fuzz target `texture`, 5,379 executions in (`../shared/fuzz-findings/`
+/// `texture-ktx2-level-overflow.bin`): a KTX2 header claiming 4294967295×4294967295. The most
+/// a level of that size holds, 16 bytes per 4×4 block, is 2^64 bytes: one more than a u64
+/// counts, so the check overflowed (a panic with overflow checks; in release it wrapped to 0
+/// and refused the file as "holds at most 0"). Counted in u128 now: the true bound, in every
+/// profile.
+#[test]
+fn a_ktx2_level_larger_than_a_u64_counts_is_refused_with_its_true_bound() {
+    let side = u32::MAX;
+    let bytes = ktx2_header(side, side, &[0, u64::MAX]);
+    let e = aperture_scene::decode_texture(&bytes, 4, u64::MAX).expect_err("refused");
+    let msg = e.to_string();
+    // Level 1 is 2147483647 square: 2^29 × 2^29 blocks of 16 bytes.
+    assert!(
+        msg.contains("images[4]")
+            && msg.contains("level 1 claims 18446744073709551615")
+            && msg.contains("2147483647x2147483647")
+            && msg.contains("holds at most 4611686018427387904"),
+        "{msg}"
+    );
+}
+
+/// The same size with a level 0 that claims u64::MAX bytes: within the true bound (2^64), so
+/// the header check lets it through to the transcoder, which refuses the truncated file. The
+/// old wrapped bound refused it as "holds at most 0".
+#[test]
+fn a_ktx2_level_0_within_2_pow_64_bytes_is_not_refused_by_a_wrapped_bound() {
+    let bytes = ktx2_header(u32::MAX, u32::MAX, &[u64::MAX]);
+    let e = aperture_scene::decode_texture(&bytes, 0, u64::MAX).expect_err("truncated");
+    let msg = e.to_string();
+    assert!(msg.contains("images[0]"), "{msg}");
+    assert!(!msg.contains("at most 0"), "{msg}");
+}

@@ -86,6 +86,15 @@ fn percent_decode(s: &str) -> String {
 #[ignore = "writes the seed corpora; run by hand"]
 fn write_seeds() {
     let s = samples();
+    seed_load(&s);
+    seed_draco(&s);
+    seed_meshopt();
+    seed_texture();
+    seed_env_and_exr();
+}
+
+/// `load`: glTF samples, as they are (GLB) or inlined (`.gltf`).
+fn seed_load(s: &Path) {
     // The loader: small samples covering GLB, sparse accessors, skins, morphs, animation,
     // instancing, cameras, lights, textures, quantization and primitive modes.
     for f in [
@@ -118,7 +127,10 @@ fn write_seeds() {
         let name = Path::new(f).file_name().unwrap().to_str().unwrap();
         put("load", name, &inline(&s.join(f)));
     }
+}
 
+/// `draco` (and `load`, the Draco box as a whole file).
+fn seed_draco(s: &Path) {
     // Draco: Box-Draco's and Avocado's streams with their real counts and attribute ids.
     let bin = std::fs::read(s.join("unsupported/Box-Draco/Box.bin")).unwrap();
     put(
@@ -137,7 +149,10 @@ fn write_seeds() {
         "box-draco.gltf",
         &inline(&s.join("unsupported/Box-Draco/Box.gltf")),
     );
+}
 
+/// `meshopt`: one stream per mode and filter.
+fn seed_meshopt() {
     // meshopt: a cube's positions, normals (octahedral filter) and indices, each mode.
     let positions: Vec<u8> = (0..24u32)
         .flat_map(|i| {
@@ -206,16 +221,21 @@ fn write_seeds() {
         "indices",
         &meshopt_input(MeshoptMode::Indices, 0, 4, 36, &seq),
     );
+}
 
+/// `img` encoded as `f`.
+fn enc(img: image::DynamicImage, f: image::ImageFormat) -> Vec<u8> {
+    let mut out = Vec::new();
+    img.write_to(&mut Cursor::new(&mut out), f).unwrap();
+    out
+}
+
+/// `texture`: PNG, JPEG and WebP images.
+fn seed_texture() {
     // Textures: 8-bit, 16-bit, grey, palette-free PNGs, a JPEG and a lossless WebP.
     let rgba = image::RgbaImage::from_fn(8, 6, |x, y| {
         image::Rgba([x as u8 * 30, y as u8 * 40, 7, 200])
     });
-    let enc = |img: image::DynamicImage, f: image::ImageFormat| {
-        let mut out = Vec::new();
-        img.write_to(&mut Cursor::new(&mut out), f).unwrap();
-        out
-    };
     let d = image::DynamicImage::ImageRgba8(rgba);
     put(
         "texture",
@@ -251,7 +271,10 @@ fn write_seeds() {
         "rgba.webp",
         &enc(d.clone(), image::ImageFormat::WebP),
     );
+}
 
+/// `env` and `exr`: Radiance HDR, and EXRs in several compressions and layouts.
+fn seed_env_and_exr() {
     // Environment maps and EXR: RGBE, and EXRs in several compressions and layouts.
     let sky = image::Rgb32FImage::from_fn(8, 4, |x, y| image::Rgb([x as f32 * 0.3, y as f32, 5.0]));
     let hdr = enc(

@@ -215,14 +215,16 @@ pub(super) fn check_dwa_blocks(bytes: &[u8], meta: &MetaData) -> Result<(), DwaP
         };
         let rows = lines.min(header.layer_size.height() - row);
         // A block that did not compress is stored raw; an empty one is all zeros.
-        if len == 0 || len == width * rows * bytes_per_pixel {
+        // u128: the header's width and channels are the file's to choose.
+        let (width, bytes_per_pixel) = (width as u128, bytes_per_pixel as u128);
+        if len == 0 || len as u128 == width * rows as u128 * bytes_per_pixel {
             continue;
         }
-        let bound = (4 * width * lines * bytes_per_pixel + 65_536) as u64;
+        let bound = 4 * width * lines as u128 * bytes_per_pixel + 65_536;
         // Counters 1..=9: sizes and counts (0 is the version, 10 the AC codec).
         for index in 1..10 {
             if let Some(value) = read_u64(&bytes[start..start + len], 8 * index) {
-                if value > bound {
+                if u128::from(value) > bound {
                     return Err(DwaProblem::Damaged(format!(
                         "DWA block at byte {position} claims {value} (at most {bound} possible)"
                     )));

@@ -149,13 +149,18 @@ pub fn decode_exr(bytes: &[u8], path: &Path) -> Result<Image, Error> {
 /// [`decode_exr`] with the decoded samples also held to `max_bytes` (environment maps within
 /// the render's memory budget; the fuzz targets within theirs).
 pub fn decode_exr_within(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, Error> {
-    // The `exr` decoder can panic on some damaged data (seen: an integer overflow in its B44
-    // decompressor), so a panic is turned into an error: a damaged file must not bring down
-    // the caller. Nothing shared is mutated inside, so unwinding leaves no broken state.
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        decode_exr_inner(bytes, path, max_bytes)
-    }))
-    .unwrap_or_else(|panic| {
+    caught_as_damaged(path, || decode_exr_inner(bytes, path, max_bytes))
+}
+
+/// `decode`, with a panic inside turned into an error naming the file: the `exr` decoder can
+/// panic on some damaged data (seen: an integer overflow in its B44 decompressor, in builds
+/// with overflow checks), and a damaged file must not bring down the caller. Nothing shared is
+/// mutated inside, so unwinding leaves no broken state.
+pub(super) fn caught_as_damaged(
+    path: &Path,
+    decode: impl FnOnce() -> Result<Image, Error>,
+) -> Result<Image, Error> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(decode)).unwrap_or_else(|panic| {
         let message = panic
             .downcast_ref::<&str>()
             .map(|s| s.to_string())
@@ -306,14 +311,15 @@ fn check_before_decoding(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<()
         message,
     })?;
     let limit = (1u64 << 30).max(4096 * bytes.len() as u64).min(max_bytes);
-    let mut decoded = 0u64;
+    // u128: a data window's width × height × channels × 4 can pass what a u64 counts.
+    let mut decoded = 0u128;
     for header in &meta.headers {
-        let samples = (header.layer_size.width() as u64)
-            .saturating_mul(header.layer_size.height() as u64)
-            .saturating_mul(header.channels.list.len() as u64);
-        decoded = decoded.saturating_add(samples.saturating_mul(4));
+        let samples = header.layer_size.width() as u128
+            * header.layer_size.height() as u128
+            * header.channels.list.len() as u128;
+        decoded = decoded.saturating_add(samples * 4);
     }
-    if decoded > limit {
+    if decoded > u128::from(limit) {
         return Err(unsupported(format!(
             "{decoded} bytes of samples from a {}-byte file",
             bytes.len()
