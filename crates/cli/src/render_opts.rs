@@ -202,10 +202,7 @@ pub(crate) fn frame_format(
 }
 
 /// What the loader needs of the arguments.
-fn load_options(
-    args: &RenderArgs,
-    memory: aperture_budget::MemoryBudget,
-) -> LoadOptions {
+fn load_options(args: &RenderArgs, memory: aperture_budget::MemoryBudget) -> LoadOptions {
     LoadOptions {
         scene: args.scene_index,
         dof_overrides: DofOverrides {
