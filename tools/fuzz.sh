@@ -14,8 +14,8 @@
 # -set_cover_merge=1 keeps a smallest set of inputs with the same coverage; inputs above
 # 16 KiB are left out; the seed-* files stay).
 #
-# Needs the nightly toolchain and cargo-fuzz (`cargo install cargo-fuzz`). CI runs every target
-# for 20 s (tools/fuzz-smoke.sh) and replays the committed corpus on stable
+# Needs the nightly toolchain and cargo-fuzz (`cargo install cargo-fuzz`). tools/fuzz-smoke.sh
+# runs every target for 20 s; CI replays the committed corpus on stable
 # (fuzz/harness/tests/corpus_replay.rs); run this before a change to a decoder lands.
 set -euo pipefail
 cd "$(dirname "$0")/.."
