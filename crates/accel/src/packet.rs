@@ -30,6 +30,8 @@ use crate::triangle::TriRay;
 use crate::walk::{stack_for, take_child, BlasLeaf, Group, InlineStack, Leaf, INLINE_STACK};
 use crate::{Accel, Hit, Ray};
 #[cfg(target_arch = "x86_64")]
+use crate::{Blas, Entry};
+#[cfg(target_arch = "x86_64")]
 use glam::Vec3A;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::__m128;
@@ -43,17 +45,12 @@ mod cull;
 mod node_lanes;
 #[cfg(target_arch = "x86_64")]
 mod rays;
+mod shape;
 #[cfg(target_arch = "x86_64")]
 use node_lanes::{node_lanes_avx2, node_lanes_by_ray, valid_slots};
 #[cfg(target_arch = "x86_64")]
 use rays::PacketRays;
-
-/// Rays per packet: one AVX2 lane each.
-pub const PACKET_LANES: usize = 8;
-
-/// A run is traced as a packet when every ray's direction is within this cosine of the first
-/// ray's (about 8°): wider runs share too little of their walks to gain.
-pub const PACKET_CONE_COS: f32 = 0.99;
+pub use shape::{PACKET_CONE_COS, PACKET_LANES};
 
 /// The lanes of `active` that primitive `b` stops (`leaf.visit`), trying the first active lane
 /// alone before the others: a miss there costs one triangle test for the packet.
@@ -343,27 +340,16 @@ impl Accel {
         for at in (0..n).step_by(PACKET_LANES) {
             let end = (at + PACKET_LANES).min(n);
             let run = &rays[at..end];
-            // Rays that provably meet nothing stay inactive (their answers: a miss); a run of
-            // only those is answered here, before the coherence test. A run whose first ray
-            // starts inside the scene (a camera inside it, shadow rays) is not checked further:
-            // culling only saves work, and the runs that gain start outside.
             // A full run's directions in lanes, transposed once for culling and coherence.
             let full = match <&[Ray; PACKET_LANES]>::try_from(run) {
                 // SAFETY: forwarded from the caller.
                 Ok(eight) => Some((eight, unsafe { rays::dir_lanes(eight) })),
                 Err(_) => None,
             };
-            let mut active = (1u32 << run.len()) - 1;
-            if !self.starts_inside(&run[0]) {
-                if let Some((eight, dirs)) = full {
-                    // SAFETY: forwarded from the caller.
-                    active &= !unsafe { self.misses_bounds_lanes(eight, dirs) };
-                } else {
-                    for (i, ray) in run.iter().enumerate() {
-                        active &= !(u32::from(self.misses_bounds(ray)) << i);
-                    }
-                }
-            }
+            // Rays that provably meet nothing stay inactive (their answers: a miss); a run of
+            // only those is answered here, before the coherence test.
+            // SAFETY: forwarded from the caller.
+            let active = unsafe { self.run_active(run, full) };
             if active == 0 {
                 self.batch_impl::<true, L>(&rays[loose..at], &mut out[loose..at]);
                 loose = end;
@@ -378,33 +364,10 @@ impl Accel {
             if !coherent {
                 continue;
             }
-            // Lanes past the run's end copy its last ray and stay inactive. Loops, not
-            // `array::from_fn`, whose closures stayed calls.
-            let (o0, d0) = Self::object_ray(entry, &run[0]);
-            // SAFETY: AVX2 (and so AVX) is guaranteed by the caller.
-            let leaf0 = L::start(&blas.tris, unsafe { TriRay::new_avx(o0, d0) }, run[0].tmin);
-            let mut leaves = [leaf0; PACKET_LANES];
-            let mut tmax = [run[0].tmax; PACKET_LANES];
-            let mut tmin = [run[0].tmin; PACKET_LANES];
-            let mut origins = [__m128::from(Vec3A::from(o0)); PACKET_LANES];
-            let mut dirs = [__m128::from(Vec3A::from(d0)); PACKET_LANES];
-            for i in 1..PACKET_LANES {
-                let ray = &run[i.min(run.len() - 1)];
-                let (o, d) = Self::object_ray(entry, ray);
-                // SAFETY: as above.
-                leaves[i] = L::start(&blas.tris, unsafe { TriRay::new_avx(o, d) }, ray.tmin);
-                (tmax[i], tmin[i]) = (ray.tmax, ray.tmin);
-                origins[i] = Vec3A::from(o).into();
-                dirs[i] = Vec3A::from(d).into();
-            }
-            // The octant that decides is the box test's, in the tree's space: it follows the
-            // sign of a zero component, which the world-space check above does not see.
             // SAFETY: forwarded from the caller.
-            let Some(packet) = (unsafe {
-                let [ox, oy, oz, _] = transpose(origins);
-                let [dx, dy, dz, _] = transpose(dirs);
-                PacketRays::from_rays([ox, oy, oz], [dx, dy, dz], tmin, blas.box_bounds)
-            }) else {
+            let Some((mut leaves, mut tmax, packet)) =
+                (unsafe { Self::start_packet::<L>(entry, blas, run) })
+            else {
                 continue;
             };
             self.batch_impl::<true, L>(&rays[loose..at], &mut out[loose..at]);
@@ -436,5 +399,75 @@ impl Accel {
             }
         }
         self.batch_impl::<true, L>(&rays[loose..], &mut out[loose..]);
+    }
+
+    /// The lanes of `run` that may meet something: all but the rays that provably miss the
+    /// scene's bounds. A run whose first ray starts inside the scene (a camera inside it,
+    /// shadow rays) is not checked further: culling only saves work, and the runs that gain
+    /// start outside. `full`: a full run with its directions in lanes.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn run_active(
+        &self,
+        run: &[Ray],
+        full: Option<(&[Ray; PACKET_LANES], [std::arch::x86_64::__m256; 3])>,
+    ) -> u32 {
+        let mut active = (1u32 << run.len()) - 1;
+        if !self.starts_inside(&run[0]) {
+            if let Some((eight, dirs)) = full {
+                // SAFETY: forwarded from the caller.
+                active &= !unsafe { self.misses_bounds_lanes(eight, dirs) };
+            } else {
+                for (i, ray) in run.iter().enumerate() {
+                    active &= !(u32::from(self.misses_bounds(ray)) << i);
+                }
+            }
+        }
+        active
+    }
+
+    /// The packet of `run` in the tree of `entry`: each lane's leaf and `tmax`, and the lanes'
+    /// box-test set-up, or `None` when the rays do not share an octant in the tree's space.
+    /// Lanes past the run's end copy its last ray (and stay inactive).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn start_packet<'s, L: BlasLeaf<'s>>(
+        entry: &Entry,
+        blas: &'s Blas,
+        run: &[Ray],
+    ) -> Option<([L; PACKET_LANES], [f32; PACKET_LANES], PacketRays)> {
+        // Loops, not `array::from_fn`, whose closures stayed calls.
+        let (o0, d0) = Self::object_ray(entry, &run[0]);
+        // SAFETY: AVX2 (and so AVX) is guaranteed by the caller.
+        let leaf0 = L::start(&blas.tris, unsafe { TriRay::new_avx(o0, d0) }, run[0].tmin);
+        let mut leaves = [leaf0; PACKET_LANES];
+        let mut tmax = [run[0].tmax; PACKET_LANES];
+        let mut tmin = [run[0].tmin; PACKET_LANES];
+        let mut origins = [__m128::from(Vec3A::from(o0)); PACKET_LANES];
+        let mut dirs = [__m128::from(Vec3A::from(d0)); PACKET_LANES];
+        for i in 1..PACKET_LANES {
+            let ray = &run[i.min(run.len() - 1)];
+            let (o, d) = Self::object_ray(entry, ray);
+            // SAFETY: as above.
+            leaves[i] = L::start(&blas.tris, unsafe { TriRay::new_avx(o, d) }, ray.tmin);
+            (tmax[i], tmin[i]) = (ray.tmax, ray.tmin);
+            origins[i] = Vec3A::from(o).into();
+            dirs[i] = Vec3A::from(d).into();
+        }
+        // The octant that decides is the box test's, in the tree's space: it follows the
+        // sign of a zero component, which the world-space check does not see.
+        // SAFETY: forwarded from the caller.
+        let packet = unsafe {
+            let [ox, oy, oz, _] = transpose(origins);
+            let [dx, dy, dz, _] = transpose(dirs);
+            PacketRays::from_rays([ox, oy, oz], [dx, dy, dz], tmin, blas.box_bounds)
+        }?;
+        Some((leaves, tmax, packet))
     }
 }
