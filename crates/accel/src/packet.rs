@@ -1,3 +1,6 @@
+// layout: long-fn walk_packet (the packet walk's loop is kept whole: split into #[inline(always)]
+// helpers for the pop, the node test and the leaf visit, it took 3.2 % more instructions for
+// closest-hit packets and 2.5 % more for occlusion packets under callgrind)
 //! Packets: eight coherent rays (the lens samples of one pixel, neighbouring pixels) walked
 //! through the tree together, one node test for all of them.
 //!
@@ -149,91 +152,6 @@ unsafe fn leaf_lanes<'s, L: BlasLeaf<'s>>(
     stopped
 }
 
-/// The group and the lanes of its slots at stack slot `sp`.
-///
-/// # Safety
-/// Slot `sp` of `stack` must have been written, and so the slot of `lane_stack` beside it if
-/// there is one. (The packets run only on trees whose stack fits `INLINE_STACK`; all lanes
-/// would be the safe answer otherwise.)
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-unsafe fn pop(
-    stack: &[MaybeUninit<Group>],
-    lane_stack: &[MaybeUninit<u64>; INLINE_STACK],
-    sp: usize,
-) -> (Group, u64) {
-    // SAFETY: forwarded from the caller.
-    unsafe {
-        (
-            stack[sp].assume_init(),
-            lane_stack.get(sp).map_or(u64::MAX, |l| l.assume_init()),
-        )
-    }
-}
-
-/// The node test for lanes `here`: per slot, the lanes that enter that child, and the slots
-/// entered. Child by child for all lanes at once, or lane by lane when fewer lanes than
-/// children remain.
-///
-/// # Safety
-/// As for [`node_lanes_avx2`].
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-unsafe fn test_node(
-    node: &Node,
-    r: &PacketRays,
-    tmax: &[f32; PACKET_LANES],
-    here: u32,
-) -> ([u8; 8], u32) {
-    let valid = valid_slots(node);
-    // SAFETY: forwarded from the caller.
-    unsafe {
-        if here.count_ones() < valid.count_ones() {
-            node_lanes_by_ray(node, r, tmax, here, valid)
-        } else {
-            node_lanes_avx2(node, r, tmax, here, valid)
-        }
-    }
-}
-
-/// Primitives `first..first + count` of a leaf for lanes `todo`: with enough lanes, each
-/// triangle for all of them at once (the lanes' triangle-test constants gathered into
-/// `tri_lanes` at the first such leaf), else ray by ray. Returns the lanes stopped.
-///
-/// # Safety
-/// As for [`node_lanes_avx2`].
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-unsafe fn visit_leaf<'s, L: BlasLeaf<'s>>(
-    leaves: &mut [L; PACKET_LANES],
-    tmax: &mut [f32; PACKET_LANES],
-    tri_lanes: &mut Option<TriLanes>,
-    (first, count): (u32, u32),
-    mut todo: u32,
-) -> u32 {
-    if todo.count_ones() >= MIN_LANES {
-        let lanes = match tri_lanes {
-            Some(l) => l,
-            // SAFETY: forwarded from the caller.
-            None => tri_lanes.insert(unsafe { gather_lanes(leaves) }),
-        };
-        // SAFETY: forwarded from the caller.
-        return unsafe { leaf_lanes(lanes, leaves, tmax, first, count, todo) };
-    }
-    let mut stopped = 0;
-    while todo != 0 {
-        let i = todo.trailing_zeros() as usize;
-        todo &= todo - 1;
-        for primitive in first..first + count {
-            if leaves[i].visit(primitive, &mut tmax[i]) {
-                stopped |= 1 << i;
-                break;
-            }
-        }
-    }
-    stopped
-}
-
 /// The walk of one packet over `nodes`: `leaves[i]` visits the primitives of the leaves its ray
 /// hits (and may shrink `tmax[i]`). Returns the lanes whose leaf stopped its walk. Lanes outside
 /// `active` are ignored.
@@ -272,7 +190,13 @@ unsafe fn walk_packet<'s, L: BlasLeaf<'s>>(
             }
             sp -= 1;
             // SAFETY: slots below `sp` were written before `sp` passed them.
-            (current, cur_lanes) = unsafe { pop(stack, &lane_stack, sp) };
+            current = unsafe { stack[sp].assume_init() };
+            // SAFETY: a slot of `lane_stack` that exists was written with `stack[sp]`. (The
+            // packets run only on trees whose stack fits `INLINE_STACK`; all lanes would be the
+            // safe answer otherwise.)
+            cur_lanes = lane_stack
+                .get(sp)
+                .map_or(u64::MAX, |l| unsafe { l.assume_init() });
             continue;
         }
         let pushed_at = sp;
@@ -291,8 +215,15 @@ unsafe fn walk_packet<'s, L: BlasLeaf<'s>>(
             // Unreachable for a well-formed tree; never read out of bounds.
             return stopped;
         };
+        let valid = valid_slots(node);
         // SAFETY: AVX2 and FMA are guaranteed by the caller.
-        let (lanes, mut any) = unsafe { test_node(node, r, tmax, here) };
+        let (lanes, mut any) = unsafe {
+            if here.count_ones() < valid.count_ones() {
+                node_lanes_by_ray(node, r, tmax, here, valid)
+            } else {
+                node_lanes_avx2(node, r, tmax, here, valid)
+            }
+        };
         let mut inner = 0u32;
         while any != 0 {
             let c = any.trailing_zeros() as usize;
@@ -306,11 +237,34 @@ unsafe fn walk_packet<'s, L: BlasLeaf<'s>>(
             }
             let first = node.primitive_base_idx + (meta & 0x1f);
             let count = (meta >> 5).count_ones();
-            let todo = u32::from(lane_bits) & active;
-            // SAFETY: forwarded from the caller.
-            let s = unsafe { visit_leaf(leaves, tmax, &mut tri_lanes, (first, count), todo) };
-            stopped |= s;
-            active &= !s;
+            let mut todo = u32::from(lane_bits) & active;
+            if todo.count_ones() >= MIN_LANES {
+                // Enough lanes: each triangle for all of them at once.
+                let lanes = match &mut tri_lanes {
+                    Some(l) => l,
+                    // SAFETY: forwarded from the caller.
+                    None => tri_lanes.insert(unsafe { gather_lanes(leaves) }),
+                };
+                // SAFETY: forwarded from the caller.
+                let s = unsafe { leaf_lanes(lanes, leaves, tmax, first, count, todo) };
+                stopped |= s;
+                active &= !s;
+                if active == 0 {
+                    return stopped;
+                }
+                continue;
+            }
+            while todo != 0 {
+                let i = todo.trailing_zeros() as usize;
+                todo &= todo - 1;
+                for primitive in first..first + count {
+                    if leaves[i].visit(primitive, &mut tmax[i]) {
+                        stopped |= 1 << i;
+                        active &= !(1 << i);
+                        break;
+                    }
+                }
+            }
             if active == 0 {
                 return stopped;
             }
