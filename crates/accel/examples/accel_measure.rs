@@ -44,7 +44,17 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-fn main() {
+/// The command line.
+struct Args {
+    scene_path: String,
+    quality: BvhQuality,
+    ray_files: Vec<String>,
+    build_only: bool,
+    batch: bool,
+    repeats: usize,
+}
+
+fn parse_args() -> Args {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut scene_path = None;
     let mut quality = BvhQuality::default();
@@ -70,10 +80,20 @@ fn main() {
         }
     }
     let scene_path = scene_path.expect("usage: accel_measure SCENE [--quality Q] [--rays FILE]...");
+    Args {
+        scene_path,
+        quality,
+        ray_files,
+        build_only,
+        batch,
+        repeats,
+    }
+}
 
-    let t0 = Instant::now();
-    let (meshes, instances): (Vec<Mesh>, Vec<InstanceInput>) = if scene_path.ends_with(".tris") {
-        let f = read_f32s(&scene_path);
+/// The meshes and instances of a `.tris` file or a scene.
+fn load_scene(scene_path: &str) -> (Vec<Mesh>, Vec<InstanceInput>) {
+    if scene_path.ends_with(".tris") {
+        let f = read_f32s(scene_path);
         let pos: Vec<Vec3> = f.chunks_exact(3).map(Vec3::from_slice).collect();
         let idx = (0..pos.len() as u32 / 3)
             .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
@@ -103,7 +123,84 @@ fn main() {
                 .collect(),
             instances,
         )
+    }
+}
+
+/// Rays per second (millions) of one query over `rays`, by wall time and, where the platform
+/// tells, by this thread's on-CPU time; and the query's count of hits.
+fn time_query(n: f64, query: impl FnOnce() -> usize) -> (f64, Option<f64>, usize) {
+    let (t, c) = (Instant::now(), thread_cpu_ns());
+    let count = query();
+    let wall = n / t.elapsed().as_secs_f64() / 1e6;
+    let cpu = match (c, thread_cpu_ns()) {
+        (Some(c0), Some(c1)) => Some(n / ((c1 - c0) as f64 * 1e-9) / 1e6),
+        _ => None,
     };
+    (wall, cpu, count)
+}
+
+/// Times closest hit and occlusion on the rays of `file` and prints the throughputs.
+fn measure_file(accel: &Accel, file: &str, repeats: usize, batch: bool) {
+    let rays: Vec<Ray> = aperture_accel::read_rays(file.as_ref()).unwrap_or_else(|e| panic!("{e}"));
+    let n = rays.len() as f64;
+    // One thread, one query at a time (as Embree's rtcIntersect1 loop is measured), or with
+    // `--batch` the whole file through the interleaved batch queries.
+    let mut closest = Vec::new();
+    let mut occluded = Vec::new();
+    let mut closest_cpu = Vec::new();
+    let mut occluded_cpu = Vec::new();
+    let mut hits = 0;
+    let mut batch_hits = vec![None; rays.len()];
+    let mut batch_occ = vec![false; rays.len()];
+    for _ in 0..repeats {
+        let (wall, cpu, h) = time_query(n, || {
+            if batch {
+                accel.intersect_batch(&rays, &mut batch_hits);
+                batch_hits.iter().filter(|h| h.is_some()).count()
+            } else {
+                rays.iter().filter(|r| accel.intersect(r).is_some()).count()
+            }
+        });
+        hits = h;
+        closest.push(wall);
+        closest_cpu.extend(cpu);
+        let (wall, cpu, occ) = time_query(n, || {
+            if batch {
+                accel.occluded_batch(&rays, &mut batch_occ);
+                batch_occ.iter().filter(|&&o| o).count()
+            } else {
+                rays.iter().filter(|r| accel.occluded(r)).count()
+            }
+        });
+        occluded.push(wall);
+        occluded_cpu.extend(cpu);
+        assert_eq!(occ, hits, "occlusion disagrees with closest hit");
+    }
+    if !closest_cpu.is_empty() {
+        println!(
+            "{file}: per on-CPU second (median of {repeats}): closest {:.3} Mrays/s, occluded {:.3} Mrays/s",
+            median(closest_cpu),
+            median(occluded_cpu)
+        );
+    }
+    let best = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    println!(
+        "{file}: {} rays, hit fraction {:.4}, 1 thread: closest {:.3} Mrays/s, occluded {:.3} Mrays/s (median of {repeats}); best of {repeats} (Embree's statistic): closest {:.3}, occluded {:.3}",
+        rays.len(),
+        hits as f64 / n,
+        median(closest.clone()),
+        median(occluded.clone()),
+        best(&closest),
+        best(&occluded)
+    );
+}
+
+fn main() {
+    let args = parse_args();
+    let scene_path = &args.scene_path;
+    let quality = args.quality;
+    let t0 = Instant::now();
+    let (meshes, instances) = load_scene(scene_path);
     let load_s = t0.elapsed().as_secs_f64();
     let inputs: Vec<MeshInput> = meshes
         .iter()
@@ -114,7 +211,7 @@ fn main() {
         .collect();
     let mut builds = Vec::new();
     let mut accel = None;
-    for _ in 0..if build_only { 1 } else { 5 } {
+    for _ in 0..if args.build_only { 1 } else { 5 } {
         let a = Accel::build(&inputs, &instances, quality);
         builds.push(a.stats().build_time.as_secs_f64());
         accel = Some(a);
@@ -128,60 +225,7 @@ fn main() {
     );
     println!("{:#?}", accel.stats());
 
-    for file in &ray_files {
-        let rays: Vec<Ray> =
-            aperture_accel::read_rays(file.as_ref()).unwrap_or_else(|e| panic!("{e}"));
-        let n = rays.len() as f64;
-        // One thread, one query at a time (as Embree's rtcIntersect1 loop is measured), or with
-        // `--batch` the whole file through the interleaved batch queries.
-        let mut closest = Vec::new();
-        let mut occluded = Vec::new();
-        let mut closest_cpu = Vec::new();
-        let mut occluded_cpu = Vec::new();
-        let mut hits = 0;
-        let mut batch_hits = vec![None; rays.len()];
-        let mut batch_occ = vec![false; rays.len()];
-        for _ in 0..repeats {
-            let (t, c) = (Instant::now(), thread_cpu_ns());
-            hits = if batch {
-                accel.intersect_batch(&rays, &mut batch_hits);
-                batch_hits.iter().filter(|h| h.is_some()).count()
-            } else {
-                rays.iter().filter(|r| accel.intersect(r).is_some()).count()
-            };
-            closest.push(n / t.elapsed().as_secs_f64() / 1e6);
-            if let (Some(c0), Some(c1)) = (c, thread_cpu_ns()) {
-                closest_cpu.push(n / ((c1 - c0) as f64 * 1e-9) / 1e6);
-            }
-            let (t, c) = (Instant::now(), thread_cpu_ns());
-            let occ = if batch {
-                accel.occluded_batch(&rays, &mut batch_occ);
-                batch_occ.iter().filter(|&&o| o).count()
-            } else {
-                rays.iter().filter(|r| accel.occluded(r)).count()
-            };
-            occluded.push(n / t.elapsed().as_secs_f64() / 1e6);
-            if let (Some(c0), Some(c1)) = (c, thread_cpu_ns()) {
-                occluded_cpu.push(n / ((c1 - c0) as f64 * 1e-9) / 1e6);
-            }
-            assert_eq!(occ, hits, "occlusion disagrees with closest hit");
-        }
-        if !closest_cpu.is_empty() {
-            println!(
-                "{file}: per on-CPU second (median of {repeats}): closest {:.3} Mrays/s, occluded {:.3} Mrays/s",
-                median(closest_cpu),
-                median(occluded_cpu)
-            );
-        }
-        let best = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
-        println!(
-            "{file}: {} rays, hit fraction {:.4}, 1 thread: closest {:.3} Mrays/s, occluded {:.3} Mrays/s (median of {repeats}); best of {repeats} (Embree's statistic): closest {:.3}, occluded {:.3}",
-            rays.len(),
-            hits as f64 / n,
-            median(closest.clone()),
-            median(occluded.clone()),
-            best(&closest),
-            best(&occluded)
-        );
+    for file in &args.ray_files {
+        measure_file(&accel, file, args.repeats, args.batch);
     }
 }

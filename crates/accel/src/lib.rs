@@ -60,7 +60,6 @@ pub use rayfile::{read_rays, write_rays, RayFileError};
 pub use spawn::{offset_ray_origin, SpawnPoint};
 pub use triangle::intersect_triangle;
 pub use types::{AccelStats, BvhQuality, Hit, InstanceInput, MeshInput, ParseBvhQualityError, Ray};
-use walk::detect_avx2;
 pub use walk::BATCH_LANES;
 
 use crate::node::Node;

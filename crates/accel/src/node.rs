@@ -26,7 +26,7 @@
 //! thickness) enters that leaf again whenever the slack exceeds its origin's offset from the
 //! surface, and tests its triangles for nothing. With `K = 64` and `M` padded by three times
 //! the tree's extent (a margin kept from obvhs' quantised boxes), every bounce and shadow ray
-//! from a floor did (BENCHMARKS.md, "Issue 18, nineteenth session").
+//! from a floor did.
 //!
 //! Every path (AVX2, SSE2, scalar) computes the same operations in the same order: the same bits.
 

@@ -1,3 +1,9 @@
+// layout: long-fn packets_impl (the packet queries' loop over runs is kept whole: with the
+// culling and the lanes' set-up in #[inline(always)] helpers it took 3.3 % more callgrind
+// instructions for closest-hit packets and 2.5 % more for occlusion packets)
+// layout: long-fn walk_packet (one packet's walk is kept whole: with the pop, the node test and
+// the leaf visit in #[inline(always)] helpers it took 0.3 % more callgrind instructions for
+// closest-hit packets)
 //! Packets: eight coherent rays (the lens samples of one pixel, neighbouring pixels) walked
 //! through the tree together, one node test for all of them.
 //!
@@ -43,17 +49,12 @@ mod cull;
 mod node_lanes;
 #[cfg(target_arch = "x86_64")]
 mod rays;
+mod shape;
 #[cfg(target_arch = "x86_64")]
 use node_lanes::{node_lanes_avx2, node_lanes_by_ray, valid_slots};
 #[cfg(target_arch = "x86_64")]
 use rays::PacketRays;
-
-/// Rays per packet: one AVX2 lane each.
-pub const PACKET_LANES: usize = 8;
-
-/// A run is traced as a packet when every ray's direction is within this cosine of the first
-/// ray's (about 8°): wider runs share too little of their walks to gain.
-pub const PACKET_CONE_COS: f32 = 0.99;
+pub use shape::{PACKET_CONE_COS, PACKET_LANES};
 
 /// The lanes of `active` that primitive `b` stops (`leaf.visit`), trying the first active lane
 /// alone before the others: a miss there costs one triangle test for the packet.

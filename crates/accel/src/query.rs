@@ -139,7 +139,7 @@ impl Accel {
     /// [`Accel::intersect`] for each of `rays` on the calling thread, into `out` (one result per
     /// ray; extra slots on either side are left alone). The results are exactly `intersect`'s,
     /// ray by ray; the walks of [`BATCH_LANES`] rays are interleaved, which is faster than a loop
-    /// of `intersect` calls (figures in `BENCHMARKS.md`).
+    /// of `intersect` calls (one walk's dependent loads leave the core idle; several fill it).
     pub fn intersect_batch(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {

@@ -287,8 +287,8 @@ pub(crate) fn intersect<const AVX: bool>(
 /// the edges of `f32` points are exact, their cross products round once, and the two dot
 /// products `w . n`, `d . n` a few times more: both are known to about 1e-15 of their
 /// magnitudes, so a margin of 1e-12 decides their signs beyond doubt. The `t` returned is then
-/// also more accurate than the `f32` one. Called only for hits the bound would reject; that it can be called still costs
-/// about 3 % of a shadow ray's instructions (registers held for it; BENCHMARKS.md).
+/// also more accurate than the `f32` one. Called only for hits the bound would reject, and kept
+/// out of line: merely being callable holds registers in the hot test.
 #[cold]
 #[inline(never)]
 fn t_in_front_f64(r: &TriRay, p: &[Vec3; 3]) -> Option<f32> {
@@ -521,8 +521,8 @@ mod tests {
 
     /// A ray leaving a wall just above a large floor, as a bounce off the wall's foot does,
     /// meets the floor a few 1e-5 away: in front of it beyond doubt, though closer than the
-    /// f32 error bound of a hit on so large a triangle. It must hit (it used to leak out of a
-    /// closed room, BENCHMARKS.md, issue 18 second session).
+    /// f32 error bound of a hit on so large a triangle. It must hit (light used to leak out
+    /// of a closed room there).
     #[test]
     fn hits_close_to_the_origin_on_large_triangles_count() {
         let dir = Vec3::new(0.969_221_3, -0.236_580_04, -0.068_116_87);

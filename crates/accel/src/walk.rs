@@ -4,294 +4,17 @@
 //! every batch) and [`group`] (obvhs' node groups in octant order; one-ray occlusion, packets).
 
 use crate::node::{BoxRay, Node};
-use crate::triangle::TriRay;
-use crate::{Accel, Blas, Entry, Hit, Ray, Tri};
 use std::mem::MaybeUninit;
 
 mod group;
+mod leaf;
 mod ordered;
+mod stack;
 
 pub(crate) use group::take_child;
+pub(crate) use leaf::{AnyLeaf, BlasLeaf, ClosestLeaf, EntriesAny, EntriesClosest, Leaf};
 use ordered::Walk;
-
-/// A traversal stack entry: a node group (obvhs encoding: child base index, hit mask) in the
-/// group walks, a node index and the bits of its entry distance in the ordered walks.
-pub(crate) type Group = (u32, u32);
-
-/// Stacks up to this size live on the call stack (trees up to 27 levels deep); deeper trees
-/// (degenerate input) get a heap stack sized from the measured depth, so the stack can never
-/// overflow.
-pub(crate) const INLINE_STACK: usize = 192;
-
-/// The stack entries a walk of a tree of `depth` levels needs: in the ordered walk each node on
-/// the current path pushes at most seven of its eight children (the group walks, one entry).
-#[inline(always)]
-pub(crate) fn stack_len(depth: usize) -> usize {
-    depth.saturating_mul(7).saturating_add(1)
-}
-
-/// An uninitialised inline stack.
-pub(crate) type InlineStack = [MaybeUninit<Group>; INLINE_STACK];
-
-/// The traversal stack for a tree of `depth` levels: `inline` when it fits, else `heap` sized to
-/// the depth. A plain function rather than a closure-taking one so that the query stays one
-/// function after inlining (closures were separate calls per ray).
-///
-/// Slots start uninitialised: zeroing 48 entries per query (a `memset` call) cost about 3 % of the
-/// instructions of a primary ray. The walks read a slot only below their stack pointer, that
-/// is, only after writing it.
-#[inline(always)]
-pub(crate) fn stack_for<'a>(
-    depth: usize,
-    inline: &'a mut InlineStack,
-    heap: &'a mut Vec<MaybeUninit<Group>>,
-) -> &'a mut [MaybeUninit<Group>] {
-    let len = stack_len(depth);
-    if len <= INLINE_STACK {
-        inline
-    } else {
-        *heap = vec![MaybeUninit::<Group>::uninit(); len];
-        heap
-    }
-}
-
-/// What [`traverse`] does with each primitive of a hit leaf. A trait with `#[inline(always)]`
-/// implementations rather than a closure: the compiler left the occlusion closure as a call per
-/// triangle once the traversal was inlined into the query.
-pub(crate) trait Leaf {
-    /// Whether the walk looks for the closest hit (nearest child first, pops beyond `tmax`
-    /// skipped) rather than any hit.
-    const CLOSEST: bool;
-    /// Visits `primitive`; may shrink `tmax`; returns `true` to stop the traversal.
-    fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool;
-}
-
-impl<L: Leaf> Leaf for &mut L {
-    const CLOSEST: bool = L::CLOSEST;
-    #[inline(always)]
-    fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
-        (**self).visit(primitive, tmax)
-    }
-}
-
-/// The top level's leaf for closest hit: each entry is a walk of its bottom-level tree. A
-/// struct with an `#[inline(always)]` visit, not a closure: closures do not take the query's
-/// target features, and once the walk became a stepped state the compiler kept the closure
-/// (and the 8-wide node test inside it) a call (+10 % instructions per instanced query).
-pub(crate) struct EntriesClosest<'a, const AVX2: bool> {
-    pub(crate) accel: &'a Accel,
-    pub(crate) ray: &'a Ray,
-    pub(crate) stack: &'a mut [MaybeUninit<Group>],
-    pub(crate) best: Option<Hit>,
-}
-
-impl<const AVX2: bool> Leaf for EntriesClosest<'_, AVX2> {
-    const CLOSEST: bool = true;
-    #[inline(always)]
-    fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
-        if let Some(entry) = self.accel.entries.get(primitive as usize) {
-            let hit = self
-                .accel
-                .walk_entry::<AVX2, ClosestLeaf<AVX2>>(entry, self.ray, tmax, self.stack);
-            if let Some(Some(hit)) = hit {
-                self.best = Some(hit);
-            }
-        }
-        false
-    }
-}
-
-/// The top level's leaf for occlusion ([`EntriesClosest`] for any hit): stops at the first entry
-/// that occludes.
-pub(crate) struct EntriesAny<'a, const AVX2: bool> {
-    pub(crate) accel: &'a Accel,
-    pub(crate) ray: &'a Ray,
-    pub(crate) stack: &'a mut [MaybeUninit<Group>],
-}
-
-impl<const AVX2: bool> Leaf for EntriesAny<'_, AVX2> {
-    const CLOSEST: bool = false;
-    #[inline(always)]
-    fn visit(&mut self, primitive: u32, _: &mut f32) -> bool {
-        let mut tmax = self.ray.tmax;
-        self.accel
-            .entries
-            .get(primitive as usize)
-            .is_some_and(|entry| {
-                self.accel
-                    .walk_entry::<AVX2, AnyLeaf<AVX2>>(entry, self.ray, &mut tmax, self.stack)
-                    == Some(true)
-            })
-    }
-}
-
-/// Closest hit over a bottom-level BVH's triangles: `(triangle index, (t, u, v))`. With `AVX`
-/// its triangle test takes the AVX path (`triangle::intersect`): such a leaf is only walked
-/// inside the queries compiled for AVX2 (`AVX2` of the walks), as `AnyLeaf`'s.
-#[derive(Clone, Copy)]
-pub(crate) struct ClosestLeaf<'a, const AVX: bool> {
-    pub(crate) tris: &'a [Tri],
-    pub(crate) ray: TriRay,
-    pub(crate) tmin: f32,
-    pub(crate) best: Option<(usize, (f32, f32, f32))>,
-}
-
-impl<const AVX: bool> Leaf for ClosestLeaf<'_, AVX> {
-    const CLOSEST: bool = true;
-    #[inline(always)]
-    fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
-        if let Some(tri) = self.tris.get(primitive as usize) {
-            if let Some(h) = crate::triangle::intersect::<AVX>(&self.ray, tri, self.tmin, *tmax) {
-                return self.record(primitive, h, tmax);
-            }
-        }
-        false
-    }
-}
-
-/// Any hit over a bottom-level BVH's triangles: stops at the first.
-#[derive(Clone, Copy)]
-pub(crate) struct AnyLeaf<'a, const AVX: bool> {
-    pub(crate) tris: &'a [Tri],
-    pub(crate) ray: TriRay,
-    pub(crate) tmin: f32,
-    /// The primitive that stopped the walk (meaningful once one has).
-    pub(crate) blocker: u32,
-}
-
-impl<const AVX: bool> Leaf for AnyLeaf<'_, AVX> {
-    const CLOSEST: bool = false;
-    #[inline(always)]
-    fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
-        let hit = self
-            .tris
-            .get(primitive as usize)
-            .and_then(|tri| crate::triangle::intersect::<AVX>(&self.ray, tri, self.tmin, *tmax));
-        hit.is_some_and(|h| self.record(primitive, h, tmax))
-    }
-}
-
-/// A bottom-level leaf (closest or any hit): how a ray's leaf starts and what its answer is,
-/// for the one-ray walks ([`Accel::walk_entry`]) and the batches ([`Accel::batch_impl`]).
-pub(crate) trait BlasLeaf<'a>: Leaf + Copy {
-    /// One ray's answer.
-    type Answer;
-    /// The leaf of a ray with triangle-test constants `ray`, before any visit.
-    fn start(tris: &'a [Tri], ray: TriRay, tmin: f32) -> Self;
-    /// The answer once the walk has ended (`stopped`: the leaf stopped it).
-    fn answer(&self, blas: &Blas, entry: &Entry, stopped: bool) -> Self::Answer;
-    /// The one-ray query, for scenes that interleaving does not cover.
-    fn one<const AVX2: bool>(accel: &Accel, ray: &Ray) -> Self::Answer;
-    /// The answer for a ray that meets nothing.
-    fn miss() -> Self::Answer;
-    /// The primitive that stopped the walk, for leaves whose answer any stopping primitive
-    /// gives alike (any hit); `None` for the others.
-    fn blocker(&self) -> Option<u32>;
-    /// The triangles the leaf tests, its ray's triangle-test constants and `tmin`: what a
-    /// packet tests for several leaves at once ([`crate::triangle::lanes`]).
-    fn triangles(&self) -> (&'a [Tri], &TriRay, f32);
-    /// Takes hit `(t, b1, b2)` of `primitive`, found by the triangle test within
-    /// `[tmin, tmax]` (the rest of [`Leaf::visit`]); `true` stops the walk.
-    fn record(&mut self, primitive: u32, hit: (f32, f32, f32), tmax: &mut f32) -> bool;
-}
-
-impl<'a, const AVX: bool> BlasLeaf<'a> for ClosestLeaf<'a, AVX> {
-    type Answer = Option<Hit>;
-
-    #[inline(always)]
-    fn start(tris: &'a [Tri], ray: TriRay, tmin: f32) -> Self {
-        Self {
-            tris,
-            ray,
-            tmin,
-            best: None,
-        }
-    }
-
-    #[inline(always)]
-    fn answer(&self, blas: &Blas, entry: &Entry, _: bool) -> Option<Hit> {
-        self.best.map(|(i, h)| Accel::make_hit(blas, entry, i, h))
-    }
-
-    #[inline(always)]
-    fn one<const AVX2: bool>(accel: &Accel, ray: &Ray) -> Option<Hit> {
-        accel.intersect_impl::<AVX2>(ray)
-    }
-
-    #[inline(always)]
-    fn miss() -> Option<Hit> {
-        None
-    }
-
-    #[inline(always)]
-    fn blocker(&self) -> Option<u32> {
-        None
-    }
-
-    #[inline(always)]
-    fn triangles(&self) -> (&'a [Tri], &TriRay, f32) {
-        (self.tris, &self.ray, self.tmin)
-    }
-
-    #[inline(always)]
-    fn record(&mut self, primitive: u32, h: (f32, f32, f32), tmax: &mut f32) -> bool {
-        // A tie in `t` goes to the lower primitive, so the answer does not depend on the
-        // order of the visits (packets visit in another order than one ray).
-        let first = self
-            .best
-            .is_none_or(|(best, _)| h.0 < *tmax || (primitive as usize) < best);
-        if first {
-            *tmax = h.0;
-            self.best = Some((primitive as usize, h));
-        }
-        false
-    }
-}
-
-impl<'a, const AVX: bool> BlasLeaf<'a> for AnyLeaf<'a, AVX> {
-    type Answer = bool;
-
-    #[inline(always)]
-    fn start(tris: &'a [Tri], ray: TriRay, tmin: f32) -> Self {
-        Self {
-            tris,
-            ray,
-            tmin,
-            blocker: 0,
-        }
-    }
-
-    #[inline(always)]
-    fn answer(&self, _: &Blas, _: &Entry, stopped: bool) -> bool {
-        stopped
-    }
-
-    #[inline(always)]
-    fn one<const AVX2: bool>(accel: &Accel, ray: &Ray) -> bool {
-        accel.occluded_impl::<AVX2>(ray)
-    }
-
-    #[inline(always)]
-    fn miss() -> bool {
-        false
-    }
-
-    #[inline(always)]
-    fn blocker(&self) -> Option<u32> {
-        Some(self.blocker)
-    }
-
-    #[inline(always)]
-    fn triangles(&self) -> (&'a [Tri], &TriRay, f32) {
-        (self.tris, &self.ray, self.tmin)
-    }
-
-    #[inline(always)]
-    fn record(&mut self, primitive: u32, _: (f32, f32, f32), _: &mut f32) -> bool {
-        self.blocker = primitive;
-        true
-    }
-}
+pub(crate) use stack::{stack_for, stack_len, Group, InlineStack, INLINE_STACK};
 
 /// Walks a CWBVH (obvhs layout) for `r`, calling `leaf.visit(primitive, &mut tmax)` for every
 /// primitive in a hit leaf. Returns whether `leaf` stopped it. `stack` needs [`stack_len`]
@@ -333,6 +56,17 @@ pub(crate) trait Walks<L> {
     fn finish(&mut self, i: usize, leaf: &L, stopped: bool);
 }
 
+/// One lane of [`interleave`]. Lanes are updated in place (no moves of whole lanes), and idle
+/// ones are marked by their index: both faster than `Option`s of lanes.
+struct Lane<L> {
+    /// The ray walked, or `usize::MAX` when the lane is idle.
+    index: usize,
+    walk: Walk,
+    br: BoxRay,
+    tmax: f32,
+    leaf: L,
+}
+
 /// Runs walks `0..n` of `walks` over `nodes`, [`BATCH_LANES`] at a time, interleaved step by
 /// step. Each ray's walk is exactly [`traverse`]'s, so the results are too; only the order of
 /// work between rays changes.
@@ -347,16 +81,6 @@ pub(crate) fn interleave<const AVX2: bool, L: Leaf + Copy>(
 ) {
     if n == 0 {
         return;
-    }
-    // Lanes are updated in place (no moves of whole lanes), and idle ones are marked by their
-    // index: both measured faster than `Option`s of lanes.
-    struct Lane<L> {
-        /// The ray walked, or `usize::MAX` when the lane is idle.
-        index: usize,
-        walk: Walk,
-        br: BoxRay,
-        tmax: f32,
-        leaf: L,
     }
     // The stacks stay out of the lanes: `from_fn` builds its array and then moves it, which
     // copied four 1.5 KiB stacks per call (2 % of a render in `memmove`).

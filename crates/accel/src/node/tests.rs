@@ -2,6 +2,7 @@
 
 use super::layout::nodes_from_cwbvh;
 use super::*;
+use glam::DVec3;
 use obvhs::{aabb::Aabb, cwbvh::builder::build_cwbvh, BvhBuildParams};
 use std::time::Duration;
 
@@ -146,6 +147,61 @@ fn honours_tmin() {
     assert_ne!(late, early);
 }
 
+/// Whether the exact segment `[tmin, tmax]` of the ray `o + t d` (in `f64`) enters child
+/// `slot` of `node`, its box grown by `grow` on every side.
+fn segment_enters(
+    node: &Node,
+    slot: usize,
+    (o, d): (DVec3, DVec3),
+    (tmin, tmax): (f32, f32),
+    grow: f64,
+) -> bool {
+    let (mut t0, mut t1) = (f64::from(tmin), f64::from(tmax));
+    for a in 0..3 {
+        let lo = f64::from(node.bounds[2 * a][slot]) - grow;
+        let hi = f64::from(node.bounds[2 * a + 1][slot]) + grow;
+        if d[a] == 0.0 {
+            if o[a] < lo || o[a] > hi {
+                t0 = f64::INFINITY;
+            }
+            continue;
+        }
+        let (x, y) = ((lo - o[a]) / d[a], (hi - o[a]) / d[a]);
+        t0 = t0.max(x.min(y));
+        t1 = t1.min(x.max(y));
+    }
+    t0 <= t1
+}
+
+/// Ray `i` of the grazing test: an origin near the boxes (far away now and then), aimed at a
+/// corner of some box or in a random direction (now and then along an axis).
+fn grazing_ray(s: &mut u64, i: usize, offset: Vec3A, scale: f32, boxes: &[Aabb]) -> (Vec3A, Vec3A) {
+    let u = |s: &mut u64| Vec3A::new(lcg(s), lcg(s), lcg(s));
+    let far = if i % 7 == 0 { 30.0 } else { 1.0 };
+    let o = offset + (u(s) * 140.0 - 20.0) * scale * far;
+    let d = if i % 2 == 0 {
+        let b = &boxes[i % boxes.len()];
+        let k = lcg(s);
+        Vec3A::new(
+            if k < 0.5 { b.min.x } else { b.max.x },
+            if !(0.25..=0.75).contains(&k) {
+                b.min.y
+            } else {
+                b.max.y
+            },
+            if lcg(s) < 0.5 { b.min.z } else { b.max.z },
+        ) - o
+    } else {
+        let mut d = u(s) - 0.5;
+        if i % 5 == 1 {
+            d.y = 0.0;
+            d.z = 0.0;
+        }
+        d
+    };
+    (o, d)
+}
+
 /// Wherever a ray's exact segment (in `f64`) enters a child's box, the test says so, and it says
 /// so elsewhere only within twice its slack: scenes near and far from the origin and at several
 /// scales, rays from inside and outside, along axes, and aimed exactly at box corners (grazing).
@@ -172,30 +228,7 @@ fn never_misses_a_box_the_exact_ray_enters() {
         let bounds = (Vec3::from(all.min), Vec3::from(all.max));
         let (mut entered, mut loose) = (0, 0);
         for i in 0..400 {
-            let u = |s: &mut u64| Vec3A::new(lcg(s), lcg(s), lcg(s));
-            let far = if i % 7 == 0 { 30.0 } else { 1.0 };
-            let o = offset + (u(&mut s) * 140.0 - 20.0) * scale * far;
-            // Aimed at a corner of some box, or a random direction (now and then along an axis).
-            let d = if i % 2 == 0 {
-                let b = &boxes[i % boxes.len()];
-                let k = lcg(&mut s);
-                Vec3A::new(
-                    if k < 0.5 { b.min.x } else { b.max.x },
-                    if !(0.25..=0.75).contains(&k) {
-                        b.min.y
-                    } else {
-                        b.max.y
-                    },
-                    if lcg(&mut s) < 0.5 { b.min.z } else { b.max.z },
-                ) - o
-            } else {
-                let mut d = u(&mut s) - 0.5;
-                if i % 5 == 1 {
-                    d.y = 0.0;
-                    d.z = 0.0;
-                }
-                d
-            };
+            let (o, d) = grazing_ray(&mut s, i, offset, scale, &boxes);
             let (tmin, tmax) = if i % 3 == 0 {
                 (0.0, f32::INFINITY)
             } else {
@@ -205,40 +238,21 @@ fn never_misses_a_box_the_exact_ray_enters() {
             // Twice the slack in space, with the two ulps of the origin's coordinates.
             let slack =
                 2.0 * f64::from(reach(o, bounds) + 2.0 * f32::EPSILON * o.abs().max_element());
-            let (o, d) = (o.as_dvec3(), d.as_dvec3());
+            let exact = (o.as_dvec3(), d.as_dvec3());
             for node in &nodes {
                 let (hits, _) = child_hits_scalar(node, &r, tmax);
                 for slot in 0..8 {
                     if node.child_meta[slot] == 0 {
                         continue;
                     }
-                    // The exact segment inside the box, and the same for the box grown by
-                    // twice the slack.
-                    let segment = |grow: f64| {
-                        let (mut t0, mut t1) = (f64::from(tmin), f64::from(tmax));
-                        for a in 0..3 {
-                            let lo = f64::from(node.bounds[2 * a][slot]) - grow;
-                            let hi = f64::from(node.bounds[2 * a + 1][slot]) + grow;
-                            if d[a] == 0.0 {
-                                if o[a] < lo || o[a] > hi {
-                                    t0 = f64::INFINITY;
-                                }
-                                continue;
-                            }
-                            let (x, y) = ((lo - o[a]) / d[a], (hi - o[a]) / d[a]);
-                            t0 = t0.max(x.min(y));
-                            t1 = t1.min(x.max(y));
-                        }
-                        t0 <= t1
-                    };
                     let hit = hits & (1 << slot) != 0;
-                    if segment(0.0) {
+                    if segment_enters(node, slot, exact, (tmin, tmax), 0.0) {
                         entered += 1;
                         assert!(hit, "offset {offset} scale {scale} ray {i} slot {slot}");
                     } else if hit {
                         loose += 1;
                         assert!(
-                            segment(slack),
+                            segment_enters(node, slot, exact, (tmin, tmax), slack),
                             "offset {offset} scale {scale} ray {i} slot {slot}"
                         );
                     }

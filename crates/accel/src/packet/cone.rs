@@ -1,7 +1,7 @@
 //! Whether a run of rays is coherent enough to walk as a packet: one direction octant, and
 //! every direction within [`PACKET_CONE_COS`] of the first.
 
-use super::PACKET_CONE_COS;
+use super::shape::PACKET_CONE_COS;
 use crate::Ray;
 use std::arch::x86_64::*;
 
@@ -73,7 +73,7 @@ pub(super) unsafe fn coherent_lanes(d0: glam::Vec3, [dx, dy, dz]: [__m256; 3]) -
 #[cfg(test)]
 mod tests {
     use super::super::rays::dir_lanes;
-    use super::super::PACKET_LANES;
+    use super::super::shape::PACKET_LANES;
     use super::*;
     use crate::test_util::{awkward, mix};
     use glam::Vec3;

@@ -2,7 +2,7 @@
 //! eight rays at once, so that a run of camera rays around a lone asset is answered for a few
 //! instructions a ray (most rays of a product shot miss it).
 
-use super::PACKET_LANES;
+use super::shape::PACKET_LANES;
 use crate::triangle::lanes::transpose;
 use crate::{Accel, Ray};
 use glam::Vec3A;

@@ -3,7 +3,7 @@
 //! the same bits either way.
 
 use super::rays::PacketRays;
-use super::PACKET_LANES;
+use super::shape::PACKET_LANES;
 use crate::node::Node;
 
 /// One node's box test for the packet's `active` lanes: per child slot, the lanes whose ray

@@ -2,7 +2,7 @@
 //! rays' origins and directions, with the arithmetic of eight `BoxRay::new`s ([`box_lanes`],
 //! which the bounds cull shares).
 
-use super::PACKET_LANES;
+use super::shape::PACKET_LANES;
 #[cfg(test)]
 use crate::node::BoxRay;
 use std::arch::x86_64::*;

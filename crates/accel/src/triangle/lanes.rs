@@ -121,95 +121,87 @@ pub(crate) unsafe fn transpose(v: [__m128; LANES]) -> [__m256; 4] {
     }
 }
 
-/// The watertight test of triangle `p` for the `lanes` of `l` (bit `i` for lane `i`), each
-/// within its `[tmin, tmax[i]]`.
+// Shorthands for the kernels below. Macros, not closures: closures do not inherit the target
+// features (a call per intrinsic). Each expands inside the caller's `unsafe` block.
+macro_rules! set {
+    ($x:expr) => {
+        _mm256_set1_ps($x)
+    };
+}
+macro_rules! abs {
+    ($x:expr) => {
+        _mm256_andnot_ps(_mm256_set1_ps(-0.0), $x)
+    };
+}
+macro_rules! mul {
+    ($a:expr, $b:expr) => {
+        _mm256_mul_ps($a, $b)
+    };
+}
+macro_rules! add {
+    ($a:expr, $b:expr) => {
+        _mm256_add_ps($a, $b)
+    };
+}
+macro_rules! max3 {
+    ($a:expr, $b:expr, $c:expr) => {
+        _mm256_max_ps(_mm256_max_ps(abs!($a), abs!($b)), abs!($c))
+    };
+}
+macro_rules! mask {
+    ($m:expr) => {
+        _mm256_movemask_ps($m) as u32
+    };
+}
+
+/// Vertex `v` in each lane's ray space: `shear * (v - origin)` as glam's `Mat3A * Vec3A`,
+/// `(c0 x + c1 y) + c2 z`, per row.
 ///
 /// # Safety
-/// The CPU must support AVX2, and the caller must be compiled for it (inlined into the AVX2
-/// packet queries).
+/// As for [`intersect_lanes`].
 #[inline(always)]
-pub(crate) unsafe fn intersect_lanes(
-    l: &TriLanes,
-    p: &[Vec3; 3],
-    tmax: &[f32; LANES],
-    lanes: u32,
-) -> LaneHits {
-    // SAFETY: AVX2 is guaranteed by the caller; every load reads one `[f32; 8]` in full and
-    // every store writes one. Macros, not closures: closures do not inherit the target
-    // features (a call per intrinsic).
+unsafe fn moved(l: &TriLanes, v: Vec3) -> [__m256; 3] {
+    let o = l.origin;
+    let [c0, c1, c2] = l.shear;
+    // SAFETY: AVX2 is guaranteed by the caller; register-only operations.
     unsafe {
-        macro_rules! set {
-            ($x:expr) => {
-                _mm256_set1_ps($x)
-            };
-        }
-        macro_rules! abs {
-            ($x:expr) => {
-                _mm256_andnot_ps(_mm256_set1_ps(-0.0), $x)
-            };
-        }
-        macro_rules! mul {
-            ($a:expr, $b:expr) => {
-                _mm256_mul_ps($a, $b)
-            };
-        }
-        macro_rules! add {
-            ($a:expr, $b:expr) => {
-                _mm256_add_ps($a, $b)
-            };
-        }
-        macro_rules! max3 {
-            ($a:expr, $b:expr, $c:expr) => {
-                _mm256_max_ps(_mm256_max_ps(abs!($a), abs!($b)), abs!($c))
-            };
-        }
-        macro_rules! mask {
-            ($m:expr) => {
-                _mm256_movemask_ps($m) as u32
-            };
-        }
-        let o = l.origin;
-        let [c0, c1, c2] = l.shear;
-        // `shear * (v - origin)` as glam's `Mat3A * Vec3A`: `(c0 x + c1 y) + c2 z`, per row.
-        macro_rules! moved {
-            ($v:expr) => {{
-                let d = [
-                    _mm256_sub_ps(set!($v.x), o[0]),
-                    _mm256_sub_ps(set!($v.y), o[1]),
-                    _mm256_sub_ps(set!($v.z), o[2]),
-                ];
-                [
-                    add!(
-                        add!(mul!(c0[0], d[0]), mul!(c1[0], d[1])),
-                        mul!(c2[0], d[2])
-                    ),
-                    add!(
-                        add!(mul!(c0[1], d[0]), mul!(c1[1], d[1])),
-                        mul!(c2[1], d[2])
-                    ),
-                    add!(
-                        add!(mul!(c0[2], d[0]), mul!(c1[2], d[1])),
-                        mul!(c2[2], d[2])
-                    ),
-                ]
-            }};
-        }
-        let [ax, ay, az] = moved!(p[0]);
-        let [bx, by, bz] = moved!(p[1]);
-        let [cx, cy, cz] = moved!(p[2]);
-        // Edge functions; e0 is the weight of p0, e1 of p1, e2 of p2.
-        let e0 = _mm256_sub_ps(mul!(bx, cy), mul!(by, cx));
-        let e1 = _mm256_sub_ps(mul!(cx, ay), mul!(cy, ax));
-        let e2 = _mm256_sub_ps(mul!(ax, by), mul!(ay, bx));
-        let det = add!(add!(e0, e1), e2);
-        let max_z = max3!(az, bz, cz);
-        let sz = l.sz;
-        let (az, bz, cz) = (mul!(az, sz), mul!(bz, sz), mul!(cz, sz));
+        let d = [
+            _mm256_sub_ps(set!(v.x), o[0]),
+            _mm256_sub_ps(set!(v.y), o[1]),
+            _mm256_sub_ps(set!(v.z), o[2]),
+        ];
+        // Written out, not `map`: closures do not inherit the target features.
+        [
+            add!(
+                add!(mul!(c0[0], d[0]), mul!(c1[0], d[1])),
+                mul!(c2[0], d[2])
+            ),
+            add!(
+                add!(mul!(c0[1], d[0]), mul!(c1[1], d[1])),
+                mul!(c2[1], d[2])
+            ),
+            add!(
+                add!(mul!(c0[2], d[0]), mul!(c1[2], d[1])),
+                mul!(c2[2], d[2])
+            ),
+        ]
+    }
+}
+
+/// The lanes (as a mask vector) the vector arithmetic cannot decide as the scalar test does:
+/// an edge function of exactly zero, or a value that is not finite (|x| unordered with or
+/// equal to infinity) among those the maxima read or that a zero or an infinite determinant
+/// would make. `v`: the nine moved coordinates, the three edge functions and the determinant.
+///
+/// # Safety
+/// As for [`intersect_lanes`].
+#[inline(always)]
+unsafe fn odd_lanes(v: [__m256; 13]) -> __m256 {
+    // SAFETY: AVX2 is guaranteed by the caller; register-only operations.
+    unsafe {
+        let (e0, e1, e2) = (v[9], v[10], v[11]);
         let zero = _mm256_setzero_ps();
         let inf = set!(f32::INFINITY);
-        // Lanes for the scalar test: an edge function of exactly zero, or a value that is not
-        // finite (|x| unordered with or equal to infinity) among those the maxima read or
-        // that a zero or an infinite determinant would make.
         let mut odd = _mm256_or_ps(
             _mm256_or_ps(
                 _mm256_cmp_ps::<_CMP_EQ_OQ>(e0, zero),
@@ -217,12 +209,22 @@ pub(crate) unsafe fn intersect_lanes(
             ),
             _mm256_cmp_ps::<_CMP_EQ_OQ>(e2, zero),
         );
-        for x in [ax, ay, az, bx, by, bz, cx, cy, cz, e0, e1, e2, det] {
+        for x in v {
             odd = _mm256_or_ps(odd, _mm256_cmp_ps::<_CMP_NLT_UQ>(abs!(x), inf));
         }
-        let scalar_lanes = mask!(odd) & lanes;
-        // Both signs among the edge functions: outside (all finite and non-zero here, so
-        // `det` is not zero either).
+        odd
+    }
+}
+
+/// The lanes (as a mask vector) whose edge functions do not have both signs: not outside.
+///
+/// # Safety
+/// As for [`intersect_lanes`].
+#[inline(always)]
+unsafe fn inside_lanes(e0: __m256, e1: __m256, e2: __m256) -> __m256 {
+    // SAFETY: AVX2 is guaranteed by the caller; register-only operations.
+    unsafe {
+        let zero = _mm256_setzero_ps();
         let any_neg = _mm256_or_ps(
             _mm256_or_ps(
                 _mm256_cmp_ps::<_CMP_LT_OQ>(e0, zero),
@@ -237,11 +239,94 @@ pub(crate) unsafe fn intersect_lanes(
             ),
             _mm256_cmp_ps::<_CMP_GT_OQ>(e2, zero),
         );
-        let inside = _mm256_andnot_ps(
+        _mm256_andnot_ps(
             _mm256_and_ps(any_neg, any_pos),
             _mm256_castsi256_ps(_mm256_set1_epi32(-1)),
+        )
+    }
+}
+
+/// pbrt-v4's bound on the error of `t`, in the scalar test's order of operations: from the
+/// moved `x`, `y` and scaled `z` of the three vertices (`[a, b, c]` each), the largest unscaled
+/// `|z|`, the edge functions and `1 / det`.
+///
+/// # Safety
+/// As for [`intersect_lanes`].
+#[inline(always)]
+unsafe fn t_error(
+    [x, y, z]: [[__m256; 3]; 3],
+    max_z: __m256,
+    [e0, e1, e2]: [__m256; 3],
+    inv_det: __m256,
+) -> __m256 {
+    // SAFETY: AVX2 is guaranteed by the caller; register-only operations.
+    unsafe {
+        let max_zt = max3!(z[0], z[1], z[2]);
+        let delta_z = mul!(set!(gamma(3)), max_zt);
+        let max_xt = max3!(x[0], x[1], x[2]);
+        let max_yt = max3!(y[0], y[1], y[2]);
+        let delta_x = mul!(set!(gamma(5)), add!(max_xt, max_z));
+        let delta_y = mul!(set!(gamma(5)), add!(max_yt, max_z));
+        let delta_e = mul!(
+            set!(2.0),
+            add!(
+                add!(
+                    mul!(mul!(set!(gamma(2)), max_xt), max_yt),
+                    mul!(delta_y, max_xt)
+                ),
+                mul!(delta_x, max_yt)
+            )
         );
-        let candidates = lanes & !scalar_lanes & mask!(inside);
+        let max_e = max3!(e0, e1, e2);
+        mul!(
+            mul!(
+                set!(3.0),
+                add!(
+                    add!(
+                        mul!(mul!(set!(gamma(3)), max_e), max_zt),
+                        mul!(delta_e, max_zt)
+                    ),
+                    mul!(delta_z, max_e)
+                )
+            ),
+            abs!(inv_det)
+        )
+    }
+}
+
+/// The watertight test of triangle `p` for the `lanes` of `l` (bit `i` for lane `i`), each
+/// within its `[tmin, tmax[i]]`.
+///
+/// # Safety
+/// The CPU must support AVX2, and the caller must be compiled for it (inlined into the AVX2
+/// packet queries).
+#[inline(always)]
+pub(crate) unsafe fn intersect_lanes(
+    l: &TriLanes,
+    p: &[Vec3; 3],
+    tmax: &[f32; LANES],
+    lanes: u32,
+) -> LaneHits {
+    // SAFETY: AVX2 is guaranteed by the caller; every load reads one `[f32; 8]` in full and
+    // every store writes one.
+    unsafe {
+        let [ax, ay, az] = moved(l, p[0]);
+        let [bx, by, bz] = moved(l, p[1]);
+        let [cx, cy, cz] = moved(l, p[2]);
+        // Edge functions; e0 is the weight of p0, e1 of p1, e2 of p2.
+        let e0 = _mm256_sub_ps(mul!(bx, cy), mul!(by, cx));
+        let e1 = _mm256_sub_ps(mul!(cx, ay), mul!(cy, ax));
+        let e2 = _mm256_sub_ps(mul!(ax, by), mul!(ay, bx));
+        let det = add!(add!(e0, e1), e2);
+        let max_z = max3!(az, bz, cz);
+        let sz = l.sz;
+        let (az, bz, cz) = (mul!(az, sz), mul!(bz, sz), mul!(cz, sz));
+        // Lanes for the scalar test.
+        let odd = odd_lanes([ax, ay, az, bx, by, bz, cx, cy, cz, e0, e1, e2, det]);
+        let scalar_lanes = mask!(odd) & lanes;
+        // Both signs among the edge functions: outside (all finite and non-zero here, so
+        // `det` is not zero either).
+        let candidates = lanes & !scalar_lanes & mask!(inside_lanes(e0, e1, e2));
         if candidates == 0 {
             // Most tests end here, as the scalar test's do after its sign test.
             return LaneHits {
@@ -259,37 +344,8 @@ pub(crate) unsafe fn intersect_lanes(
             _mm256_cmp_ps::<_CMP_GE_OQ>(t, l.tmin),
             _mm256_cmp_ps::<_CMP_LE_OQ>(t, _mm256_loadu_ps(tmax.as_ptr())),
         );
-        // pbrt-v4's bound on t's error, in the scalar test's order of operations.
-        let max_zt = max3!(az, bz, cz);
-        let delta_z = mul!(set!(gamma(3)), max_zt);
-        let max_xt = max3!(ax, bx, cx);
-        let max_yt = max3!(ay, by, cy);
-        let delta_x = mul!(set!(gamma(5)), add!(max_xt, max_z));
-        let delta_y = mul!(set!(gamma(5)), add!(max_yt, max_z));
-        let delta_e = mul!(
-            set!(2.0),
-            add!(
-                add!(
-                    mul!(mul!(set!(gamma(2)), max_xt), max_yt),
-                    mul!(delta_y, max_xt)
-                ),
-                mul!(delta_x, max_yt)
-            )
-        );
-        let max_e = max3!(e0, e1, e2);
-        let delta_t = mul!(
-            mul!(
-                set!(3.0),
-                add!(
-                    add!(
-                        mul!(mul!(set!(gamma(3)), max_e), max_zt),
-                        mul!(delta_e, max_zt)
-                    ),
-                    mul!(delta_z, max_e)
-                )
-            ),
-            abs!(inv_det)
-        );
+        let xyz = [[ax, bx, cx], [ay, by, cy], [az, bz, cz]];
+        let delta_t = t_error(xyz, max_z, [e0, e1, e2], inv_det);
         let decided = candidates & mask!(in_range);
         // Hits too close to call go to the scalar test, which decides them in `f64`.
         let close = decided & mask!(_mm256_cmp_ps::<_CMP_LE_OQ>(t, delta_t));
@@ -337,6 +393,106 @@ mod tests {
         V[mix(k) as usize % V.len()]
     }
 
+    /// Case `k`'s value `j`: with `stress`, now and then an exact or extreme value.
+    fn pick(k: u32, stress: bool, j: u32) -> f32 {
+        if stress && mix(k + j) % 5 == 0 {
+            odd(k + j)
+        } else {
+            unit(k + j)
+        }
+    }
+
+    /// Case `k`'s eight rays at `tri` (through a vertex or edge now and then) or anywhere,
+    /// with their `tmin` and `tmax`.
+    fn case_rays(
+        k: u32,
+        stress: bool,
+        tri: &[Vec3; 3],
+    ) -> (Vec<TriRay>, [f32; LANES], [f32; LANES]) {
+        let mut rays = Vec::new();
+        let mut tmin = [0.0; LANES];
+        let mut tmax = [0.0; LANES];
+        for i in 0..LANES as u32 {
+            let q = |j: u32| pick(k, stress, 16 + 6 * i + j);
+            let origin = Vec3::new(q(0), q(1), q(2) + 2.0 * unit(k + 60));
+            let target = match mix(k + 61 + i) % 4 + 2 * u32::from(!stress) {
+                0 => tri[0],
+                1 => (tri[1] + tri[2]) * 0.5,
+                2 => Vec3::new(q(3), q(4), q(5)),
+                3 => (tri[0] + tri[1] + tri[2]) / 3.0,
+                4 => Vec3::new(q(3), q(4), q(5)),
+                _ => tri[1] * 0.25 + tri[2] * 0.25 + tri[0] * 0.5,
+            };
+            let dir = if stress && mix(k + 62 + i) % 7 == 0 {
+                Vec3::new(q(3), 0.0, -0.0)
+            } else {
+                target - origin
+            };
+            rays.push(TriRay::new(origin, dir));
+            tmin[i as usize] = if mix(k + 63 + i) % 3 == 0 { 0.0 } else { 1e-4 };
+            tmax[i as usize] = match mix(k + 40 + i) % 3 {
+                0 => f32::INFINITY,
+                1 => 0.7,
+                _ => 1e3,
+            };
+        }
+        (rays, tmin, tmax)
+    }
+
+    /// How the lanes answered, counted over the cases.
+    #[derive(Default)]
+    struct Tally {
+        hits: u32,
+        /// Lanes left to the scalar test, ordinary cases only.
+        scalar: u32,
+        misses: u32,
+    }
+
+    /// One case's (number, stressed) eight-lane answer `h` (for lanes `want`) against the scalar test's, lane by
+    /// lane, counted into `tally`.
+    fn check_case(
+        (case, stress): (u32, bool),
+        tri: [Vec3; 3],
+        rays: &[TriRay],
+        (tmin, tmax): ([f32; LANES], [f32; LANES]),
+        want: u32,
+        h: &LaneHits,
+        tally: &mut Tally,
+    ) {
+        for i in 0..LANES {
+            let t = Tri { p: tri, prim: 0 };
+            let expected = intersect::<false>(&rays[i], &t, tmin[i], tmax[i]);
+            // SAFETY: AVX2 and FMA checked by the caller.
+            let avx = unsafe { intersect_avx(&rays[i], &t, tmin[i], tmax[i]) };
+            let bits = |h: Option<(f32, f32, f32)>| h.map(|h| [h.0, h.1, h.2].map(f32::to_bits));
+            assert_eq!(bits(avx), bits(expected), "case {case} lane {i}: AVX path");
+            let bit = 1u32 << i;
+            if want & bit == 0 {
+                continue;
+            }
+            if h.scalar & bit != 0 {
+                tally.scalar += u32::from(!stress);
+            } else if h.hits & bit != 0 {
+                let got = (h.t[i], h.b1[i], h.b2[i]);
+                let e = expected.unwrap_or_else(|| {
+                    panic!("case {case} lane {i}: {got:?} where the scalar test misses")
+                });
+                assert_eq!(
+                    [got.0, got.1, got.2].map(f32::to_bits),
+                    [e.0, e.1, e.2].map(f32::to_bits),
+                    "case {case} lane {i}"
+                );
+                tally.hits += 1;
+            } else {
+                assert!(
+                    expected.is_none(),
+                    "case {case} lane {i}: missed {expected:?}"
+                );
+                tally.misses += 1;
+            }
+        }
+    }
+
     /// The eight-lane answer of every lane against the scalar test's, bit for bit: the
     /// lanes it decides must hit exactly where the scalar test hits, with its `(t, b1, b2)`,
     /// and miss exactly where it misses. The scalar test's two paths (portable, and AVX's
@@ -346,52 +502,19 @@ mod tests {
         if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
             return;
         }
-        let (mut hits, mut scalar, mut misses) = (0, 0, 0);
+        let mut tally = Tally::default();
         for case in 0..40_000u32 {
             let k = case * 64;
             // Every other case draws exact and extreme values too; the others, ordinary ones.
             let stress = case % 2 == 0;
-            let pick = |j: u32| {
-                if stress && mix(k + j) % 5 == 0 {
-                    odd(k + j)
-                } else {
-                    unit(k + j)
-                }
-            };
+            let pick = |j: u32| pick(k, stress, j);
             // A triangle near the origin, or with a vertex or edge on exact values.
             let tri = [
                 Vec3::new(pick(1), pick(2), pick(3)),
                 Vec3::new(pick(4), pick(5), pick(6)),
                 Vec3::new(pick(7), pick(8), pick(9)),
             ];
-            let mut rays = Vec::new();
-            let mut tmin = [0.0; LANES];
-            let mut tmax = [0.0; LANES];
-            for i in 0..LANES as u32 {
-                let q = |j: u32| pick(16 + 6 * i + j);
-                let origin = Vec3::new(q(0), q(1), q(2) + 2.0 * unit(k + 60));
-                // Rays towards the triangle (through a vertex or edge now and then) or anywhere.
-                let target = match mix(k + 61 + i) % 4 + 2 * u32::from(!stress) {
-                    0 => tri[0],
-                    1 => (tri[1] + tri[2]) * 0.5,
-                    2 => Vec3::new(q(3), q(4), q(5)),
-                    3 => (tri[0] + tri[1] + tri[2]) / 3.0,
-                    4 => Vec3::new(q(3), q(4), q(5)),
-                    _ => tri[1] * 0.25 + tri[2] * 0.25 + tri[0] * 0.5,
-                };
-                let dir = if stress && mix(k + 62 + i) % 7 == 0 {
-                    Vec3::new(q(3), 0.0, -0.0)
-                } else {
-                    target - origin
-                };
-                rays.push(TriRay::new(origin, dir));
-                tmin[i as usize] = if mix(k + 63 + i) % 3 == 0 { 0.0 } else { 1e-4 };
-                tmax[i as usize] = match mix(k + 40 + i) % 3 {
-                    0 => f32::INFINITY,
-                    1 => 0.7,
-                    _ => 1e3,
-                };
-            }
+            let (rays, tmin, tmax) = case_rays(k, stress, &tri);
             let refs: [&TriRay; LANES] = std::array::from_fn(|i| &rays[i]);
             // SAFETY: AVX2 checked above.
             let lanes = unsafe { TriLanes::new(refs, tmin) };
@@ -401,40 +524,21 @@ mod tests {
             let h = unsafe { intersect_lanes(&lanes, &tri, &tmax, want) };
             assert_eq!(h.hits & h.scalar, 0);
             assert_eq!((h.hits | h.scalar) & !want, 0, "lanes outside the mask");
-            for i in 0..LANES {
-                let t = Tri { p: tri, prim: 0 };
-                let expected = intersect::<false>(&rays[i], &t, tmin[i], tmax[i]);
-                // SAFETY: AVX2 and FMA checked above.
-                let avx = unsafe { intersect_avx(&rays[i], &t, tmin[i], tmax[i]) };
-                let bits =
-                    |h: Option<(f32, f32, f32)>| h.map(|h| [h.0, h.1, h.2].map(f32::to_bits));
-                assert_eq!(bits(avx), bits(expected), "case {case} lane {i}: AVX path");
-                let bit = 1u32 << i;
-                if want & bit == 0 {
-                    continue;
-                }
-                if h.scalar & bit != 0 {
-                    scalar += u32::from(!stress);
-                } else if h.hits & bit != 0 {
-                    let got = (h.t[i], h.b1[i], h.b2[i]);
-                    let e = expected.unwrap_or_else(|| {
-                        panic!("case {case} lane {i}: {got:?} where the scalar test misses")
-                    });
-                    assert_eq!(
-                        [got.0, got.1, got.2].map(f32::to_bits),
-                        [e.0, e.1, e.2].map(f32::to_bits),
-                        "case {case} lane {i}"
-                    );
-                    hits += 1;
-                } else {
-                    assert!(
-                        expected.is_none(),
-                        "case {case} lane {i}: missed {expected:?}"
-                    );
-                    misses += 1;
-                }
-            }
+            check_case(
+                (case, stress),
+                tri,
+                &rays,
+                (tmin, tmax),
+                want,
+                &h,
+                &mut tally,
+            );
         }
+        let Tally {
+            hits,
+            scalar,
+            misses,
+        } = tally;
         // Every kind of answer is exercised, and on ordinary rays the lanes decide nearly all.
         assert!(
             hits > 10_000 && misses > 10_000,

@@ -1,7 +1,8 @@
 //! The walk of node groups in obvhs' octant order (its traversal, with our box test): the
 //! one-ray occlusion queries and the packets' walk.
 
-use super::{Group, Leaf};
+use super::leaf::Leaf;
+use super::stack::Group;
 
 use crate::node::{child_index, BoxRay, Node};
 use std::mem::MaybeUninit;

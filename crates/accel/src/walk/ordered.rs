@@ -1,7 +1,8 @@
 //! The walk in entry-distance order: nearest child first and pops beyond `tmax` skipped for
 //! closest hits, one-ray and interleaved.
 
-use super::{Group, Leaf};
+use super::leaf::Leaf;
+use super::stack::Group;
 use crate::node::{child_index, BoxRay, ChildHits, Node};
 use std::mem::MaybeUninit;
 

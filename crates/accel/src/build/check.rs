@@ -1,0 +1,97 @@
+//! Which triangles are kept: indices in range, three finite points not on one line.
+
+use crate::{InstanceInput, MeshInput, Tri};
+use glam::Vec3;
+
+/// Why a triangle is left out.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum TriCheck {
+    Ok([Vec3; 3]),
+    OutOfRange,
+    Degenerate,
+}
+
+fn check_triangle(positions: &[Vec3], tri: [u32; 3]) -> TriCheck {
+    let mut p = [Vec3::ZERO; 3];
+    for k in 0..3 {
+        match positions.get(tri[k] as usize) {
+            Some(v) => p[k] = *v,
+            None => return TriCheck::OutOfRange,
+        }
+    }
+    classify(p)
+}
+
+fn classify(p: [Vec3; 3]) -> TriCheck {
+    if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
+        return TriCheck::Degenerate;
+    }
+    // In f64 the edges of f32 points and their products are exact, so this is exactly "the
+    // three points are collinear", without a tolerance that would depend on the scene's scale.
+    let [a, b, c] = p.map(|v| v.as_dvec3());
+    if (b - a).cross(c - a) == glam::DVec3::ZERO {
+        return TriCheck::Degenerate;
+    }
+    TriCheck::Ok(p)
+}
+
+/// Per mesh: validity counts, and the kept triangles if a bottom-level BVH is to be built.
+pub(super) struct Checked {
+    pub(super) shared: Vec<(Tri, u32)>,
+    pub(super) kept: usize,
+    pub(super) degenerate: usize,
+    pub(super) out_of_range: usize,
+}
+
+/// The triangles of `mesh` checked; kept ones are collected when `keep`.
+pub(super) fn check_mesh(mesh: &MeshInput<'_>, keep: bool) -> Checked {
+    let mut c = Checked {
+        shared: Vec::new(),
+        kept: 0,
+        degenerate: 0,
+        out_of_range: 0,
+    };
+    for (i, tri) in mesh.indices.iter().enumerate() {
+        match check_triangle(mesh.positions, *tri) {
+            TriCheck::Ok(p) => {
+                c.kept += 1;
+                if keep {
+                    c.shared.push((Tri { p, prim: i as u32 }, 0));
+                }
+            }
+            TriCheck::OutOfRange => c.out_of_range += 1,
+            TriCheck::Degenerate => c.degenerate += 1,
+        }
+    }
+    c
+}
+
+/// The flattened instances' triangles in world space, tagged with the instance, and how many
+/// triangles only become degenerate there (rounding).
+pub(super) fn flatten(
+    meshes: &[MeshInput<'_>],
+    flat: &[(u32, InstanceInput)],
+) -> (Vec<(Tri, u32)>, usize) {
+    let mut tris: Vec<(Tri, u32)> = Vec::new();
+    let mut degenerate = 0;
+    for (id, inst) in flat {
+        let mesh = &meshes[inst.mesh as usize];
+        let world: Vec<Vec3> = mesh
+            .positions
+            .iter()
+            .map(|p| inst.world_from_object.transform_point3(*p))
+            .collect();
+        for (i, tri) in mesh.indices.iter().enumerate() {
+            match check_triangle(&world, *tri) {
+                TriCheck::Ok(p) => tris.push((Tri { p, prim: i as u32 }, *id)),
+                TriCheck::Degenerate
+                    if check_triangle(mesh.positions, *tri) != TriCheck::Degenerate =>
+                {
+                    degenerate += 1
+                }
+                _ => {}
+            }
+        }
+    }
+    (tris, degenerate)
+}

@@ -1,0 +1,133 @@
+//! Where each instance goes: into the world-space BVH, or over a bottom-level BVH of its mesh
+//! (and what an animation frame tells about that).
+
+use crate::{InstanceInput, MeshInput};
+use glam::Affine3A;
+
+/// `object_from_world` for a usable instance transform, computed in f64 for accuracy.
+fn invert(world_from_object: &Affine3A) -> Option<Affine3A> {
+    let m = world_from_object;
+    if !(m.matrix3.is_finite() && m.translation.is_finite()) {
+        return None;
+    }
+    let d = glam::DAffine3::from_mat3_translation(m.matrix3.as_dmat3(), m.translation.as_dvec3());
+    let det = d.matrix3.determinant();
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv = d.inverse();
+    let f = Affine3A::from_mat3_translation(inv.matrix3.as_mat3(), inv.translation.as_vec3());
+    (f.matrix3.is_finite() && f.translation.is_finite()).then_some(f)
+}
+
+/// What an animation frame's structure may take from the previous frame's (see
+/// [`Accel::build_frame`](crate::Accel::build_frame)).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FrameHints<'a> {
+    /// Per instance: its transform may change between frames, so it is kept out of the
+    /// world-space BVH (moving it then only rebuilds the top level). Empty: none moves.
+    pub moving: &'a [bool],
+    /// Meshes from this index on deform between frames (skins, morph targets): kept out of the
+    /// world-space BVH and rebuilt every frame; `meshes[..deforming_from]` are the same geometry
+    /// in every frame, and their bottom-level BVHs are reused. `usize::MAX` (as
+    /// [`FrameHints::STILL`]): nothing deforms and nothing is reused.
+    pub deforming_from: usize,
+    /// When the still instances draw at most this many triangles in all (each instance
+    /// counted), every one of them goes into the world-space BVH, shared meshes too: one level
+    /// to walk, no per-instance ray transform, and the interleaved queries apply. Above it, a
+    /// mesh drawn more than once keeps one object-space BVH (memory bounded by the unique
+    /// triangles). [`FLATTEN_SHARED_LIMIT`] by default; 0 keeps every shared mesh instanced.
+    pub flatten_shared_up_to: usize,
+}
+
+/// The default of [`FrameHints::flatten_shared_up_to`]: 2^20 drawn triangles, so flattening
+/// costs at most about 60 MB (a triangle takes about 60 bytes with its share of the nodes).
+pub const FLATTEN_SHARED_LIMIT: usize = 1 << 20;
+
+impl FrameHints<'_> {
+    /// A still scene: no instance moves, no mesh deforms (what [`Accel::build`](crate::Accel::build) assumes).
+    pub const STILL: FrameHints<'static> = FrameHints {
+        moving: &[],
+        deforming_from: usize::MAX,
+        flatten_shared_up_to: FLATTEN_SHARED_LIMIT,
+    };
+}
+
+/// A key of the world-space BVH's contents: which instances of which meshes, with which
+/// transforms. Equal keys (and static meshes) mean an equal BVH.
+pub(super) fn flat_key(flat: &[(u32, InstanceInput)]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |w: u32| {
+        for b in w.to_le_bytes() {
+            h = (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    for (id, inst) in flat {
+        eat(*id);
+        eat(inst.mesh);
+        for v in inst.world_from_object.to_cols_array() {
+            eat(v.to_bits());
+        }
+    }
+    h
+}
+
+/// Where each instance goes: the usable ones (a mesh that exists, an invertible transform),
+/// how often each mesh is drawn, which instances the world-space BVH holds, and which meshes
+/// need a BVH of their own.
+pub(super) struct Placement {
+    pub(super) usable: Vec<(u32, InstanceInput, Affine3A)>,
+    pub(super) uses: Vec<u32>,
+    pub(super) flat: Vec<(u32, InstanceInput)>,
+    pub(super) own_blas: Vec<bool>,
+    pub(super) skipped: usize,
+}
+
+/// Flattens what neither moves nor deforms and is drawn once, or, in scenes drawing at most
+/// `hints.flatten_shared_up_to` still triangles, everything that neither moves nor deforms.
+pub(super) fn placement(
+    meshes: &[MeshInput<'_>],
+    instances: &[InstanceInput],
+    hints: &FrameHints<'_>,
+) -> Placement {
+    let mut usable: Vec<(u32, InstanceInput, Affine3A)> = Vec::with_capacity(instances.len());
+    let mut uses = vec![0u32; meshes.len()];
+    let mut skipped = 0;
+    for (i, inst) in instances.iter().enumerate() {
+        let inv = invert(&inst.world_from_object);
+        match (meshes.get(inst.mesh as usize), inv) {
+            (Some(_), Some(inv)) => {
+                uses[inst.mesh as usize] += 1;
+                usable.push((i as u32, *inst, inv));
+            }
+            _ => skipped += 1,
+        }
+    }
+    let is_static = |id: u32, m: usize| {
+        !hints.moving.get(id as usize).copied().unwrap_or(false) && m < hints.deforming_from
+    };
+    let static_drawn: usize = usable
+        .iter()
+        .filter(|(id, inst, _)| is_static(*id, inst.mesh as usize))
+        .map(|(_, inst, _)| meshes[inst.mesh as usize].indices.len())
+        .sum();
+    let flatten_all = static_drawn <= hints.flatten_shared_up_to;
+    let flattened = |id: u32, m: usize| (uses[m] == 1 || flatten_all) && is_static(id, m);
+    let flat: Vec<(u32, InstanceInput)> = usable
+        .iter()
+        .filter(|(id, inst, _)| flattened(*id, inst.mesh as usize))
+        .map(|(id, inst, _)| (*id, *inst))
+        .collect();
+    let mut own_blas = vec![false; meshes.len()];
+    for (id, inst, _) in &usable {
+        let m = inst.mesh as usize;
+        own_blas[m] |= !flattened(*id, m);
+    }
+    Placement {
+        usable,
+        uses,
+        flat,
+        own_blas,
+        skipped,
+    }
+}
