@@ -158,11 +158,7 @@ fn tiled_dwa_is_refused() {
         line_order: LineOrder::Increasing,
     };
     let layer = ExrLayer::new((8, 8), LayerAttributes::default(), encoding, channels);
-    let mut bytes = Vec::new();
-    ExrImage::from_layer(layer)
-        .write()
-        .to_buffered(Cursor::new(&mut bytes))
-        .unwrap();
+    let bytes = layer_bytes(layer);
     let err = decode_exr(&bytes, "t".as_ref()).unwrap_err();
     assert!(matches!(err, Error::UnsupportedExr { .. }), "{err}");
 }

@@ -23,12 +23,7 @@ fn foreign_rgb_half(path_name: &str) -> Vec<u8> {
         AttributeValue::F64(1.5), // a type this crate skips
     );
     let layer = ExrLayer::new((3, 2), attrs, Encoding::FAST_LOSSLESS, channels);
-    let mut bytes = Vec::new();
-    ExrImage::from_layer(layer)
-        .write()
-        .to_buffered(Cursor::new(&mut bytes))
-        .unwrap();
-    bytes
+    layer_bytes(layer)
 }
 
 #[test]
@@ -64,12 +59,7 @@ fn reads_blender_multilayer_and_luminance_files() {
             Encoding::FAST_LOSSLESS,
             channels,
         );
-        let mut bytes = Vec::new();
-        ExrImage::from_layer(layer)
-            .write()
-            .to_buffered(Cursor::new(&mut bytes))
-            .unwrap();
-        bytes
+        layer_bytes(layer)
     };
     let blender = write(&[
         ("ViewLayer.Combined.R", 1.0),

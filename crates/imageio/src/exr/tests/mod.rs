@@ -19,6 +19,16 @@ mod files;
 mod foreign;
 mod round_trip;
 
+/// One layer written as an EXR file in memory.
+fn layer_bytes(layer: ExrLayer<AnyChannels<FlatSamples>>) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    ExrImage::from_layer(layer)
+        .write()
+        .to_buffered(Cursor::new(&mut bytes))
+        .unwrap();
+    bytes
+}
+
 fn sample_image() -> Image {
     let (w, h) = (5u32, 3u32);
     let n = (w * h) as usize;
@@ -90,10 +100,5 @@ fn foreign_file(compression: Compression) -> Vec<u8> {
         line_order: LineOrder::Increasing,
     };
     let layer = ExrLayer::new((w, h), LayerAttributes::default(), encoding, channels);
-    let mut bytes = Vec::new();
-    ExrImage::from_layer(layer)
-        .write()
-        .to_buffered(Cursor::new(&mut bytes))
-        .unwrap();
-    bytes
+    layer_bytes(layer)
 }
