@@ -51,7 +51,7 @@ pub(crate) fn before_load(args: &RenderArgs) -> anyhow::Result<BeforeLoad> {
             passes,
             ..render_options(args)
         };
-        check_footprint(args, &early, &exr, &budget)?;
+        check_footprint(args, png_out, &early, &exr, &budget)?;
     }
     Ok(BeforeLoad {
         png_out,
@@ -92,7 +92,7 @@ pub(crate) fn after_load(
         cancel: crate::interrupt::install()?,
         ..render_options(args)
     };
-    check_footprint(args, &opts, &before.exr, &before.budget)?;
+    check_footprint(args, before.png_out, &opts, &before.exr, &before.budget)?;
     // --region/--tile apply to every frame of a sequence too.
     let exr = aperture_output::ExrOptions {
         region: part.map(|p| p.window),
@@ -111,11 +111,12 @@ pub(crate) fn after_load(
 /// has, printing the warnings; an error says what it needs and what there is.
 fn check_footprint(
     args: &RenderArgs,
+    png_out: bool,
     opts: &RenderOptions,
     exr: &aperture_output::ExrOptions,
     budget: &aperture_budget::MemoryBudget,
 ) -> anyhow::Result<()> {
-    let kind = if is_png(&args.output) {
+    let kind = if png_out {
         aperture_output::OutputKind::Png { sixteen_bit: false }
     } else {
         aperture_output::OutputKind::Exr
@@ -124,12 +125,6 @@ fn check_footprint(
         eprintln!("warning: {w}");
     }
     Ok(())
-}
-
-fn is_png(path: &std::path::Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("png"))
 }
 
 /// Whether the output is a PNG (else an EXR); any other extension is a usage error.
