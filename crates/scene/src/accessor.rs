@@ -16,7 +16,7 @@ pub(crate) struct Buffers {
     pub data: Vec<Vec<u8>>,
     /// Sum of all buffer lengths: the budget for accessors with no bytes behind them.
     pub total: u64,
-    /// Bytes of `EXT_meshopt_compression` buffer views, decoded, by view index: read instead of
+    /// Bytes of meshopt-compressed buffer views, decoded, by view index: read instead of
     /// the view's own (fallback) bytes.
     pub decoded: HashMap<usize, Vec<u8>>,
     /// Bytes of accessor data read so far, every read counted (a file may have ten thousand

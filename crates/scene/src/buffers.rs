@@ -21,7 +21,7 @@ pub(crate) fn load_buffers(
     for b in doc.buffers() {
         let at = format!("buffers[{}]", b.index());
         if crate::meshopt::is_fallback(root, b.index()) {
-            // EXT_meshopt_compression's placeholder: no bytes; its views are decoded instead.
+            // The meshopt extension's placeholder: no bytes; its views are decoded instead.
             data.push(Vec::new());
             continue;
         }

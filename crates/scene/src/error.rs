@@ -157,8 +157,9 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
-    /// Compressed geometry (`KHR_draco_mesh_compression`, `EXT_meshopt_compression`) that does
-    /// not decode, or decodes to other sizes than its accessors state.
+    /// Compressed geometry (`KHR_draco_mesh_compression`, `KHR_meshopt_compression` or
+    /// `EXT_meshopt_compression`) that does not decode, or decodes to other sizes than its
+    /// accessors state.
     #[error("{at}: {reason}")]
     Compressed {
         /// JSON path of the compressed data (`meshes[0].primitives[1].extensions.KHR_draco_mesh_compression`).

@@ -15,8 +15,8 @@
 //! - Without a time the stored pose is drawn: node transforms, morph weights (`node.weights`, else
 //!   `mesh.weights`) and skins posed by their joints (SPEC §7). With [`LoadOptions::time`] the
 //!   selected animations are evaluated at that time; [`Animated`] loads once and poses at any time.
-//! - `KHR_draco_mesh_compression` and `EXT_meshopt_compression` geometry is decoded, its sizes
-//!   checked against the accessors before anything is allocated.
+//! - `KHR_draco_mesh_compression` and `KHR_meshopt_compression` (or `EXT_`) geometry is
+//!   decoded, its sizes checked against the accessors before anything is allocated.
 //! - Only the selected scene's meshes are loaded, each once, with one [`Instance`] per drawing node
 //!   or `EXT_mesh_gpu_instancing` instance; only images used by drawn materials are decoded, in
 //!   parallel.

@@ -1,6 +1,10 @@
-//! `EXT_meshopt_compression`: buffer views whose bytes are meshoptimizer-compressed (vertex
-//! attributes, triangle indices or index sequences), optionally followed by a filter
-//! (octahedral normals, quaternions, exponential floats, YCoCg colours).
+//! `KHR_meshopt_compression` and `EXT_meshopt_compression`: buffer views whose bytes are
+//! meshoptimizer-compressed (vertex attributes, triangle indices or index sequences), optionally
+//! followed by a filter (octahedral normals, quaternions, exponential floats, YCoCg colours).
+//!
+//! The Khronos extension is the vendor one under its own name, with the same objects; what its
+//! text adds (version 1 of the attribute codec, the `COLOR` filter) the same decoder reads under
+//! either name, as meshoptimizer's own loaders do.
 //!
 //! Each compressed view is decoded once, when the buffers are read, into the bytes its accessors
 //! then read as if they were stored plainly. Sizes are checked before anything is allocated: the
@@ -20,13 +24,24 @@ pub(crate) const MAX_EXPANSION: u64 = 256;
 /// Decoded bytes always allowed, whatever the compressed size.
 const SLACK: u64 = 1 << 16;
 
-/// The `EXT_meshopt_compression` object of `buffers[i]`, if any.
+/// The two names of the extension, the Khronos one first (a file may carry both on one object,
+/// the vendor one for older readers).
+pub(crate) const NAMES: [&str; 2] = ["KHR_meshopt_compression", "EXT_meshopt_compression"];
+
+/// The meshopt extension object of a buffer or buffer view, with the name it is under.
+fn extension(object: &Value) -> Option<(&'static str, &Value)> {
+    let extensions = object.get("extensions")?;
+    NAMES
+        .iter()
+        .find_map(|&name| extensions.get(name).map(|e| (name, e)))
+}
+
+/// Whether `buffers[i]` is a meshopt `fallback` buffer (no real bytes).
 pub(crate) fn is_fallback(root: &Value, buffer: usize) -> bool {
     root.get("buffers")
         .and_then(|b| b.get(buffer))
-        .and_then(|b| b.get("extensions"))
-        .and_then(|e| e.get("EXT_meshopt_compression"))
-        .and_then(|e| e.get("fallback"))
+        .and_then(extension)
+        .and_then(|(_, e)| e.get("fallback"))
         .and_then(Value::as_bool)
         .unwrap_or(false)
 }
@@ -302,14 +317,11 @@ pub(crate) fn decode_views(root: &Value, buffers: &mut Buffers) -> Result<(), Er
         .saturating_add(SLACK);
     let mut total = 0u64;
     for (i, view) in views.into_iter().flatten().enumerate() {
-        let Some(ext) = view
-            .get("extensions")
-            .and_then(|e| e.get("EXT_meshopt_compression"))
-        else {
+        let Some((name, ext)) = extension(view) else {
             continue;
         };
         let length = view.get("byteLength").and_then(Value::as_u64).unwrap_or(0);
-        let at = format!("bufferViews[{i}].extensions.EXT_meshopt_compression");
+        let at = format!("bufferViews[{i}].extensions.{name}");
         // The primitives reading a view are named only in errors: finding them scans every
         // accessor and primitive, which for every view of a large file would be quadratic.
         let with_users = || format!("{at}{}", users(root, i));

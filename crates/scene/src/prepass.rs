@@ -23,6 +23,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_specular",
     "KHR_draco_mesh_compression",
     "EXT_meshopt_compression",
+    "KHR_meshopt_compression",
     "KHR_animation_pointer",
     "KHR_materials_transmission",
     "KHR_materials_volume",

@@ -172,9 +172,9 @@ fn json_cases() -> Vec<Case> {
         ),
         gltf_case(
             "unsupported required extension",
-            |j| j["extensionsRequired"] = json!(["EXT_lights_image_based"]),
+            |j| j["extensionsRequired"] = json!(["ACME_made_up_extension"]),
             |e| matches!(e, Error::UnsupportedExtension { .. }),
-            "EXT_lights_image_based",
+            "ACME_made_up_extension",
         ),
     ]
 }
