@@ -190,6 +190,7 @@ fn report(s: &Scene, mode: aperture_render::TransmissionMode) -> Value {
         "bounds": bounds,
         "node_bounds": node_bounds(s),
         "world_origin": [s.world_origin.x, s.world_origin.y, s.world_origin.z],
+        "hidden_nodes": s.stats.hidden_nodes,
         "skipped": {
             "primitives": s.stats.skipped_primitives,
             "features": s.stats.skipped_features,
@@ -278,6 +279,12 @@ fn print_counts(r: &Value) {
 /// What the loader left out, and its warnings.
 fn print_skipped_and_warnings(r: &Value) {
     let skipped = &r["skipped"];
+    if count(&r["hidden_nodes"]) > 0 {
+        println!(
+            "  hidden: {} node(s) (KHR_node_visibility; not drawn, not lights)",
+            count(&r["hidden_nodes"])
+        );
+    }
     if count(&skipped["primitives"]) > 0 {
         println!(
             "  skipped: {} non-triangle primitive(s)",

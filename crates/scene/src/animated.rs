@@ -196,6 +196,7 @@ impl Animated {
         let graph = node_graph(&doc, &buffers)?;
         let order = drawn_order(&doc, options, &graph, &mut stats)?;
         stats.nodes = order.len();
+        stats.hidden_nodes = order.iter().filter(|&&i| graph.hidden[i]).count();
 
         let animations = animation::parse(&doc, &buffers, &root, &options.animation)?;
         if !animations.ignored_pointers.is_empty() {
@@ -205,10 +206,25 @@ impl Animated {
                 animations.ignored_pointers.join(", ")
             ));
         }
+        if (animations.ignored_pointers.iter()).any(|p| p.contains("KHR_node_visibility")) {
+            stats.warnings.push(
+                "KHR_node_visibility: animated visibility is not evaluated yet; every node keeps \
+                 its stored visibility at every time"
+                    .into(),
+            );
+        }
         stats.animations = animations.info.clone();
 
         let mut materials = Materials::default();
-        let mut meshes = read_meshes(&doc, &order, &buffers, &mut stats, variant, &mut materials)?;
+        let mut meshes = read_meshes(
+            &doc,
+            &order,
+            &graph.hidden,
+            &buffers,
+            &mut stats,
+            variant,
+            &mut materials,
+        )?;
         let material_index = materials.gltf_indices();
         generate_tangents(&mut meshes, &materials.materials);
         let material_list = std::mem::take(&mut materials.materials);
@@ -522,18 +538,19 @@ fn ignored_extension_warnings(ignored: &[String]) -> Vec<String> {
         .collect()
 }
 
-/// Every mesh the drawn nodes use, read once each (by glTF mesh index), its materials gathered
+/// Every mesh the drawn (visible) nodes use, read once each (by glTF mesh index), its materials gathered
 /// into `materials`.
 fn read_meshes(
     doc: &gltf::Document,
     order: &[usize],
+    hidden: &[bool],
     buffers: &Buffers,
     stats: &mut SceneStats,
     variant: Option<usize>,
     materials: &mut Materials,
 ) -> Result<HashMap<usize, LoadedMesh>, Error> {
     let mut meshes = HashMap::new();
-    for &ni in order {
+    for &ni in order.iter().filter(|&&ni| !hidden[ni]) {
         let Some(m) = doc.nodes().nth(ni).and_then(|n| n.mesh()) else {
             continue;
         };

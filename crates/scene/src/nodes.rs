@@ -77,6 +77,17 @@ pub(crate) struct NodeGraph {
     pub children: Vec<Vec<usize>>,
     /// Every node, parents before their children.
     pub topological: Vec<usize>,
+    /// `KHR_node_visibility`: the node or an ancestor is stored `visible: false`. Hidden nodes
+    /// draw nothing and light nothing; their transforms still place cameras and focus objects.
+    pub hidden: Vec<bool>,
+}
+
+/// A node's own `KHR_node_visibility` flag (visible unless it says `false`).
+fn visible(node: &gltf::Node<'_>) -> bool {
+    node.extension_value("KHR_node_visibility")
+        .and_then(|e| e.get("visible"))
+        .and_then(Value::as_bool)
+        .unwrap_or(true)
 }
 
 fn finite(at: impl FnOnce() -> String, values: &[f32]) -> Result<(), Error> {
@@ -193,12 +204,18 @@ pub(crate) fn node_graph(doc: &gltf::Document, buffers: &Buffers) -> Result<Node
             reason: "is part of a cycle in the node hierarchy".into(),
         });
     }
+    let own: Vec<bool> = doc.nodes().map(|n| !visible(&n)).collect();
+    let mut hidden = vec![false; n];
+    for &i in &topological {
+        hidden[i] = own[i] || parent[i].is_some_and(|p| hidden[p]);
+    }
     Ok(NodeGraph {
         nodes,
         names: doc.nodes().map(|n| n.name().map(str::to_owned)).collect(),
         parent,
         children,
         topological,
+        hidden,
     })
 }
 

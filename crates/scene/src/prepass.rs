@@ -24,6 +24,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_draco_mesh_compression",
     "EXT_meshopt_compression",
     "KHR_meshopt_compression",
+    "KHR_node_visibility",
     "KHR_animation_pointer",
     "KHR_materials_transmission",
     "KHR_materials_volume",

@@ -349,6 +349,9 @@ pub struct SceneStats {
     pub primitives: usize,
     /// Primitives skipped (points, lines).
     pub skipped_primitives: usize,
+    /// Nodes of the selected scene hidden by `KHR_node_visibility` (themselves or an
+    /// ancestor): not drawn, not lights, not in Cryptomatte.
+    pub hidden_nodes: usize,
     /// Features present in the file but not evaluated.
     pub skipped_features: Vec<String>,
     /// Warnings for the user (one line each).

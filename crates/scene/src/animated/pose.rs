@@ -34,7 +34,7 @@ impl Animated {
         let mut camera_data = self.cameras.clone();
         let mut materials = self.materials.clone();
         self.apply_pointers(&pose, &mut light_data, &mut camera_data, &mut materials)?;
-        for &ni in &self.order {
+        for &ni in self.order.iter().filter(|&&ni| !self.graph.hidden[ni]) {
             let node = &self.graph.nodes[ni];
             let world = pose.world[ni];
             if let Some(mi) = node.mesh {
