@@ -4,11 +4,11 @@
 //! The functions are declared by hand, only those used, with the C types of `oidn.h`:
 //! handles are opaque pointers, enums are `c_int`, sizes `size_t`. Every call goes through a
 //! [`Device`] or [`Filter`] that holds a live handle and keeps the library loaded (the
-//! [`Api`] is borrowed from an `Rc` the owners share), so no symbol outlives its library.
+//! [`Api`] is shared through an `Arc`), so no symbol outlives its library.
 
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::path::Path;
-use std::rc::Rc;
+use std::sync::Arc;
 
 type DeviceHandle = *mut c_void;
 type FilterHandle = *mut c_void;
@@ -84,14 +84,14 @@ fn cstr(s: &str) -> CString {
 
 /// A committed OIDN CPU device of a loaded library.
 pub(crate) struct Device {
-    api: Rc<Api>,
+    api: Arc<Api>,
     handle: DeviceHandle,
 }
 
 impl Device {
     /// Loads the library at `name` and makes a CPU device; `Err` holds why, in words.
     pub(crate) fn open(name: &Path) -> Result<Self, String> {
-        let api = Rc::new(open(name)?);
+        let api = Arc::new(open(name)?);
         // SAFETY: `oidnNewDevice` takes any device type and returns null on failure.
         let handle = unsafe { (api.new_device)(DEVICE_TYPE_CPU) };
         if handle.is_null() {
@@ -131,6 +131,14 @@ impl Device {
         Err(format!("OIDN error {code}: {text}"))
     }
 }
+
+// SAFETY: OIDN's API is thread-safe ("All API calls are thread-safe, but operations that use
+// the same device will be serialized", OIDN 2 documentation, "Open Image Denoise API"); the
+// handle is an opaque pointer to the library's reference-counted device object, and `Api`
+// holds only function pointers and the library handle.
+unsafe impl Send for Device {}
+// SAFETY: as for `Send`: calls on one device from several threads are serialised by OIDN.
+unsafe impl Sync for Device {}
 
 impl Drop for Device {
     fn drop(&mut self) {
