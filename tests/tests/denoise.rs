@@ -80,7 +80,8 @@ fn the_denoised_demo_at_16_spp_beats_the_raw_demo_at_64() {
     };
     let reference = beauty(&image(&scene, &opts(256, 99, PassSet::NONE)));
     let raw64 = beauty(&image(&scene, &opts(64, 1, PassSet::NONE)));
-    let den16 = denoised(&scene, &opts(16, 1, aux_passes()), &d);
+    let den16 = denoised(&scene, &opts(16, 1, aux_passes().with(Pass::Depth)), &d);
+    let depth = den16.layer("Depth").expect("depth").data.clone();
     let raw16 = beauty_of(
         den16.layer("Noisy Image").expect("noisy beauty kept"),
         &den16,
@@ -106,6 +107,77 @@ fn the_denoised_demo_at_16_spp_beats_the_raw_demo_at_64() {
     assert!(rmse(&den16) < rmse(&raw64), "displayed RMSE");
     assert!(rel(&den16) < rel(&raw64), "relative MSE");
     assert!(rmse(&raw64) < rmse(&raw16), "more samples, less error");
+    in_focus_texture_stays_sharp(&scene, &depth, &reference, &den16, &raw64);
+}
+
+/// Mean luminance gradient (|dx| + |dy| of the displayed image) over the pixels whose circle of
+/// confusion is under half a pixel, and whose neighbours' are too: the sharp checkerboard and
+/// objects at the focus distance.
+fn sharpness(img: &Image, mask: &[bool]) -> f64 {
+    let w = img.width as usize;
+    let lum = |i: usize| {
+        let p = img.rgba[i];
+        0.2126 * f64::from(p[0].clamp(0.0, 1.0))
+            + 0.7152 * f64::from(p[1].clamp(0.0, 1.0))
+            + 0.0722 * f64::from(p[2].clamp(0.0, 1.0))
+    };
+    let inside: Vec<usize> = (0..mask.len()).filter(|i| mask[*i]).collect();
+    let sum: f64 = inside
+        .iter()
+        .map(|&i| (lum(i + 1) - lum(i)).abs() + (lum(i + w) - lum(i)).abs())
+        .sum();
+    sum / inside.len().max(1) as f64
+}
+
+/// Denoising keeps the in-focus texture: there the denoised 16 spp is closer to the reference
+/// than raw 64 spp, and its gradient keeps at least 75 % of the reference's (blurring the
+/// checkerboard lowers it; the reference's leftover noise raises its own a little).
+fn in_focus_texture_stays_sharp(
+    scene: &Scene,
+    depth: &[f32],
+    reference: &Image,
+    den: &Image,
+    raw64: &Image,
+) {
+    let (w, h) = (reference.width as usize, reference.height as usize);
+    let cam = aperture_render::Camera::new(&scene.cameras[0], w as u32, h as u32);
+    let sharp = |i: usize| depth[i] < 1e9 && cam.coc_pixels(depth[i]) < 0.5;
+    let mask: Vec<bool> = (0..w * h)
+        .map(|i| i % w + 1 < w && i / w + 1 < h && sharp(i) && sharp(i + 1) && sharp(i + w))
+        .collect();
+    let count = mask.iter().filter(|m| **m).count();
+    let (g_ref, g_den) = (sharpness(reference, &mask), sharpness(den, &mask));
+    let g64 = sharpness(raw64, &mask);
+    let err = |a: &Image| {
+        let s: f64 = (0..w * h)
+            .filter(|i| mask[*i])
+            .flat_map(|i| (0..3).map(move |c| (i, c)))
+            .map(|(i, c)| {
+                let d = a.rgba[i][c].clamp(0.0, 1.0) - reference.rgba[i][c].clamp(0.0, 1.0);
+                f64::from(d * d)
+            })
+            .sum();
+        (s / (3 * count) as f64).sqrt()
+    };
+    let (e64, e_den) = (err(raw64), err(den));
+    println!(
+        "in focus ({count} pixels): gradient reference {g_ref:.5}, raw 64 spp {g64:.5}, \
+         denoised 16 spp {g_den:.5}; displayed RMSE there raw 64 {e64:.5}, denoised 16 {e_den:.5}"
+    );
+    assert!(
+        count > 500,
+        "the demo has an in-focus region: {count} pixels"
+    );
+    assert!(
+        e_den < e64,
+        "in focus, denoised 16 spp is closer than raw 64 spp"
+    );
+    // Measured: 82 % at 320x180, where a checker square is a few pixels: the denoiser softens
+    // the finest texture somewhat (noted as open in issue 45).
+    assert!(
+        g_den > 0.75 * g_ref,
+        "in-focus texture blurred: {g_den} vs {g_ref}"
+    );
 }
 
 /// The `Noisy Image` layer as an image of its own.
