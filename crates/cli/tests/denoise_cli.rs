@@ -281,3 +281,36 @@ fn an_unlit_scene_warns_that_the_image_will_be_black() {
     let o = Command::new(aperture()).args(args(true)).output().unwrap();
     assert!(!stderr(&o).contains("will be black"), "{}", stderr(&o));
 }
+
+#[test]
+fn render_denoise_with_no_library_anywhere_says_how_to_get_one() {
+    let dir = Scratch::new("denoise-nowhere");
+    let out = dir.path("out.png");
+    // No home (so no cache, pyoidn or bpy under it), no PATH with Blender, no APERTURE_OIDN.
+    let o = Command::new(aperture())
+        .args([
+            "render",
+            demo_scene().to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .args(SMALL)
+        .arg("--denoise")
+        .env_clear()
+        .env("PATH", "/usr/bin:/bin")
+        .env("HOME", dir.path("no-home"))
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    if o.status.success() {
+        // Installed system-wide (or in /usr's Python): nothing to check here.
+        eprintln!("skipping: OIDN found outside the home folder");
+        return;
+    }
+    assert!(
+        err.contains("not found") && err.contains("tools/oidn/install.sh"),
+        "{err}"
+    );
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    assert!(!out.exists());
+}
