@@ -91,9 +91,9 @@ impl Denoiser {
         for c in locate::implicit_candidates() {
             match Self::open(&c) {
                 Ok(d) => return Ok(d),
-                Err(reason) if c.origin == Origin::System => {
+                // The usual case, said briefly; anything else (a 1.x library) in full.
+                Err(reason) if c.origin == Origin::System && reason.contains("cannot open") => {
                     tried.push(format!("not on the {}", c.origin));
-                    let _ = reason;
                 }
                 Err(reason) => tried.push(format!("{}: {reason}", c.path.display())),
             }
