@@ -169,11 +169,21 @@ pub fn denoise_image(image: &mut Image, denoiser: &Denoiser) -> Result<(), Denoi
             return Err(DenoisingError::Missing { missing });
         }
     };
-    let colour: Vec<[f32; 3]> = image
-        .rgba
-        .iter()
-        .map(|p| [p[0], p[1], p[2]].map(finite))
-        .collect();
+    // A file denoised by Cycles already has its Noisy Image (and a denoised beauty): the
+    // noisy one is what is denoised, and it stays.
+    let noisy_name = format!("{prefix}{NOISY_IMAGE}");
+    let had_noisy = aux(image, NOISY_IMAGE, ["R", "G", "B"])
+        .ok()
+        .filter(|(p, _)| *p == prefix)
+        .map(|(_, px)| px);
+    let colour: Vec<[f32; 3]> = match &had_noisy {
+        Some(px) => px.clone(),
+        None => image
+            .rgba
+            .iter()
+            .map(|p| [p[0], p[1], p[2]].map(finite))
+            .collect(),
+    };
     let clean = denoiser.denoise(&Images {
         width: image.width as usize,
         height: image.height as usize,
@@ -182,7 +192,7 @@ pub fn denoise_image(image: &mut Image, denoiser: &Denoiser) -> Result<(), Denoi
         normal: &normal,
     })?;
     let mut noisy = Layer::new(
-        &format!("{prefix}{NOISY_IMAGE}"),
+        &noisy_name,
         &["R", "G", "B", "A"],
         image.rgba.iter().flatten().copied().collect(),
     );
@@ -193,7 +203,9 @@ pub fn denoise_image(image: &mut Image, denoiser: &Denoiser) -> Result<(), Denoi
             p[k] = store(c[k], half);
         }
     }
-    image.layers.push(noisy);
+    if had_noisy.is_none() {
+        image.layers.push(noisy);
+    }
     image.metadata.retain(|(k, _)| k != DENOISED);
     image.metadata.push((DENOISED.into(), MetaValue::Int(1)));
     Ok(())

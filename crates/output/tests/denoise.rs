@@ -233,3 +233,53 @@ fn missing_denoising_channels_are_named() {
         "{err}"
     );
 }
+
+/// A file Cycles denoised has its own `<view layer>.Noisy Image`: that is what gets denoised,
+/// and it is kept, not written twice.
+#[test]
+fn an_existing_noisy_image_is_denoised_and_kept() {
+    let Some(d) = denoiser() else { return };
+    let (w, h) = (24u32, 16u32);
+    let n = (w * h) as usize;
+    let mut img = Image::new(w, h);
+    let noisy: Vec<f32> = (0..n)
+        .flat_map(|i| {
+            let v = 0.5 + 0.4 * (((i as u32).wrapping_mul(2654435761) >> 24) as f32 / 255.0 - 0.5);
+            [v, v, v, 1.0]
+        })
+        .collect();
+    for p in &mut img.rgba {
+        *p = [0.2, 0.2, 0.2, 1.0]; // the beauty Cycles denoised (here: something else)
+    }
+    img.layers = vec![
+        aperture_imageio::Layer::new(
+            "ViewLayer.Denoising Albedo",
+            &["R", "G", "B"],
+            vec![0.8; 3 * n],
+        ),
+        aperture_imageio::Layer::new(
+            "ViewLayer.Denoising Normal",
+            &["X", "Y", "Z"],
+            [0.0, 0.0, 1.0].repeat(n),
+        ),
+        aperture_imageio::Layer::new(
+            "ViewLayer.Noisy Image",
+            &["R", "G", "B", "A"],
+            noisy.clone(),
+        ),
+    ];
+    aperture_output::denoised::denoise_image(&mut img, &d).unwrap();
+    let layers: Vec<&str> = img.layers.iter().map(|l| l.name.as_str()).collect();
+    assert_eq!(
+        layers.iter().filter(|l| l.ends_with(NOISY_IMAGE)).count(),
+        1,
+        "{layers:?}"
+    );
+    assert_eq!(
+        bits(&img.layer("ViewLayer.Noisy Image").unwrap().data),
+        bits(&noisy)
+    );
+    // The noisy image was denoised, not the old beauty (0.2): its mean stays near 0.5.
+    let mean = img.rgba.iter().map(|p| p[0]).sum::<f32>() / n as f32;
+    assert!((mean - 0.5).abs() < 0.05, "{mean}");
+}
