@@ -28,6 +28,7 @@ fn render(
         pattern,
         format: FrameFormat::Exr(ExrOptions::default()),
         skip_existing: skip,
+        denoiser: None,
     };
     let mut reports = Vec::new();
     sequence::render_sequence(&seq, &|_, _| {}, &mut |r| reports.push(r.clone())).unwrap();

@@ -84,6 +84,10 @@ def build_scene():
     s.samples = 8
     s.seed = 3
     s.keep_files = True
+    # The exactness checks below (bit-identical to the CLI, a border equal to the whole
+    # render's pixels, strength 2 doubling the mean) hold for the raw render; denoising is
+    # not linear. test_denoise turns it on (as a new scene has it).
+    s.denoise = False
     vl = sc.view_layers[0]
     vl.use_pass_z = True
     vl.use_pass_normal = True
@@ -291,6 +295,31 @@ def test_cancel():
           f"folder removed: {gone}")
 
 
+def test_denoise():
+    """The Denoise checkbox (on by default, as in Cycles) runs `--denoise` with the OIDN that
+    ships inside Blender; Combined is the denoised image, Noisy Image the raw one."""
+    s = bpy.context.scene.aperture
+    default = type(s).bl_rna.properties["denoise"].default
+    s.denoise = True
+    denoised = render(name="denoised")
+    cmd = engine_module().LAST_RUN["command"]
+    noisy = render(socket="Noisy Image", name="noisy")
+    s.denoise = False
+    raw = render(name="raw")
+    lib = cmd[cmd.index("--oidn") + 1] if "--oidn" in cmd else None
+    ships = lib is not None and os.path.dirname(lib) == os.path.join(
+        os.path.dirname(bpy.utils.resource_path("LOCAL")), "lib")
+    check("engine.denoise-command", default and "--denoise" in cmd
+          and (ships or bool(os.environ.get("APERTURE_OIDN"))),
+          f"Denoise on by default: {default}; the command has --denoise and --oidn {lib}")
+    same_noisy = np.array_equal(noisy[..., :3].view(np.uint32), raw[..., :3].view(np.uint32))
+    changed = float(np.abs(denoised[..., :3] - raw[..., :3]).mean())
+    ratio = float(denoised[..., :3].mean() / raw[..., :3].mean())
+    check("engine.denoise", same_noisy and changed > 1e-4 and abs(ratio - 1.0) < 0.02,
+          f"Noisy Image equals the undenoised render: {same_noisy}; Combined denoised (mean "
+          f"change {changed:.4f}, brightness ratio {ratio:.4f})")
+
+
 def test_error():
     cam = bpy.data.objects["CamA"].data
     cam["aperture_fstop"] = -1.0
@@ -349,6 +378,7 @@ def run():
     test_camera(base)
     test_frame()
     test_world()
+    test_denoise()
     test_error()
     test_cancel()
     return summary()

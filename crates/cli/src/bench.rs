@@ -37,6 +37,9 @@ pub enum Config {
     /// Sobol with adaptive sampling: the budget is the most a pixel takes, the noise threshold
     /// follows it (`--adaptive-scale / √spp`).
     Adaptive,
+    /// Sobol, every pixel at the budget, then denoised (Open Image Denoise with the Denoising
+    /// passes, as `render --denoise`); the time includes the denoising.
+    Denoised,
 }
 
 impl Config {
@@ -45,6 +48,7 @@ impl Config {
             Self::Sobol => "sobol",
             Self::Random => "random",
             Self::Adaptive => "adaptive",
+            Self::Denoised => "denoised",
         }
     }
 }
@@ -61,7 +65,8 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32,64,128",
           value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub spp: Vec<u32>,
-    /// Configurations, comma separated.
+    /// Configurations, comma separated (`denoised` needs Open Image Denoise: see `render
+    /// --denoise`).
     #[arg(
         long,
         value_delimiter = ',',
@@ -159,6 +164,10 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         None => None,
     };
     let (width, height) = image_size(&args, cam, reference.as_ref())?;
+    let denoiser = match args.configs.contains(&Config::Denoised) {
+        true => Some(crate::denoise_cmd::load_denoiser(None)?),
+        false => None,
+    };
     let pool = crate::workers::worker_pool(args.threads)?;
     let threads = pool.current_num_threads();
     let clamp = args.tracing.clamp();
@@ -193,7 +202,15 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         for &config in &args.configs {
             for &spp in &args.spp {
                 let opts = config_options(&base, config, spp, args.adaptive_scale);
-                rows.push(measure(&args, &scene, &accel, &opts, config, &reference)?);
+                let denoise = denoiser.as_ref().filter(|_| config == Config::Denoised);
+                let job = Job {
+                    scene: &scene,
+                    accel: &accel,
+                    opts: &opts,
+                    config,
+                    denoiser: denoise,
+                };
+                rows.push(measure(&args, &job, &reference)?);
             }
         }
         Ok(rows)
@@ -268,7 +285,13 @@ fn config_options(
         spp,
         sampler: match config {
             Config::Random => SamplerKind::Random,
-            Config::Sobol | Config::Adaptive => SamplerKind::Sobol,
+            Config::Sobol | Config::Adaptive | Config::Denoised => SamplerKind::Sobol,
+        },
+        passes: match config {
+            Config::Denoised => aperture_render::PassSet::NONE
+                .with(aperture_render::Pass::DenoisingAlbedo)
+                .with(aperture_render::Pass::DenoisingNormal),
+            _ => base.passes,
         },
         adaptive: (config == Config::Adaptive).then(|| AdaptiveOptions {
             threshold: adaptive_scale / (spp as f32).sqrt(),
@@ -280,29 +303,44 @@ fn config_options(
 
 /// Renders `--repeats` times with `opts`, and measures the median time and the error against
 /// the reference.
-fn measure(
-    args: &BenchArgs,
-    scene: &aperture_scene::Scene,
-    accel: &aperture_accel::Accel,
-    opts: &RenderOptions,
+/// One measured configuration at one budget.
+struct Job<'a> {
+    scene: &'a aperture_scene::Scene,
+    accel: &'a aperture_accel::Accel,
+    opts: &'a RenderOptions,
     config: Config,
-    reference: &Image,
-) -> anyhow::Result<Row> {
+    /// Denoise each render (its time included).
+    denoiser: Option<&'a aperture_denoise::Denoiser>,
+}
+
+/// The job's image: rendered, and denoised when the job says so.
+fn job_image(job: &Job<'_>) -> anyhow::Result<(Image, u64)> {
+    let film = aperture_render::render(job.scene, job.accel, job.opts, &|_, _| {})?;
+    let mut image = Image::new(job.opts.width, job.opts.height);
+    if let Some(d) = job.denoiser {
+        let mut full = aperture_output::film_to_image(&film, job.scene, job.opts, false, 0.0)?;
+        aperture_output::denoised::denoise_image(&mut full, d)?;
+        image.rgba = full.rgba;
+    } else {
+        image.rgba = film.to_rgba();
+    }
+    Ok((image, film.total_samples()))
+}
+
+fn measure(args: &BenchArgs, job: &Job<'_>, reference: &Image) -> anyhow::Result<Row> {
+    let (opts, config) = (job.opts, job.config);
     // Same seed each time, so the image (and its error) is the same: only the time,
     // disturbed by whatever else the machine runs, varies.
     let mut times = Vec::new();
-    let mut film = None;
+    let mut last = None;
     for _ in 0..args.repeats {
         let t0 = Instant::now();
-        film = Some(aperture_render::render(scene, accel, opts, &|_, _| {})?);
+        last = Some(job_image(job)?);
         times.push(t0.elapsed().as_secs_f64());
     }
-    let film = film.context("no render (--repeats 0)")?;
+    let (image, samples) = last.context("no render (--repeats 0)")?;
     let seconds = median(&mut times);
     let (width, height) = (opts.width, opts.height);
-    let mut image = Image::new(width, height);
-    image.rgba = film.to_rgba();
-    let samples = film.total_samples();
     let row = Row {
         label: config.name().to_string(),
         spp: opts.spp,

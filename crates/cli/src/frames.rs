@@ -11,6 +11,7 @@ use aperture_scene::Animated;
 use std::time::Instant;
 
 /// Renders the frames of `--frames` with the options and output format of one frame.
+#[allow(clippy::too_many_arguments)]
 pub fn run(
     args: &RenderArgs,
     animated: &Animated,
@@ -19,6 +20,7 @@ pub fn run(
     opts: &RenderOptions,
     quality: BvhQuality,
     pool: &rayon::ThreadPool,
+    denoiser: Option<&aperture_denoise::Denoiser>,
 ) -> anyhow::Result<()> {
     let seq = Sequence {
         animated,
@@ -29,6 +31,7 @@ pub fn run(
         pattern: &args.output,
         format,
         skip_existing: args.skip_existing,
+        denoiser,
     };
     let start = Instant::now();
     let (mut rendered, mut secs) = (0usize, 0.0f64);

@@ -13,7 +13,7 @@ fn args(scene: &std::path::Path, out: &std::path::Path, extra: &[&str]) -> Rende
     argv.extend_from_slice(&["--width", "40", "--height", "30", "--spp", "2", "--quiet"]);
     argv.extend_from_slice(extra);
     match crate::Cli::try_parse_from(argv).unwrap().command {
-        crate::Command::Render(r) => r,
+        crate::Command::Render(r) => *r,
         _ => unreachable!("render subcommand"),
     }
 }

@@ -4,6 +4,9 @@ mod bench;
 mod bench_plot;
 mod bench_rays;
 mod bench_results;
+mod denoise_cmd;
+mod error_line;
+mod first_image;
 mod frames;
 #[cfg(test)]
 mod frames_tests;
@@ -37,7 +40,9 @@ pub(crate) enum Command {
     /// Print what a scene contains and how its cameras resolve.
     Info(info::InfoArgs),
     /// Render a scene to EXR or PNG.
-    Render(render_args::RenderArgs),
+    Render(Box<render_args::RenderArgs>),
+    /// Denoise an EXR that has the beauty and the Denoising Albedo/Normal passes.
+    Denoise(denoise_cmd::DenoiseArgs),
     /// Put the parts of a render split across machines (tiles, sample batches) together.
     Merge(merge_cmd::MergeArgs),
     /// Error against time per sampler configuration: CSV, log-log plot and table.
@@ -50,7 +55,8 @@ fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Info(args) => info::run(args),
-        Command::Render(args) => render_cmd::run(args),
+        Command::Render(args) => render_cmd::run(*args),
+        Command::Denoise(args) => denoise_cmd::run(args),
         Command::Merge(args) => merge_cmd::run(args),
         Command::Bench(args) => bench::run(args),
         Command::BenchRays(args) => bench_rays::run(args),
@@ -58,7 +64,7 @@ fn main() -> std::process::ExitCode {
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", error_line::error_line(&e));
             let interrupted = e.chain().any(|c| {
                 matches!(
                     c.downcast_ref(),

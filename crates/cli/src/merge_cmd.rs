@@ -1,7 +1,7 @@
 //! `aperture merge`: the parts of a split render (tiles, sample batches) into one EXR.
 
 use anyhow::Context as _;
-use aperture_output::merge::{merge_exr, MergeOptions};
+use aperture_output::merge::{merge_exr, merge_exr_denoised, MergeOptions};
 use std::path::PathBuf;
 
 /// Arguments of `aperture merge`.
@@ -18,6 +18,13 @@ pub struct MergeArgs {
     /// bounding box and missing pixels are empty (sample count 0).
     #[arg(long)]
     pub allow_partial: bool,
+    /// Denoise the merged image once (Open Image Denoise; see `aperture render --denoise`).
+    /// Parts must not be denoised themselves: denoising is not linear.
+    #[arg(long)]
+    pub denoise: bool,
+    /// With --denoise: the libOpenImageDenoise.so.2 to load (or its folder).
+    #[arg(long, value_name = "PATH", requires = "denoise")]
+    pub oidn: Option<PathBuf>,
     /// No summary.
     #[arg(long, short)]
     pub quiet: bool,
@@ -35,14 +42,18 @@ pub fn run(args: MergeArgs) -> anyhow::Result<()> {
             args.output.display()
         );
     }
+    let denoiser = match args.denoise {
+        true => Some(crate::denoise_cmd::load_denoiser(args.oidn.as_deref())?),
+        false => None,
+    };
     let t0 = std::time::Instant::now();
-    let summary = merge_exr(
-        &args.parts,
-        &args.output,
-        &MergeOptions {
-            allow_partial: args.allow_partial,
-        },
-    )
+    let opts = MergeOptions {
+        allow_partial: args.allow_partial,
+    };
+    let summary = match &denoiser {
+        Some(d) => merge_exr_denoised(&args.parts, &args.output, &opts, d),
+        None => merge_exr(&args.parts, &args.output, &opts),
+    }
     .with_context(|| format!("merging into {}", args.output.display()))?;
     if !summary.complete {
         eprintln!(

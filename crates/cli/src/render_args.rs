@@ -258,6 +258,19 @@ pub struct RenderArgs {
     /// renders it again.
     #[arg(long, conflicts_with = "frames")]
     pub save_partial: bool,
+    /// Denoise the beauty with Intel Open Image Denoise 2.x (its RT filter, HDR, albedo and
+    /// normal prefiltered, quality high, as Cycles): the EXR's R,G,B (and the PNG) are the
+    /// denoised image, the EXR keeps the noisy one as `Noisy Image` and the Denoising passes.
+    /// The library is loaded at run time, found in this order: --oidn, APERTURE_OIDN, the
+    /// system library path, tools/oidn/install.sh's copy in ~/.cache/aperture/oidn, a pyoidn
+    /// wheel, Blender's lib/ folder. Missing: an error before anything is rendered. Denoised
+    /// parts cannot be merged: render parts without it and use `aperture merge --denoise`.
+    #[arg(long)]
+    pub denoise: bool,
+    /// With --denoise: the libOpenImageDenoise.so.2 to load (or its folder), before all other
+    /// places.
+    #[arg(long, value_name = "PATH", requires = "denoise")]
+    pub oidn: Option<PathBuf>,
     /// A part of a render split across machines: --region, --tile, --sample-offset.
     #[command(flatten)]
     pub split: crate::split_args::SplitArgs,
@@ -289,7 +302,7 @@ pub(crate) mod tests {
         let mut argv = vec!["aperture", "render", "s.glb", "-o", "o.exr"];
         argv.extend_from_slice(args);
         match crate::Cli::try_parse_from(argv)?.command {
-            crate::Command::Render(r) => Ok(r),
+            crate::Command::Render(r) => Ok(*r),
             _ => unreachable!("render subcommand"),
         }
     }

@@ -17,9 +17,17 @@ pub struct Interrupted(pub String);
 /// Runs `aperture render`.
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let before = before_load(&args)?;
+    // The library is needed before anything is loaded, rendered or written.
+    let denoiser = match args.denoise {
+        true => Some(crate::denoise_cmd::load_denoiser(args.oidn.as_deref())?),
+        false => None,
+    };
     let t_load = Instant::now();
     let (animated, scene) = load_posed(&args, &before.load)?;
     let plan = after_load(&args, &before, &scene)?;
+    for w in crate::first_image::scene_warnings(&scene, &plan.opts.env) {
+        eprintln!("warning: {}: {w}", args.scene.display());
+    }
 
     let pool = crate::workers::worker_pool(args.threads)?;
     if let Some(frames) = args.frames {
@@ -32,6 +40,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             &plan.opts,
             plan.quality,
             &pool,
+            denoiser.as_ref(),
         );
     }
     let hints = aperture_render::SceneHints::new(&animated, &scene);
@@ -40,7 +49,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         // The same structure a sequence builds for this frame, so their images agree bit for bit.
         let accel = aperture_render::build_frame_accel(&scene, plan.quality, &hints, None);
         let load_secs = t_load.elapsed().as_secs_f64();
-        let summary = write_image(&args, &scene, &accel, &plan.opts, &plan.exr, before.png_out)?;
+        let out = Output {
+            exr: &plan.exr,
+            png: before.png_out,
+            denoiser: denoiser.as_ref(),
+        };
+        let summary = write_image(&args, &scene, &accel, &plan.opts, &out)?;
         Ok((summary, load_secs))
     })?;
 
@@ -58,14 +72,21 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// How the still image is written.
+struct Output<'a> {
+    exr: &'a aperture_output::ExrOptions,
+    /// PNG rather than EXR.
+    png: bool,
+    denoiser: Option<&'a aperture_denoise::Denoiser>,
+}
+
 /// Renders the still image and writes it, showing progress.
 fn write_image(
     args: &RenderArgs,
     scene: &aperture_scene::Scene,
     accel: &aperture_accel::Accel,
     opts: &RenderOptions,
-    exr: &aperture_output::ExrOptions,
-    png_out: bool,
+    out: &Output<'_>,
 ) -> anyhow::Result<aperture_output::RenderSummary> {
     let progress = Progress::with_mode(args.quiet, args.progress);
     progress.set_samples(
@@ -73,18 +94,26 @@ fn write_image(
         None,
     );
     let report = |done, total| progress.update(done, total);
-    let summary = if png_out {
-        aperture_output::render_png(
+    let path = &args.output;
+    let png = png_options(args);
+    let summary = match (out.png, out.denoiser) {
+        (true, None) => {
+            aperture_output::render_png(scene, accel, opts, path, &png, args.transparent, &report)
+        }
+        (true, Some(d)) => aperture_output::render_png_denoised(
             scene,
             accel,
             opts,
-            &args.output,
-            &png_options(args),
+            path,
+            &png,
             args.transparent,
+            d,
             &report,
-        )
-    } else {
-        aperture_output::render_exr(scene, accel, opts, &args.output, exr, &report)
+        ),
+        (false, None) => aperture_output::render_exr(scene, accel, opts, path, out.exr, &report),
+        (false, Some(d)) => {
+            aperture_output::render_exr_denoised(scene, accel, opts, path, out.exr, d, &report)
+        }
     };
     progress.finish();
     let summary = summary.with_context(|| format!("writing {}", args.output.display()))?;

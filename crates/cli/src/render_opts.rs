@@ -118,6 +118,8 @@ fn check_footprint(
 ) -> anyhow::Result<()> {
     let kind = if png_out {
         aperture_output::OutputKind::Png { sixteen_bit: false }
+    } else if args.denoise {
+        aperture_output::OutputKind::ExrDenoised
     } else {
         aperture_output::OutputKind::Exr
     };

@@ -15,6 +15,9 @@ use aperture_render::{PassSet, RenderOptions, Window};
 pub enum OutputKind {
     /// EXR, rendered and written band by band.
     Exr,
+    /// EXR with the beauty denoised ([`crate::render_exr_denoised`]): rendered band by band,
+    /// but the resolved window is held until it is denoised.
+    ExrDenoised,
     /// PNG, rendered whole in memory; 16 bits per channel when `sixteen_bit`.
     Png {
         /// 16 bits per channel.
@@ -61,6 +64,13 @@ fn png_bytes_per_pixel(adaptive: bool, sixteen_bit: bool) -> u64 {
     (2 * sums).max(sums + 16 + 2 * encoded)
 }
 
+fn sample_bytes_of(t: aperture_imageio::SampleType) -> u64 {
+    match t {
+        aperture_imageio::SampleType::F16 => 2,
+        _ => 4,
+    }
+}
+
 /// Estimates what rendering `opts` into `kind` needs (`exr`: the band size, region and half
 /// floats of EXR output).
 pub fn footprint(opts: &RenderOptions, kind: OutputKind, exr: &ExrOptions) -> Footprint {
@@ -74,9 +84,16 @@ pub fn footprint(opts: &RenderOptions, kind: OutputKind, exr: &ExrOptions) -> Fo
                 disk: pixels * if sixteen_bit { 8 } else { 4 },
             }
         }
-        OutputKind::Exr => {
+        OutputKind::Exr | OutputKind::ExrDenoised => {
             let window = exr.region.unwrap_or(whole);
-            let passes = channels::file_passes(opts.passes, adaptive || window != whole);
+            let asked = match kind {
+                OutputKind::ExrDenoised => opts
+                    .passes
+                    .with(aperture_render::Pass::DenoisingAlbedo)
+                    .with(aperture_render::Pass::DenoisingNormal),
+                _ => opts.passes,
+            };
+            let passes = channels::file_passes(asked, adaptive || window != whole);
             let specs = channels::channels(passes, exr.half);
             let bpp = film_bytes_per_pixel(passes, adaptive, specs.len());
             let rows = u64::from(aperture_render::bands::band_rows(
@@ -88,19 +105,24 @@ pub fn footprint(opts: &RenderOptions, kind: OutputKind, exr: &ExrOptions) -> Fo
             // Adaptive rounds render an apron of one pixel per round around the band.
             let apron = if adaptive { 2 * 17 } else { 0 };
             let band = (w + apron) * (rows + apron);
-            let sample_bytes: u64 = specs
-                .iter()
-                .map(|c| match c.sample_type {
-                    aperture_imageio::SampleType::F16 => 2,
-                    _ => 4,
-                })
-                .sum();
+            let sample_bytes: u64 = specs.iter().map(|c| sample_bytes_of(c.sample_type)).sum();
             // An upper bound: a 4000x2000 render with the default passes peaked at 187 MB
             // where this says 473 MB (output::film_bytes_per_pixel counts every Cryptomatte
             // rank slot).
+            // Denoising holds the window's values and their denoised copy (4 more channels,
+            // the noisy beauty), plus the denoiser's five RGB float images; the file gets the
+            // noisy beauty's 4 channels, colour ones (half with --half).
+            let (held, noisy) = match kind {
+                OutputKind::ExrDenoised => {
+                    let channels = specs.len() as u64;
+                    let held = window.pixels() as u64 * (4 * (2 * channels + 4) + 5 * 12);
+                    (held, 4 * sample_bytes_of(specs[0].sample_type))
+                }
+                _ => (0, 0),
+            };
             Footprint {
-                memory: band * bpp,
-                disk: window.pixels() as u64 * sample_bytes,
+                memory: band * bpp + held,
+                disk: window.pixels() as u64 * (sample_bytes + noisy),
             }
         }
     }
@@ -123,7 +145,7 @@ pub fn check_output(
             format!("a {}x{} PNG render", opts.width, opts.height),
             "; EXR output renders in bands and needs far less (-o NAME.exr)",
         ),
-        OutputKind::Exr => (
+        OutputKind::Exr | OutputKind::ExrDenoised => (
             format!(
                 "a {}x{} EXR render ({} bands of rows)",
                 opts.width,
@@ -149,7 +171,8 @@ pub fn check_output(
         }
     }
     if let Some(free) = aperture_budget::free_disk_bytes(path) {
-        if kind == OutputKind::Exr && f.disk / 4 > free {
+        let exr = matches!(kind, OutputKind::Exr | OutputKind::ExrDenoised);
+        if exr && f.disk / 4 > free {
             return Err(FootprintError::Disk {
                 path: path.display().to_string(),
                 needed: f.disk,
@@ -179,6 +202,21 @@ mod tests {
             passes: PassSet::compositing(),
             ..RenderOptions::default()
         }
+    }
+
+    #[test]
+    fn a_denoised_exr_holds_its_whole_window() {
+        let exr = ExrOptions::default();
+        let (d, e) = (OutputKind::ExrDenoised, OutputKind::Exr);
+        let held = |w: u32| {
+            let o = opts(w, w);
+            footprint(&o, d, &exr).memory - footprint(&o, e, &exr).memory
+        };
+        // Band-bounded without denoising; the whole window's values with it.
+        assert_eq!(held(8000) / held(1000), 64);
+        assert!(held(8000) > 8000 * 8000 * 100, "{}", held(8000));
+        let o = opts(8000, 8000);
+        assert!(footprint(&o, d, &exr).disk > footprint(&o, e, &exr).disk);
     }
 
     #[test]

@@ -24,6 +24,7 @@
 //! the file's sink; nothing here renders a pixel or knows how.
 
 pub mod channels;
+pub mod denoised;
 mod footprint;
 pub mod header;
 pub mod merge;
@@ -32,6 +33,7 @@ pub mod sequence;
 pub use footprint::{check_output, footprint, Footprint, FootprintError, OutputKind};
 
 use aperture_accel::Accel;
+use aperture_denoise::Denoiser;
 use aperture_imageio::{ExrLayout, Image, Layer, MetaValue, Placement, PngOptions};
 use aperture_render::bands::{band_rows, bands};
 use aperture_render::film::{AovLayout, Film, Window};
@@ -56,6 +58,9 @@ pub enum OutputError {
     /// The image could not be written.
     #[error(transparent)]
     Image(#[from] aperture_imageio::Error),
+    /// The image could not be denoised.
+    #[error(transparent)]
+    Denoise(#[from] denoised::DenoisingError),
     /// The render was cancelled ([`RenderOptions::cancel`]) and nothing was written
     /// ([`ExrOptions::save_partial`] writes what was rendered instead).
     #[error("interrupted after {samples} samples: nothing written")]
@@ -147,30 +152,85 @@ pub fn render_exr(
     exr: &ExrOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<RenderSummary, OutputError> {
-    let camera = scene_camera(scene, opts)?;
-    let whole = Window::whole(opts.width, opts.height);
-    let window = exr.region.unwrap_or(whole);
-    let passes = channels::file_passes(opts.passes, needs_sample_count(opts, window));
+    render_exr_with(scene, accel, opts, path, exr, None, progress)
+}
+
+/// [`render_exr`] with the beauty denoised by `denoiser` ([`denoised`]): the Denoising passes
+/// are added to `opts.passes`, the whole image (or region) is held until it is denoised, then
+/// written with the noisy beauty as `Noisy Image`. An interrupted render saved with
+/// [`ExrOptions::save_partial`] is written undenoised, so it can still be merged.
+pub fn render_exr_denoised(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &RenderOptions,
+    path: &Path,
+    exr: &ExrOptions,
+    denoiser: &Denoiser,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<RenderSummary, OutputError> {
+    let passes = opts
+        .passes
+        .with(Pass::DenoisingAlbedo)
+        .with(Pass::DenoisingNormal);
     let opts = RenderOptions {
         passes,
         ..opts.clone()
     };
-    let channels = channels::channels(passes, exr.half);
+    render_exr_with(scene, accel, &opts, path, exr, Some(denoiser), progress)
+}
+
+/// The file [`render_exr`] writes: its channels (the `Noisy Image` ones last when
+/// `denoising`) and header, late values to be filled in.
+fn exr_layout(
+    scene: &Scene,
+    camera: &aperture_render::camera::Camera,
+    opts: &RenderOptions,
+    window: Window,
+    exr: &ExrOptions,
+    denoising: bool,
+) -> ExrLayout {
+    let whole = Window::whole(opts.width, opts.height);
     let mut layout = ExrLayout {
         width: window.width,
         height: window.height,
         placement: placement(window, whole),
         metadata: [
-            header::metadata(scene, &camera, &opts, passes),
-            header::split_metadata(scene, &opts, window, exr.tile),
+            header::metadata(scene, camera, opts, opts.passes),
+            header::split_metadata(scene, opts, window, exr.tile),
         ]
         .concat(),
-        channels,
+        channels: channels::channels(opts.passes, exr.half),
     };
     if exr.save_partial {
         let flag = header::late::INTERRUPTED.to_string();
         layout.metadata.push((flag, MetaValue::Int(0)));
     }
+    if denoising {
+        layout.channels.extend(denoised::noisy_channels(exr.half));
+        let flag = denoised::DENOISED.to_string();
+        layout.metadata.push((flag, MetaValue::Int(0)));
+    }
+    layout
+}
+
+fn render_exr_with(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &RenderOptions,
+    path: &Path,
+    exr: &ExrOptions,
+    denoiser: Option<&Denoiser>,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<RenderSummary, OutputError> {
+    let camera = scene_camera(scene, opts)?;
+    let window = exr.region.unwrap_or(Window::whole(opts.width, opts.height));
+    let passes = channels::file_passes(opts.passes, needs_sample_count(opts, window));
+    let opts = RenderOptions {
+        passes,
+        ..opts.clone()
+    };
+    let layout = exr_layout(scene, &camera, &opts, window, exr, denoiser.is_some());
+    let specs = channels::channels(passes, exr.half);
     let bpp = film_bytes_per_pixel(passes, opts.adaptive.is_some(), layout.channels.len());
     let bands = bands(window, band_rows(window, exr.band_bytes, bpp));
     let world_from_camera = Mat3::from(camera.world_from_camera.matrix3);
@@ -182,12 +242,18 @@ pub fn render_exr(
         render_secs: 0.0,
         half_clamped: 0,
     };
+    // Denoising needs the whole window: its rows wait here instead of going to the file.
+    let mut held: Vec<f32> = Vec::new();
     aperture_imageio::write_exr_streamed::<OutputError>(path, &layout, |rows| {
         let mut sink = |film: Film| -> Result<(), OutputError> {
             let resolver =
                 PixelResolver::new(&film, passes, exr.half, world_from_camera, world_origin);
-            let (values, clamped) = resolver.rows(layout.channels.len());
-            rows.push_rows(&values)?;
+            let (values, clamped) = resolver.rows(specs.len());
+            if denoiser.is_some() {
+                held.extend_from_slice(&values);
+            } else {
+                rows.push_rows(&values)?;
+            }
             summary.half_clamped += clamped;
             Ok(())
         };
@@ -195,18 +261,23 @@ pub fn render_exr(
         summary.samples = totals.samples;
         summary.dropped = totals.dropped;
         summary.render_secs = totals.render_secs;
-        if opts.cancel.is_cancelled() && !exr.save_partial {
+        let cancelled = opts.cancel.is_cancelled();
+        if cancelled && !exr.save_partial {
             return Err(OutputError::Interrupted {
                 samples: summary.samples,
             });
         }
         let mut late = late_values(&summary, &opts);
         if exr.save_partial {
-            let interrupted = i32::from(opts.cancel.is_cancelled());
-            late.push((
-                header::late::INTERRUPTED.to_string(),
-                MetaValue::Int(interrupted),
-            ));
+            let flag = header::late::INTERRUPTED.to_string();
+            late.push((flag, MetaValue::Int(i32::from(cancelled))));
+        }
+        if let Some(d) = denoiser {
+            let d = (!cancelled).then_some(d);
+            let values = denoised::denoise_rows(&held, &specs, window.width, window.height, d)?;
+            rows.push_rows(&values)?;
+            let flag = denoised::DENOISED.to_string();
+            late.push((flag, MetaValue::Int(i32::from(d.is_some()))));
         }
         Ok(late)
     })?;
@@ -264,8 +335,53 @@ pub fn render_png(
     transparent: bool,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<RenderSummary, OutputError> {
+    render_png_with(scene, accel, opts, path, png, transparent, None, progress)
+}
+
+/// [`render_png`] with the beauty denoised by `denoiser` (the Denoising passes are rendered
+/// for it, not written).
+#[allow(clippy::too_many_arguments)]
+pub fn render_png_denoised(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &RenderOptions,
+    path: &Path,
+    png: &PngOptions,
+    transparent: bool,
+    denoiser: &Denoiser,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<RenderSummary, OutputError> {
+    render_png_with(
+        scene,
+        accel,
+        opts,
+        path,
+        png,
+        transparent,
+        Some(denoiser),
+        progress,
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn render_png_with(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &RenderOptions,
+    path: &Path,
+    png: &PngOptions,
+    transparent: bool,
+    denoiser: Option<&Denoiser>,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<RenderSummary, OutputError> {
+    let passes = match denoiser {
+        Some(_) => PassSet::NONE
+            .with(Pass::DenoisingAlbedo)
+            .with(Pass::DenoisingNormal),
+        None => PassSet::NONE,
+    };
     let opts = RenderOptions {
-        passes: PassSet::NONE,
+        passes,
         ..opts.clone()
     };
     let t0 = Instant::now();
@@ -276,8 +392,18 @@ pub fn render_png(
         });
     }
     let render_secs = t0.elapsed().as_secs_f64();
-    let mut image = Image::new(film.width(), film.height());
-    image.rgba = film.to_rgba();
+    let mut image = match denoiser {
+        Some(d) => {
+            let mut image = film_to_image(&film, scene, &opts, false, render_secs)?;
+            denoised::denoise_image(&mut image, d)?;
+            image
+        }
+        None => {
+            let mut image = Image::new(film.width(), film.height());
+            image.rgba = film.to_rgba();
+            image
+        }
+    };
     if !transparent {
         for p in &mut image.rgba {
             p[3] = 1.0;

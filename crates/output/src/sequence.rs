@@ -6,6 +6,7 @@
 
 use crate::{render_exr, render_png, ExrOptions, OutputError, RenderSummary};
 use aperture_accel::{Accel, AccelStats, BvhQuality};
+use aperture_denoise::Denoiser;
 use aperture_imageio::PngOptions;
 use aperture_render::sequence::{for_each_frame, FrameRange, PosedFrame};
 use aperture_render::RenderOptions;
@@ -114,6 +115,8 @@ pub struct Sequence<'a> {
     /// Leave frames whose file exists (files are written whole or not at all, so an existing
     /// file is a finished frame): a restarted job goes on where it stopped.
     pub skip_existing: bool,
+    /// Denoise every frame ([`crate::render_exr_denoised`], [`crate::render_png_denoised`]).
+    pub denoiser: Option<&'a Denoiser>,
 }
 
 /// Renders every frame of `seq` in turn: `tile_progress(done, total)` during each frame,
@@ -170,9 +173,23 @@ fn write_frame(
     path: &Path,
     tile_progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<RenderSummary, OutputError> {
-    match seq.format {
-        FrameFormat::Exr(exr) => render_exr(scene, accel, seq.opts, path, &exr, tile_progress),
-        FrameFormat::Png { png, transparent } => render_png(
+    let opts = seq.opts;
+    match (seq.format, seq.denoiser) {
+        (FrameFormat::Exr(exr), Some(d)) => {
+            crate::render_exr_denoised(scene, accel, opts, path, &exr, d, tile_progress)
+        }
+        (FrameFormat::Png { png, transparent }, Some(d)) => crate::render_png_denoised(
+            scene,
+            accel,
+            opts,
+            path,
+            &png,
+            transparent,
+            d,
+            tile_progress,
+        ),
+        (FrameFormat::Exr(exr), None) => render_exr(scene, accel, opts, path, &exr, tile_progress),
+        (FrameFormat::Png { png, transparent }, None) => render_png(
             scene,
             accel,
             seq.opts,

@@ -97,6 +97,31 @@ def export_scene(path):
     )
 
 
+def blender_oidn():
+    """The Open Image Denoise library that ships with this Blender (the `bpy` module's `lib/`,
+    or the `lib/` beside the Blender executable), or None."""
+    # Blender's <version>/ folder sits beside its lib/, in an installation and in the bpy module.
+    folders = [os.path.join(os.path.dirname(bpy.utils.resource_path("LOCAL")), "lib")]
+    if bpy.app.binary_path:
+        folders.append(os.path.join(os.path.dirname(bpy.app.binary_path), "lib"))
+    for folder in folders:
+        lib = os.path.join(folder, "libOpenImageDenoise.so.2")
+        if os.path.isfile(lib):
+            return lib
+    return None
+
+
+def denoise_arguments(s):
+    """`--denoise` and the library: the panel's, else APERTURE_OIDN (aperture reads it), else
+    Blender's own, else aperture's search."""
+    if not s.denoise:
+        return []
+    lib = bpy.path.abspath(s.oidn) if s.oidn else None
+    if lib is None and not os.environ.get("APERTURE_OIDN"):
+        lib = blender_oidn()
+    return ["--denoise"] + (["--oidn", lib] if lib else [])
+
+
 def command(binary, glb, out, scene, view_layer):
     """The `aperture render` command line for this scene's settings; and what of the world it
     could not express."""
@@ -111,6 +136,7 @@ def command(binary, glb, out, scene, view_layer):
            "--progress", "json"]
     if s.noise_threshold > 0.0:
         cmd += ["--noise-threshold", f"{s.noise_threshold:.9g}"]
+    cmd += denoise_arguments(s)
     if s.transmission != "AUTO":
         cmd += ["--transmission", s.transmission.lower()]
     if scene.camera is not None:
@@ -132,6 +158,9 @@ class ApertureRenderEngine(bpy.types.RenderEngine):
 
     def update_render_passes(self, scene=None, renderlayer=None):
         self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", "COLOR")
+        if scene.aperture.denoise:
+            # As Cycles with denoising: the image before denoising, for the compositor.
+            self.register_pass(scene, renderlayer, "Noisy Image", 4, "RGBA", "COLOR")
         rows, crypto = enabled_passes(scene, renderlayer)
         for name, n, chan, kind, _, _ in rows:
             self.register_pass(scene, renderlayer, name, n, chan, kind)
@@ -244,6 +273,7 @@ class ApertureRenderEngine(bpy.types.RenderEngine):
             # the radiance over it).
             channels["A"] = channels["A"] * 0.0 + 1.0
         put("Combined", ["R", "G", "B", "A"])
+        put("Noisy Image", [f"Noisy Image.{c}" for c in "RGBA"])
         rows, crypto = enabled_passes(scene, view_layer)
         for name, _, chan, _, ap, _ in rows:
             put(name, [f"{ap}.{c}" for c in chan])

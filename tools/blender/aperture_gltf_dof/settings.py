@@ -46,6 +46,19 @@ class ApertureSettings(bpy.types.PropertyGroup):
         description="Denoising Albedo and Denoising Normal passes, for the Denoise node",
         default=True,
     )
+    denoise: bpy.props.BoolProperty(
+        name="Denoise",
+        description="Denoise the image with Open Image Denoise (albedo and normal prefiltered, "
+        "as Cycles; `aperture render --denoise`); the noisy image stays as the Noisy Image pass",
+        default=True,
+    )
+    oidn: bpy.props.StringProperty(
+        name="OIDN Library",
+        description="libOpenImageDenoise.so.2 to denoise with (empty: APERTURE_OIDN if set, "
+        "else the one that ships with this Blender, else aperture's own search)",
+        subtype="FILE_PATH",
+        default="",
+    )
     keep_files: bpy.props.BoolProperty(
         name="Keep Files",
         description="Keep the exported glTF and aperture's EXR in the temporary folder (for "
@@ -73,7 +86,7 @@ class RENDER_PT_aperture(bpy.types.Panel):
         layout.use_property_split = True
         for name in ("samples", "noise_threshold", "max_bounces", "clamp_direct",
                      "clamp_indirect", "filter", "seed", "transmission", "denoising_data",
-                     "binary", "keep_files"):
+                     "denoise", "oidn", "binary", "keep_files"):
             layout.prop(s, name)
 
 

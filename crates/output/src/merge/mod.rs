@@ -44,6 +44,26 @@ pub fn merge_exr(
     out: &Path,
     opts: &MergeOptions,
 ) -> Result<MergeSummary, MergeError> {
+    merge_exr_with(parts, out, opts, None)
+}
+
+/// [`merge_exr`], then the merged image denoised once by `denoiser`
+/// ([`crate::denoised::denoise_image`]) before it is written: how a split render is denoised.
+pub fn merge_exr_denoised(
+    parts: &[PathBuf],
+    out: &Path,
+    opts: &MergeOptions,
+    denoiser: &aperture_denoise::Denoiser,
+) -> Result<MergeSummary, MergeError> {
+    merge_exr_with(parts, out, opts, Some(denoiser))
+}
+
+fn merge_exr_with(
+    parts: &[PathBuf],
+    out: &Path,
+    opts: &MergeOptions,
+    denoiser: Option<&aperture_denoise::Denoiser>,
+) -> Result<MergeSummary, MergeError> {
     if parts.is_empty() {
         return Err(MergeError::NoParts);
     }
@@ -55,6 +75,9 @@ pub fn merge_exr(
     let plan = Plan::new(&headers, opts)?;
     let mut image = accumulate::merge_pixels(&plan, &headers)?;
     image.metadata = merged_metadata(&plan, &headers, &image);
+    if let Some(d) = denoiser {
+        crate::denoised::denoise_image(&mut image, d).map_err(MergeError::Denoise)?;
+    }
     aperture_imageio::write_exr(out, &image).map_err(MergeError::Write)?;
     Ok(MergeSummary {
         parts: headers.len(),

@@ -199,6 +199,21 @@ pub enum MergeError {
         /// The part.
         path: PathBuf,
     },
+    /// A part is denoised: denoising is not linear (the mean of denoised parts is not the
+    /// denoised mean), so parts are merged first and denoised once (`merge --denoise`).
+    #[error(
+        "{}: a denoised part (aperture:denoised = 1): denoising is not linear, so parts must \
+         be merged undenoised and the result denoised once: render the parts without \
+         --denoise and run `aperture merge ... --denoise`",
+        path.display()
+    )]
+    DenoisedPart {
+        /// The part.
+        path: PathBuf,
+    },
+    /// The merged image could not be denoised.
+    #[error(transparent)]
+    Denoise(crate::denoised::DenoisingError),
     /// The output would overwrite one of the parts.
     #[error("{}: the output is one of the parts", path.display())]
     OutputIsAPart {

@@ -122,6 +122,11 @@ impl Part {
             Some(other) => Err(bad(key, format!("{other:?}"), "must be an integer")),
             None => Ok(None),
         };
+        if matches!(h.meta(crate::denoised::DENOISED), Some(MetaValue::Int(v)) if *v != 0) {
+            return Err(MergeError::DenoisedPart {
+                path: path.to_path_buf(),
+            });
+        }
         let scene_hash = text(split::SCENE_HASH)?;
         let options_hash = text(split::OPTIONS_HASH)?;
         let pose = match text(split::POSE) {
