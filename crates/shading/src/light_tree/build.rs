@@ -1,7 +1,7 @@
-//! Building the light tree: leaves from the scene's lights, then a top-down split at the
-//! median of the longest axis of the leaves' centres, so that the tree is balanced (its depth
-//! fits the 64-bit trails) and its build costs O(n log n) on one thread, deterministically.
+//! Building the light tree: leaves from the scene's lights, then top-down splits where
+//! [`super::split`] says, on one thread, deterministically.
 
+use super::split::{self, Split};
 use super::{Leaf, LightBounds, LightTree, Node};
 use crate::color::luminance;
 use crate::lights::EmissiveLights;
@@ -62,6 +62,9 @@ impl LightTree {
             .into_iter()
             .map(|(b, l)| (b, l, b.centre()))
             .collect();
+        // One order whatever the caller's, so that the tree (whose bucket bounds depend on the
+        // order of their unions) is the same.
+        items.sort_unstable_by_key(|it| it.1);
         tree.split(&mut items, 0, 0);
         for (i, leaf) in tree.leaves.iter().enumerate() {
             let slot = match *leaf {
@@ -94,25 +97,15 @@ impl LightTree {
             second: 0,
             leaf: false,
         });
-        let (lo, hi) = items.iter().fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), it| (lo.min(it.2), hi.max(it.2)),
-        );
-        let extent = hi - lo;
-        let axis = if extent.x >= extent.y && extent.x >= extent.z {
-            0
-        } else if extent.y >= extent.z {
-            1
-        } else {
-            2
-        };
-        let mid = items.len() / 2;
-        // Ties broken by the light, so that the order never depends on the input's.
+        let bounds: Vec<(LightBounds, Vec3)> = items.iter().map(|it| (it.0, it.2)).collect();
+        let Split { axis, count: mid } = split::choose(&bounds, depth);
+        // The `mid` items of smallest centre go first (buckets follow the coordinate); ties
+        // broken by the light, so that the order never depends on the input's.
         items.select_nth_unstable_by(mid, |a, b| {
             a.2[axis].total_cmp(&b.2[axis]).then(a.1.cmp(&b.1))
         });
         let (left, right) = items.split_at_mut(mid);
-        // Depth stays below 64: each level halves the items.
+        // Depth stays below 64: past `MEDIAN_DEPTH` each level halves the items.
         let a = self.split(left, depth + 1, trail);
         let second = self.nodes.len() as u32;
         let b = self.split(right, depth + 1, trail | (1u64 << depth.min(63)));

@@ -17,6 +17,7 @@ pub mod bounds;
 mod build;
 pub mod pick;
 mod sample;
+mod split;
 
 pub use bounds::LightBounds;
 
