@@ -11,6 +11,14 @@ angle. Written as self-contained .gltf (buffer inline), deterministic for a seed
 ``time`` renders each file with both binaries alternately (``nice``, 2 threads), ``--rounds``
 times, and prints the median time per sample from the EXR header's ``aperture:renderTime``
 (the traced image only: no loading, no BVH build).
+
+    many_lights.py efficiency --before BIN --after BIN DIR/*.gltf [--spp 16]
+
+``efficiency`` renders each file with both binaries at seeds 1 and 2: the variance of a pixel
+is half the mean squared difference of the two images; it prints image means (equal within
+noise for unbiased samplers), variances, times per sample and variance × time after/before
+(below 1: the after binary is more efficient). Needs NumPy (reads the EXRs with
+``tools/blender/aperture_gltf_dof/exr.py``).
 """
 
 from __future__ import annotations
@@ -120,7 +128,7 @@ def scene(n_lights, n_panels, seed):
             nodes.append({"mesh": 1, "translation": [x, h / 2, z], "scale": [w, h, w]})
     lights = []
     # Total intensity stays the same whatever N, so that the images stay comparable.
-    intensity = 40000.0 / n_lights
+    intensity = 40000.0 / max(n_lights, 1)
     for k in range(n_lights):
         colour = [rng.uniform(0.2, 1.0) for _ in range(3)]
         lights.append({"type": "point", "color": colour, "intensity": intensity})
@@ -187,10 +195,10 @@ def header_float(path, name):
     raise ValueError(f"{path}: no {name}")
 
 
-def render_time(binary, path, spp, width, height):
-    out = "/tmp/many_lights_out.exr"
+def render_time(binary, path, spp, width, height, out="/tmp/many_lights_out.exr", seed=0):
     cmd = ["nice", binary, "render", path, "-o", out, "--width", str(width), "--height",
-           str(height), "--spp", str(spp), "--threads", "2", "--passes", "none", "--quiet"]
+           str(height), "--spp", str(spp), "--threads", "2", "--passes", "none", "--seed",
+           str(seed), "--quiet"]
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
     return header_float(out, "aperture:renderTime")
 
@@ -209,6 +217,40 @@ def timing(args):
               f"\tafter {med['after']:.1f} ms/spp\t({args.rounds} rounds)", flush=True)
 
 
+def beauty(path):
+    """The beauty's R, G, B of an aperture EXR, as one (h, w, 3) array."""
+    import importlib.util
+    import numpy as np
+    here = os.path.dirname(os.path.abspath(__file__))
+    spec = importlib.util.spec_from_file_location(
+        "aperture_exr", os.path.join(here, "..", "blender", "aperture_gltf_dof", "exr.py"))
+    exr = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(exr)
+    channels, _ = exr.read(path)
+    pick = [next(k for k in channels if k == c or k.endswith("Combined." + c)) for c in "RGB"]
+    return np.stack([channels[k] for k in pick], axis=-1).astype(np.float64)
+
+
+def efficiency(args):
+    import numpy as np
+    bins = {"before": args.before, "after": args.after}
+    for path in args.files:
+        res = {}
+        for k, b in bins.items():
+            imgs, secs = [], []
+            for seed in (1, 2):
+                out = f"/tmp/many_lights_{k}_{seed}.exr"
+                secs.append(render_time(b, path, args.spp, args.width, args.height, out, seed))
+                imgs.append(beauty(out))
+            var = float(np.mean((imgs[0] - imgs[1]) ** 2) / 2)
+            mean = float(np.mean((imgs[0] + imgs[1]) / 2))
+            res[k] = (mean, var, statistics.mean(secs) / args.spp)
+        (mb, vb, tb), (ma, va, ta) = res["before"], res["after"]
+        print(f"{os.path.basename(path)}\tmean {mb:.4f} -> {ma:.4f}\tvariance {vb:.3g} -> "
+              f"{va:.3g}\tms/spp {tb * 1e3:.1f} -> {ta * 1e3:.1f}\tvariance x time after/before "
+              f"{va * ta / (vb * tb):.3f}", flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="cmd")
@@ -221,6 +263,13 @@ def main():
     t.add_argument("--width", type=int, default=320)
     t.add_argument("--height", type=int, default=240)
     t.add_argument("files", nargs="+")
+    e = sub.add_parser("efficiency")
+    e.add_argument("--before", required=True)
+    e.add_argument("--after", required=True)
+    e.add_argument("--spp", type=int, default=16)
+    e.add_argument("--width", type=int, default=160)
+    e.add_argument("--height", type=int, default=120)
+    e.add_argument("files", nargs="+")
     ap.add_argument("-o", "--out")
     ap.add_argument("--lights", default="10,100,1000,10000")
     ap.add_argument("--panels", type=int, default=0)
@@ -228,6 +277,8 @@ def main():
     args = ap.parse_args()
     if args.cmd == "time":
         timing(args)
+    elif args.cmd == "efficiency":
+        efficiency(args)
     elif args.out:
         write(args)
     else:

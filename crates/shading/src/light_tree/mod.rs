@@ -9,9 +9,10 @@
 //! ([`LightTree::triangle_probability`]), so MIS sees the same probability. Directional lights
 //! have no position: they are picked beside the tree ([`pick`]).
 //!
-//! Below [`PUNCTUAL_THRESHOLD`] point and spot lights and [`EMITTER_THRESHOLD`] emissive
-//! triangles the exhaustive choice ([`crate::light_choice`]) is kept: it evaluates every light
-//! exactly, and for few lights that costs less than the descent; its images stay as they were.
+//! Below [`PUNCTUAL_THRESHOLD`] point and spot lights the exhaustive choice
+//! ([`crate::light_choice`]) is kept: it evaluates every light exactly, which for fewer lights
+//! gives less noise per unit of time than the descent; its images stay as they were. Above it
+//! the scene's emissive triangles join the tree as leaves.
 
 pub mod bounds;
 mod build;
@@ -25,15 +26,13 @@ use crate::lights::EmissiveLights;
 use crate::surface::Geometry;
 use aperture_scene::Light;
 
-/// Point and spot lights from which a scene uses the tree: the exhaustive choice evaluates
-/// each of them at every vertex (measured on the street grid of `tools/bench/many_lights.py`;
-/// see BENCHMARKS.md).
-pub const PUNCTUAL_THRESHOLD: usize = 64;
-
-/// Emissive triangles from which a scene uses the tree even with few punctual lights: the
-/// exhaustive choice costs the same for any number of them (one candidate, an alias table),
-/// but picks them by power alone, wherever the vertex is.
-pub const EMITTER_THRESHOLD: usize = 1024;
+/// Point and spot lights from which a scene uses the tree: below it the exhaustive choice's
+/// exact importances give less noise per unit of time (street grid of
+/// `tools/bench/many_lights.py`: variance × time 3.9× lower than the tree's at 100 lights,
+/// 2.1× higher at 1,000; see BENCHMARKS.md). Emissive triangles alone never ask for the
+/// tree: the exhaustive choice costs the same for any number of them (one candidate, an alias
+/// table), and on 5,000 panels it was 1.8× more efficient.
+pub const PUNCTUAL_THRESHOLD: usize = 512;
 
 /// A leaf of the tree: one light.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -70,21 +69,19 @@ pub struct LightTree {
 }
 
 impl LightTree {
-    /// Whether a scene with these lights and emitters uses the tree (see
-    /// [`PUNCTUAL_THRESHOLD`], [`EMITTER_THRESHOLD`]).
-    pub fn wanted(lights: &[Light], emissive: Option<&EmissiveLights>) -> bool {
+    /// Whether a scene with these lights uses the tree (see [`PUNCTUAL_THRESHOLD`]).
+    pub fn wanted(lights: &[Light]) -> bool {
         let positional = lights
             .iter()
             .filter(|l| !matches!(l.kind, aperture_scene::LightKind::Directional))
             .count();
-        let triangles = emissive.map_or(0, |e| e.triangles.len());
-        positional >= PUNCTUAL_THRESHOLD || triangles >= EMITTER_THRESHOLD
+        positional >= PUNCTUAL_THRESHOLD
     }
 
     /// The tree when the scene [wants](LightTree::wanted) one, else `None` (the exhaustive
     /// choice serves it).
     pub fn for_scene(geom: &Geometry<'_>, emissive: Option<&EmissiveLights>) -> Option<Self> {
-        if !Self::wanted(&geom.scene.lights, emissive) {
+        if !Self::wanted(&geom.scene.lights) {
             return None;
         }
         Self::build(geom, emissive)
