@@ -27,6 +27,7 @@ pub mod color;
 pub mod environment;
 pub mod hit_prefetch;
 pub mod light_choice;
+pub mod light_tree;
 pub mod lights;
 pub mod media;
 pub mod punctual;

@@ -121,7 +121,7 @@ impl EmitterBounds {
 /// `(sin, cos)` of `max(θ_a − θ_b, 0)` from those of `θ_a` and `θ_b` (pbrt-v4's
 /// `cosSubClamped` and `sinSubClamped`).
 #[inline]
-fn angle_less(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> (f32, f32) {
+pub(crate) fn angle_less(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> (f32, f32) {
     if cos_a > cos_b {
         (0.0, 1.0)
     } else {
@@ -153,6 +153,9 @@ pub enum Pick {
     Punctual(usize),
     /// One of the emissive triangles (the caller picks which, by power, with [`Choice::u`]).
     Emitters,
+    /// The emissive triangle of this index in [`crate::lights::EmissiveLights::triangles`],
+    /// picked by the light tree ([`crate::light_tree`]).
+    Triangle(usize),
 }
 
 /// A vertex's pick: which light, with what probability, and the probability that the
@@ -216,7 +219,7 @@ impl Candidates<'_> {
                 .get(i)
                 .copied()
                 .unwrap_or_else(|| punctual_importance(&self.lights[i], p, n, two_sided)),
-            Pick::Emitters => w_emit,
+            Pick::Emitters | Pick::Triangle(_) => w_emit,
         };
         // The same weights in the same order as `total`, so the walk ends where `target`
         // falls; should rounding leave it past the end, the last candidate that can light the

@@ -27,6 +27,8 @@ pub struct EmissiveLights {
     pub triangles: Vec<EmissiveTriangle>,
     /// Selection table over `triangles`, by emitted power.
     pub table: AliasTable,
+    /// Each triangle's emitted power, in the units of the punctual lights' importance.
+    pub power: Vec<f32>,
     /// For each instance, the light index of each of its triangles (`u32::MAX` when not
     /// emissive); `None` for instances without emissive triangles.
     index: Vec<Option<Box<[u32]>>>,
@@ -82,6 +84,7 @@ impl EmissiveLights {
         Some(Self {
             triangles,
             table: AliasTable::new(&weights),
+            power: weights.iter().map(|&w| w as f32).collect(),
             index,
             bounds,
         })
@@ -89,12 +92,18 @@ impl EmissiveLights {
 
     /// Probability that light sampling picks this triangle (0 when it is not a light).
     pub fn pick_probability(&self, instance: u32, triangle: u32) -> f32 {
+        self.light_index(instance, triangle)
+            .map_or(0.0, |i| self.table.pmf(i))
+    }
+
+    /// The index in [`EmissiveLights::triangles`] of this triangle, if it is a light.
+    pub fn light_index(&self, instance: u32, triangle: u32) -> Option<usize> {
         match self.index.get(instance as usize) {
             Some(Some(map)) => match map.get(triangle as usize) {
-                Some(&i) if i != u32::MAX => self.table.pmf(i as usize),
-                _ => 0.0,
+                Some(&i) if i != u32::MAX => Some(i as usize),
+                _ => None,
             },
-            _ => 0.0,
+            _ => None,
         }
     }
 }

@@ -94,6 +94,11 @@ impl Integrator<'_> {
                 });
                 self.direct_emissive(v, beta, ls.as_ref(), c.probability, path);
             }
+            Some(Pick::Triangle(i)) => {
+                if let Some(ls) = ls {
+                    self.direct_triangle(v, beta, ls, i, c.probability, path);
+                }
+            }
             None => {}
         }
     }
@@ -143,7 +148,27 @@ impl Integrator<'_> {
             return;
         };
         let i = em.table.sample(bs.light_pick);
-        let t = em.triangles[i];
+        self.direct_triangle(v, beta, bs, i, em.table.pmf(i) * pick, path);
+    }
+
+    /// Next-event estimation towards the emissive triangle of index `i`, picked with
+    /// probability `pick`, weighted against BSDF sampling by MIS.
+    fn direct_triangle<const AOV: bool>(
+        &self,
+        v: &Vertex<'_>,
+        beta: Vec3,
+        bs: &VertexLightSample,
+        i: usize,
+        pick: f32,
+        path: &mut PathState<AOV>,
+    ) {
+        let Some(t) = self
+            .emissive
+            .as_ref()
+            .and_then(|em| em.triangles.get(i).copied())
+        else {
+            return;
+        };
         let (a, b) = (bs.light[0].sqrt(), bs.light[1]);
         let q = self
             .geom
@@ -159,7 +184,7 @@ impl Integrator<'_> {
         let Some(origin) = v.origin_towards(wi) else {
             return;
         };
-        let light_pdf = em.table.pmf(i) * pick / q.area * d2 / cos_l;
+        let light_pdf = pick / q.area * d2 / cos_l;
         let wi_l = v.frame.to_local(wi);
         let (f, bsdf_pdf) = v.bsdf.eval(v.wo_l, wi_l);
         let le = self.geom.emission(&q);

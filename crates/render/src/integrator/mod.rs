@@ -29,6 +29,7 @@ use crate::sampler::{BounceSample, SampleStream};
 use aperture_accel::{Accel, Hit, Ray, SpawnPoint};
 use aperture_shading::bsdf::{Interface, LobeSplit};
 use aperture_shading::environment::EnvLight;
+use aperture_shading::light_tree::LightTree;
 use aperture_shading::lights::EmissiveLights;
 use aperture_shading::media::{Crossing, Medium};
 use aperture_shading::spectrum;
@@ -41,6 +42,8 @@ pub(crate) struct Integrator<'a> {
     pub geom: Geometry<'a>,
     pub accel: &'a Accel,
     pub emissive: Option<EmissiveLights>,
+    /// The light tree, for scenes with many lights (else the exhaustive choice).
+    pub light_tree: Option<LightTree>,
     pub env: EnvLight,
     pub max_bounces: u32,
     pub clamp: Clamp,
@@ -208,7 +211,10 @@ impl Integrator<'_> {
             (self.emissive.is_some() || self.pick_light).then(|| stream.vertex_light(w.vertex))
         });
         let choice = match (self.pick_light, &ls) {
-            (true, Some(l)) => Some(self.candidates().pick(s.p, ng, two_sided, l.light_pick)),
+            (true, Some(l)) => Some(match &self.light_tree {
+                Some(t) => t.pick(&self.geom.scene.lights, s.p, ng, two_sided, l.light_pick),
+                None => self.candidates().pick(s.p, ng, two_sided, l.light_pick),
+            }),
             _ => None,
         };
         let v = direct::Vertex {
@@ -324,6 +330,8 @@ impl Integrator<'_> {
                 p: v.p,
                 pdf: if unsampled { f32::INFINITY } else { sample.pdf },
                 emitters: v.emitters,
+                n: v.ng,
+                two_sided: v.two_sided,
             };
         }
         if !w.survives_roulette(bs.rr) {
@@ -351,7 +359,13 @@ impl Integrator<'_> {
         }
         match &self.emissive {
             Some(em) => {
-                let pick = em.pick_probability(hit.instance, hit.triangle) * arrival.emitters;
+                let pick = match &self.light_tree {
+                    Some(t) => em.light_index(hit.instance, hit.triangle).map_or(0.0, |i| {
+                        let lights = &self.geom.scene.lights;
+                        t.triangle_probability(lights, arrival.p, arrival.n, arrival.two_sided, i)
+                    }),
+                    None => em.pick_probability(hit.instance, hit.triangle) * arrival.emitters,
+                };
                 let cos_l = ng.dot(wo).abs();
                 let d2 = (s.p - arrival.p).length_squared();
                 let light_pdf = if cos_l > 0.0 && s.area > 0.0 {

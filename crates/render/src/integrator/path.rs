@@ -67,6 +67,10 @@ pub(super) struct Arrival {
     pub(super) pdf: f32,
     /// Probability that light sampling picked the emitters there (1 without a choice).
     pub(super) emitters: f32,
+    /// The vertex's normal on the side light is received from, and whether both sides
+    /// count: the light tree's probability of a met emitter depends on them.
+    pub(super) n: Vec3,
+    pub(super) two_sided: bool,
 }
 
 /// Where a path is between vertices.
@@ -97,6 +101,8 @@ impl Walk {
                 p: origin,
                 pdf: f32::INFINITY,
                 emitters: 1.0,
+                n: Vec3::ZERO,
+                two_sided: false,
             },
             vertex: 0,
             scatter: 0,

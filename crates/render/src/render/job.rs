@@ -13,6 +13,7 @@ use crate::spares::Spares;
 use aperture_accel::Accel;
 use aperture_scene::Scene;
 use aperture_shading::environment::EnvLight;
+use aperture_shading::light_tree::LightTree;
 use aperture_shading::lights::EmissiveLights;
 use aperture_shading::surface::Geometry;
 use glam::Vec3;
@@ -129,10 +130,12 @@ pub(super) fn integrator<'a>(
     let (model, _) = opts.transmission.resolve(scene);
     let geom = Geometry::with_transmission(scene, opts.material_override, model);
     let emissive = EmissiveLights::build(&geom);
+    let light_tree = LightTree::for_scene(&geom, emissive.as_ref());
     let mut integrator = Integrator {
         geom,
         accel,
         emissive,
+        light_tree,
         env: EnvLight::new(&opts.env),
         max_bounces: opts.max_bounces,
         clamp: opts.clamp,
@@ -140,6 +143,6 @@ pub(super) fn integrator<'a>(
         energy_compensation: opts.energy_compensation,
         pick_light: false,
     };
-    integrator.pick_light = integrator.candidates().choose();
+    integrator.pick_light = integrator.light_tree.is_some() || integrator.candidates().choose();
     integrator
 }

@@ -13,6 +13,7 @@ use crate::sampler::MAX_SPP;
 use crate::AdaptiveOptions;
 use aperture_scene::Scene;
 use aperture_shading::environment::Environment;
+use aperture_shading::light_tree::LightTree;
 use aperture_shading::test_scenes;
 use glam::Affine3A;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -134,47 +135,112 @@ fn one_light_per_vertex_converges_to_every_light() {
         spp: 64,
         ..RenderOptions::default()
     };
-    let camera = Camera::new(&scene.cameras[0], opts.width, opts.height);
-    let filter = Filter::new(opts.filter);
     let mean = |pick: bool, seed: u32| {
         let mut integrator = integrator(&scene, &accel, &opts);
         assert!(integrator.pick_light);
         integrator.pick_light = pick;
-        let opts = RenderOptions {
-            seed,
-            ..opts.clone()
-        };
-        let job = lens_job(&integrator, &camera, &filter, &opts);
-        let mut sum = Vec3::ZERO;
-        for (x, y) in (0..opts.height).flat_map(|y| (0..opts.width).map(move |x| (x, y))) {
-            for i in 0..opts.spp {
-                let (stream, ray) = job.camera_ray(x, y, i);
-                if let Some(r) = ray {
-                    sum += integrator.li_alone::<false>(r.origin, r.dir, &stream).0;
-                }
+        image_mean(
+            &integrator,
+            &RenderOptions {
+                seed,
+                ..opts.clone()
+            },
+        )
+    };
+    let (picked, e_picked) = over_seeds(|seed| mean(true, seed));
+    let (every, e_every) = over_seeds(|seed| mean(false, seed));
+    assert_within_noise((picked, e_picked), (every, e_every), 0.01);
+}
+
+#[test]
+fn light_tree_converges_to_the_exhaustive_choice() {
+    // Eighty coloured point lights around the emissive ball: the tree's picks, and its
+    // probability of the ball's triangles in their MIS weights, give the image mean of the
+    // exhaustive choice.
+    let mut scene = busy_scene();
+    let mut x = 0x9e37_79b9u32;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        x as f32 / u32::MAX as f32
+    };
+    for _ in 0..80 {
+        scene.lights.push(aperture_scene::Light {
+            name: None,
+            kind: aperture_scene::LightKind::Point,
+            position: Vec3::new(4.0 * next() - 2.0, 0.2 + 2.0 * next(), 4.0 * next() - 2.0),
+            direction: Vec3::NEG_Y,
+            intensity: Vec3::new(next(), next(), next()) * 0.2,
+        });
+    }
+    let accel = build_accel(&scene, Default::default());
+    let opts = RenderOptions {
+        width: 32,
+        height: 24,
+        spp: 128,
+        ..RenderOptions::default()
+    };
+    let mean = |tree: bool, seed: u32| {
+        let mut integrator = integrator(&scene, &accel, &opts);
+        // Fewer lights than the threshold: the tree is built here.
+        assert!(integrator.light_tree.is_none() && integrator.pick_light);
+        if tree {
+            let em = integrator.emissive.as_ref();
+            integrator.light_tree = LightTree::build(&integrator.geom, em);
+        }
+        image_mean(
+            &integrator,
+            &RenderOptions {
+                seed,
+                ..opts.clone()
+            },
+        )
+    };
+    let tree = over_seeds(|seed| mean(true, seed));
+    let exhaustive = over_seeds(|seed| mean(false, seed));
+    assert_within_noise(tree, exhaustive, 0.02);
+}
+
+/// The mean radiance of an image traced sample by sample.
+fn image_mean(integrator: &Integrator<'_>, opts: &RenderOptions) -> Vec3 {
+    let camera = Camera::new(&integrator.geom.scene.cameras[0], opts.width, opts.height);
+    let filter = Filter::new(opts.filter);
+    let job = lens_job(integrator, &camera, &filter, opts);
+    let mut sum = Vec3::ZERO;
+    for (x, y) in (0..opts.height).flat_map(|y| (0..opts.width).map(move |x| (x, y))) {
+        for i in 0..opts.spp {
+            let (stream, ray) = job.camera_ray(x, y, i);
+            if let Some(r) = ray {
+                sum += integrator.li_alone::<false>(r.origin, r.dir, &stream).0;
             }
         }
-        sum / (opts.width * opts.height * opts.spp) as f32
-    };
-    // Mean and standard error over seeds (each an independent scramble).
-    let runs = |pick: bool| {
-        let m: Vec<Vec3> = (0..6).map(|seed| mean(pick, seed)).collect();
-        let avg = m.iter().sum::<Vec3>() / m.len() as f32;
-        let var = m.iter().map(|x| (*x - avg) * (*x - avg)).sum::<Vec3>() / 5.0;
-        (avg, (var / 6.0).powf(0.5))
-    };
-    let (picked, e_picked) = runs(true);
-    let (every, e_every) = runs(false);
-    assert!(every.min_element() > 0.01, "{every}");
+    }
+    sum / (opts.width * opts.height * opts.spp) as f32
+}
+
+/// Mean and standard error of `mean` over six seeds (each an independent scramble).
+fn over_seeds(mean: impl Fn(u32) -> Vec3) -> (Vec3, Vec3) {
+    let m: Vec<Vec3> = (0..6).map(mean).collect();
+    let avg = m.iter().sum::<Vec3>() / m.len() as f32;
+    let var = m.iter().map(|x| (*x - avg) * (*x - avg)).sum::<Vec3>() / 5.0;
+    (avg, (var / 6.0).powf(0.5))
+}
+
+/// `a` and `b` (means with their standard errors) agree within four standard errors, and
+/// that spread is below `spread` of `b`, so the comparison means something.
+fn assert_within_noise(a: (Vec3, Vec3), b: (Vec3, Vec3), spread: f32) {
+    assert!(b.0.min_element() > 0.01, "{}", b.0);
     for c in 0..3 {
-        let tolerance = 4.0 * (e_picked[c].powi(2) + e_every[c].powi(2)).sqrt();
+        let tolerance = 4.0 * (a.1[c].powi(2) + b.1[c].powi(2)).sqrt();
         assert!(
-            (picked[c] - every[c]).abs() <= tolerance,
-            "channel {c}: {picked} against {every} (tolerance {tolerance})"
+            (a.0[c] - b.0[c]).abs() <= tolerance,
+            "channel {c}: {} against {} (tolerance {tolerance})",
+            a.0,
+            b.0
         );
-        // The spread is small enough for the comparison to mean something.
         assert!(
-            tolerance < 0.01 * every[c],
+            tolerance < spread * b.0[c],
             "channel {c}: tolerance {tolerance}"
         );
     }

@@ -185,6 +185,7 @@ fn picks_follow_the_importances() {
         let slot = match c.pick {
             Some(Pick::Punctual(i)) => i,
             Some(Pick::Emitters) => 3,
+            Some(Pick::Triangle(_)) => panic!("the exhaustive choice picks the emitters as one"),
             None => panic!("u = {u}: nothing picked"),
         };
         assert!((c.probability - w[slot] / total).abs() < 1e-6);

@@ -1,0 +1,120 @@
+//! Building the light tree: leaves from the scene's lights, then top-down splits where
+//! [`super::split`] says, on one thread, deterministically.
+
+use super::split::{self, Split};
+use super::{Leaf, LightBounds, LightTree, Node};
+use crate::color::luminance;
+use crate::lights::EmissiveLights;
+use crate::surface::Geometry;
+use aperture_scene::{Light, LightKind};
+use glam::Vec3;
+
+/// A leaf waiting for its place: its bound, light and the centre it is sorted by.
+type Item = (LightBounds, Leaf, Vec3);
+
+impl LightTree {
+    /// The tree of the scene's point and spot lights and of its emissive triangles; `None`
+    /// when none of them sends light.
+    pub fn build(geom: &Geometry<'_>, emissive: Option<&EmissiveLights>) -> Option<Self> {
+        let lights = &geom.scene.lights;
+        let mut leaves = Vec::new();
+        for (i, l) in lights.iter().enumerate() {
+            if let Some(b) = LightBounds::punctual(l, luminance(l.intensity)) {
+                leaves.push((b, Leaf::Punctual(i as u32)));
+            }
+        }
+        let mut triangles = 0;
+        if let Some(em) = emissive {
+            triangles = em.triangles.len();
+            for (i, (t, &phi)) in em.triangles.iter().zip(&em.power).enumerate() {
+                let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]
+                    .map(|(b1, b2)| geom.emitter_surface(t.instance, t.triangle, b1, b2).p);
+                if let Some(b) = LightBounds::triangle(corners, phi) {
+                    leaves.push((b, Leaf::Triangle(i as u32)));
+                }
+            }
+        }
+        Self::from_leaves(leaves, lights, triangles)
+    }
+
+    /// The tree over `leaves` (bounds and lights) of a scene with these punctual `lights` and
+    /// `triangles` emissive triangles; `None` without leaves.
+    pub fn from_leaves(
+        leaves: Vec<(LightBounds, Leaf)>,
+        lights: &[Light],
+        triangles: usize,
+    ) -> Option<Self> {
+        if leaves.is_empty() {
+            return None;
+        }
+        let directional = (0..lights.len() as u32)
+            .filter(|&i| matches!(lights[i as usize].kind, LightKind::Directional))
+            .collect();
+        let mut tree = Self {
+            nodes: Vec::with_capacity(2 * leaves.len()),
+            leaves: Vec::with_capacity(leaves.len()),
+            trails: Vec::with_capacity(leaves.len()),
+            punctual_leaf: vec![u32::MAX; lights.len()],
+            triangle_leaf: vec![u32::MAX; triangles],
+            directional,
+        };
+        let mut items: Vec<Item> = leaves
+            .into_iter()
+            .map(|(b, l)| (b, l, b.centre()))
+            .collect();
+        // One order whatever the caller's, so that the tree (whose bucket bounds depend on the
+        // order of their unions) is the same.
+        items.sort_unstable_by_key(|it| it.1);
+        tree.split(&mut items, 0, 0);
+        for (i, leaf) in tree.leaves.iter().enumerate() {
+            let slot = match *leaf {
+                Leaf::Punctual(l) => tree.punctual_leaf.get_mut(l as usize),
+                Leaf::Triangle(t) => tree.triangle_leaf.get_mut(t as usize),
+            };
+            if let Some(s) = slot {
+                *s = i as u32;
+            }
+        }
+        Some(tree)
+    }
+
+    /// Appends the subtree of `items` (not empty) at `depth` reached by `trail`, depth first
+    /// (a node's first child follows it); returns its bound.
+    fn split(&mut self, items: &mut [Item], depth: u32, trail: u64) -> LightBounds {
+        let at = self.nodes.len();
+        if let [(bounds, leaf, _)] = items {
+            self.nodes.push(Node {
+                bounds: *bounds,
+                second: self.leaves.len() as u32,
+                leaf: true,
+            });
+            self.leaves.push(*leaf);
+            self.trails.push(trail);
+            return *bounds;
+        }
+        self.nodes.push(Node {
+            bounds: items[0].0,
+            second: 0,
+            leaf: false,
+        });
+        let bounds: Vec<(LightBounds, Vec3)> = items.iter().map(|it| (it.0, it.2)).collect();
+        let Split { axis, count: mid } = split::choose(&bounds, depth);
+        // The `mid` items of smallest centre go first (buckets follow the coordinate); ties
+        // broken by the light, so that the order never depends on the input's.
+        items.select_nth_unstable_by(mid, |a, b| {
+            a.2[axis].total_cmp(&b.2[axis]).then(a.1.cmp(&b.1))
+        });
+        let (left, right) = items.split_at_mut(mid);
+        // Depth stays below 64: past `MEDIAN_DEPTH` each level halves the items.
+        let a = self.split(left, depth + 1, trail);
+        let second = self.nodes.len() as u32;
+        let b = self.split(right, depth + 1, trail | (1u64 << depth.min(63)));
+        let bounds = a.union(&b);
+        self.nodes[at] = Node {
+            bounds,
+            second,
+            leaf: false,
+        };
+        bounds
+    }
+}
