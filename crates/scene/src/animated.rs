@@ -199,32 +199,17 @@ impl Animated {
         stats.hidden_nodes = order.iter().filter(|&&i| graph.hidden[i]).count();
 
         let animations = animation::parse(&doc, &buffers, &root, &options.animation)?;
-        if !animations.ignored_pointers.is_empty() {
-            stats.warnings.push(format!(
-                "KHR_animation_pointer: {} pointer(s) at what aperture does not animate, ignored: {}",
-                animations.ignored_pointers.len(),
-                animations.ignored_pointers.join(", ")
-            ));
-        }
-        if (animations.ignored_pointers.iter()).any(|p| p.contains("KHR_node_visibility")) {
-            stats.warnings.push(
-                "KHR_node_visibility: animated visibility is not evaluated yet; every node keeps \
-                 its stored visibility at every time"
-                    .into(),
-            );
-        }
+        pointer_warnings(&animations.ignored_pointers, &mut stats.warnings);
         stats.animations = animations.info.clone();
 
         let mut materials = Materials::default();
-        let mut meshes = read_meshes(
-            &doc,
-            &order,
-            &graph.hidden,
-            &buffers,
-            &mut stats,
-            variant,
-            &mut materials,
-        )?;
+        // Hidden nodes' meshes are not even read (KHR_node_visibility).
+        let shown: Vec<usize> = order
+            .iter()
+            .copied()
+            .filter(|&i| !graph.hidden[i])
+            .collect();
+        let mut meshes = read_meshes(&doc, &shown, &buffers, &mut stats, variant, &mut materials)?;
         let material_index = materials.gltf_indices();
         generate_tangents(&mut meshes, &materials.materials);
         let material_list = std::mem::take(&mut materials.materials);
@@ -538,19 +523,36 @@ fn ignored_extension_warnings(ignored: &[String]) -> Vec<String> {
         .collect()
 }
 
-/// Every mesh the drawn (visible) nodes use, read once each (by glTF mesh index), its materials gathered
+/// What the user should know of the `KHR_animation_pointer` pointers aperture ignores.
+fn pointer_warnings(ignored: &[String], out: &mut Vec<String>) {
+    if !ignored.is_empty() {
+        out.push(format!(
+            "KHR_animation_pointer: {} pointer(s) at what aperture does not animate, ignored: {}",
+            ignored.len(),
+            ignored.join(", ")
+        ));
+    }
+    if ignored.iter().any(|p| p.contains("KHR_node_visibility")) {
+        out.push(
+            "KHR_node_visibility: animated visibility is not evaluated yet; every node keeps its \
+             stored visibility at every time"
+                .into(),
+        );
+    }
+}
+
+/// Every mesh the nodes in `order` use, read once each (by glTF mesh index), its materials gathered
 /// into `materials`.
 fn read_meshes(
     doc: &gltf::Document,
     order: &[usize],
-    hidden: &[bool],
     buffers: &Buffers,
     stats: &mut SceneStats,
     variant: Option<usize>,
     materials: &mut Materials,
 ) -> Result<HashMap<usize, LoadedMesh>, Error> {
     let mut meshes = HashMap::new();
-    for &ni in order.iter().filter(|&&ni| !hidden[ni]) {
+    for &ni in order {
         let Some(m) = doc.nodes().nth(ni).and_then(|n| n.mesh()) else {
             continue;
         };
