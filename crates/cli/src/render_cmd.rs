@@ -2,9 +2,10 @@
 
 use crate::progress::Progress;
 use crate::render_args::RenderArgs;
-use crate::render_opts::{after_load, before_load, frame_format, png_options, usage_error};
+use crate::render_opts::{after_load, before_load, usage_error};
 use crate::render_summary::print_summary;
 use anyhow::Context as _;
+use aperture_output::sequence::FrameFormat;
 use aperture_render::RenderOptions;
 use aperture_scene::LoadOptions;
 use std::time::Instant;
@@ -31,12 +32,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
 
     let pool = crate::workers::worker_pool(args.threads)?;
     if let Some(frames) = args.frames {
-        let format = frame_format(&args, before.png_out, plan.exr);
         return crate::frames::run(
             &args,
             &animated,
             frames,
-            format,
+            plan.format,
             &plan.opts,
             plan.quality,
             &pool,
@@ -50,8 +50,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         let accel = aperture_render::build_frame_accel(&scene, plan.quality, &hints, None);
         let load_secs = t_load.elapsed().as_secs_f64();
         let out = Output {
-            exr: &plan.exr,
-            png: before.png_out,
+            format: plan.format,
             denoiser: denoiser.as_ref(),
         };
         let summary = write_image(&args, &scene, &accel, &plan.opts, &out)?;
@@ -74,9 +73,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
 
 /// How the still image is written.
 struct Output<'a> {
-    exr: &'a aperture_output::ExrOptions,
-    /// PNG rather than EXR.
-    png: bool,
+    format: FrameFormat,
     denoiser: Option<&'a aperture_denoise::Denoiser>,
 }
 
@@ -95,24 +92,25 @@ fn write_image(
     );
     let report = |done, total| progress.update(done, total);
     let path = &args.output;
-    let png = png_options(args);
-    let summary = match (out.png, out.denoiser) {
-        (true, None) => {
-            aperture_output::render_png(scene, accel, opts, path, &png, args.transparent, &report)
+    let summary = match (out.format, out.denoiser) {
+        (FrameFormat::Png { png, transparent }, None) => {
+            aperture_output::render_png(scene, accel, opts, path, &png, transparent, &report)
         }
-        (true, Some(d)) => aperture_output::render_png_denoised(
+        (FrameFormat::Png { png, transparent }, Some(d)) => aperture_output::render_png_denoised(
             scene,
             accel,
             opts,
             path,
             &png,
-            args.transparent,
+            transparent,
             d,
             &report,
         ),
-        (false, None) => aperture_output::render_exr(scene, accel, opts, path, out.exr, &report),
-        (false, Some(d)) => {
-            aperture_output::render_exr_denoised(scene, accel, opts, path, out.exr, d, &report)
+        (FrameFormat::Exr(exr), None) => {
+            aperture_output::render_exr(scene, accel, opts, path, &exr, &report)
+        }
+        (FrameFormat::Exr(exr), Some(d)) => {
+            aperture_output::render_exr_denoised(scene, accel, opts, path, &exr, d, &report)
         }
     };
     progress.finish();

@@ -66,7 +66,8 @@ pub(crate) fn before_load(args: &RenderArgs) -> anyhow::Result<BeforeLoad> {
 /// part of the image), the BVH quality and the part.
 pub(crate) struct RenderPlan {
     pub opts: RenderOptions,
-    pub exr: aperture_output::ExrOptions,
+    /// How the image (or each frame) is written: PNG with its options, or EXR.
+    pub format: aperture_output::sequence::FrameFormat,
     pub quality: aperture_accel::BvhQuality,
     pub part: Option<crate::split_args::ImagePart>,
 }
@@ -101,7 +102,7 @@ pub(crate) fn after_load(
     };
     Ok(RenderPlan {
         opts,
-        exr,
+        format: frame_format(args, before.png_out, exr),
         quality,
         part,
     })
@@ -183,7 +184,7 @@ fn image_part(
 }
 
 /// How a sequence's frames are written: PNG (`--exposure`, `--view`, `--transparent`) or EXR.
-pub(crate) fn frame_format(
+fn frame_format(
     args: &RenderArgs,
     png_out: bool,
     exr: aperture_output::ExrOptions,
@@ -354,7 +355,7 @@ fn environment(args: &RenderArgs, max_bytes: u64) -> anyhow::Result<Environment>
 }
 
 /// `--exposure`, `--view`.
-pub(crate) fn png_options(args: &RenderArgs) -> aperture_imageio::PngOptions {
+fn png_options(args: &RenderArgs) -> aperture_imageio::PngOptions {
     aperture_imageio::PngOptions {
         exposure: args.exposure,
         view: match args.view {
