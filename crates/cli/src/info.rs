@@ -191,6 +191,7 @@ fn report(s: &Scene, mode: aperture_render::TransmissionMode) -> Value {
         "node_bounds": node_bounds(s),
         "world_origin": [s.world_origin.x, s.world_origin.y, s.world_origin.z],
         "hidden_nodes": s.stats.hidden_nodes,
+        "extensions": extensions_json(&s.stats.extensions),
         "skipped": {
             "primitives": s.stats.skipped_primitives,
             "features": s.stats.skipped_features,
@@ -223,6 +224,17 @@ fn report(s: &Scene, mode: aperture_render::TransmissionMode) -> Value {
     })
 }
 
+/// Each extension the file uses: its name, what aperture does with it, and why when ignored.
+fn extensions_json(used: &[(String, aperture_scene::ExtensionStatus)]) -> Value {
+    use aperture_scene::ExtensionStatus;
+    let row = |(name, status): &(String, ExtensionStatus)| match status {
+        ExtensionStatus::Supported => json!({"name": name, "status": "supported"}),
+        ExtensionStatus::Ignored => json!({"name": name, "status": "ignored",
+            "why": "optional and not implemented: the file renders without it"}),
+    };
+    Value::Array(used.iter().map(row).collect())
+}
+
 /// The report as text: one section after another.
 fn print_text(path: &std::path::Path, r: &Value) {
     println!("{}", path.display());
@@ -231,6 +243,11 @@ fn print_text(path: &std::path::Path, r: &Value) {
     print_materials(r);
     print_time(r);
     print_cameras(r);
+}
+
+/// A JSON string ("" when missing).
+fn str_of(v: &Value) -> &str {
+    v.as_str().unwrap_or_default()
 }
 
 /// A JSON count (0 when missing).
@@ -279,6 +296,16 @@ fn print_counts(r: &Value) {
 /// What the loader left out, and its warnings.
 fn print_skipped_and_warnings(r: &Value) {
     let skipped = &r["skipped"];
+    for e in r["extensions"].as_array().into_iter().flatten() {
+        let why = e["why"]
+            .as_str()
+            .map_or(String::new(), |w| format!(" ({w})"));
+        println!(
+            "  extension: {} {}{why}",
+            str_of(&e["name"]),
+            str_of(&e["status"])
+        );
+    }
     if count(&r["hidden_nodes"]) > 0 {
         println!(
             "  hidden: {} node(s) (KHR_node_visibility; not drawn, not lights)",
@@ -504,6 +531,27 @@ mod tests {
     }
 
     /// A recentred scene reports bounds and cameras in the file's coordinates.
+    #[test]
+    fn extensions_are_listed_with_what_aperture_does_with_them() {
+        use aperture_scene::ExtensionStatus;
+        let mut s = scene();
+        s.stats.extensions = vec![
+            ("KHR_node_visibility".into(), ExtensionStatus::Supported),
+            ("KHR_xmp".into(), ExtensionStatus::Ignored),
+        ];
+        s.stats.hidden_nodes = 3;
+        let r = report(&s, Default::default());
+        assert_eq!(r["extensions"][0]["name"], "KHR_node_visibility");
+        assert_eq!(r["extensions"][0]["status"], "supported");
+        assert!(r["extensions"][0].get("why").is_none());
+        assert_eq!(r["extensions"][1]["status"], "ignored");
+        assert!(r["extensions"][1]["why"]
+            .as_str()
+            .unwrap()
+            .contains("optional"));
+        assert_eq!(r["hidden_nodes"], 3);
+    }
+
     #[test]
     fn recentred_scenes_report_file_coordinates() {
         let mut s = scene();

@@ -180,10 +180,10 @@ impl Animated {
             (bytes, None)
         };
         let prepared = prepass::prepare(json)?;
-        let doc = prepared.document;
-        let root = prepared.root;
+        let (doc, root) = (prepared.document, prepared.root);
         let mut stats = SceneStats {
             skipped_features: prepared.skipped,
+            extensions: prepared.extensions,
             warnings: ignored_extension_warnings(&prepared.ignored_extensions),
             ..SceneStats::default()
         };

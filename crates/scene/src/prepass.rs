@@ -49,6 +49,25 @@ pub(crate) struct Prepared {
     pub skipped: Vec<String>,
     /// Extensions the file uses that we ignore (allowed: they are not required).
     pub ignored_extensions: Vec<String>,
+    /// Every extension of `extensionsUsed`, with its status.
+    pub extensions: Vec<(String, crate::ExtensionStatus)>,
+}
+
+/// Every extension of `extensionsUsed` with its status, and the ignored ones' names.
+fn extension_statuses(root: &Value) -> (Vec<(String, crate::ExtensionStatus)>, Vec<String>) {
+    let used = root.get("extensionsUsed").and_then(Value::as_array);
+    let names = used.into_iter().flatten().filter_map(Value::as_str);
+    let all: Vec<_> = names
+        .map(|e| match SUPPORTED_EXTENSIONS.contains(&e) {
+            true => (e.to_owned(), crate::ExtensionStatus::Supported),
+            false => (e.to_owned(), crate::ExtensionStatus::Ignored),
+        })
+        .collect();
+    let ignored = (all.iter())
+        .filter(|(_, s)| *s == crate::ExtensionStatus::Ignored)
+        .map(|(e, _)| e.clone())
+        .collect();
+    (all, ignored)
 }
 
 /// Refuses required extensions we do not implement. Runs on the raw JSON, before anything else.
@@ -244,15 +263,7 @@ pub(crate) fn prepare(json: &[u8]) -> Result<Prepared, Error> {
     let mut root = Value::Object(kept);
     check_required(&root)?;
 
-    let ignored_extensions = root
-        .get("extensionsUsed")
-        .and_then(Value::as_array)
-        .into_iter()
-        .flatten()
-        .filter_map(Value::as_str)
-        .filter(|e| !SUPPORTED_EXTENSIONS.contains(e))
-        .map(str::to_owned)
-        .collect();
+    let (extensions, ignored_extensions) = extension_statuses(&root);
     check_position_indices(&root)?;
     check_shapes_the_typed_api_assumes(&mut root)?;
     use_extension_sources(&mut root);
@@ -288,6 +299,7 @@ pub(crate) fn prepare(json: &[u8]) -> Result<Prepared, Error> {
         root,
         skipped: Vec::new(),
         ignored_extensions,
+        extensions,
     })
 }
 

@@ -294,6 +294,15 @@ pub struct LoadOptions {
     pub memory: aperture_budget::MemoryBudget,
 }
 
+/// What aperture does with an extension a file uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ExtensionStatus {
+    /// Implemented (in [`crate::SUPPORTED_EXTENSIONS`]).
+    Supported,
+    /// Not implemented and optional (not in `extensionsRequired`): the file renders without it.
+    Ignored,
+}
+
 /// An axis-aligned box.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Bounds {
@@ -349,6 +358,9 @@ pub struct SceneStats {
     pub primitives: usize,
     /// Primitives skipped (points, lines).
     pub skipped_primitives: usize,
+    /// Every extension the file lists in `extensionsUsed`, with what aperture does with it (a
+    /// required one aperture lacks never gets here: the load is refused).
+    pub extensions: Vec<(String, ExtensionStatus)>,
     /// Nodes of the selected scene hidden by `KHR_node_visibility` (themselves or an
     /// ancestor): not drawn, not lights, not in Cryptomatte.
     pub hidden_nodes: usize,

@@ -42,7 +42,7 @@ fn file(visibility: bool) -> Vec<u8> {
     let ext = |e: Value| if visibility { e } else { json!({}) };
     let mut doc = json!({
         "asset": {"version": "2.0"},
-        "extensionsUsed": ["KHR_node_visibility", "KHR_lights_punctual"],
+        "extensionsUsed": ["KHR_node_visibility", "KHR_lights_punctual", "ACME_optional"],
         "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 10.0}]}},
         "buffers": [{"byteLength": 44}],
         "bufferViews": [{"buffer": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
@@ -106,4 +106,22 @@ fn a_hidden_camera_and_a_hidden_focus_object_still_work() {
         s.cameras[0].dof.focus_distance,
         all.cameras[0].dof.focus_distance
     );
+}
+
+#[test]
+fn every_used_extension_is_reported_supported_or_ignored() {
+    use aperture_scene::ExtensionStatus::{Ignored, Supported};
+    let s = load(true);
+    let got: Vec<(&str, _)> = (s.stats.extensions.iter())
+        .map(|(n, st)| (n.as_str(), *st))
+        .collect();
+    assert_eq!(
+        got,
+        vec![
+            ("KHR_node_visibility", Supported),
+            ("KHR_lights_punctual", Supported),
+            ("ACME_optional", Ignored)
+        ]
+    );
+    assert!(s.stats.warnings.iter().any(|w| w.contains("ACME_optional")));
 }
