@@ -92,27 +92,15 @@ fn write_image(
     );
     let report = |done, total| progress.update(done, total);
     let path = &args.output;
-    let summary = match (out.format, out.denoiser) {
-        (FrameFormat::Png { png, transparent }, None) => {
-            aperture_output::render_png(scene, accel, opts, path, &png, transparent, &report)
-        }
-        (FrameFormat::Png { png, transparent }, Some(d)) => aperture_output::render_png_denoised(
-            scene,
-            accel,
-            opts,
-            path,
-            &png,
-            transparent,
-            d,
-            &report,
-        ),
-        (FrameFormat::Exr(exr), None) => {
-            aperture_output::render_exr(scene, accel, opts, path, &exr, &report)
-        }
-        (FrameFormat::Exr(exr), Some(d)) => {
-            aperture_output::render_exr_denoised(scene, accel, opts, path, &exr, d, &report)
-        }
-    };
+    let summary = aperture_output::sequence::render_image(
+        scene,
+        accel,
+        opts,
+        path,
+        out.format,
+        out.denoiser,
+        &report,
+    );
     progress.finish();
     let summary = summary.with_context(|| format!("writing {}", args.output.display()))?;
     progress.frame_written(args.when.frame, &args.output, summary.render_secs);

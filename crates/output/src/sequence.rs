@@ -173,31 +173,41 @@ fn write_frame(
     path: &Path,
     tile_progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<RenderSummary, OutputError> {
-    let opts = seq.opts;
-    match (seq.format, seq.denoiser) {
+    let (opts, format) = (seq.opts, seq.format);
+    render_image(
+        scene,
+        accel,
+        opts,
+        path,
+        format,
+        seq.denoiser,
+        tile_progress,
+    )
+}
+
+/// Renders `opts` and writes it to `path` in `format`, denoised when a `denoiser` is given: the
+/// one way a still image and each frame of a sequence are written.
+pub fn render_image(
+    scene: &Scene,
+    accel: &Accel,
+    opts: &RenderOptions,
+    path: &Path,
+    format: FrameFormat,
+    denoiser: Option<&Denoiser>,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<RenderSummary, OutputError> {
+    match (format, denoiser) {
         (FrameFormat::Exr(exr), Some(d)) => {
-            crate::render_exr_denoised(scene, accel, opts, path, &exr, d, tile_progress)
+            crate::render_exr_denoised(scene, accel, opts, path, &exr, d, progress)
         }
-        (FrameFormat::Png { png, transparent }, Some(d)) => crate::render_png_denoised(
-            scene,
-            accel,
-            opts,
-            path,
-            &png,
-            transparent,
-            d,
-            tile_progress,
-        ),
-        (FrameFormat::Exr(exr), None) => render_exr(scene, accel, opts, path, &exr, tile_progress),
-        (FrameFormat::Png { png, transparent }, None) => render_png(
-            scene,
-            accel,
-            seq.opts,
-            path,
-            &png,
-            transparent,
-            tile_progress,
-        ),
+        (FrameFormat::Png { png, transparent }, Some(d)) => {
+            let t = transparent;
+            crate::render_png_denoised(scene, accel, opts, path, &png, t, d, progress)
+        }
+        (FrameFormat::Exr(exr), None) => render_exr(scene, accel, opts, path, &exr, progress),
+        (FrameFormat::Png { png, transparent }, None) => {
+            render_png(scene, accel, opts, path, &png, transparent, progress)
+        }
     }
 }
 

@@ -12,6 +12,8 @@ use meshopt::encoding::{
 use serde_json::{json, Value};
 use std::path::Path;
 
+mod common;
+
 const POSITIONS: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.5, 0.0, 0.25], [0.0, 2.0, -0.5]];
 const NORMALS: [[f32; 4]; 3] = [
     [0.0, 0.0, 1.0, 0.0],
@@ -26,29 +28,6 @@ const COLORS: [[f32; 4]; 3] = [
 
 fn rotations() -> [Quat; 2] {
     [Quat::from_rotation_z(0.5), Quat::from_rotation_z(0.5)]
-}
-
-/// The GLB container: JSON chunk and BIN chunk, each padded to 4 bytes.
-fn glb(doc: &Value, bin: &[u8]) -> Vec<u8> {
-    let mut js = serde_json::to_vec(doc).unwrap();
-    while js.len() % 4 != 0 {
-        js.push(b' ');
-    }
-    let mut bin = bin.to_vec();
-    while bin.len() % 4 != 0 {
-        bin.push(0);
-    }
-    let total = 12 + 8 + js.len() + 8 + bin.len();
-    let mut out = b"glTF".to_vec();
-    for v in [2, total as u32, js.len() as u32, 0x4E4F_534A] {
-        out.extend_from_slice(&v.to_le_bytes());
-    }
-    out.extend_from_slice(&js);
-    for v in [bin.len() as u32, 0x004E_4942] {
-        out.extend_from_slice(&v.to_le_bytes());
-    }
-    out.extend_from_slice(&bin);
-    out
 }
 
 /// One compressed attribute stream: bytes, stride, element count, filter.
@@ -131,7 +110,7 @@ fn file(ext: &str) -> Vec<u8> {
         "animations": [{"samplers": [{"input": 5, "output": 3}],
             "channels": [{"sampler": 0, "target": {"node": 0, "path": "rotation"}}]}]
     });
-    glb(&doc, &bin)
+    common::glb::glb(&doc, &bin)
 }
 
 fn posed() -> LoadOptions {

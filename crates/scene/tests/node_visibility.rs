@@ -6,6 +6,8 @@ use aperture_scene::{load_bytes, LoadOptions, Scene};
 use serde_json::{json, Value};
 use std::path::Path;
 
+mod common;
+
 /// A GLB of `doc` over one triangle's positions (3 × VEC3 float) and indices.
 fn glb(doc: &Value) -> Vec<u8> {
     let mut bin = Vec::new();
@@ -15,21 +17,7 @@ fn glb(doc: &Value) -> Vec<u8> {
     for i in [0u16, 1, 2, 0] {
         bin.extend_from_slice(&i.to_le_bytes());
     }
-    let mut js = serde_json::to_vec(doc).unwrap();
-    while js.len() % 4 != 0 {
-        js.push(b' ');
-    }
-    let total = 12 + 8 + js.len() + 8 + bin.len();
-    let mut out = b"glTF".to_vec();
-    for v in [2, total as u32, js.len() as u32, 0x4E4F_534A] {
-        out.extend_from_slice(&v.to_le_bytes());
-    }
-    out.extend_from_slice(&js);
-    for v in [bin.len() as u32, 0x004E_4942] {
-        out.extend_from_slice(&v.to_le_bytes());
-    }
-    out.extend_from_slice(&bin);
-    out
+    common::glb::glb(doc, &bin)
 }
 
 fn hidden() -> Value {

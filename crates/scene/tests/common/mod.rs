@@ -24,4 +24,5 @@ pub fn samples_dir() -> Option<PathBuf> {
     None
 }
 
+pub mod glb;
 pub mod reference;
