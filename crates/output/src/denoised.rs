@@ -13,6 +13,14 @@ use std::path::Path;
 
 /// Header attribute (i32) that is 1 in a denoised file.
 pub const DENOISED: &str = "aperture:denoised";
+
+/// `passes` and the two the denoiser reads (albedo and normal), rendered for it.
+pub(crate) fn with_aux(passes: aperture_render::PassSet) -> aperture_render::PassSet {
+    use aperture_render::Pass;
+    passes
+        .with(Pass::DenoisingAlbedo)
+        .with(Pass::DenoisingNormal)
+}
 /// Cycles' name of the noisy beauty kept beside the denoised one.
 pub const NOISY_IMAGE: &str = "Noisy Image";
 /// The albedo pass the denoiser takes.

@@ -87,10 +87,7 @@ pub fn footprint(opts: &RenderOptions, kind: OutputKind, exr: &ExrOptions) -> Fo
         OutputKind::Exr | OutputKind::ExrDenoised => {
             let window = exr.region.unwrap_or(whole);
             let asked = match kind {
-                OutputKind::ExrDenoised => opts
-                    .passes
-                    .with(aperture_render::Pass::DenoisingAlbedo)
-                    .with(aperture_render::Pass::DenoisingNormal),
+                OutputKind::ExrDenoised => crate::denoised::with_aux(opts.passes),
                 _ => opts.passes,
             };
             let passes = channels::file_passes(asked, adaptive || window != whole);

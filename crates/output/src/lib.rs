@@ -168,10 +168,7 @@ pub fn render_exr_denoised(
     denoiser: &Denoiser,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<RenderSummary, OutputError> {
-    let passes = opts
-        .passes
-        .with(Pass::DenoisingAlbedo)
-        .with(Pass::DenoisingNormal);
+    let passes = denoised::with_aux(opts.passes);
     let opts = RenderOptions {
         passes,
         ..opts.clone()
@@ -375,9 +372,7 @@ fn render_png_with(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<RenderSummary, OutputError> {
     let passes = match denoiser {
-        Some(_) => PassSet::NONE
-            .with(Pass::DenoisingAlbedo)
-            .with(Pass::DenoisingNormal),
+        Some(_) => denoised::with_aux(PassSet::NONE),
         None => PassSet::NONE,
     };
     let opts = RenderOptions {

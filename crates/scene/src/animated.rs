@@ -183,8 +183,8 @@ impl Animated {
         let (doc, root) = (prepared.document, prepared.root);
         let mut stats = SceneStats {
             skipped_features: prepared.skipped,
+            warnings: ignored_extension_warnings(&prepass::ignored(&prepared.extensions)),
             extensions: prepared.extensions,
-            warnings: ignored_extension_warnings(&prepared.ignored_extensions),
             ..SceneStats::default()
         };
         stats.generator = doc.as_json().asset.generator.clone();
@@ -516,7 +516,7 @@ fn read_lights(doc: &gltf::Document) -> Result<Vec<LightData>, Error> {
 }
 
 /// The warnings for extensions the file uses that aperture ignores.
-fn ignored_extension_warnings(ignored: &[String]) -> Vec<String> {
+fn ignored_extension_warnings(ignored: &[&str]) -> Vec<String> {
     ignored
         .iter()
         .map(|e| format!("extension {e} is used but not implemented: ignored"))

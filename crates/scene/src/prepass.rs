@@ -47,27 +47,28 @@ pub(crate) struct Prepared {
     /// except that `nodes` holds one `null` per node (see `COUNTED_ONLY`).
     pub root: Value,
     pub skipped: Vec<String>,
-    /// Extensions the file uses that we ignore (allowed: they are not required).
-    pub ignored_extensions: Vec<String>,
     /// Every extension of `extensionsUsed`, with its status.
     pub extensions: Vec<(String, crate::ExtensionStatus)>,
 }
 
-/// Every extension of `extensionsUsed` with its status, and the ignored ones' names.
-fn extension_statuses(root: &Value) -> (Vec<(String, crate::ExtensionStatus)>, Vec<String>) {
+/// Every extension of `extensionsUsed` with its status.
+fn extension_statuses(root: &Value) -> Vec<(String, crate::ExtensionStatus)> {
     let used = root.get("extensionsUsed").and_then(Value::as_array);
     let names = used.into_iter().flatten().filter_map(Value::as_str);
-    let all: Vec<_> = names
+    names
         .map(|e| match SUPPORTED_EXTENSIONS.contains(&e) {
             true => (e.to_owned(), crate::ExtensionStatus::Supported),
             false => (e.to_owned(), crate::ExtensionStatus::Ignored),
         })
-        .collect();
-    let ignored = (all.iter())
+        .collect()
+}
+
+/// The names of the extensions `extensions` marks ignored (optional, not implemented).
+pub(crate) fn ignored(extensions: &[(String, crate::ExtensionStatus)]) -> Vec<&str> {
+    (extensions.iter())
         .filter(|(_, s)| *s == crate::ExtensionStatus::Ignored)
-        .map(|(e, _)| e.clone())
-        .collect();
-    (all, ignored)
+        .map(|(e, _)| e.as_str())
+        .collect()
 }
 
 /// Refuses required extensions we do not implement. Runs on the raw JSON, before anything else.
@@ -263,7 +264,7 @@ pub(crate) fn prepare(json: &[u8]) -> Result<Prepared, Error> {
     let mut root = Value::Object(kept);
     check_required(&root)?;
 
-    let (extensions, ignored_extensions) = extension_statuses(&root);
+    let extensions = extension_statuses(&root);
     check_position_indices(&root)?;
     check_shapes_the_typed_api_assumes(&mut root)?;
     use_extension_sources(&mut root);
@@ -298,7 +299,6 @@ pub(crate) fn prepare(json: &[u8]) -> Result<Prepared, Error> {
         document,
         root,
         skipped: Vec::new(),
-        ignored_extensions,
         extensions,
     })
 }
@@ -320,7 +320,7 @@ mod tests {
     fn used_only_extensions_are_ignored_and_required_supported_ones_pass() {
         let p = prepare(br#"{"asset":{"version":"2.0"},"extensionsUsed":["EXT_lights_image_based","EXT_mesh_gpu_instancing"],"extensionsRequired":["EXT_mesh_gpu_instancing","KHR_mesh_quantization"]}"#)
             .unwrap();
-        assert_eq!(p.ignored_extensions, ["EXT_lights_image_based"]);
+        assert_eq!(ignored(&p.extensions), ["EXT_lights_image_based"]);
     }
 
     #[test]
@@ -362,7 +362,7 @@ mod tests {
         .unwrap();
         let sources: Vec<usize> = p.document.textures().map(|t| t.source().index()).collect();
         assert_eq!(sources, [1, 0]);
-        assert!(p.ignored_extensions.is_empty());
+        assert!(ignored(&p.extensions).is_empty());
     }
 
     #[test]
