@@ -141,11 +141,18 @@ def scene(n_lights, n_panels, seed):
             z = -g + spacing * rng.randint(0, GRID) + rng.uniform(-0.3, 0.3)
         nodes.append({"translation": [x, rng.uniform(0.3, 4.0), z],
                       "extensions": {"KHR_lights_punctual": {"light": k}}})
+    on_box = [0] * len(boxes)
     for _ in range(n_panels):
-        # On a box's street-facing side (+Z), at some height.
-        x, z, w, h = boxes[rng.randrange(len(boxes))]
+        # On a box's street-facing side (+Z), at some height; each panel of a box 2 mm in
+        # front of the one before. Overlapping panels closer than a shadow ray's offset (0.1 mm
+        # was) are all seen by light sampling but one at a time by rays: the two strategies
+        # then disagree, and an image's brightness depends on which one MIS favours.
+        b = rng.randrange(len(boxes))
+        x, z, w, h = boxes[b]
+        gap = 0.01 + 2e-3 * on_box[b]
+        on_box[b] += 1
         nodes.append({"mesh": 2, "translation": [x + rng.uniform(-w, w) * 0.4,
-                                                 rng.uniform(0.3, h - 0.2), z + w / 2 + 0.01]})
+                                                 rng.uniform(0.3, h - 0.2), z + w / 2 + gap]})
     nodes.append({"camera": 0, "translation": [0, 14, 30],
                   "rotation": [-0.2588190, 0, 0, 0.9659258]})  # 30 degrees down
     doc = {

@@ -202,6 +202,41 @@ fn light_tree_converges_to_the_exhaustive_choice() {
     assert_within_noise(tree, exhaustive, 0.02);
 }
 
+#[test]
+fn many_point_lights_and_emitters_share_the_tree() {
+    // Past the threshold the tree serves the emitters too (their MIS weights then follow the
+    // tree's probability, which `light_tree_converges_to_the_exhaustive_choice` checks).
+    let mut scene = busy_scene();
+    let n = aperture_shading::light_tree::PUNCTUAL_THRESHOLD;
+    for k in 0..n {
+        scene.lights.push(aperture_scene::Light {
+            name: None,
+            kind: aperture_scene::LightKind::Point,
+            position: Vec3::new(k as f32 * 0.01 - 2.0, 1.5, -1.0),
+            direction: Vec3::NEG_Y,
+            intensity: Vec3::splat(0.01),
+        });
+    }
+    let accel = build_accel(&scene, Default::default());
+    let integrator = integrator(&scene, &accel, &RenderOptions::default());
+    let tree = integrator
+        .light_tree
+        .as_ref()
+        .expect("the tree past the threshold");
+    let triangles = integrator
+        .emissive
+        .as_ref()
+        .map_or(0, |e| e.triangles.len());
+    let leaves = tree.leaves();
+    let emitting = leaves
+        .iter()
+        .filter(|l| matches!(l, aperture_shading::light_tree::Leaf::Triangle(_)))
+        .count();
+    assert!(triangles > 0);
+    assert_eq!(emitting, triangles, "every emissive triangle is a leaf");
+    assert_eq!(leaves.len(), triangles + scene.lights.len());
+}
+
 /// The mean radiance of an image traced sample by sample.
 fn image_mean(integrator: &Integrator<'_>, opts: &RenderOptions) -> Vec3 {
     let camera = Camera::new(&integrator.geom.scene.cameras[0], opts.width, opts.height);

@@ -11,9 +11,8 @@
 //!
 //! Below [`PUNCTUAL_THRESHOLD`] point and spot lights the exhaustive choice
 //! ([`crate::light_choice`]) is kept: it evaluates every light exactly, which for fewer lights
-//! gives less noise per unit of time than the descent; its images stay as they were. A scene
-//! with emissive triangles keeps the exhaustive choice for now ([`LightTree::for_scene`]); the
-//! tree itself takes them as leaves, which its tests exercise.
+//! gives less noise per unit of time than the descent; its images stay as they were. From it on,
+//! the tree holds the emissive triangles too, each its own leaf.
 
 pub mod bounds;
 mod build;
@@ -82,11 +81,7 @@ impl LightTree {
     /// The tree when the scene [wants](LightTree::wanted) one, else `None` (the exhaustive
     /// choice serves it).
     pub fn for_scene(geom: &Geometry<'_>, emissive: Option<&EmissiveLights>) -> Option<Self> {
-        // Not yet with emissive triangles: on scenes of many panels the tree's images are a few
-        // per cent brighter than the exhaustive choice's, a gap not yet explained (BENCHMARKS.md,
-        // "Many lights"), so those scenes keep the choice whose result is established.
-        let has_emitters = emissive.is_some_and(|e| !e.triangles.is_empty());
-        if has_emitters || !Self::wanted(&geom.scene.lights) {
+        if !Self::wanted(&geom.scene.lights) {
             return None;
         }
         Self::build(geom, emissive)
