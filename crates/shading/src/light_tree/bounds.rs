@@ -119,41 +119,89 @@ impl LightBounds {
     /// with normal `n` (facing the side light is received from), or from both sides of it
     /// when `two_sided`. Zero only where none of the lights can light the point.
     pub fn importance(&self, p: Vec3, n: Vec3, two_sided: bool) -> f32 {
-        let centre = self.centre();
-        let radius2 = (self.hi - self.lo).length_squared() * 0.25;
-        let d2 = p.distance_squared(centre);
-        // Directions from `p` into the bounding sphere: a cone of half-angle θ_b.
-        let (sin_b, cos_b) = if d2 <= radius2 {
-            (0.0, -1.0)
-        } else {
-            let sin2 = radius2 / d2;
-            (sin2.sqrt(), (1.0 - sin2).max(0.0).sqrt())
-        };
-        let to_p = (p - centre).normalize_or_zero();
-        let cos_w = self.axis.dot(to_p);
-        let cos_w = if self.two_sided { cos_w.abs() } else { cos_w };
-        let sin_w = (1.0 - cos_w * cos_w).max(0.0).sqrt();
-        let sin_o = (1.0 - self.cos_o * self.cos_o).max(0.0).sqrt();
-        let (sin_x, cos_x) = angle_less(sin_w, cos_w, sin_o, self.cos_o);
-        let (_, cos_emit) = angle_less(sin_x, cos_x, sin_b, cos_b);
-        if cos_emit <= self.cos_e && d2 > radius2 {
-            return 0.0;
+        Reach::new(self).importance(p, n, two_sided)
+    }
+}
+
+/// What the descent reads of a [`LightBounds`], precomputed: its bounding sphere and the sine
+/// of its cone (a tree node holds this; 44 bytes against 52, and no square root per visit).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Reach {
+    centre: Vec3,
+    radius2: f32,
+    axis: Vec3,
+    cos_o: f32,
+    sin_o: f32,
+    cos_e: f32,
+    phi: f32,
+    two_sided: bool,
+}
+
+impl Reach {
+    /// The reach of `b`.
+    pub(super) fn new(b: &LightBounds) -> Self {
+        Self {
+            centre: b.centre(),
+            radius2: (b.hi - b.lo).length_squared() * 0.25,
+            axis: b.axis,
+            cos_o: b.cos_o,
+            sin_o: (1.0 - b.cos_o * b.cos_o).max(0.0).sqrt(),
+            cos_e: b.cos_e,
+            phi: b.phi,
+            two_sided: b.two_sided,
         }
+    }
+
+    /// [`LightBounds::importance`] (pbrt-v4's `LightBounds::Importance`): the same arithmetic,
+    /// with the cases that end at zero or need no angle taken first.
+    #[inline]
+    pub(super) fn importance(&self, p: Vec3, n: Vec3, two_sided: bool) -> f32 {
+        let d = p - self.centre;
+        let d2 = d.length_squared();
+        if d2 <= self.radius2 {
+            // Inside the bounding sphere every direction is possible: no cone excludes the
+            // point and there is no falloff.
+            return clamp_importance(self.phi / self.radius2);
+        }
+        // Directions from `p` into the bounding sphere: a cone of half-angle θ_b.
+        let to_p = d * d2.sqrt().recip();
+        let sin2_b = self.radius2 / d2;
+        let (sin_b, cos_b) = (sin2_b.sqrt(), (1.0 - sin2_b).max(0.0).sqrt());
+        // The receiver's side first: a surface facing away ends most visits here.
         let cos_i = if two_sided {
             n.dot(to_p).abs()
         } else {
             -n.dot(to_p)
         };
-        let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
-        let (_, cos_recv) = angle_less(sin_i, cos_i, sin_b, cos_b);
-        // Inside the sphere every direction is possible: no emission falloff.
-        let emit = if d2 <= radius2 { 1.0 } else { cos_emit };
-        let importance = self.phi * emit.max(0.0) * cos_recv.max(0.0) / d2.max(radius2);
-        if importance > 0.0 {
-            importance.min(f32::MAX)
-        } else {
-            0.0
+        let (_, cos_recv) = angle_less(sin_of(cos_i), cos_i, sin_b, cos_b);
+        if cos_recv.is_nan() || cos_recv <= 0.0 {
+            return 0.0;
         }
+        let cos_w = self.axis.dot(to_p);
+        let cos_w = if self.two_sided { cos_w.abs() } else { cos_w };
+        let (sin_x, cos_x) = angle_less(sin_of(cos_w), cos_w, self.sin_o, self.cos_o);
+        let (_, cos_emit) = angle_less(sin_x, cos_x, sin_b, cos_b);
+        if cos_emit <= self.cos_e {
+            return 0.0;
+        }
+        clamp_importance(self.phi * cos_emit.max(0.0) * cos_recv / d2)
+    }
+}
+
+/// `sin θ` from `cos θ` for `θ ∈ [0, π]`.
+#[inline]
+fn sin_of(cos: f32) -> f32 {
+    (1.0 - cos * cos).max(0.0).sqrt()
+}
+
+/// An importance as the descent takes it: NaN and negatives are zero, an overflow the largest
+/// weight.
+#[inline]
+fn clamp_importance(importance: f32) -> f32 {
+    if importance > 0.0 {
+        importance.min(f32::MAX)
+    } else {
+        0.0
     }
 }
 

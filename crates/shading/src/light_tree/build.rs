@@ -1,6 +1,7 @@
 //! Building the light tree: leaves from the scene's lights, then top-down splits where
 //! [`super::split`] says, on one thread, deterministically.
 
+use super::bounds::Reach;
 use super::split::{self, Split};
 use super::{Leaf, LightBounds, LightTree, Node};
 use crate::color::luminance;
@@ -84,7 +85,7 @@ impl LightTree {
         let at = self.nodes.len();
         if let [(bounds, leaf, _)] = items {
             self.nodes.push(Node {
-                bounds: *bounds,
+                bounds: Reach::new(bounds),
                 second: self.leaves.len() as u32,
                 leaf: true,
             });
@@ -93,7 +94,7 @@ impl LightTree {
             return *bounds;
         }
         self.nodes.push(Node {
-            bounds: items[0].0,
+            bounds: Reach::new(&items[0].0),
             second: 0,
             leaf: false,
         });
@@ -111,7 +112,7 @@ impl LightTree {
         let b = self.split(right, depth + 1, trail | (1u64 << depth.min(63)));
         let bounds = a.union(&b);
         self.nodes[at] = Node {
-            bounds,
+            bounds: Reach::new(&bounds),
             second,
             leaf: false,
         };

@@ -47,7 +47,7 @@ pub enum Leaf {
 /// `second` is its index in [`LightTree::leaves`].
 #[derive(Debug, Clone, Copy)]
 struct Node {
-    bounds: LightBounds,
+    bounds: bounds::Reach,
     second: u32,
     leaf: bool,
 }
