@@ -43,6 +43,7 @@
 
 mod build;
 mod cover;
+mod motion;
 mod node;
 mod packet;
 mod query;
@@ -55,6 +56,7 @@ mod types;
 mod walk;
 
 pub use build::{FrameHints, FLATTEN_SHARED_LIMIT};
+pub use motion::MotionTransform;
 pub use packet::{PACKET_CONE_COS, PACKET_LANES};
 pub use rayfile::{read_rays, write_rays, RayFileError};
 pub use spawn::{offset_ray_origin, SpawnPoint};

@@ -14,6 +14,7 @@ mod info;
 mod interrupt;
 mod material_args;
 mod merge_cmd;
+mod motion_args;
 mod number_args;
 mod plot;
 mod progress;

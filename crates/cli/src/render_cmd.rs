@@ -44,6 +44,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         );
     }
     let hints = aperture_render::SceneHints::new(&animated, &scene);
+    let mut plan = plan;
+    plan.opts.motion = crate::motion_args::frame_motion(
+        &args.motion,
+        &animated,
+        &scene,
+        (before.load.time, args.when.fps),
+        (plan.opts.camera, plan.opts.width, plan.opts.height),
+    )?;
     drop(animated);
     let (summary, load_secs) = pool.install(|| -> anyhow::Result<_> {
         // The same structure a sequence builds for this frame, so their images agree bit for bit.

@@ -31,6 +31,7 @@ pub mod film;
 mod filter;
 mod frame_accel;
 mod integrator;
+pub mod motion;
 mod options;
 pub mod passes;
 mod primary;

@@ -9,6 +9,7 @@ use crate::background::PixelMask;
 use crate::camera::{Camera, CameraRay, CameraSample};
 use crate::camera_lanes::{LensLanes, LANES};
 use crate::filter::Filter;
+use crate::motion::FrameMotion;
 use crate::sampler::{pixel_seed_in_row, row_seed, PixelRun, SampleStream, SamplerKind};
 use glam::{Vec2, Vec3};
 
@@ -34,6 +35,9 @@ pub(crate) struct PrimarySamples<'a> {
     /// The pixels whose rays may meet the scene (all when `None`); the others' samples are
     /// [`Start::Background`].
     scene: Option<&'a PixelMask>,
+    /// The frame's motion, when something in it moves (motion blur on): each sample draws its
+    /// time, and a moving camera makes its rays one at a time at that time.
+    motion: Option<&'a FrameMotion>,
 }
 
 /// What a sample's camera gave: a traced ray, no ray, or a ray that provably leaves the scene
@@ -67,6 +71,20 @@ impl<'a> PrimarySamples<'a> {
             centre: Vec2::ZERO,
             run: PixelRun::new(kind, 0, 0),
             scene: None,
+            motion: None,
+        }
+    }
+
+    /// Samples at their time in the shutter of `motion` (when something moves in it).
+    pub fn with_motion(self, motion: Option<&'a FrameMotion>) -> Self {
+        let motion = motion.filter(|m| m.moves());
+        Self {
+            // The lanes make a still camera's rays.
+            lanes: self
+                .lanes
+                .filter(|_| motion.is_none_or(|m| m.camera.is_none())),
+            motion,
+            ..self
         }
     }
 
@@ -166,8 +184,25 @@ impl<'a> PrimarySamples<'a> {
     #[inline(always)]
     pub fn sample(&mut self, x: u32, y: u32, i: u32) -> (SampleStream, Option<CameraRay>) {
         let (stream, p_film, p_lens) = self.numbers(x, y, i);
-        let sample = CameraSample { p_film, p_lens };
-        (stream, self.camera.generate_ray(&sample))
+        let Some(motion) = self.motion else {
+            let sample = CameraSample {
+                p_film,
+                p_lens,
+                time: 0.0,
+            };
+            return (stream, self.camera.generate_ray(&sample));
+        };
+        let time = (motion.shutter).normalised_time(stream.time(), p_film.y, self.camera.height);
+        let sample = CameraSample {
+            p_film,
+            p_lens,
+            time,
+        };
+        let ray = match &motion.camera {
+            Some(path) => path.generate_ray(&sample),
+            None => self.camera.generate_ray(&sample),
+        };
+        (stream, ray)
     }
 
     /// Sample `i` of pixel `(x, y)`: its stream and the numbers it gives the camera.
@@ -221,6 +256,7 @@ pub(crate) fn drawn_alone(
     let sample = CameraSample {
         p_film: Vec2::new(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y),
         p_lens,
+        time: 0.0,
     };
     (stream, camera.generate_ray(&sample))
 }

@@ -101,7 +101,11 @@ pub fn render_window(
         layout: AovLayout::new(opts.passes),
         ids: crypto_ids(scene, opts.passes),
         wavefronts: Spares::default(),
-        backdrop: crate::background::backdrop(&integrator, accel, camera, &filter, &opts.env),
+        // A moving camera sees other pixels' background at other times: no backdrop then.
+        backdrop: match opts.motion.as_deref().and_then(|m| m.camera.as_ref()) {
+            Some(_) => None,
+            None => crate::background::backdrop(&integrator, accel, camera, &filter, &opts.env),
+        },
     };
     let mut film = match opts.adaptive {
         Some(a) => render_adaptive(&job, &a, window, progress),

@@ -283,6 +283,12 @@ impl Animated {
         self.build(time, self.static_meshes.clone(), self.textures.clone())
     }
 
+    /// [`Animated::scene_at`] without textures (none is decoded or copied): what a motion step
+    /// needs of a pose (placements, cameras, lights, deformed meshes).
+    pub fn shape_at(&self, time: Option<f32>) -> Result<Scene, Error> {
+        self.build(time, self.static_meshes.clone(), Vec::new())
+    }
+
     /// [`Animated::scene_at`], consuming the document (no copy of the geometry and textures).
     pub fn into_scene(mut self, time: Option<f32>) -> Result<Scene, Error> {
         let meshes = std::mem::take(&mut self.static_meshes);
@@ -467,6 +473,10 @@ fn drawn_order(
         })?),
         None => doc.default_scene().or_else(|| doc.scenes().next()),
     };
+    if let Some(s) = &scene {
+        let extras = crate::camera::raw(s.extras());
+        stats.motion = crate::MotionExtras::parse(s.index(), extras.as_ref())?;
+    }
     let mut order = Vec::new();
     match &scene {
         Some(s) => {

@@ -83,7 +83,8 @@ impl Job<'_> {
             .unwrap_or_default();
         let o = self.opts;
         let mut primary =
-            PrimarySamples::new(self.camera, self.filter, o.sampler, o.seed, o.sample_offset);
+            PrimarySamples::new(self.camera, self.filter, o.sampler, o.seed, o.sample_offset)
+                .with_motion(o.motion.as_deref());
         if let Some(b) = &self.backdrop {
             primary = primary.with_scene(&b.scene);
         }
