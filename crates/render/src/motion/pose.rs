@@ -34,7 +34,8 @@ pub fn pose_frame_motion(
         let tau = k as f32 / (steps - 1) as f32;
         let scene = animated.shape_at(Some(motion.seconds(tau) as f32))?;
         let offset = (scene.world_origin - frame_origin).as_vec3();
-        if let Some(cam) = scene.cameras.get(camera) {
+        // The automatic camera frames each pose's bounds: it stays the frame's.
+        if let Some(cam) = scene.cameras.get(camera).filter(|c| c.node.is_some()) {
             let mut c = Camera::new(cam, width, height);
             c.world_from_camera.translation += glam::Vec3A::from(offset);
             cameras.push(c);
