@@ -8,6 +8,7 @@ use crate::{render_exr, render_png, ExrOptions, OutputError, RenderSummary};
 use aperture_accel::{Accel, AccelStats, BvhQuality};
 use aperture_denoise::Denoiser;
 use aperture_imageio::PngOptions;
+use aperture_render::motion::{pose_frame_motion, MotionSettings};
 use aperture_render::sequence::{for_each_frame, FrameRange, PosedFrame};
 use aperture_render::RenderOptions;
 use aperture_scene::{Animated, Scene};
@@ -117,6 +118,9 @@ pub struct Sequence<'a> {
     pub skip_existing: bool,
     /// Denoise every frame ([`crate::render_exr_denoised`], [`crate::render_png_denoised`]).
     pub denoiser: Option<&'a Denoiser>,
+    /// Motion blur: each frame's shutter interval posed with these settings (`None`, or a
+    /// setting without a shutter: every frame an instant).
+    pub motion: Option<MotionSettings>,
 }
 
 /// Renders every frame of `seq` in turn: `tile_progress(done, total)` during each frame,
@@ -138,7 +142,12 @@ pub fn render_sequence(
             rendered: None,
         };
         if let Some((scene, accel)) = f.posed {
-            let written = write_frame(seq, scene, accel, &path, tile_progress);
+            let opts =
+                frame_options(seq, f.frame, scene).map_err(|source| SequenceError::Pose {
+                    frame: f.frame,
+                    source,
+                })?;
+            let written = write_frame(seq, &opts, scene, accel, &path, tile_progress);
             let summary = written.map_err(|source| SequenceError::Render {
                 frame: f.frame,
                 source,
@@ -165,15 +174,37 @@ pub fn render_sequence(
     )
 }
 
-/// One posed frame of `seq` rendered into its file.
+/// The options of `frame` (posed as `scene`): the sequence's, with the frame's motion.
+fn frame_options(
+    seq: &Sequence<'_>,
+    frame: i64,
+    scene: &Scene,
+) -> Result<RenderOptions, aperture_scene::Error> {
+    let mut opts = seq.opts.clone();
+    if let Some(settings) = &seq.motion {
+        let fps = f64::from(seq.fps);
+        opts.motion = pose_frame_motion(
+            seq.animated,
+            settings,
+            (frame as f64 / fps, fps),
+            scene.world_origin,
+            (opts.camera, opts.width, opts.height),
+        )?
+        .map(std::sync::Arc::new);
+    }
+    Ok(opts)
+}
+
+/// One posed frame of `seq` rendered into its file with `opts`.
 fn write_frame(
     seq: &Sequence<'_>,
+    opts: &RenderOptions,
     scene: &Scene,
     accel: &Accel,
     path: &Path,
     tile_progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<RenderSummary, OutputError> {
-    let (opts, format) = (seq.opts, seq.format);
+    let format = seq.format;
     render_image(
         scene,
         accel,

@@ -252,6 +252,11 @@ impl Animated {
         Ok(animated)
     }
 
+    /// The selected scene's motion-blur keys (`scenes[i].extras`, SPEC §7).
+    pub fn motion_extras(&self) -> crate::MotionExtras {
+        self.stats.motion
+    }
+
     /// The file's animations (every one, with whether this load evaluates it).
     pub fn animations(&self) -> &[AnimationInfo] {
         &self.animations.info
