@@ -89,7 +89,7 @@ pub fn frame_motion(
         animated,
         &settings,
         (f64::from(time), f64::from(fps)),
-        scene.world_origin,
+        scene,
         (camera, width, height),
     )?;
     Ok(motion.map(Arc::new))

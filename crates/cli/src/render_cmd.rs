@@ -55,7 +55,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     drop(animated);
     let (summary, load_secs) = pool.install(|| -> anyhow::Result<_> {
         // The same structure a sequence builds for this frame, so their images agree bit for bit.
-        let accel = aperture_render::build_frame_accel(&scene, plan.quality, &hints, None);
+        let motion = plan.opts.motion.as_deref();
+        let accel = aperture_render::build_motion_accel(&scene, plan.quality, &hints, None, motion);
         let load_secs = t_load.elapsed().as_secs_f64();
         let out = Output {
             format: plan.format,

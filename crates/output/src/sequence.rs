@@ -10,7 +10,7 @@ use aperture_denoise::Denoiser;
 use aperture_imageio::PngOptions;
 use aperture_render::motion::{pose_frame_motion, MotionSettings};
 use aperture_render::sequence::{for_each_frame, FrameRange, PosedFrame};
-use aperture_render::RenderOptions;
+use aperture_render::{build_motion_accel, RenderOptions, SceneHints};
 use aperture_scene::{Animated, Scene};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -147,6 +147,14 @@ pub fn render_sequence(
                     frame: f.frame,
                     source,
                 })?;
+            // Instances moving within the shutter need a structure bounding them over it: the
+            // frame's is rebuilt with their motion (nothing of it reused).
+            let moving = opts.motion.as_deref().filter(|m| !m.instances.is_empty());
+            let rebuilt = moving.map(|m| {
+                let hints = SceneHints::new(seq.animated, scene);
+                build_motion_accel(scene, seq.quality, &hints, None, Some(m))
+            });
+            let accel = rebuilt.as_ref().unwrap_or(accel);
             let written = write_frame(seq, &opts, scene, accel, &path, tile_progress);
             let summary = written.map_err(|source| SequenceError::Render {
                 frame: f.frame,
@@ -187,7 +195,7 @@ fn frame_options(
             seq.animated,
             settings,
             (frame as f64 / fps, fps),
-            scene.world_origin,
+            scene,
             (opts.camera, opts.width, opts.height),
         )?
         .map(std::sync::Arc::new);

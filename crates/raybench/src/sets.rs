@@ -244,6 +244,7 @@ fn shadow_rays(accel: &Accel, hits: &[FirstHit], target: Vec3) -> Vec<Ray> {
                 dir,
                 tmin: 0.0,
                 tmax: dist * 0.9999,
+                time: 0.0,
             })
         })
         .collect()

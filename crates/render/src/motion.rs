@@ -7,11 +7,13 @@
 //! every sample is at the frame's instant, as before.
 
 mod camera_path;
+mod instances;
 mod pose;
 mod settings;
 mod shutter;
 
 pub use camera_path::CameraPath;
+pub use instances::MovingInstance;
 pub use pose::pose_frame_motion;
 pub use settings::{MotionOverrides, MotionSettings, DEFAULT_MOTION_STEPS, MAX_MOTION_STEPS};
 pub use shutter::{RollingShutter, Shutter, ShutterPosition, DEFAULT_SHUTTER_FRAMES};
@@ -25,6 +27,9 @@ pub struct FrameMotion {
     pub interval: (f64, f64),
     /// The camera's path, when the camera (or a lens key) moves within the interval.
     pub camera: Option<CameraPath>,
+    /// Per instance of the frame's scene: how it moves within the interval (`None`: still).
+    /// Empty when no instance moves.
+    pub instances: Vec<Option<MovingInstance>>,
 }
 
 impl FrameMotion {
@@ -36,6 +41,12 @@ impl FrameMotion {
 
     /// True when something within the interval moves (else samples need no time).
     pub fn moves(&self) -> bool {
-        self.camera.is_some()
+        self.camera.is_some() || !self.instances.is_empty()
+    }
+
+    /// The keys of each moving instance, for the accel ([`aperture_accel::FrameHints::motion`]).
+    pub fn instance_keys(&self) -> Vec<Option<aperture_accel::MotionTransform>> {
+        let keys = |m: &Option<MovingInstance>| m.as_ref().map(|m| m.keys.clone());
+        self.instances.iter().map(keys).collect()
     }
 }

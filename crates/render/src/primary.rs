@@ -122,17 +122,17 @@ impl<'a> PrimarySamples<'a> {
         items: &mut impl Iterator<Item = (K, u32, u32, u32)>,
         n: usize,
         run: &mut Vec<(K, Start)>,
-        starts: &mut Vec<(Vec3, Vec3, SampleStream)>,
+        starts: &mut Vec<(Vec3, Vec3, SampleStream, f32)>,
     ) {
         let Some(lanes) = self.lanes else {
             for _ in 0..n {
                 let Some((key, x, y, i)) = self.next_in_scene(items, run) else {
                     return;
                 };
-                let (stream, ray) = self.sample(x, y, i);
+                let (stream, ray, time) = self.sample_timed(x, y, i);
                 let start = match &ray {
                     Some(r) => {
-                        starts.push((r.origin, r.dir, stream));
+                        starts.push((r.origin, r.dir, stream, time));
                         Start::Traced
                     }
                     None => Start::NoRay,
@@ -168,7 +168,8 @@ impl<'a> PrimarySamples<'a> {
                 };
                 if rays.made[l] {
                     let origin = Vec3::new(o[0][l], o[1][l], o[2][l]);
-                    starts.push((origin, Vec3::new(d[0][l], d[1][l], d[2][l]), stream));
+                    let time = self.time_of(&stream, film[1][l]);
+                    starts.push((origin, Vec3::new(d[0][l], d[1][l], d[2][l]), stream, time));
                 } else {
                     run[at].1 = Start::NoRay;
                 }
@@ -182,27 +183,40 @@ impl<'a> PrimarySamples<'a> {
     /// Sample `i` of pixel `(x, y)`: its stream and its camera ray (`None` when the camera
     /// makes none).
     #[inline(always)]
+    #[cfg(test)]
     pub fn sample(&mut self, x: u32, y: u32, i: u32) -> (SampleStream, Option<CameraRay>) {
+        let (stream, ray, _) = self.sample_timed(x, y, i);
+        (stream, ray)
+    }
+
+    /// [`PrimarySamples::sample`] with the sample's normalised time in the shutter (0 without
+    /// motion blur).
+    #[inline(always)]
+    fn sample_timed(&mut self, x: u32, y: u32, i: u32) -> (SampleStream, Option<CameraRay>, f32) {
         let (stream, p_film, p_lens) = self.numbers(x, y, i);
-        let Some(motion) = self.motion else {
-            let sample = CameraSample {
-                p_film,
-                p_lens,
-                time: 0.0,
-            };
-            return (stream, self.camera.generate_ray(&sample));
-        };
-        let time = (motion.shutter).normalised_time(stream.time(), p_film.y, self.camera.height);
+        let time = self.time_of(&stream, p_film.y);
         let sample = CameraSample {
             p_film,
             p_lens,
             time,
         };
-        let ray = match &motion.camera {
+        let ray = match self.motion.and_then(|m| m.camera.as_ref()) {
             Some(path) => path.generate_ray(&sample),
             None => self.camera.generate_ray(&sample),
         };
-        (stream, ray)
+        (stream, ray, time)
+    }
+
+    /// The normalised shutter time of a sample at film row `row` (0 without motion blur: the
+    /// time dimension is not even drawn).
+    #[inline(always)]
+    fn time_of(&self, stream: &SampleStream, row: f32) -> f32 {
+        match self.motion {
+            None => 0.0,
+            Some(m) => m
+                .shutter
+                .normalised_time(stream.time(), row, self.camera.height),
+        }
     }
 
     /// Sample `i` of pixel `(x, y)`: its stream and the numbers it gives the camera.

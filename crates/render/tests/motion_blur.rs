@@ -1,9 +1,11 @@
 //! Motion blur (SPEC §7): the time dimension's stratification and independence, a camera
 //! rotation's blur of the background, and tiles of a blurred frame equal to the whole frame.
 
-use aperture_render::motion::{CameraPath, FrameMotion, Shutter};
+use aperture_accel::MotionTransform;
+use aperture_render::motion::{CameraPath, FrameMotion, MovingInstance, Shutter};
 use aperture_render::test_scenes::{emitter, look_at_camera, quad, scene};
-use aperture_render::{build_accel, render_window, Camera, FilterKind, RenderOptions, Window};
+use aperture_render::{build_accel, build_motion_accel, render_window, SceneHints};
+use aperture_render::{Camera, FilterKind, RenderOptions, Window};
 use aperture_render::{SampleStream, SamplerKind};
 use aperture_scene::{Dof, Scene};
 use glam::{Affine3A, Quat, Vec3};
@@ -118,6 +120,7 @@ fn turning(scene: &Scene, angle: f32) -> FrameMotion {
         shutter: Shutter::default(),
         interval: (0.0, 1.0),
         camera: CameraPath::new(keys),
+        instances: Vec::new(),
     }
 }
 
@@ -221,6 +224,7 @@ fn a_still_frame_motion_changes_nothing() {
         shutter: Shutter::default(),
         interval: (0.0, 1.0),
         camera: CameraPath::new(vec![camera; 3]),
+        instances: Vec::new(),
     };
     assert!(still_motion.camera.is_none());
     let a = render_window(&scene, &accel, &camera, &options(None), whole, &|_, _| {}).unwrap();
@@ -234,4 +238,80 @@ fn a_still_frame_motion_changes_nothing() {
     )
     .unwrap();
     assert_eq!(a.to_rgba(), b.to_rgba());
+}
+
+/// An emissive sphere of radius `R` at depth `DIST`, centred in front of the camera.
+const R: f32 = 0.5;
+
+/// The sphere scene, and the sphere's motion over the shutter: from `x = −shift/2` to
+/// `+shift/2`, the frame's placement at the centre.
+fn moving_sphere(shift: f32) -> (Scene, FrameMotion) {
+    let cam = look_at_camera(Vec3::ZERO, Vec3::NEG_Z, YFOV, Dof::default());
+    let at = |x: f32| {
+        Affine3A::from_scale_rotation_translation(
+            Vec3::splat(R),
+            Quat::IDENTITY,
+            Vec3::new(x, 0.0, -DIST),
+        )
+    };
+    let sphere = aperture_render::test_scenes::icosphere(4, 0);
+    let scene = scene(vec![(sphere, at(0.0))], vec![emitter(Vec3::ONE)], cam);
+    let keys = MotionTransform::new(&[at(-0.5 * shift), at(0.5 * shift)]).unwrap();
+    let moving = MovingInstance {
+        keys,
+        object_from_frame: at(0.0).inverse(),
+    };
+    let motion = FrameMotion {
+        shutter: Shutter::default(),
+        interval: (0.0, 1.0),
+        camera: None,
+        instances: vec![Some(moving)],
+    };
+    (scene, motion)
+}
+
+#[test]
+fn a_moving_sphere_leaves_a_streak_as_long_as_its_screen_motion() {
+    let f_px = 0.5 * H as f32 / (0.5 * YFOV).tan();
+    let whole = Window::whole(W, H);
+    let (scene, _) = moving_sphere(0.0);
+    let hints = SceneHints::still();
+    let still_accel = build_accel(&scene, Default::default());
+    let camera = turned(&scene, 0.0);
+    let still = render_window(
+        &scene,
+        &still_accel,
+        &camera,
+        &options(None),
+        whole,
+        &|_, _| {},
+    )
+    .unwrap();
+    let (s0, s1) = lit_extent(&still);
+    let disc = (s1 - s0 + 1) as f32;
+    for shift in [1.0f32, 2.5] {
+        let (scene, motion) = moving_sphere(shift);
+        let accel = build_motion_accel(&scene, Default::default(), &hints, None, Some(&motion));
+        let opts = options(Some(motion));
+        let film = render_window(&scene, &accel, &camera, &opts, whole, &|_, _| {}).unwrap();
+        let (b0, b1) = lit_extent(&film);
+        let streak = (b1 - b0 + 1) as f32 - disc;
+        let want = f_px * shift / DIST;
+        assert!(
+            (streak - want).abs() < 2.0,
+            "shift {shift}: streak {streak} px, want {want}"
+        );
+        // Symmetric about the frame's placement (a centred shutter).
+        let centre = 0.5 * (b0 + b1) as f32 - 0.5 * (s0 + s1) as f32;
+        assert!(
+            centre.abs() <= 1.0,
+            "shift {shift}: streak centred {centre} px off"
+        );
+        // The row through the centre keeps the still disc's energy.
+        let sum = |f: &aperture_render::Film| (0..W).map(|x| f.pixel(x, H / 2)[0]).sum::<f32>();
+        assert!(
+            (sum(&film) / sum(&still) - 1.0).abs() < 0.05,
+            "shift {shift}"
+        );
+    }
 }

@@ -126,7 +126,7 @@ impl Job<'_> {
 pub(super) fn integrator<'a>(
     scene: &'a Scene,
     accel: &'a Accel,
-    opts: &RenderOptions,
+    opts: &'a RenderOptions,
 ) -> Integrator<'a> {
     let (model, _) = opts.transmission.resolve(scene);
     let geom = Geometry::with_transmission(scene, opts.material_override, model);
@@ -143,6 +143,7 @@ pub(super) fn integrator<'a>(
         light_passes: opts.passes.has_light_passes(),
         energy_compensation: opts.energy_compensation,
         pick_light: false,
+        moving: opts.motion.as_deref().map_or(&[], |m| &m.instances),
     };
     integrator.pick_light = integrator.light_tree.is_some() || integrator.candidates().choose();
     integrator
