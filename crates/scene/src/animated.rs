@@ -252,11 +252,6 @@ impl Animated {
         Ok(animated)
     }
 
-    /// The selected scene's motion-blur keys (`scenes[i].extras`, SPEC §7).
-    pub fn motion_extras(&self) -> crate::MotionExtras {
-        self.stats.motion
-    }
-
     /// The file's animations (every one, with whether this load evaluates it).
     pub fn animations(&self) -> &[AnimationInfo] {
         &self.animations.info
@@ -286,12 +281,6 @@ impl Animated {
     /// The scene at `time` seconds (`None`: the stored pose, no animation evaluated).
     pub fn scene_at(&self, time: Option<f32>) -> Result<Scene, Error> {
         self.build(time, self.static_meshes.clone(), self.textures.clone())
-    }
-
-    /// [`Animated::scene_at`] without textures (none is decoded or copied): what a motion step
-    /// needs of a pose (placements, cameras, lights, deformed meshes).
-    pub fn shape_at(&self, time: Option<f32>) -> Result<Scene, Error> {
-        self.build(time, self.static_meshes.clone(), Vec::new())
     }
 
     /// [`Animated::scene_at`], consuming the document (no copy of the geometry and textures).

@@ -226,9 +226,8 @@ impl Integrator<'_> {
             wo_l,
             ng,
             p: s.p,
-            // Our point is interpolated from the vertices; the accel's bound covers the
-            // rounding of instanced transforms, which a few ulps of the point alone would
-            // not.
+            // Our point is interpolated from the vertices; the accel's bound covers the rounding
+            // of instanced transforms, which a few ulps of the point alone would not.
             p_out: SpawnPoint { p: s.p, error }.origin(ng),
             spawn: SpawnPoint { p: s.p, error },
             two_sided,
