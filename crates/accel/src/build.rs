@@ -44,6 +44,9 @@ fn world_bounds(world_from_object: &Affine3A, (lo, hi): (Vec3, Vec3)) -> Aabb {
     Aabb::new((wlo - margin).into(), (whi + margin).into())
 }
 
+/// A usable instance: its index, its input and its `object_from_world`.
+type Usable = (u32, InstanceInput, Affine3A);
+
 /// [`world_bounds`] of an object-space box over every time of a moving instance's interval.
 fn swept_world_bounds(motion: &MotionTransform, object: (Vec3, Vec3)) -> Aabb {
     let (lo, hi) = motion.swept_bounds(object);
@@ -284,10 +287,7 @@ impl Accel {
     fn top_level(
         blases: Vec<Blas>,
         has_flat: bool,
-        (usable, motion): (
-            &[(u32, InstanceInput, Affine3A)],
-            &[Option<MotionTransform>],
-        ),
+        (usable, motion): (&[Usable], &[Option<MotionTransform>]),
         blas_of_mesh: &[u32],
         quality: BvhQuality,
     ) -> Self {

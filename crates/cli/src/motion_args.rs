@@ -4,8 +4,8 @@
 
 use crate::number_args::positive_f32;
 use aperture_render::motion::{
-    pose_frame_motion, FrameMotion, MotionOverrides, MotionSettings, ShutterPosition,
-    MAX_MOTION_STEPS,
+    pose_frame_motion, pose_neighbours, FrameMotion, FrameNeighbours, MotionOverrides,
+    MotionSettings, ShutterPosition, MAX_MOTION_STEPS,
 };
 use aperture_scene::{Animated, Scene};
 use std::sync::Arc;
@@ -60,6 +60,26 @@ impl MotionArgs {
             steps: self.motion_steps,
         }
     }
+}
+
+/// The frames before and after the one at `time` seconds (`None`: the stored pose, which has
+/// no neighbours) of `scene`, for the `Vector` pass when it is asked for.
+pub fn frame_vector(
+    opts: &aperture_render::RenderOptions,
+    animated: &Animated,
+    scene: &Scene,
+    (time, fps): (Option<f32>, f32),
+) -> anyhow::Result<Option<Arc<FrameNeighbours>>> {
+    let (Some(time), true) = (time, opts.passes.contains(aperture_render::Pass::Vector)) else {
+        return Ok(None);
+    };
+    let n = pose_neighbours(
+        animated,
+        (f64::from(time), f64::from(fps)),
+        scene,
+        (opts.camera, opts.width, opts.height),
+    )?;
+    Ok(n.map(Arc::new))
 }
 
 /// The motion within the shutter of the frame at `time` seconds (`None`: the stored pose) of

@@ -52,6 +52,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         (before.load.time, args.when.fps),
         (plan.opts.camera, plan.opts.width, plan.opts.height),
     )?;
+    let when = (before.load.time, args.when.fps);
+    plan.opts.vector = crate::motion_args::frame_vector(&plan.opts, &animated, &scene, when)?;
     drop(animated);
     let (summary, load_secs) = pool.install(|| -> anyhow::Result<_> {
         // The same structure a sequence builds for this frame, so their images agree bit for bit.

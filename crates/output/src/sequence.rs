@@ -8,11 +8,12 @@ use crate::{render_exr, render_png, ExrOptions, OutputError, RenderSummary};
 use aperture_accel::{Accel, AccelStats, BvhQuality};
 use aperture_denoise::Denoiser;
 use aperture_imageio::PngOptions;
-use aperture_render::motion::{pose_frame_motion, MotionSettings};
+use aperture_render::motion::{pose_frame_motion, pose_neighbours, MotionSettings};
 use aperture_render::sequence::{for_each_frame, FrameRange, PosedFrame};
 use aperture_render::{build_motion_accel, RenderOptions, SceneHints};
 use aperture_scene::{Animated, Scene};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// The output file of `frame`: each run of `#` in the file name becomes the frame number,
@@ -189,16 +190,21 @@ fn frame_options(
     scene: &Scene,
 ) -> Result<RenderOptions, aperture_scene::Error> {
     let mut opts = seq.opts.clone();
+    let fps = f64::from(seq.fps);
+    let frame_time = frame as f64 / fps;
+    if opts.passes.contains(aperture_render::Pass::Vector) {
+        let at = (opts.camera, opts.width, opts.height);
+        opts.vector = pose_neighbours(seq.animated, (frame_time, fps), scene, at)?.map(Arc::new);
+    }
     if let Some(settings) = &seq.motion {
-        let fps = f64::from(seq.fps);
         opts.motion = pose_frame_motion(
             seq.animated,
             settings,
-            (frame as f64 / fps, fps),
+            (frame_time, fps),
             scene,
             (opts.camera, opts.width, opts.height),
         )?
-        .map(std::sync::Arc::new);
+        .map(Arc::new);
     }
     Ok(opts)
 }

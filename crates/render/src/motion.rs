@@ -11,12 +11,14 @@ mod instances;
 mod pose;
 mod settings;
 mod shutter;
+mod vector;
 
 pub use camera_path::CameraPath;
 pub use instances::MovingInstance;
 pub use pose::pose_frame_motion;
 pub use settings::{MotionOverrides, MotionSettings, DEFAULT_MOTION_STEPS, MAX_MOTION_STEPS};
 pub use shutter::{RollingShutter, Shutter, ShutterPosition, DEFAULT_SHUTTER_FRAMES};
+pub use vector::{pose_neighbours, raster_of, FrameNeighbours};
 
 /// What moves within one frame's shutter.
 #[derive(Debug, Clone, PartialEq)]

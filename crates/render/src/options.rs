@@ -57,6 +57,8 @@ pub struct RenderOptions {
     /// What moves within the frame's shutter (SPEC §7); `None`: motion blur off, every sample
     /// at the frame's instant.
     pub motion: Option<std::sync::Arc<crate::motion::FrameMotion>>,
+    /// The frames before and after, for the `Vector` pass (`None`: it is zero).
+    pub vector: Option<std::sync::Arc<crate::motion::FrameNeighbours>>,
     /// Stops the render early when cancelled (never, by default): the film then holds the
     /// samples taken so far, each pixel's count saying how many.
     pub cancel: crate::Cancel,
@@ -82,6 +84,7 @@ impl Default for RenderOptions {
             transmission: TransmissionMode::Auto,
             energy_compensation: true,
             motion: None,
+            vector: None,
             cancel: crate::Cancel::default(),
         }
     }

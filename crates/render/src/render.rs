@@ -111,7 +111,9 @@ pub fn render_window(
         Some(a) => render_adaptive(&job, &a, window, progress),
         None => render_uniform(&job, window, progress),
     };
-    let wanted = opts.passes.contains(Pass::Depth) || opts.passes.contains(Pass::Position);
+    let wanted = [Pass::Depth, Pass::Position, Pass::Vector]
+        .iter()
+        .any(|&p| opts.passes.contains(p));
     if wanted && !opts.cancel.is_cancelled() {
         centre_rays(&job, &mut film);
     }
@@ -149,13 +151,13 @@ pub fn material_name(scene: &Scene, index: usize) -> String {
     }
 }
 
-/// The Depth and Position passes: the surface seen through each pixel's centre and the lens
-/// centre, one ray per pixel, traced once (sharp and deterministic, not a sample).
+/// The Depth, Position and Vector passes: the surface seen through each pixel's centre and the
+/// lens centre, one ray per pixel, traced once (sharp and deterministic, not a sample).
 fn centre_rays(job: &Job<'_>, film: &mut Film) {
     let w = film.window();
     let cam = job.camera;
     let forward = cam.world_from_camera.transform_vector3(Vec3::NEG_Z);
-    let hits: Vec<Option<Vec3>> = (0..w.pixels())
+    let hits: Vec<Option<(Vec3, u32)>> = (0..w.pixels())
         .into_par_iter()
         .map(|i| {
             let (x, y) = (w.x0 + (i as u32 % w.width), w.y0 + (i as u32 / w.width));
@@ -171,13 +173,29 @@ fn centre_rays(job: &Job<'_>, film: &mut Film) {
             .iter()
             .map(|h| match h {
                 // Distance along the view axis (from the camera's plane for orthographic).
-                Some(p) if ortho || (*p - origin).dot(forward) > 0.0 => (*p - origin).dot(forward),
+                Some((p, _)) if ortho || (*p - origin).dot(forward) > 0.0 => {
+                    (*p - origin).dot(forward)
+                }
                 _ => DEPTH_BACKGROUND,
             })
             .collect();
     }
     if job.opts.passes.contains(Pass::Position) {
-        film.position = hits.iter().map(|h| h.unwrap_or(Vec3::ZERO)).collect();
+        film.position = hits.iter().map(|h| h.map_or(Vec3::ZERO, |h| h.0)).collect();
+    }
+    if job.opts.passes.contains(Pass::Vector) {
+        let instances = &job.integrator.geom.scene.instances;
+        let on = |&(p, i): &(Vec3, u32)| {
+            let object_from_world = instances.get(i as usize)?.world_from_object.inverse();
+            Some((p, i, object_from_world))
+        };
+        film.vector = match job.opts.vector.as_deref() {
+            None => vec![[0.0; 4]; hits.len()],
+            Some(n) => hits
+                .iter()
+                .map(|h| n.vector(cam, h.as_ref().and_then(on)))
+                .collect(),
+        };
     }
 }
 

@@ -2,10 +2,12 @@
 //! rotation's blur of the background, and tiles of a blurred frame equal to the whole frame.
 
 use aperture_accel::MotionTransform;
-use aperture_render::motion::{CameraPath, FrameMotion, MovingInstance, Shutter};
+use aperture_render::motion::{
+    raster_of, CameraPath, FrameMotion, FrameNeighbours, MovingInstance, Shutter,
+};
 use aperture_render::test_scenes::{emitter, look_at_camera, quad, scene};
 use aperture_render::{build_accel, build_motion_accel, render_window, SceneHints};
-use aperture_render::{Camera, FilterKind, RenderOptions, Window};
+use aperture_render::{Camera, FilterKind, Pass, RenderOptions, Window};
 use aperture_render::{SampleStream, SamplerKind};
 use aperture_scene::{Dof, Scene};
 use glam::{Affine3A, Quat, Vec3};
@@ -313,5 +315,77 @@ fn a_moving_sphere_leaves_a_streak_as_long_as_its_screen_motion() {
             (sum(&film) / sum(&still) - 1.0).abs() < 0.05,
             "shift {shift}"
         );
+    }
+}
+
+#[test]
+fn the_vector_pass_of_a_translating_sphere_is_its_screen_motion() {
+    // The sphere moves +x by `step` per frame; the camera stays. Cycles' Vector is
+    // (pre − center, center − post) with y up: both pairs are minus the motion per frame.
+    let f_px = 0.5 * H as f32 / (0.5 * YFOV).tan();
+    let (scene, _) = moving_sphere(0.0);
+    let accel = build_accel(&scene, Default::default());
+    let camera = turned(&scene, 0.0);
+    let step = 0.3;
+    let placed = scene.instances[0].world_from_object;
+    let shifted = |dx: f32| Affine3A::from_translation(Vec3::new(dx, 0.0, 0.0)) * placed;
+    let neighbours = FrameNeighbours {
+        camera_prev: camera,
+        camera_next: camera,
+        instances: vec![Some((shifted(-step), shifted(step)))],
+    };
+    let opts = RenderOptions {
+        spp: 1,
+        passes: [Pass::Vector, Pass::Depth].into_iter().collect(),
+        vector: Some(Arc::new(neighbours)),
+        ..options(None)
+    };
+    let film = render_window(
+        &scene,
+        &accel,
+        &camera,
+        &opts,
+        Window::whole(W, H),
+        &|_, _| {},
+    )
+    .unwrap();
+    let mut checked = 0;
+    for y in 0..H {
+        for x in 0..W {
+            let i = (y * W + x) as usize;
+            let v = film.vector[i];
+            let depth = film.depth[i];
+            if depth >= aperture_render::DEPTH_BACKGROUND {
+                assert_eq!(v, [0.0; 4], "background ({x}, {y})");
+                continue;
+            }
+            // A point at depth z moving by `step` sideways moves f·step/z pixels.
+            let motion = f_px * step / depth;
+            for (got, want) in v.iter().zip([-motion, 0.0, -motion, 0.0]) {
+                assert!(
+                    (got - want).abs() < 0.5,
+                    "({x}, {y}): {v:?}, motion {motion}"
+                );
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked > 50, "the sphere covers {checked} pixels");
+}
+
+#[test]
+fn raster_of_inverts_the_centre_ray() {
+    let scene = stripe_scene();
+    let camera = turned(&scene, 0.3);
+    for (x, y) in [
+        (0.5f32, 0.5f32),
+        (100.0, 20.0),
+        (199.5, 39.5),
+        (37.25, 3.75),
+    ] {
+        let p_film = glam::Vec2::new(x, y);
+        let r = camera.centre_ray(p_film).unwrap();
+        let back = raster_of(&camera, r.origin + 7.0 * r.dir).unwrap();
+        assert!((back - p_film).length() < 1e-3, "{p_film} → {back}");
     }
 }

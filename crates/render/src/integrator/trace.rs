@@ -118,15 +118,16 @@ impl Integrator<'_> {
     }
 
     /// The first surface along a ray (unit direction) that is opaque at coverage ½: what the
-    /// Depth and Position passes show. Deterministic, unlike a sample: alpha-blended surfaces
+    /// Depth, Position and Vector passes show (with the instance it lies on). Deterministic,
+    /// unlike a sample: alpha-blended surfaces
     /// count as solid where their alpha is at least ½.
-    pub fn first_surface(&self, origin: Vec3, dir: Vec3) -> Option<Vec3> {
+    pub fn first_surface(&self, origin: Vec3, dir: Vec3) -> Option<(Vec3, u32)> {
         let mut r = Ray::new(origin, dir);
         for _ in 0..MAX_ALPHA_PASSES {
             let hit = self.accel.intersect(&r)?;
             let s = self.hit_surface(&r, &hit, true);
             if !self.geom.has_alpha || self.geom.is_opaque(&s, 0.5) {
-                return Some(s.p);
+                return Some((s.p, hit.instance));
             }
             let error = self.accel.spawn_point(&r, &hit).error;
             let n = if s.ng.dot(r.dir) > 0.0 { s.ng } else { -s.ng };
