@@ -100,8 +100,10 @@ impl Pass {
         Pass::Environment,
         Pass::CryptoObject,
         Pass::CryptoMaterial,
-        Pass::SampleCount,
+        // Before the sample count, which a window always has and a whole render may not:
+        // the layers of both then line up.
         Pass::Vector,
+        Pass::SampleCount,
     ];
 
     /// Blender's name for the pass: the layer name in the EXR and the compositor socket.
