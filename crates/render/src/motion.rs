@@ -41,6 +41,15 @@ impl FrameMotion {
         open + f64::from(tau) * (close - open)
     }
 
+    /// The frame's own instant as a normalised time: where the shutter's position puts it.
+    pub fn frame_time(&self) -> f32 {
+        match self.shutter.position {
+            ShutterPosition::Start => 0.0,
+            ShutterPosition::Center => 0.5,
+            ShutterPosition::End => 1.0,
+        }
+    }
+
     /// True when something within the interval moves (else samples need no time).
     pub fn moves(&self) -> bool {
         self.camera.is_some() || !self.instances.is_empty()

@@ -157,13 +157,15 @@ fn centre_rays(job: &Job<'_>, film: &mut Film) {
     let w = film.window();
     let cam = job.camera;
     let forward = cam.world_from_camera.transform_vector3(Vec3::NEG_Z);
+    // The frame's instant: where moving instances are at the frame itself.
+    let time = job.opts.motion.as_deref().map_or(0.0, |m| m.frame_time());
     let hits: Vec<Option<(Vec3, u32)>> = (0..w.pixels())
         .into_par_iter()
         .map(|i| {
             let (x, y) = (w.x0 + (i as u32 % w.width), w.y0 + (i as u32 / w.width));
             let p_film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
             let ray = cam.centre_ray(p_film)?;
-            job.integrator.first_surface(ray.origin, ray.dir)
+            job.integrator.first_surface(ray.origin, ray.dir, time)
         })
         .collect();
     let origin = Vec3::from(cam.world_from_camera.translation);

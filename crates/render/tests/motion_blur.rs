@@ -294,8 +294,17 @@ fn a_moving_sphere_leaves_a_streak_as_long_as_its_screen_motion() {
     for shift in [1.0f32, 2.5] {
         let (scene, motion) = moving_sphere(shift);
         let accel = build_motion_accel(&scene, Default::default(), &hints, None, Some(&motion));
-        let opts = options(Some(motion));
+        let opts = RenderOptions {
+            passes: [Pass::Depth].into_iter().collect(),
+            ..options(Some(motion))
+        };
         let film = render_window(&scene, &accel, &camera, &opts, whole, &|_, _| {}).unwrap();
+        // The Depth pass is sharp: the sphere where it is at the frame's instant.
+        let centre = film.depth[(H / 2 * W + W / 2) as usize];
+        assert!(
+            (centre - (DIST - R)).abs() < 0.01,
+            "shift {shift}: depth {centre}"
+        );
         let (b0, b1) = lit_extent(&film);
         let streak = (b1 - b0 + 1) as f32 - disc;
         let want = f_px * shift / DIST;

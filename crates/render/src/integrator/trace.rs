@@ -121,8 +121,11 @@ impl Integrator<'_> {
     /// Depth, Position and Vector passes show (with the instance it lies on). Deterministic,
     /// unlike a sample: alpha-blended surfaces
     /// count as solid where their alpha is at least ½.
-    pub fn first_surface(&self, origin: Vec3, dir: Vec3) -> Option<(Vec3, u32)> {
-        let mut r = Ray::new(origin, dir);
+    pub fn first_surface(&self, origin: Vec3, dir: Vec3, time: f32) -> Option<(Vec3, u32)> {
+        let mut r = Ray {
+            time,
+            ..Ray::new(origin, dir)
+        };
         for _ in 0..MAX_ALPHA_PASSES {
             let hit = self.accel.intersect(&r)?;
             let s = self.hit_surface(&r, &hit, true);
@@ -131,7 +134,10 @@ impl Integrator<'_> {
             }
             let error = self.accel.spawn_point(&r, &hit).error;
             let n = if s.ng.dot(r.dir) > 0.0 { s.ng } else { -s.ng };
-            r = Ray::new(SpawnPoint { p: s.p, error }.origin(n), r.dir);
+            r = Ray {
+                time,
+                ..Ray::new(SpawnPoint { p: s.p, error }.origin(n), r.dir)
+            };
         }
         None
     }
