@@ -256,6 +256,19 @@ impl Accel {
             let mesh = &meshes[inst.mesh as usize];
             accel.instance_magnitude[*id as usize] = magnitude(mesh, &inst.world_from_object);
         }
+        // A moving instance's points meet the magnitudes of every place it passes: the bound
+        // at its keys and between them (sampled as its swept box is).
+        for (id, keys) in hints.motion.iter().enumerate() {
+            let (Some(keys), Some(inst)) = (keys, instances.get(id)) else {
+                continue;
+            };
+            let mesh = &meshes[inst.mesh as usize];
+            let most = (0..=32)
+                .map(|k| magnitude(mesh, &keys.at(k as f32 / 32.0)))
+                .fold(0.0f32, f32::max);
+            let m = &mut accel.instance_magnitude[id];
+            *m = m.max(most);
+        }
         accel.count_structure(&mut stats);
         stats.build_time = start.elapsed();
         accel.stats = stats;

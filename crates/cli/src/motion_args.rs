@@ -114,3 +114,44 @@ pub fn frame_motion(
     )?;
     Ok(motion.map(Arc::new))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        motion: MotionArgs,
+    }
+
+    fn parse(args: &[&str]) -> Result<MotionOverrides, clap::Error> {
+        let argv = std::iter::once("t").chain(args.iter().copied());
+        Cli::try_parse_from(argv).map(|c| c.motion.overrides())
+    }
+
+    #[test]
+    fn flags_map_to_overrides() {
+        assert_eq!(parse(&[]).unwrap(), MotionOverrides::default());
+        let o = parse(&[
+            "--motion-blur",
+            "--shutter",
+            "0.25",
+            "--shutter-position",
+            "end",
+            "--motion-steps",
+            "5",
+        ])
+        .unwrap();
+        assert_eq!(o.enabled, Some(true));
+        assert_eq!(o.shutter, Some(0.25));
+        assert_eq!(o.position, Some(ShutterPosition::End));
+        assert_eq!(o.steps, Some(5));
+        assert_eq!(parse(&["--no-motion-blur"]).unwrap().enabled, Some(false));
+        assert!(parse(&["--motion-blur", "--no-motion-blur"]).is_err());
+        assert!(parse(&["--shutter", "0"]).is_err());
+        assert!(parse(&["--motion-steps", "1"]).is_err());
+        assert!(parse(&["--motion-steps", "65"]).is_err());
+    }
+}
