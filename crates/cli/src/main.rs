@@ -11,6 +11,7 @@ mod frames;
 #[cfg(test)]
 mod frames_tests;
 mod info;
+mod info_motion;
 mod interrupt;
 mod material_args;
 mod merge_cmd;
