@@ -64,5 +64,8 @@ echo "== tools/blender/test_materials.py"
 # SPEC §6 (issue 47): the Vector pass's order and signs against Cycles' (a few seconds).
 echo "== tools/blender/test_vector.py"
 "$venv/bin/python" tools/blender/test_vector.py "$bin" || status=$?
+# SPEC §7 (issue 47): a translating and turning cube's motion blur against Cycles' (~30 s).
+echo "== tools/blender/test_motion_blur.py"
+"$venv/bin/python" tools/blender/test_motion_blur.py "$bin" || status=$?
 echo "== blender test: exit $status after $(($(date +%s) - start)) s"
 exit $status
