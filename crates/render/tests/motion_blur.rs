@@ -398,3 +398,44 @@ fn raster_of_inverts_the_centre_ray() {
         assert!((back - p_film).length() < 1e-3, "{p_film} → {back}");
     }
 }
+
+#[test]
+fn a_rolling_shutter_shows_each_row_at_its_own_time() {
+    // A pure rolling shutter (duration 0): row y sees the instant y / H of the interval, so
+    // the stripe is sharp in every row and leans with the camera's turn.
+    let scene = stripe_scene();
+    let accel = build_accel(&scene, Default::default());
+    let camera = turned(&scene, 0.0);
+    let angle = 0.4f32;
+    let mut motion = turning(&scene, angle);
+    motion.shutter.rolling = Some(0.0);
+    let film = render_window(
+        &scene,
+        &accel,
+        &camera,
+        &options(Some(motion)),
+        Window::whole(W, H),
+        &|_, _| {},
+    )
+    .unwrap();
+    let f_px = 0.5 * H as f32 / (0.5 * YFOV).tan();
+    let centre_of = |y: u32| {
+        let lit: Vec<u32> = (0..W).filter(|&x| film.pixel(x, y)[0] > 1e-4).collect();
+        let width = lit.last().unwrap() - lit.first().unwrap() + 1;
+        let stripe = f_px * STRIPE / DIST;
+        assert!(
+            (width as f32) < stripe + 3.0,
+            "row {y}: {width} px wide, sharp expected"
+        );
+        0.5 * (lit.first().unwrap() + lit.last().unwrap()) as f32
+    };
+    let (top, bottom) = (centre_of(2), centre_of(H - 3));
+    // The camera turns by `angle · Δrow / H` between the rows; the stripe moves right.
+    let turn = |y: u32| angle * ((y as f32 + 0.5) / H as f32 - 0.5);
+    let want = f_px * ((turn(H - 3)).tan() - (turn(2)).tan());
+    assert!(
+        (bottom - top - want).abs() < 2.0,
+        "lean {} px, want {want}",
+        bottom - top
+    );
+}
