@@ -24,6 +24,7 @@ fn samples() -> Vec<CameraSample> {
                     (f * 0.754_877).fract() * 180.0,
                 ),
                 p_lens: Vec2::new((f * 0.569_840).fract(), (f * 0.324_718).fract()),
+                time: 0.0,
             }
         })
         .collect()

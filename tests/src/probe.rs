@@ -153,6 +153,7 @@ pub fn pixel_hits(accel: &Accel, camera: &Camera, w: u32, h: u32) -> Vec<Option<
             let s = CameraSample {
                 p_film: Vec2::new(x as f32 + 0.5, y as f32 + 0.5),
                 p_lens: Vec2::ZERO,
+                time: 0.0,
             };
             let r = camera.generate_ray(&s)?;
             accel

@@ -156,6 +156,7 @@ fn point_light_on_a_plane_matches_inverse_square_cosine() {
                 .generate_ray(&CameraSample {
                     p_film: Vec2::new(x as f32 + 0.5, y as f32 + 0.5),
                     p_lens: Vec2::ZERO,
+                    time: 0.0,
                 })
                 .unwrap();
             let t = -ray.origin.y / ray.dir.y;

@@ -20,6 +20,7 @@ fn render(
         ..RenderOptions::default()
     };
     let seq = Sequence {
+        motion: None,
         animated,
         frames: FrameRange::parse(frames).unwrap(),
         fps: 24.0,

@@ -61,5 +61,11 @@ echo "== tools/blender/test_engine.py"
 # SPEC §5 (issue 14): Blender's glass and Principled spheres, Cycles against aperture (~1 min).
 echo "== tools/blender/test_materials.py"
 "$venv/bin/python" tools/blender/test_materials.py --aperture "$bin" "${anim_args[@]}" || status=$?
+# SPEC §6 (issue 47): the Vector pass's order and signs against Cycles' (a few seconds).
+echo "== tools/blender/test_vector.py"
+"$venv/bin/python" tools/blender/test_vector.py "$bin" || status=$?
+# SPEC §7 (issue 47): a translating and turning cube's motion blur against Cycles' (~30 s).
+echo "== tools/blender/test_motion_blur.py"
+"$venv/bin/python" tools/blender/test_motion_blur.py "$bin" || status=$?
 echo "== blender test: exit $status after $(($(date +%s) - start)) s"
 exit $status

@@ -306,6 +306,28 @@ def test_extras_main(doc):
           f"sun exported as {lux} lux (3 W/m² × 683)")
 
 
+def test_motion_extras(doc):
+    """The scene's motion-blur settings in ``scenes[i].extras`` (SPEC section 7)."""
+    scene = bpy.context.scene
+    ex = doc.get("scenes", [{}])[doc.get("scene", 0)].get("extras") or {}
+    fps = scene.render.fps / scene.render.fps_base
+    expected = {
+        "use_motion_blur": bool(scene.render.use_motion_blur),
+        "motion_blur_shutter": float(scene.render.motion_blur_shutter),
+        "motion_blur_position": scene.render.motion_blur_position,
+        "rolling_shutter_type": scene.cycles.rolling_shutter_type,
+        "fps": float(fps),
+        "frame_current": int(scene.frame_current),
+    }
+    bad = {
+        k: (ex.get(k), v)
+        for k, v in expected.items()
+        if not (ex.get(k) == v or (isinstance(v, float) and close(ex.get(k), v)))
+    }
+    check("a.scene-motion-extras", not bad,
+          "motion blur settings as set in Blender" if not bad else f"differ (got, want): {bad}")
+
+
 def test_extras_rules(cams, binary):
     # Export 2: every rule camera, "Custom Properties" on, the hidden focus target not selected.
     for obj in bpy.context.scene.objects:
@@ -663,6 +685,7 @@ def main():
         main_path = os.path.join(WORK, "scene.gltf")
         doc, _ = export(main_path)
         test_extras_main(doc)
+        test_motion_extras(doc)
 
         if os.path.isfile(binary) and os.access(binary, os.X_OK):
             test_info(binary, main_path, cam)

@@ -8,7 +8,10 @@ mod tree;
 
 use crate::node::Node;
 use crate::walk::detect_avx2;
-use crate::{Accel, AccelStats, Blas, BvhQuality, Entry, InstanceInput, MeshInput, Tri, FLATTENED};
+use crate::{
+    Accel, AccelStats, Blas, BvhQuality, Entry, InstanceInput, MeshInput, MotionTransform, Tri,
+    FLATTENED, NO_MOTION,
+};
 use check::{check_mesh, flatten, Checked};
 use glam::{Affine3A, Vec3};
 use obvhs::aabb::Aabb;
@@ -39,6 +42,16 @@ fn world_bounds(world_from_object: &Affine3A, (lo, hi): (Vec3, Vec3)) -> Aabb {
             .max_element()
             .max(f32::MIN_POSITIVE);
     Aabb::new((wlo - margin).into(), (whi + margin).into())
+}
+
+/// A usable instance: its index, its input and its `object_from_world`.
+type Usable = (u32, InstanceInput, Affine3A);
+
+/// [`world_bounds`] of an object-space box over every time of a moving instance's interval.
+fn swept_world_bounds(motion: &MotionTransform, object: (Vec3, Vec3)) -> Aabb {
+    let (lo, hi) = motion.swept_bounds(object);
+    let margin = 1e-5 * lo.abs().max(hi.abs()).max_element().max(f32::MIN_POSITIVE);
+    Aabb::new((lo - margin).into(), (hi + margin).into())
 }
 
 /// A bound on the magnitudes met when moving an instance's points between object and world
@@ -228,7 +241,13 @@ impl Accel {
             })
             .collect();
         let has_flat = jobs.has_flat;
-        let mut accel = Self::top_level(blases, has_flat, &usable, &jobs.blas_of_mesh, quality);
+        let mut accel = Self::top_level(
+            blases,
+            has_flat,
+            (&usable, hints.motion),
+            &jobs.blas_of_mesh,
+            quality,
+        );
         accel.blas_of_mesh = jobs.blas_of_mesh;
         accel.flat = has_flat.then_some((key, flat.len()));
         accel.flat_degenerate = jobs.flat_degenerate;
@@ -236,6 +255,19 @@ impl Accel {
         for (id, inst, _) in &usable {
             let mesh = &meshes[inst.mesh as usize];
             accel.instance_magnitude[*id as usize] = magnitude(mesh, &inst.world_from_object);
+        }
+        // A moving instance's points meet the magnitudes of every place it passes: the bound
+        // at its keys and between them (sampled as its swept box is).
+        for (id, keys) in hints.motion.iter().enumerate() {
+            let (Some(keys), Some(inst)) = (keys, instances.get(id)) else {
+                continue;
+            };
+            let mesh = &meshes[inst.mesh as usize];
+            let most = (0..=32)
+                .map(|k| magnitude(mesh, &keys.at(k as f32 / 32.0)))
+                .fold(0.0f32, f32::max);
+            let m = &mut accel.instance_magnitude[id];
+            *m = m.max(most);
         }
         accel.count_structure(&mut stats);
         stats.build_time = start.elapsed();
@@ -268,12 +300,13 @@ impl Accel {
     fn top_level(
         blases: Vec<Blas>,
         has_flat: bool,
-        usable: &[(u32, InstanceInput, Affine3A)],
+        (usable, motion): (&[Usable], &[Option<MotionTransform>]),
         blas_of_mesh: &[u32],
         quality: BvhQuality,
     ) -> Self {
         let mut entries = Vec::new();
         let mut bounds = Vec::new();
+        let mut motions = Vec::new();
         if has_flat {
             if let Some(b) = blases[0].bounds {
                 entries.push(Entry {
@@ -281,6 +314,7 @@ impl Accel {
                     instance: FLATTENED,
                     object_from_world: Affine3A::IDENTITY,
                     identity: true,
+                    motion: NO_MOTION,
                 });
                 bounds.push(world_bounds(&Affine3A::IDENTITY, b));
             }
@@ -293,13 +327,21 @@ impl Accel {
             let Some(bb) = blases[b as usize].bounds else {
                 continue;
             };
+            let moving = motion.get(*id as usize).and_then(Option::as_ref);
             entries.push(Entry {
                 blas: b,
                 instance: *id,
                 object_from_world: *inv,
                 identity: false,
+                motion: moving.map_or(NO_MOTION, |_| motions.len() as u32),
             });
-            bounds.push(world_bounds(&inst.world_from_object, bb));
+            bounds.push(match moving {
+                Some(m) => {
+                    motions.push(m.clone());
+                    swept_world_bounds(m, bb)
+                }
+                None => world_bounds(&inst.world_from_object, bb),
+            });
         }
         let (tlas, order) = if entries.len() > 1 {
             build_cwbvh(&bounds, quality)
@@ -327,6 +369,7 @@ impl Accel {
             blas_of_mesh: Vec::new(),
             flat: None,
             flat_degenerate: 0,
+            motions,
         }
     }
 }

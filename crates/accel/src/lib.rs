@@ -43,6 +43,7 @@
 
 mod build;
 mod cover;
+mod motion;
 mod node;
 mod packet;
 mod query;
@@ -55,6 +56,7 @@ mod types;
 mod walk;
 
 pub use build::{FrameHints, FLATTEN_SHARED_LIMIT};
+pub use motion::MotionTransform;
 pub use packet::{PACKET_CONE_COS, PACKET_LANES};
 pub use rayfile::{read_rays, write_rays, RayFileError};
 pub use spawn::{offset_ray_origin, SpawnPoint};
@@ -96,7 +98,12 @@ struct Entry {
     object_from_world: Affine3A,
     /// The flattened BVH is already in world space: skip the ray transform.
     identity: bool,
+    /// Index into [`Accel::motions`] of a moving instance, or [`NO_MOTION`].
+    motion: u32,
 }
+
+/// [`Entry::motion`] of an entry that stays put.
+const NO_MOTION: u32 = u32::MAX;
 
 const FLATTENED: u32 = u32::MAX;
 
@@ -130,4 +137,6 @@ pub struct Accel {
     flat: Option<(u64, usize)>,
     /// Triangles that only became degenerate in world space when flattened.
     flat_degenerate: usize,
+    /// The transforms of moving entries ([`Entry::motion`]).
+    motions: Vec<MotionTransform>,
 }

@@ -4,7 +4,7 @@
 use crate::node::BoxRay;
 use crate::triangle::TriRay;
 use crate::walk::*;
-use crate::{Accel, AccelStats, Blas, Entry, Hit, Ray, FLATTENED};
+use crate::{Accel, AccelStats, Blas, Entry, Hit, Ray, FLATTENED, NO_MOTION};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::mem::MaybeUninit;
@@ -185,11 +185,15 @@ impl Accel {
     /// ray.
     pub(crate) fn single_entry(&self) -> Option<(&Entry, &Blas)> {
         match self.entries.as_slice() {
-            [entry] if stack_len(self.max_blas_depth) <= INLINE_STACK => self
-                .blases
-                .get(entry.blas as usize)
-                .filter(|b| !b.nodes.is_empty())
-                .map(|b| (entry, b)),
+            // A moving entry is placed per ray: walked ray by ray.
+            [entry]
+                if stack_len(self.max_blas_depth) <= INLINE_STACK && entry.motion == NO_MOTION =>
+            {
+                self.blases
+                    .get(entry.blas as usize)
+                    .filter(|b| !b.nodes.is_empty())
+                    .map(|b| (entry, b))
+            }
             _ => None,
         }
     }
@@ -292,6 +296,19 @@ impl Accel {
         }
     }
 
+    /// `entry` placed at `ray`'s time: itself when it stays put, else a copy whose
+    /// `object_from_world` is the moving instance's at that time.
+    #[inline(always)]
+    pub(crate) fn entry_at(&self, entry: &Entry, ray: &Ray) -> Entry {
+        match self.motions.get(entry.motion as usize) {
+            None => *entry,
+            Some(m) => Entry {
+                object_from_world: m.at(ray.time).inverse(),
+                ..*entry
+            },
+        }
+    }
+
     #[inline(always)]
     pub(crate) fn object_ray(entry: &Entry, ray: &Ray) -> (Vec3, Vec3) {
         if entry.identity {
@@ -369,6 +386,7 @@ impl Accel {
             let Some(blas) = self.blases.get(entry.blas as usize) else {
                 continue;
             };
+            let entry = &self.entry_at(entry, ray);
             let (o, d) = Self::object_ray(entry, ray);
             let tr = TriRay::new(o, d);
             for (i, tri) in blas.tris.iter().enumerate() {

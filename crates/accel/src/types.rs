@@ -13,6 +13,9 @@ pub struct Ray {
     pub tmin: f32,
     /// Largest accepted `t`.
     pub tmax: f32,
+    /// Normalised time in the shutter, `[0, 1]`: where moving instances are
+    /// ([`crate::FrameHints::motion`]); still ones ignore it.
+    pub time: f32,
 }
 
 impl Ray {
@@ -23,6 +26,7 @@ impl Ray {
             dir,
             tmin: 0.0,
             tmax: f32::INFINITY,
+            time: 0.0,
         }
     }
 }

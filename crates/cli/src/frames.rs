@@ -5,6 +5,7 @@ use crate::progress::Progress;
 use crate::render_args::RenderArgs;
 use aperture_accel::BvhQuality;
 use aperture_output::sequence::{self, FrameFormat, FrameReport, Sequence};
+use aperture_render::motion::MotionSettings;
 use aperture_render::sequence::FrameRange;
 use aperture_render::RenderOptions;
 use aperture_scene::Animated;
@@ -32,6 +33,10 @@ pub fn run(
         format,
         skip_existing: args.skip_existing,
         denoiser,
+        motion: Some(MotionSettings::resolve(
+            &animated.motion_extras(),
+            &args.motion.overrides(),
+        )),
     };
     let start = Instant::now();
     let (mut rendered, mut secs) = (0usize, 0.0f64);

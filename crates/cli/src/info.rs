@@ -20,6 +20,9 @@ pub struct InfoArgs {
     /// Time, frame and animation (SPEC §7): bounds, lights and cameras as posed then.
     #[command(flatten)]
     pub when: crate::time_args::TimeArgs,
+    /// Motion blur, as `render` would pose it (SPEC §7).
+    #[command(flatten)]
+    pub motion: crate::motion_args::MotionArgs,
     /// Transmission and variants, as `render` would interpret them.
     #[command(flatten)]
     pub materials: crate::material_args::MaterialArgs,
@@ -242,6 +245,7 @@ fn print_text(path: &std::path::Path, r: &Value) {
     print_skipped_and_warnings(r);
     print_materials(r);
     print_time(r);
+    crate::info_motion::print_motion(r);
     print_cameras(r);
 }
 
@@ -427,9 +431,13 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
         variant: args.materials.variant.clone(),
         ..LoadOptions::default()
     };
-    let s = aperture_scene::load(&args.scene, &options)
+    let loaded = aperture_scene::Animated::load(&args.scene, &options)
+        .and_then(|a| a.scene_at(options.time).map(|s| (a, s)));
+    let (animated, s) = loaded
         .map_err(|e| anyhow::anyhow!(e).context(format!("loading {}", args.scene.display())))?;
-    let r = report(&s, args.materials.transmission);
+    let mut r = report(&s, args.materials.transmission);
+    let when = (options.time, args.when.fps);
+    r["motion"] = crate::info_motion::motion_json(&args.motion, &animated, &s, when)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&r)?);
     } else {

@@ -11,9 +11,11 @@ mod frames;
 #[cfg(test)]
 mod frames_tests;
 mod info;
+mod info_motion;
 mod interrupt;
 mod material_args;
 mod merge_cmd;
+mod motion_args;
 mod number_args;
 mod plot;
 mod progress;

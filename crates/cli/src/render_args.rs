@@ -188,6 +188,9 @@ pub struct RenderArgs {
     /// Time, frame and animation (SPEC §7).
     #[command(flatten)]
     pub when: crate::time_args::TimeArgs,
+    /// Motion blur (SPEC §7).
+    #[command(flatten)]
+    pub motion: crate::motion_args::MotionArgs,
     /// Transmission, variants and energy compensation (SPEC §5).
     #[command(flatten)]
     pub materials: crate::material_args::MaterialArgs,

@@ -44,10 +44,21 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         );
     }
     let hints = aperture_render::SceneHints::new(&animated, &scene);
+    let mut plan = plan;
+    plan.opts.motion = crate::motion_args::frame_motion(
+        &args.motion,
+        &animated,
+        &scene,
+        (before.load.time, args.when.fps),
+        (plan.opts.camera, plan.opts.width, plan.opts.height),
+    )?;
+    let when = (before.load.time, args.when.fps);
+    plan.opts.vector = crate::motion_args::frame_vector(&plan.opts, &animated, &scene, when)?;
     drop(animated);
     let (summary, load_secs) = pool.install(|| -> anyhow::Result<_> {
         // The same structure a sequence builds for this frame, so their images agree bit for bit.
-        let accel = aperture_render::build_frame_accel(&scene, plan.quality, &hints, None);
+        let motion = plan.opts.motion.as_deref();
+        let accel = aperture_render::build_motion_accel(&scene, plan.quality, &hints, None, motion);
         let load_secs = t_load.elapsed().as_secs_f64();
         let out = Output {
             format: plan.format,

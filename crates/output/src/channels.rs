@@ -144,6 +144,7 @@ impl<'a> PixelResolver<'a> {
         for pass in self.passes.iter() {
             match pass {
                 Pass::Depth => out.push(film.depth.get(i).copied().unwrap_or(0.0)),
+                Pass::Vector => out.extend(film.vector.get(i).copied().unwrap_or_default()),
                 Pass::Position => {
                     let p = film.position.get(i).copied().unwrap_or(Vec3::ZERO);
                     let p = if p == Vec3::ZERO {

@@ -328,6 +328,11 @@ pub fn options_hash(opts: &RenderOptions) -> u64 {
         opts.passes.without(Pass::SampleCount),
     )
     .into_bytes();
+    // Only with motion blur, so the hash of a render without it is what it always was.
+    if let Some(m) = &opts.motion {
+        let motion = format!(" motion {:?} {:?} {:?}", m.shutter, m.interval, m.camera);
+        bytes.extend(motion.bytes());
+    }
     match &opts.env {
         Environment::Constant(c) => bytes.extend(format!(" env {c:?}").bytes()),
         Environment::Image(im) => {

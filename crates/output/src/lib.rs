@@ -135,7 +135,8 @@ pub fn film_bytes_per_pixel(passes: PassSet, adaptive: bool, channels: usize) ->
     let film = accum
         + 4
         + 4 * usize::from(passes.contains(Pass::Depth))
-        + 12 * usize::from(passes.contains(Pass::Position));
+        + 12 * usize::from(passes.contains(Pass::Position))
+        + 16 * usize::from(passes.contains(Pass::Vector));
     // Adaptive rounds keep their own state (sums, squares, counts, flags) beside the film.
     let rounds = if adaptive { accum + 24 + 8 + 4 + 3 } else { 0 };
     film + rounds + 4 * channels

@@ -8,10 +8,12 @@ use crate::{render_exr, render_png, ExrOptions, OutputError, RenderSummary};
 use aperture_accel::{Accel, AccelStats, BvhQuality};
 use aperture_denoise::Denoiser;
 use aperture_imageio::PngOptions;
+use aperture_render::motion::{pose_frame_motion, pose_neighbours, MotionSettings};
 use aperture_render::sequence::{for_each_frame, FrameRange, PosedFrame};
-use aperture_render::RenderOptions;
+use aperture_render::{build_motion_accel, RenderOptions, SceneHints};
 use aperture_scene::{Animated, Scene};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// The output file of `frame`: each run of `#` in the file name becomes the frame number,
@@ -117,6 +119,9 @@ pub struct Sequence<'a> {
     pub skip_existing: bool,
     /// Denoise every frame ([`crate::render_exr_denoised`], [`crate::render_png_denoised`]).
     pub denoiser: Option<&'a Denoiser>,
+    /// Motion blur: each frame's shutter interval posed with these settings (`None`, or a
+    /// setting without a shutter: every frame an instant).
+    pub motion: Option<MotionSettings>,
 }
 
 /// Renders every frame of `seq` in turn: `tile_progress(done, total)` during each frame,
@@ -138,7 +143,20 @@ pub fn render_sequence(
             rendered: None,
         };
         if let Some((scene, accel)) = f.posed {
-            let written = write_frame(seq, scene, accel, &path, tile_progress);
+            let opts =
+                frame_options(seq, f.frame, scene).map_err(|source| SequenceError::Pose {
+                    frame: f.frame,
+                    source,
+                })?;
+            // Instances moving within the shutter need a structure bounding them over it: the
+            // frame's is rebuilt with their motion (nothing of it reused).
+            let moving = opts.motion.as_deref().filter(|m| !m.instances.is_empty());
+            let rebuilt = moving.map(|m| {
+                let hints = SceneHints::new(seq.animated, scene);
+                build_motion_accel(scene, seq.quality, &hints, None, Some(m))
+            });
+            let accel = rebuilt.as_ref().unwrap_or(accel);
+            let written = write_frame(seq, &opts, scene, accel, &path, tile_progress);
             let summary = written.map_err(|source| SequenceError::Render {
                 frame: f.frame,
                 source,
@@ -165,15 +183,42 @@ pub fn render_sequence(
     )
 }
 
-/// One posed frame of `seq` rendered into its file.
+/// The options of `frame` (posed as `scene`): the sequence's, with the frame's motion.
+fn frame_options(
+    seq: &Sequence<'_>,
+    frame: i64,
+    scene: &Scene,
+) -> Result<RenderOptions, aperture_scene::Error> {
+    let mut opts = seq.opts.clone();
+    let fps = f64::from(seq.fps);
+    let frame_time = frame as f64 / fps;
+    if opts.passes.contains(aperture_render::Pass::Vector) {
+        let at = (opts.camera, opts.width, opts.height);
+        opts.vector = pose_neighbours(seq.animated, (frame_time, fps), scene, at)?.map(Arc::new);
+    }
+    if let Some(settings) = &seq.motion {
+        opts.motion = pose_frame_motion(
+            seq.animated,
+            settings,
+            (frame_time, fps),
+            scene,
+            (opts.camera, opts.width, opts.height),
+        )?
+        .map(Arc::new);
+    }
+    Ok(opts)
+}
+
+/// One posed frame of `seq` rendered into its file with `opts`.
 fn write_frame(
     seq: &Sequence<'_>,
+    opts: &RenderOptions,
     scene: &Scene,
     accel: &Accel,
     path: &Path,
     tile_progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<RenderSummary, OutputError> {
-    let (opts, format) = (seq.opts, seq.format);
+    let format = seq.format;
     render_image(
         scene,
         accel,

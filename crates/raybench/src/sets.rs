@@ -77,6 +77,7 @@ pub fn primary_samples(camera: &Camera, opts: &RaySetOptions) -> Vec<PrimarySamp
                         let sample = CameraSample {
                             p_film: Vec2::new(x as f32 + c[0], y as f32 + c[1]),
                             p_lens: Vec2::new(c[2], c[3]),
+                            time: 0.0,
                         };
                         out.push(PrimarySample {
                             x,
@@ -243,6 +244,7 @@ fn shadow_rays(accel: &Accel, hits: &[FirstHit], target: Vec3) -> Vec<Ray> {
                 dir,
                 tmin: 0.0,
                 tmax: dist * 0.9999,
+                time: 0.0,
             })
         })
         .collect()

@@ -16,6 +16,8 @@ pub struct CameraSample {
     pub p_film: Vec2,
     /// Lens sample in `[0, 1)²`; ignored by a pinhole.
     pub p_lens: Vec2,
+    /// Normalised time in the shutter, `[0, 1]` (SPEC §7); ignored by a still camera.
+    pub time: f32,
 }
 
 /// A primary ray in world space.
@@ -352,13 +354,18 @@ mod tests {
                 .generate_ray_camera_space(&CameraSample {
                     p_film,
                     p_lens: Vec2::ZERO,
+                    time: 0.0,
                 })
                 .unwrap();
                 let target = pin.origin + pin.dir * (4.0 / -pin.dir.z);
                 let mut origins = Vec::new();
                 for p_lens in grid(8) {
                     let r = cam
-                        .generate_ray_camera_space(&CameraSample { p_film, p_lens })
+                        .generate_ray_camera_space(&CameraSample {
+                            p_film,
+                            p_lens,
+                            time: 0.0,
+                        })
                         .unwrap();
                     let t = (-4.0 - r.origin.z) / r.dir.z;
                     let hit = r.origin + t * r.dir;
@@ -387,6 +394,7 @@ mod tests {
                 .generate_ray_camera_space(&CameraSample {
                     p_film: Vec2::new(16.0, 16.0),
                     p_lens,
+                    time: 0.0,
                 })
                 .unwrap()
                 .origin;
@@ -404,6 +412,7 @@ mod tests {
                 .generate_ray_camera_space(&CameraSample {
                     p_film: Vec2::new(3.0, 29.0),
                     p_lens,
+                    time: 0.0,
                 })
                 .unwrap()
                 .origin
@@ -433,6 +442,7 @@ mod tests {
             .generate_ray(&CameraSample {
                 p_film: Vec2::ZERO,
                 p_lens: Vec2::ZERO,
+                time: 0.0,
             })
             .unwrap();
         assert!(top_left.dir.x < 0.0 && top_left.dir.y > 0.0 && top_left.dir.z < 0.0);
@@ -441,6 +451,7 @@ mod tests {
             .generate_ray(&CameraSample {
                 p_film: Vec2::new(20.0, 0.0),
                 p_lens: Vec2::ZERO,
+                time: 0.0,
             })
             .unwrap();
         assert!((top.dir.y / -top.dir.z - (0.4f32).tan()).abs() < 1e-6);
@@ -519,7 +530,7 @@ mod tests {
                 lx in unit(), ly in unit(),
             ) {
                 let cam = camera(dof.clone(), ortho, yfov);
-                let s = CameraSample { p_film: Vec2::new(fx, fy), p_lens: Vec2::new(lx, ly) };
+                let s = CameraSample { p_film: Vec2::new(fx, fy), p_lens: Vec2::new(lx, ly), time: 0.0 };
                 let r = cam.generate_ray_camera_space(&s).expect("a ray");
                 prop_assert!(r.origin.is_finite() && r.dir.is_finite());
                 prop_assert!((r.dir.length() - 1.0).abs() < 1e-5);
@@ -566,11 +577,11 @@ mod tests {
                 let f = dof.focus_distance;
                 let p_film = Vec2::new(fx, fy);
                 let pin = Camera { aperture: Aperture::Pinhole, ..cam }
-                    .generate_ray_camera_space(&CameraSample { p_film, p_lens: Vec2::ZERO })
+                    .generate_ray_camera_space(&CameraSample { p_film, p_lens: Vec2::ZERO, time: 0.0 })
                     .expect("a pinhole ray");
                 let target = pin.origin + pin.dir * (f / -pin.dir.z);
                 let r = cam
-                    .generate_ray_camera_space(&CameraSample { p_film, p_lens: Vec2::new(lx, ly) })
+                    .generate_ray_camera_space(&CameraSample { p_film, p_lens: Vec2::new(lx, ly), time: 0.0 })
                     .expect("a ray");
                 let hit = r.origin + r.dir * ((-f - r.origin.z) / r.dir.z);
                 // Rounding: relative 1e-5 of the distances involved (focal point and lens

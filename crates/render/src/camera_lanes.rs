@@ -168,6 +168,7 @@ mod tests {
                     let want = cam.generate_ray(&CameraSample {
                         p_film: Vec2::new(film[0][l], film[1][l]),
                         p_lens: Vec2::new(lens[0][l], lens[1][l]),
+                        time: 0.0,
                     });
                     let ray = got.made[l].then(|| CameraRay {
                         origin: Vec3::new(got.origin[0][l], got.origin[1][l], got.origin[2][l]),

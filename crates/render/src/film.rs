@@ -335,6 +335,8 @@ pub struct Film {
     pub depth: Vec<f32>,
     /// World position of that hit (`Position` pass), or empty.
     pub position: Vec<Vec3>,
+    /// Its screen motion towards the previous and next frames (`Vector` pass), or empty.
+    pub vector: Vec<[f32; 4]>,
 }
 
 impl Film {
@@ -356,6 +358,7 @@ impl Film {
             dropped: 0,
             depth: Vec::new(),
             position: Vec::new(),
+            vector: Vec::new(),
         }
     }
 

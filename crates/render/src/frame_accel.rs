@@ -72,6 +72,19 @@ pub fn build_frame_accel(
     hints: &SceneHints,
     previous: Option<Accel>,
 ) -> Accel {
+    build_motion_accel(scene, quality, hints, previous, None)
+}
+
+/// [`build_frame_accel`] with the instances that move within the frame's shutter (`motion`)
+/// bounded over it and walked at each ray's time.
+pub fn build_motion_accel(
+    scene: &Scene,
+    quality: BvhQuality,
+    hints: &SceneHints,
+    previous: Option<Accel>,
+    motion: Option<&crate::motion::FrameMotion>,
+) -> Accel {
+    let keys = motion.map(|m| m.instance_keys()).unwrap_or_default();
     let meshes: Vec<MeshInput<'_>> = scene
         .meshes
         .iter()
@@ -91,6 +104,7 @@ pub fn build_frame_accel(
     let frame = FrameHints {
         moving: &hints.moving,
         deforming_from: hints.deforming_from,
+        motion: &keys,
         ..FrameHints::STILL
     };
     Accel::build_frame(&meshes, &instances, quality, frame, previous)

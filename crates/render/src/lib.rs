@@ -31,6 +31,7 @@ pub mod film;
 mod filter;
 mod frame_accel;
 mod integrator;
+pub mod motion;
 mod options;
 pub mod passes;
 mod primary;
@@ -44,7 +45,9 @@ pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, Camer
 pub use cancel::Cancel;
 pub use film::{Film, PixelSum, Window};
 pub use filter::{Filter, FilterKind};
-pub use frame_accel::{auto_bvh_quality, build_accel, build_frame_accel, SceneHints};
+pub use frame_accel::{
+    auto_bvh_quality, build_accel, build_frame_accel, build_motion_accel, SceneHints,
+};
 pub use integrator::Clamp;
 pub use options::{RenderError, RenderOptions, DEFAULT_MAX_BOUNCES};
 pub use passes::{Pass, PassSet};

@@ -54,6 +54,11 @@ pub struct RenderOptions {
     /// Give microfacet lobes back the energy single scattering loses, and layer materials by
     /// albedo scaling (on by default; off renders glTF Appendix B's formulas literally).
     pub energy_compensation: bool,
+    /// What moves within the frame's shutter (SPEC §7); `None`: motion blur off, every sample
+    /// at the frame's instant.
+    pub motion: Option<std::sync::Arc<crate::motion::FrameMotion>>,
+    /// The frames before and after, for the `Vector` pass (`None`: it is zero).
+    pub vector: Option<std::sync::Arc<crate::motion::FrameNeighbours>>,
     /// Stops the render early when cancelled (never, by default): the film then holds the
     /// samples taken so far, each pixel's count saying how many.
     pub cancel: crate::Cancel,
@@ -78,6 +83,8 @@ impl Default for RenderOptions {
             passes: PassSet::NONE,
             transmission: TransmissionMode::Auto,
             energy_compensation: true,
+            motion: None,
+            vector: None,
             cancel: crate::Cancel::default(),
         }
     }

@@ -46,6 +46,9 @@ pub enum Pass {
     CryptoMaterial,
     /// The samples each pixel took.
     SampleCount,
+    /// Screen-space motion (pixels) of the surface seen through the pixel centre towards the
+    /// previous and next frames, as Cycles writes it.
+    Vector,
 }
 
 /// What a pass holds, which decides how it is stored and merged.
@@ -78,7 +81,7 @@ pub(crate) const LIGHT_PASSES: [Pass; 11] = [
 
 impl Pass {
     /// Every pass, in output order.
-    pub const ALL: [Pass; 19] = [
+    pub const ALL: [Pass; 20] = [
         Pass::Depth,
         Pass::Position,
         Pass::Normal,
@@ -97,6 +100,9 @@ impl Pass {
         Pass::Environment,
         Pass::CryptoObject,
         Pass::CryptoMaterial,
+        // Before the sample count, which a window always has and a whole render may not:
+        // the layers of both then line up.
+        Pass::Vector,
         Pass::SampleCount,
     ];
 
@@ -122,6 +128,7 @@ impl Pass {
             Pass::CryptoObject => "CryptoObject",
             Pass::CryptoMaterial => "CryptoMaterial",
             Pass::SampleCount => "Debug Sample Count",
+            Pass::Vector => "Vector",
         }
     }
 
@@ -133,6 +140,7 @@ impl Pass {
             _ => match self {
                 Pass::Depth => &["Z"],
                 Pass::SampleCount => &["X"],
+                Pass::Vector => &["X", "Y", "Z", "W"],
                 _ => &["X", "Y", "Z"],
             },
         }
@@ -141,7 +149,7 @@ impl Pass {
     /// How the pass is stored and merged.
     pub fn kind(self) -> PassKind {
         match self {
-            Pass::Depth | Pass::Position | Pass::SampleCount => PassKind::PixelData,
+            Pass::Depth | Pass::Position | Pass::SampleCount | Pass::Vector => PassKind::PixelData,
             Pass::Normal | Pass::DenoisingNormal => PassKind::AveragedData,
             Pass::CryptoObject | Pass::CryptoMaterial => PassKind::Cryptomatte,
             _ => PassKind::Colour,

@@ -9,6 +9,7 @@ use crate::background::PixelMask;
 use crate::camera::{Camera, CameraRay, CameraSample};
 use crate::camera_lanes::{LensLanes, LANES};
 use crate::filter::Filter;
+use crate::motion::FrameMotion;
 use crate::sampler::{pixel_seed_in_row, row_seed, PixelRun, SampleStream, SamplerKind};
 use glam::{Vec2, Vec3};
 
@@ -34,6 +35,9 @@ pub(crate) struct PrimarySamples<'a> {
     /// The pixels whose rays may meet the scene (all when `None`); the others' samples are
     /// [`Start::Background`].
     scene: Option<&'a PixelMask>,
+    /// The frame's motion, when something in it moves (motion blur on): each sample draws its
+    /// time, and a moving camera makes its rays one at a time at that time.
+    motion: Option<&'a FrameMotion>,
 }
 
 /// What a sample's camera gave: a traced ray, no ray, or a ray that provably leaves the scene
@@ -67,6 +71,20 @@ impl<'a> PrimarySamples<'a> {
             centre: Vec2::ZERO,
             run: PixelRun::new(kind, 0, 0),
             scene: None,
+            motion: None,
+        }
+    }
+
+    /// Samples at their time in the shutter of `motion` (when something moves in it).
+    pub fn with_motion(self, motion: Option<&'a FrameMotion>) -> Self {
+        let motion = motion.filter(|m| m.moves());
+        Self {
+            // The lanes make a still camera's rays.
+            lanes: self
+                .lanes
+                .filter(|_| motion.is_none_or(|m| m.camera.is_none())),
+            motion,
+            ..self
         }
     }
 
@@ -104,17 +122,17 @@ impl<'a> PrimarySamples<'a> {
         items: &mut impl Iterator<Item = (K, u32, u32, u32)>,
         n: usize,
         run: &mut Vec<(K, Start)>,
-        starts: &mut Vec<(Vec3, Vec3, SampleStream)>,
+        starts: &mut Vec<(Vec3, Vec3, SampleStream, f32)>,
     ) {
         let Some(lanes) = self.lanes else {
             for _ in 0..n {
                 let Some((key, x, y, i)) = self.next_in_scene(items, run) else {
                     return;
                 };
-                let (stream, ray) = self.sample(x, y, i);
+                let (stream, ray, time) = self.sample_timed(x, y, i);
                 let start = match &ray {
                     Some(r) => {
-                        starts.push((r.origin, r.dir, stream));
+                        starts.push((r.origin, r.dir, stream, time));
                         Start::Traced
                     }
                     None => Start::NoRay,
@@ -150,7 +168,8 @@ impl<'a> PrimarySamples<'a> {
                 };
                 if rays.made[l] {
                     let origin = Vec3::new(o[0][l], o[1][l], o[2][l]);
-                    starts.push((origin, Vec3::new(d[0][l], d[1][l], d[2][l]), stream));
+                    let time = self.time_of(&stream, film[1][l]);
+                    starts.push((origin, Vec3::new(d[0][l], d[1][l], d[2][l]), stream, time));
                 } else {
                     run[at].1 = Start::NoRay;
                 }
@@ -164,10 +183,40 @@ impl<'a> PrimarySamples<'a> {
     /// Sample `i` of pixel `(x, y)`: its stream and its camera ray (`None` when the camera
     /// makes none).
     #[inline(always)]
+    #[cfg(test)]
     pub fn sample(&mut self, x: u32, y: u32, i: u32) -> (SampleStream, Option<CameraRay>) {
+        let (stream, ray, _) = self.sample_timed(x, y, i);
+        (stream, ray)
+    }
+
+    /// [`PrimarySamples::sample`] with the sample's normalised time in the shutter (0 without
+    /// motion blur).
+    #[inline(always)]
+    fn sample_timed(&mut self, x: u32, y: u32, i: u32) -> (SampleStream, Option<CameraRay>, f32) {
         let (stream, p_film, p_lens) = self.numbers(x, y, i);
-        let sample = CameraSample { p_film, p_lens };
-        (stream, self.camera.generate_ray(&sample))
+        let time = self.time_of(&stream, p_film.y);
+        let sample = CameraSample {
+            p_film,
+            p_lens,
+            time,
+        };
+        let ray = match self.motion.and_then(|m| m.camera.as_ref()) {
+            Some(path) => path.generate_ray(&sample),
+            None => self.camera.generate_ray(&sample),
+        };
+        (stream, ray, time)
+    }
+
+    /// The normalised shutter time of a sample at film row `row` (0 without motion blur: the
+    /// time dimension is not even drawn).
+    #[inline(always)]
+    fn time_of(&self, stream: &SampleStream, row: f32) -> f32 {
+        match self.motion {
+            None => 0.0,
+            Some(m) => m
+                .shutter
+                .normalised_time(stream.time(), row, self.camera.height),
+        }
     }
 
     /// Sample `i` of pixel `(x, y)`: its stream and the numbers it gives the camera.
@@ -221,6 +270,7 @@ pub(crate) fn drawn_alone(
     let sample = CameraSample {
         p_film: Vec2::new(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y),
         p_lens,
+        time: 0.0,
     };
     (stream, camera.generate_ray(&sample))
 }

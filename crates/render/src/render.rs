@@ -101,13 +101,19 @@ pub fn render_window(
         layout: AovLayout::new(opts.passes),
         ids: crypto_ids(scene, opts.passes),
         wavefronts: Spares::default(),
-        backdrop: crate::background::backdrop(&integrator, accel, camera, &filter, &opts.env),
+        // A moving camera sees other pixels' background at other times: no backdrop then.
+        backdrop: match opts.motion.as_deref().and_then(|m| m.camera.as_ref()) {
+            Some(_) => None,
+            None => crate::background::backdrop(&integrator, accel, camera, &filter, &opts.env),
+        },
     };
     let mut film = match opts.adaptive {
         Some(a) => render_adaptive(&job, &a, window, progress),
         None => render_uniform(&job, window, progress),
     };
-    let wanted = opts.passes.contains(Pass::Depth) || opts.passes.contains(Pass::Position);
+    let wanted = [Pass::Depth, Pass::Position, Pass::Vector]
+        .iter()
+        .any(|&p| opts.passes.contains(p));
     if wanted && !opts.cancel.is_cancelled() {
         centre_rays(&job, &mut film);
     }
@@ -145,19 +151,21 @@ pub fn material_name(scene: &Scene, index: usize) -> String {
     }
 }
 
-/// The Depth and Position passes: the surface seen through each pixel's centre and the lens
-/// centre, one ray per pixel, traced once (sharp and deterministic, not a sample).
+/// The Depth, Position and Vector passes: the surface seen through each pixel's centre and the
+/// lens centre, one ray per pixel, traced once (sharp and deterministic, not a sample).
 fn centre_rays(job: &Job<'_>, film: &mut Film) {
     let w = film.window();
     let cam = job.camera;
     let forward = cam.world_from_camera.transform_vector3(Vec3::NEG_Z);
-    let hits: Vec<Option<Vec3>> = (0..w.pixels())
+    // The frame's instant: where moving instances are at the frame itself.
+    let time = job.opts.motion.as_deref().map_or(0.0, |m| m.frame_time());
+    let hits: Vec<Option<(Vec3, u32)>> = (0..w.pixels())
         .into_par_iter()
         .map(|i| {
             let (x, y) = (w.x0 + (i as u32 % w.width), w.y0 + (i as u32 / w.width));
             let p_film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
             let ray = cam.centre_ray(p_film)?;
-            job.integrator.first_surface(ray.origin, ray.dir)
+            job.integrator.first_surface(ray.origin, ray.dir, time)
         })
         .collect();
     let origin = Vec3::from(cam.world_from_camera.translation);
@@ -167,13 +175,29 @@ fn centre_rays(job: &Job<'_>, film: &mut Film) {
             .iter()
             .map(|h| match h {
                 // Distance along the view axis (from the camera's plane for orthographic).
-                Some(p) if ortho || (*p - origin).dot(forward) > 0.0 => (*p - origin).dot(forward),
+                Some((p, _)) if ortho || (*p - origin).dot(forward) > 0.0 => {
+                    (*p - origin).dot(forward)
+                }
                 _ => DEPTH_BACKGROUND,
             })
             .collect();
     }
     if job.opts.passes.contains(Pass::Position) {
-        film.position = hits.iter().map(|h| h.unwrap_or(Vec3::ZERO)).collect();
+        film.position = hits.iter().map(|h| h.map_or(Vec3::ZERO, |h| h.0)).collect();
+    }
+    if job.opts.passes.contains(Pass::Vector) {
+        let instances = &job.integrator.geom.scene.instances;
+        let on = |&(p, i): &(Vec3, u32)| {
+            let object_from_world = instances.get(i as usize)?.world_from_object.inverse();
+            Some((p, i, object_from_world))
+        };
+        film.vector = match job.opts.vector.as_deref() {
+            None => vec![[0.0; 4]; hits.len()],
+            Some(n) => hits
+                .iter()
+                .map(|h| n.vector(cam, h.as_ref().and_then(on)))
+                .collect(),
+        };
     }
 }
 

@@ -27,6 +27,9 @@ pub const MAX_SPP: u32 = 1 << 16;
 /// 4-D dimension sets the Sobol tables hold; later sets reuse them under another scramble seed.
 const SOBOL_SETS: u32 = sobol_burley::NUM_DIMENSION_SETS_4D;
 
+/// The dimension set of [`SampleStream::time`].
+pub const TIME_SET: u32 = 1 << 22;
+
 /// A 32-bit integer hash with good avalanche (the "lowbias32" finaliser by Chris Wellons).
 #[inline]
 pub(crate) fn hash_u32(mut x: u32) -> u32 {
@@ -325,6 +328,14 @@ impl SampleStream {
     pub fn wavelength(&self, k: u32) -> f32 {
         self.kind
             .sample_2d(self.pixel_seed, self.index, (1 << 21) + k)[0]
+    }
+
+    /// The sample's time in the shutter, normalised to `[0, 1)` (motion blur, SPEC §7):
+    /// dimension set `2^22`, far above every other set. Its Sobol index shuffle and scramble
+    /// come from another seed than the camera set's, so time is stratified on its own and
+    /// independent of the pixel and lens dimensions.
+    pub fn time(&self) -> f32 {
+        self.kind.sample_2d(self.pixel_seed, self.index, TIME_SET)[0]
     }
 
     /// An extra value for the `n`-th repeated decision at vertex `k` (alpha pass-through after

@@ -467,6 +467,10 @@ fn drawn_order(
         })?),
         None => doc.default_scene().or_else(|| doc.scenes().next()),
     };
+    if let Some(s) = &scene {
+        let extras = crate::camera::raw(s.extras());
+        stats.motion = crate::MotionExtras::parse(s.index(), extras.as_ref())?;
+    }
     let mut order = Vec::new();
     match &scene {
         Some(s) => {

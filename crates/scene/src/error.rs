@@ -141,6 +141,18 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// A motion-blur key of `scenes[i].extras` (SPEC §7) with the wrong type or out of range.
+    #[error("scenes[{scene}].extras: {key} = {value}: {reason}")]
+    InvalidSceneExtra {
+        /// The scene's index.
+        scene: usize,
+        /// The key (`motion_blur_shutter`, `motion_blur_position`, ...).
+        key: String,
+        /// The value as written.
+        value: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// A scene index that does not exist (`--scene N`).
     #[error("scene {index} does not exist (the file has {count})")]
     NoSuchScene {

@@ -372,6 +372,8 @@ pub struct SceneStats {
     pub animations: Vec<crate::AnimationInfo>,
     /// The time the scene is posed at (`None`: the stored pose).
     pub time: Option<f32>,
+    /// The selected scene's motion-blur keys (`scenes[i].extras`, SPEC §7).
+    pub motion: crate::MotionExtras,
     /// `asset.generator`: the tool that wrote the file (decides `--transmission auto`).
     pub generator: Option<String>,
     /// `KHR_materials_variants` names, in the file's order.

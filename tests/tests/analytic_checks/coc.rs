@@ -137,6 +137,7 @@ impl FilmSolver {
             .generate_ray(&CameraSample {
                 p_film: p_film.as_vec2(),
                 p_lens,
+                time: 0.0,
             })
             .expect("ray");
         let o = self.camera_from_world.transform_point3(r.origin).as_dvec3();

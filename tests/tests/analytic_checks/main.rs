@@ -43,6 +43,7 @@ fn subpixel_rays(cam: &Camera, x: u32, y: u32, k: u32) -> Vec<(DVec3, DVec3)> {
                 .generate_ray(&CameraSample {
                     p_film,
                     p_lens: Vec2::ZERO,
+                    time: 0.0,
                 })
                 .expect("pinhole ray");
             (r.origin.as_dvec3(), r.dir.as_dvec3())

@@ -91,6 +91,7 @@ fn multi_uv_test_emission_uses_texcoord_1() {
                 let s = CameraSample {
                     p_film: Vec2::new(x as f32 + 0.5, y as f32 + 0.5),
                     p_lens: Vec2::ZERO,
+                    time: 0.0,
                 };
                 let r = camera.generate_ray(&s).unwrap();
                 accel.intersect(&Ray::new(r.origin, r.dir))

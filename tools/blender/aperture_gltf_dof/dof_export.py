@@ -120,6 +120,8 @@ class glTF2ExportUserExtension:
         self._written = {}
         # camera data name -> the glTF camera written for it
         self._gltf_cameras = {}
+        # The frame shown when the export started: the exporter moves it while sampling.
+        self._frame_current = bpy.context.scene.frame_current
 
     def gather_camera_hook(self, gltf2_camera, blender_camera, export_settings):
         """Adds the camera's depth of field to ``gltf2_camera.extras`` (custom properties win)."""
@@ -157,6 +159,12 @@ class glTF2ExportUserExtension:
         gltf2_camera.extras = extras
         self._written[id(gltf2_camera)] = (blender_camera.name, written)
         self._gltf_cameras[blender_camera.name] = gltf2_camera
+
+    def gather_scene_hook(self, gltf2_scene, blender_scene, export_settings):
+        """Adds the scene's motion-blur settings to ``gltf2_scene.extras`` (SPEC section 7)."""
+        from . import motion_export
+
+        motion_export.add_to(gltf2_scene, blender_scene, self._frame_current)
 
     def gather_gltf_hook(self, active_scene_idx, scenes, animations, export_settings):
         """Adds a ``KHR_animation_pointer`` animation for each camera with keyed DOF values."""

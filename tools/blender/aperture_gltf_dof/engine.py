@@ -80,9 +80,11 @@ def border(scene):
     return x0, h - top, x1, h - bottom
 
 
-def export_scene(path):
+def export_scene(path, motion_blur=False):
     """The evaluated scene at the current frame, as a GLB: cameras, lights, custom properties
-    and this add-on's depth of field on, modifiers applied, render-visible objects only."""
+    and this add-on's depth of field on, modifiers applied, render-visible objects only. With
+    motion blur, the animation too (aperture poses the shutter's motion steps from it, and the
+    scene's extras carry the shutter)."""
     bpy.ops.export_scene.gltf(
         filepath=path,
         export_format="GLB",
@@ -91,10 +93,19 @@ def export_scene(path):
         export_lights=True,
         export_extras=True,
         export_apply=True,
-        export_animations=False,
-        export_current_frame=True,
+        export_animations=motion_blur,
+        export_current_frame=not motion_blur,
         export_yup=True,
     )
+
+
+def motion_arguments(scene):
+    """The frame to render and its fps when motion blur is on (the shutter comes from the
+    exported scene extras); nothing otherwise."""
+    if not scene.render.use_motion_blur:
+        return []
+    fps = scene.render.fps / scene.render.fps_base
+    return ["--frame", str(scene.frame_current), "--fps", f"{fps:.9g}"]
 
 
 def blender_oidn():
@@ -137,6 +148,7 @@ def command(binary, glb, out, scene, view_layer):
     if s.noise_threshold > 0.0:
         cmd += ["--noise-threshold", f"{s.noise_threshold:.9g}"]
     cmd += denoise_arguments(s)
+    cmd += motion_arguments(scene)
     if s.transmission != "AUTO":
         cmd += ["--transmission", s.transmission.lower()]
     if scene.camera is not None:
@@ -178,7 +190,7 @@ class ApertureRenderEngine(bpy.types.RenderEngine):
             binary = find_binary(scene.aperture)
             glb = os.path.join(folder, "scene.glb")
             out = os.path.join(folder, "render.exr")
-            export_scene(glb)
+            export_scene(glb, scene.render.use_motion_blur)
             cmd, problems = command(binary, glb, out, scene, view_layer)
             for p in problems:
                 self.report({"WARNING"}, p)

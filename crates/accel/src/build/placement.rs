@@ -38,6 +38,10 @@ pub struct FrameHints<'a> {
     /// mesh drawn more than once keeps one object-space BVH (memory bounded by the unique
     /// triangles). [`FLATTEN_SHARED_LIMIT`] by default; 0 keeps every shared mesh instanced.
     pub flatten_shared_up_to: usize,
+    /// Per instance: how it moves within the shutter (`None`: it stays at
+    /// `world_from_object`); empty: nothing moves. A moving instance is walked at each ray's
+    /// [`Ray::time`](crate::Ray::time) and bounded over its whole interval.
+    pub motion: &'a [Option<crate::MotionTransform>],
 }
 
 /// The default of [`FrameHints::flatten_shared_up_to`]: 2^20 drawn triangles, so flattening
@@ -50,6 +54,7 @@ impl FrameHints<'_> {
         moving: &[],
         deforming_from: usize::MAX,
         flatten_shared_up_to: FLATTEN_SHARED_LIMIT,
+        motion: &[],
     };
 }
 
@@ -104,7 +109,9 @@ pub(super) fn placement(
         }
     }
     let is_static = |id: u32, m: usize| {
-        !hints.moving.get(id as usize).copied().unwrap_or(false) && m < hints.deforming_from
+        !hints.moving.get(id as usize).copied().unwrap_or(false)
+            && hints.motion.get(id as usize).is_none_or(Option::is_none)
+            && m < hints.deforming_from
     };
     let static_drawn: usize = usable
         .iter()

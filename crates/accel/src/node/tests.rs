@@ -335,6 +335,7 @@ fn slack_covers_what_the_triangle_test_accepts() {
                 dir,
                 tmin: 0.0,
                 tmax: f32::INFINITY,
+                time: 0.0,
             };
             if intersect_triangle(&ray, p).is_none() {
                 continue;

@@ -42,6 +42,7 @@ impl<const AVX2: bool> Leaf for EntriesClosest<'_, AVX2> {
     #[inline(always)]
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
         if let Some(entry) = self.accel.entries.get(primitive as usize) {
+            let entry = &self.accel.entry_at(entry, self.ray);
             let hit = self
                 .accel
                 .walk_entry::<AVX2, ClosestLeaf<AVX2>>(entry, self.ray, tmax, self.stack);
@@ -70,6 +71,7 @@ impl<const AVX2: bool> Leaf for EntriesAny<'_, AVX2> {
             .entries
             .get(primitive as usize)
             .is_some_and(|entry| {
+                let entry = &self.accel.entry_at(entry, self.ray);
                 self.accel
                     .walk_entry::<AVX2, AnyLeaf<AVX2>>(entry, self.ray, &mut tmax, self.stack)
                     == Some(true)

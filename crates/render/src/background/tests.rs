@@ -222,6 +222,7 @@ fn sample_in(rng: &mut Rng, x: u32, y: u32, filter_half: f32) -> CameraSample {
     CameraSample {
         p_film: Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + off,
         p_lens: Vec2::new(rng.f(), rng.f()),
+        time: 0.0,
     }
 }
 

@@ -36,6 +36,8 @@ pub(super) struct Vertex<'b> {
     pub sigma_a: Vec3,
     /// Probability that light sampling picks the emitters here (1 without a choice).
     pub emitters: f32,
+    /// The path's time in the shutter (its rays' [`Ray::time`]).
+    pub time: f32,
 }
 
 impl Vertex<'_> {
@@ -255,7 +257,7 @@ impl Integrator<'_> {
             path.first_split
         };
         if path.defer {
-            let (ray, absorbed) = shadow_ray(origin, dir, dist, v.sigma_a);
+            let (ray, absorbed) = shadow_ray(origin, dir, dist, v.sigma_a, v.time);
             path.pending.push(PendingLight {
                 ray,
                 clamped,
@@ -265,7 +267,7 @@ impl Integrator<'_> {
             });
             return;
         }
-        let lit = clamped * self.visibility(origin, dir, dist, v.sigma_a);
+        let lit = clamped * self.visibility(origin, dir, (dist, v.time), v.sigma_a);
         path.add_lit(lit, v.scatter + 1, &split);
     }
 
@@ -273,8 +275,14 @@ impl Integrator<'_> {
     /// `dist`, inside a medium absorbing `sigma_a`: alpha-cut and blended surfaces and
     /// thin-walled ideal transmission let light through, refractive boundaries do not (light
     /// through them bends).
-    pub(super) fn visibility(&self, origin: Vec3, dir: Vec3, dist: f32, sigma_a: Vec3) -> Vec3 {
-        let (mut ray, absorbed) = shadow_ray(origin, dir, dist, sigma_a);
+    pub(super) fn visibility(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        (dist, time): (f32, f32),
+        sigma_a: Vec3,
+    ) -> Vec3 {
+        let (mut ray, absorbed) = shadow_ray(origin, dir, dist, sigma_a, time);
         if !self.geom.has_alpha && !self.geom.has_thin {
             return if self.accel.occluded(&ray) {
                 Vec3::ZERO
@@ -287,7 +295,7 @@ impl Integrator<'_> {
             let Some(hit) = self.accel.intersect(&ray) else {
                 return tr;
             };
-            let s = self.geom.surface(hit.instance, hit.triangle, hit.u, hit.v);
+            let s = self.hit_surface(&ray, &hit, true);
             tr *= match self.geom.kind(hit.instance, s.material) {
                 SurfaceKind::Opaque => Vec3::splat(self.geom.transmittance(&s)),
                 SurfaceKind::Thin => {
@@ -316,7 +324,13 @@ impl Integrator<'_> {
 /// The shadow ray from `origin` in unit direction `dir` towards a light `dist` away (stopping
 /// just short of it), and the transmittance of the medium absorbing `sigma_a` over `dist`.
 #[inline]
-pub(super) fn shadow_ray(origin: Vec3, dir: Vec3, dist: f32, sigma_a: Vec3) -> (Ray, Vec3) {
+pub(super) fn shadow_ray(
+    origin: Vec3,
+    dir: Vec3,
+    dist: f32,
+    sigma_a: Vec3,
+    time: f32,
+) -> (Ray, Vec3) {
     let tmax = if dist.is_finite() {
         dist * (1.0 - 1e-4)
     } else {
@@ -327,6 +341,7 @@ pub(super) fn shadow_ray(origin: Vec3, dir: Vec3, dist: f32, sigma_a: Vec3) -> (
         dir,
         tmin: 0.0,
         tmax,
+        time,
     };
     let absorbed = if sigma_a == Vec3::ZERO {
         Vec3::ONE

@@ -55,6 +55,9 @@ pub(crate) struct Integrator<'a> {
     /// Whether each vertex picks one light to sample (see [`aperture_shading::light_choice`]): the scene
     /// has two candidates or more (punctual lights, and its emitters as one).
     pub pick_light: bool,
+    /// Per instance, how it moves within the shutter (empty: nothing moves): a surface found
+    /// on a moving instance is moved to where the instance is at the ray's time.
+    pub moving: &'a [Option<crate::motion::MovingInstance>],
 }
 
 impl Integrator<'_> {
@@ -223,9 +226,8 @@ impl Integrator<'_> {
             wo_l,
             ng,
             p: s.p,
-            // Our point is interpolated from the vertices; the accel's bound covers the
-            // rounding of instanced transforms, which a few ulps of the point alone would
-            // not.
+            // Our point is interpolated from the vertices; the accel's bound covers the rounding
+            // of instanced transforms, which a few ulps of the point alone would not.
             p_out: SpawnPoint { p: s.p, error }.origin(ng),
             spawn: SpawnPoint { p: s.p, error },
             two_sided,
@@ -233,6 +235,7 @@ impl Integrator<'_> {
             vertex: w.vertex,
             sigma_a: w.media.sigma_a(),
             emitters: choice.map_or(1.0, |c| c.emitters),
+            time: w.ray.time,
         };
         self.direct_lights(&v, w.beta, ls.as_ref(), choice, path);
         self.direct_environment(&v, w.beta, stream, path);
@@ -342,7 +345,15 @@ impl Integrator<'_> {
         } else {
             v.p_out
         };
-        w.step(Ray::new(o, wi), internal, straight)
+        let time = w.ray.time;
+        w.step(
+            Ray {
+                time,
+                ..Ray::new(o, wi)
+            },
+            internal,
+            straight,
+        )
     }
 
     /// The MIS weight of an emitter at `s` found by a path that arrived as `arrival` says.

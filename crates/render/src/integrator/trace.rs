@@ -19,6 +19,19 @@ fn absorption(sigma: Vec3, t: f32) -> Vec3 {
 }
 
 impl Integrator<'_> {
+    /// The surface of `hit` on `ray`: shaded where the instance is at the frame's instant,
+    /// then moved to where it is at the ray's time when it moves within the shutter.
+    #[inline(always)]
+    pub(super) fn hit_surface(&self, ray: &Ray, hit: &Hit, shading: bool) -> Surface {
+        let mut s = self
+            .geom
+            .surface_at(hit.instance, hit.triangle, hit.u, hit.v, shading);
+        if let Some(Some(m)) = self.moving.get(hit.instance as usize) {
+            m.move_surface(&mut s, ray.time);
+        }
+        s
+    }
+
     /// The closest surface along `ray` that scatters, passing through alpha-cut or blended
     /// surfaces and false interfaces of nested dielectrics (updating `w.media`), with the
     /// rounding-error bound of the hit point (from the ray segment that found it). Absorption
@@ -40,9 +53,7 @@ impl Integrator<'_> {
         // Nothing to pass through: the first hit is the surface (inline, so that a ray that
         // escapes costs no call and the surface is built where the vertex reads it).
         let hit = first.unwrap_or_else(|| self.accel.intersect(ray))?;
-        let s = self
-            .geom
-            .surface_at(hit.instance, hit.triangle, hit.u, hit.v, true);
+        let s = self.hit_surface(ray, &hit, true);
         Some((hit, s, self.accel.spawn_point(ray, &hit).error))
     }
 
@@ -62,7 +73,7 @@ impl Integrator<'_> {
                 Some(hit) => hit?,
                 None => self.accel.intersect(&r)?,
             };
-            let s = self.geom.surface(hit.instance, hit.triangle, hit.u, hit.v);
+            let s = self.hit_surface(&r, &hit, true);
             let error = self.accel.spawn_point(&r, &hit).error;
             let sigma = w.media.sigma_a();
             if sigma != Vec3::ZERO {
@@ -81,7 +92,10 @@ impl Integrator<'_> {
             }
             // Continue on the far side of the surface.
             let n = if s.ng.dot(r.dir) > 0.0 { s.ng } else { -s.ng };
-            r = Ray::new(SpawnPoint { p: s.p, error }.origin(n), r.dir);
+            r = Ray {
+                time: r.time,
+                ..Ray::new(SpawnPoint { p: s.p, error }.origin(n), r.dir)
+            };
         }
         None
     }
@@ -104,19 +118,26 @@ impl Integrator<'_> {
     }
 
     /// The first surface along a ray (unit direction) that is opaque at coverage ½: what the
-    /// Depth and Position passes show. Deterministic, unlike a sample: alpha-blended surfaces
+    /// Depth, Position and Vector passes show (with the instance it lies on). Deterministic,
+    /// unlike a sample: alpha-blended surfaces
     /// count as solid where their alpha is at least ½.
-    pub fn first_surface(&self, origin: Vec3, dir: Vec3) -> Option<Vec3> {
-        let mut r = Ray::new(origin, dir);
+    pub fn first_surface(&self, origin: Vec3, dir: Vec3, time: f32) -> Option<(Vec3, u32)> {
+        let mut r = Ray {
+            time,
+            ..Ray::new(origin, dir)
+        };
         for _ in 0..MAX_ALPHA_PASSES {
             let hit = self.accel.intersect(&r)?;
-            let s = self.geom.surface(hit.instance, hit.triangle, hit.u, hit.v);
+            let s = self.hit_surface(&r, &hit, true);
             if !self.geom.has_alpha || self.geom.is_opaque(&s, 0.5) {
-                return Some(s.p);
+                return Some((s.p, hit.instance));
             }
             let error = self.accel.spawn_point(&r, &hit).error;
             let n = if s.ng.dot(r.dir) > 0.0 { s.ng } else { -s.ng };
-            r = Ray::new(SpawnPoint { p: s.p, error }.origin(n), r.dir);
+            r = Ray {
+                time,
+                ..Ray::new(SpawnPoint { p: s.p, error }.origin(n), r.dir)
+            };
         }
         None
     }

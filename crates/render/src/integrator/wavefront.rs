@@ -80,7 +80,7 @@ impl<const AOV: bool> Wavefront<AOV> {
     /// Traces the paths of primary rays `starts` (origin, unit direction, sample stream) to
     /// their ends; [`Wavefront::results`] then gives each one's radiance, coverage and pass
     /// values, in order.
-    pub fn run(&mut self, integrator: &Integrator<'_>, starts: &[(Vec3, Vec3, SampleStream)]) {
+    pub fn run(&mut self, integrator: &Integrator<'_>, starts: &[(Vec3, Vec3, SampleStream, f32)]) {
         let accel = integrator.accel;
         self.start_paths(integrator, starts);
         let mut camera_rays = true;
@@ -129,10 +129,17 @@ impl<const AOV: bool> Wavefront<AOV> {
     /// Traces the camera rays of `starts` (a pixel's lens samples are coherent: packets) and
     /// sets up a path for each; a sample whose ray meets nothing is answered at once, without a
     /// path, where no pass needs one. The live paths' camera hits are left in `hits`.
-    fn start_paths(&mut self, integrator: &Integrator<'_>, starts: &[(Vec3, Vec3, SampleStream)]) {
+    fn start_paths(
+        &mut self,
+        integrator: &Integrator<'_>,
+        starts: &[(Vec3, Vec3, SampleStream, f32)],
+    ) {
         let accel = integrator.accel;
         self.rays.clear();
-        let camera_rays = starts.iter().map(|&(o, d, _)| Ray::new(o, d));
+        let camera_rays = starts.iter().map(|&(o, d, _, time)| Ray {
+            time,
+            ..Ray::new(o, d)
+        });
         self.rays.extend(camera_rays);
         self.hits.clear();
         self.hits.resize(self.rays.len(), None);
@@ -140,7 +147,7 @@ impl<const AOV: bool> Wavefront<AOV> {
         // Slots are re-initialised in place: their pending lists keep their capacity.
         self.paths.truncate(starts.len());
         self.live.clear();
-        for (k, (&(origin, dir, _), hit)) in starts.iter().zip(&self.hits).enumerate() {
+        for (k, (&(origin, dir, _, time), hit)) in starts.iter().zip(&self.hits).enumerate() {
             if self.paths.len() == k {
                 let fresh = integrator.start_path::<AOV>(origin, dir, true);
                 self.paths.push(fresh);
@@ -153,6 +160,7 @@ impl<const AOV: bool> Wavefront<AOV> {
                 (p.covered, p.live) = (false, false);
             } else {
                 integrator.restart_path(p, origin, dir, true);
+                p.w.ray.time = time;
                 self.live.push(k);
             }
         }

@@ -111,13 +111,13 @@ fn for_each_setup(mut f: impl FnMut(&Setup)) {
 /// ray (with the stream drawn alone, which `fill` does not keep).
 fn filled(
     start: Start,
-    traced: &mut std::slice::Iter<(Vec3, Vec3, SampleStream)>,
+    traced: &mut std::slice::Iter<(Vec3, Vec3, SampleStream, f32)>,
     want: &Drawn,
 ) -> Drawn {
     let got = (start == Start::Traced)
         .then(|| traced.next())
         .flatten()
-        .map(|&(o, d, s)| (s, Some(CameraRay { origin: o, dir: d })));
+        .map(|&(o, d, s, _)| (s, Some(CameraRay { origin: o, dir: d })));
     got.unwrap_or((want.0, None))
 }
 

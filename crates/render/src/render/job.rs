@@ -83,7 +83,8 @@ impl Job<'_> {
             .unwrap_or_default();
         let o = self.opts;
         let mut primary =
-            PrimarySamples::new(self.camera, self.filter, o.sampler, o.seed, o.sample_offset);
+            PrimarySamples::new(self.camera, self.filter, o.sampler, o.seed, o.sample_offset)
+                .with_motion(o.motion.as_deref());
         if let Some(b) = &self.backdrop {
             primary = primary.with_scene(&b.scene);
         }
@@ -125,7 +126,7 @@ impl Job<'_> {
 pub(super) fn integrator<'a>(
     scene: &'a Scene,
     accel: &'a Accel,
-    opts: &RenderOptions,
+    opts: &'a RenderOptions,
 ) -> Integrator<'a> {
     let (model, _) = opts.transmission.resolve(scene);
     let geom = Geometry::with_transmission(scene, opts.material_override, model);
@@ -142,6 +143,7 @@ pub(super) fn integrator<'a>(
         light_passes: opts.passes.has_light_passes(),
         energy_compensation: opts.energy_compensation,
         pick_light: false,
+        moving: opts.motion.as_deref().map_or(&[], |m| &m.instances),
     };
     integrator.pick_light = integrator.light_tree.is_some() || integrator.candidates().choose();
     integrator

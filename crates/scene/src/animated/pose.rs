@@ -13,6 +13,17 @@ use crate::pointer::{self, CameraProperty, LightProperty, Pointer};
 use crate::{Error, Instance, Light, LightKind, Material, Mesh, Projection, Scene, Texture};
 
 impl Animated {
+    /// [`Animated::scene_at`] without textures (none is decoded or copied): what a motion step
+    /// needs of a pose (placements, cameras, lights, deformed meshes).
+    pub fn shape_at(&self, time: Option<f32>) -> Result<Scene, Error> {
+        self.build(time, self.static_meshes.clone(), Vec::new())
+    }
+
+    /// The selected scene's motion-blur keys (`scenes[i].extras`, SPEC §7).
+    pub fn motion_extras(&self) -> crate::MotionExtras {
+        self.stats.motion
+    }
+
     /// The scene at `time`, with the static meshes and textures given.
     pub(super) fn build(
         &self,

@@ -1,0 +1,157 @@
+//! `--motion-blur`, `--no-motion-blur`, `--shutter`, `--shutter-position`, `--motion-steps`
+//! (SPEC §7): the command line's say over the file's motion-blur settings, and the frame's
+//! motion posed from them.
+
+use crate::number_args::positive_f32;
+use aperture_render::motion::{
+    pose_frame_motion, pose_neighbours, FrameMotion, FrameNeighbours, MotionOverrides,
+    MotionSettings, ShutterPosition, MAX_MOTION_STEPS,
+};
+use aperture_scene::{Animated, Scene};
+use std::sync::Arc;
+
+/// Blender's `motion_blur_position`.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PositionArg {
+    /// The shutter opens at the frame.
+    Start,
+    /// Centred on the frame.
+    Center,
+    /// The shutter closes at the frame.
+    End,
+}
+
+/// Motion blur flags; each overrides the file's `scenes[i].extras` key.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct MotionArgs {
+    /// Motion blur on: each sample at its own time in the shutter [default: the file's
+    /// `use_motion_blur`, else off].
+    #[arg(long, conflicts_with = "no_motion_blur")]
+    pub motion_blur: bool,
+    /// Motion blur off whatever the file says.
+    #[arg(long)]
+    pub no_motion_blur: bool,
+    /// Shutter open time in frames [default: the file's `motion_blur_shutter`, else 0.5].
+    #[arg(long, value_name = "FRAMES", value_parser = positive_f32)]
+    pub shutter: Option<f32>,
+    /// Where the shutter sits around the frame [default: the file's, else center].
+    #[arg(long, value_enum)]
+    pub shutter_position: Option<PositionArg>,
+    /// Poses over the shutter for what moves, interpolated per ray [default: 3].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=MAX_MOTION_STEPS as i64))]
+    pub motion_steps: Option<u32>,
+}
+
+impl MotionArgs {
+    /// What the flags say.
+    pub fn overrides(&self) -> MotionOverrides {
+        MotionOverrides {
+            enabled: match (self.motion_blur, self.no_motion_blur) {
+                (true, _) => Some(true),
+                (_, true) => Some(false),
+                _ => None,
+            },
+            shutter: self.shutter,
+            position: self.shutter_position.map(|p| match p {
+                PositionArg::Start => ShutterPosition::Start,
+                PositionArg::Center => ShutterPosition::Center,
+                PositionArg::End => ShutterPosition::End,
+            }),
+            steps: self.motion_steps,
+        }
+    }
+}
+
+/// The frames before and after the one at `time` seconds (`None`: the stored pose, which has
+/// no neighbours) of `scene`, for the `Vector` pass when it is asked for.
+pub fn frame_vector(
+    opts: &aperture_render::RenderOptions,
+    animated: &Animated,
+    scene: &Scene,
+    (time, fps): (Option<f32>, f32),
+) -> anyhow::Result<Option<Arc<FrameNeighbours>>> {
+    let (Some(time), true) = (time, opts.passes.contains(aperture_render::Pass::Vector)) else {
+        return Ok(None);
+    };
+    let n = pose_neighbours(
+        animated,
+        (f64::from(time), f64::from(fps)),
+        scene,
+        (opts.camera, opts.width, opts.height),
+    )?;
+    Ok(n.map(Arc::new))
+}
+
+/// The motion within the shutter of the frame at `time` seconds (`None`: the stored pose) of
+/// `scene`, posed from `animated`; `None` when motion blur is off, and with a warning when
+/// it is on without a time to put the shutter around in an animated file.
+pub fn frame_motion(
+    args: &MotionArgs,
+    animated: &Animated,
+    scene: &Scene,
+    (time, fps): (Option<f32>, f32),
+    (camera, width, height): (usize, u32, u32),
+) -> anyhow::Result<Option<Arc<FrameMotion>>> {
+    let settings = MotionSettings::resolve(&scene.stats.motion, &args.overrides());
+    if settings.shutter.is_none() {
+        return Ok(None);
+    }
+    let Some(time) = time else {
+        if animated.is_animated() {
+            eprintln!(
+                "warning: motion blur needs a time (--frame N or --time S): the stored pose \
+                 is rendered without it"
+            );
+        }
+        return Ok(None);
+    };
+    let motion = pose_frame_motion(
+        animated,
+        &settings,
+        (f64::from(time), f64::from(fps)),
+        scene,
+        (camera, width, height),
+    )?;
+    Ok(motion.map(Arc::new))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        motion: MotionArgs,
+    }
+
+    fn parse(args: &[&str]) -> Result<MotionOverrides, clap::Error> {
+        let argv = std::iter::once("t").chain(args.iter().copied());
+        Cli::try_parse_from(argv).map(|c| c.motion.overrides())
+    }
+
+    #[test]
+    fn flags_map_to_overrides() {
+        assert_eq!(parse(&[]).unwrap(), MotionOverrides::default());
+        let o = parse(&[
+            "--motion-blur",
+            "--shutter",
+            "0.25",
+            "--shutter-position",
+            "end",
+            "--motion-steps",
+            "5",
+        ])
+        .unwrap();
+        assert_eq!(o.enabled, Some(true));
+        assert_eq!(o.shutter, Some(0.25));
+        assert_eq!(o.position, Some(ShutterPosition::End));
+        assert_eq!(o.steps, Some(5));
+        assert_eq!(parse(&["--no-motion-blur"]).unwrap().enabled, Some(false));
+        assert!(parse(&["--motion-blur", "--no-motion-blur"]).is_err());
+        assert!(parse(&["--shutter", "0"]).is_err());
+        assert!(parse(&["--motion-steps", "1"]).is_err());
+        assert!(parse(&["--motion-steps", "65"]).is_err());
+    }
+}

@@ -1,0 +1,132 @@
+//! The `Vector` pass (SPEC §6): the screen-space motion, in pixels, of the surface seen through
+//! a pixel's centre towards the previous and the next frame, in Cycles' order and signs.
+//!
+//! Cycles (`primitive_motion_vector`) projects the surface's point as it is at the previous
+//! frame (`pre`), the frame (`center`) and the next frame (`post`), each through that frame's
+//! camera, into its raster space (y up), and writes `(pre − center, center − post)`. Our
+//! raster space is y down, so the y components change sign.
+
+use crate::camera::{Camera, CameraModel};
+use aperture_scene::{Animated, Error, Scene};
+use glam::{Affine3A, Vec2, Vec3, Vec3A};
+
+/// The cameras and instance placements of the frames before and after the rendered one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameNeighbours {
+    /// The camera at the previous frame.
+    pub camera_prev: Camera,
+    /// The camera at the next frame.
+    pub camera_next: Camera,
+    /// Per instance of the frame's scene: `world_from_object` at the previous and next frames
+    /// (`None`: the instance is not in those poses; it counts as still).
+    pub instances: Vec<Option<(Affine3A, Affine3A)>>,
+}
+
+/// Where `camera` images world point `p`, in raster coordinates (x right, y down); `None`
+/// behind a perspective camera.
+pub fn raster_of(camera: &Camera, p: Vec3) -> Option<Vec2> {
+    let c = camera.world_from_camera.inverse().transform_point3(p);
+    let (sx, sy) = match camera.model {
+        CameraModel::ThinLens {
+            tan_half_x,
+            tan_half_y,
+        } => {
+            if c.z >= 0.0 {
+                return None;
+            }
+            (c.x / (-c.z * tan_half_x), c.y / (-c.z * tan_half_y))
+        }
+        CameraModel::Orthographic { half_x, half_y } => (c.x / half_x, c.y / half_y),
+    };
+    let (w, h) = (camera.width as f32, camera.height as f32);
+    Some(Vec2::new(0.5 * (sx + 1.0) * w, 0.5 * (1.0 - sy) * h))
+}
+
+impl FrameNeighbours {
+    /// The pass value of world point `p` seen by `camera` at the frame, on `instance` (placed
+    /// by `object_from_world` at the frame) or on nothing (the background: zero).
+    pub fn vector(&self, camera: &Camera, hit: Option<(Vec3, u32, Affine3A)>) -> [f32; 4] {
+        let Some((p, instance, object_from_world)) = hit else {
+            return [0.0; 4];
+        };
+        let (p_prev, p_next) = match self.instances.get(instance as usize) {
+            Some(Some((prev, next))) => {
+                let o = object_from_world.transform_point3(p);
+                (prev.transform_point3(o), next.transform_point3(o))
+            }
+            _ => (p, p),
+        };
+        let project = |cam: &Camera, q: Vec3| raster_of(cam, q);
+        match (
+            project(camera, p),
+            project(&self.camera_prev, p_prev),
+            project(&self.camera_next, p_next),
+        ) {
+            (Some(c), Some(pre), Some(post)) => {
+                let (a, b) = (pre - c, c - post);
+                [a.x, -a.y, b.x, -b.y]
+            }
+            _ => [0.0; 4],
+        }
+    }
+}
+
+/// The neighbours of the frame at `frame_time` seconds (`fps` frames a second) posed as
+/// `frame`, for camera `camera` and a `width × height` image; `None` when the camera is not
+/// in a neighbouring pose.
+pub fn pose_neighbours(
+    animated: &Animated,
+    (frame_time, fps): (f64, f64),
+    frame: &Scene,
+    (camera, width, height): (usize, u32, u32),
+) -> Result<Option<FrameNeighbours>, Error> {
+    let mut cameras = Vec::with_capacity(2);
+    let mut placements: Vec<Vec<Option<Affine3A>>> = Vec::with_capacity(2);
+    for dt in [-1.0, 1.0] {
+        let scene = animated.shape_at(Some((frame_time + dt / fps) as f32))?;
+        let offset = Vec3A::from((scene.world_origin - frame.world_origin).as_vec3());
+        let Some(cam) = scene.cameras.get(camera) else {
+            return Ok(None);
+        };
+        // The automatic camera frames each pose's bounds: it stays the frame's.
+        let mut c = match cam.node {
+            Some(_) => Camera::new(cam, width, height),
+            None => Camera::new(
+                &frame.cameras[camera.min(frame.cameras.len() - 1)],
+                width,
+                height,
+            ),
+        };
+        c.world_from_camera.translation += if cam.node.is_some() {
+            offset
+        } else {
+            Vec3A::ZERO
+        };
+        cameras.push(c);
+        let same = scene.instances.len() == frame.instances.len();
+        placements.push(
+            frame
+                .instances
+                .iter()
+                .enumerate()
+                .map(|(i, f)| {
+                    let s = scene
+                        .instances
+                        .get(i)
+                        .filter(|s| same && s.node == f.node)?;
+                    let mut m = s.world_from_object;
+                    m.translation += offset;
+                    Some(m)
+                })
+                .collect(),
+        );
+    }
+    let instances = (placements[0].iter().zip(&placements[1]))
+        .map(|(a, b)| Some(((*a)?, (*b)?)))
+        .collect();
+    Ok(Some(FrameNeighbours {
+        camera_prev: cameras[0],
+        camera_next: cameras[1],
+        instances,
+    }))
+}
