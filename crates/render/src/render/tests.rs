@@ -218,7 +218,8 @@ fn many_point_lights_and_emitters_share_the_tree() {
         });
     }
     let accel = build_accel(&scene, Default::default());
-    let integrator = integrator(&scene, &accel, &RenderOptions::default());
+    let opts = RenderOptions::default();
+    let integrator = integrator(&scene, &accel, &opts);
     let tree = integrator
         .light_tree
         .as_ref()
