@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use aperture_accel::BvhQuality;
-use aperture_scene::{Camera, LightKind, LoadOptions, Projection, Scene};
+use aperture_scene::{LightKind, LoadOptions, Projection, Scene};
 use serde_json::{json, Value};
 
 /// Arguments of `aperture info`.
@@ -87,7 +87,8 @@ fn file_point(origin: glam::DVec3, p: glam::Vec3) -> Value {
     json!([q.x, q.y, q.z])
 }
 
-fn camera_json(c: &Camera, origin: glam::DVec3) -> Value {
+fn camera_json(s: &Scene, i: usize) -> Value {
+    let (c, origin) = (&s.cameras[i], s.world_origin);
     let (projection, yfov, aspect, xmag, ymag) = match c.projection {
         Projection::Perspective { yfov, aspect_ratio } => {
             ("perspective", Some(yfov), aspect_ratio, None, None)
@@ -100,6 +101,8 @@ fn camera_json(c: &Camera, origin: glam::DVec3) -> Value {
     json!({
         "name": c.name,
         "node": c.node,
+        "index": c.index,
+        "select": s.camera_selector(i),
         "projection": projection,
         "yfov": yfov.map(f),
         "aspect_ratio": aspect.map(f),
@@ -216,10 +219,8 @@ fn report(s: &Scene, mode: aperture_render::TransmissionMode) -> Value {
                 "selected": a.selected,
             }))
             .collect::<Vec<_>>(),
-        "cameras": s
-            .cameras
-            .iter()
-            .map(|c| camera_json(c, s.world_origin))
+        "cameras": (0..s.cameras.len())
+            .map(|i| camera_json(s, i))
             .collect::<Vec<_>>(),
     })
 }
@@ -383,9 +384,12 @@ fn print_cameras(r: &Value) {
     println!("  cameras: {}", cams.len());
     for c in &cams {
         let d = &c["dof"];
-        let node = match c["node"].as_u64() {
-            Some(i) => format!("node {i}"),
-            None => "automatic".into(),
+        let node = match (c["index"].as_u64(), c["node"].as_u64()) {
+            (Some(n), Some(j)) => format!(
+                "--camera {}: cameras[{n}] on node {j}",
+                c["select"].as_str().unwrap_or_default()
+            ),
+            _ => "automatic".into(),
         };
         let proj = match c["projection"].as_str() {
             Some("perspective") => format!(
@@ -441,7 +445,7 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use aperture_scene::{Dof, Instance, Light, Material, Mesh};
+    use aperture_scene::{Camera, Dof, Instance, Light, Material, Mesh};
     use glam::{Affine3A, Vec3};
 
     /// Two instances of a two-triangle mesh whose second triangle is emissive.
@@ -487,6 +491,7 @@ mod tests {
             cameras: vec![Camera {
                 name: "Cam".into(),
                 node: Some(2),
+                index: Some(0),
                 world_from_camera: Affine3A::IDENTITY,
                 projection: Projection::Perspective {
                     yfov: 0.7,

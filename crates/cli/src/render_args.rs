@@ -155,8 +155,10 @@ pub struct RenderArgs {
     /// Image height in pixels [default: from the width and the camera's aspect ratio].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub height: Option<u32>,
-    /// Camera by name or index [default: the first].
-    #[arg(long)]
+    /// Camera: its name, its glTF camera index N (`cameras[N]`, the N of `camera N` names and
+    /// of `info`'s list), or `node:J` for the camera node J (a glTF camera drawn by two nodes)
+    /// [default: the first camera node in drawing order, listed first by `info`].
+    #[arg(long, value_name = "NAME|N|node:J")]
     pub camera: Option<String>,
     /// Which glTF scene of the file [default: the file's default scene].
     #[arg(long = "scene", value_name = "N")]

@@ -218,7 +218,7 @@ fn load_options(args: &RenderArgs, memory: aperture_budget::MemoryBudget) -> Loa
     }
 }
 
-/// `--camera` (a name, else an index) as an index into the scene's cameras.
+/// `--camera` (a name, a glTF camera index or `node:J`) as an index into the scene's cameras.
 fn camera_index(args: &RenderArgs, scene: &aperture_scene::Scene) -> usize {
     match &args.camera {
         None => 0,
@@ -226,25 +226,12 @@ fn camera_index(args: &RenderArgs, scene: &aperture_scene::Scene) -> usize {
     }
 }
 
-/// A camera given by name, else by index, as an index into the scene's cameras; the error
-/// lists the cameras there are.
+/// `--camera` (a name, a glTF camera index or `node:J`) as an index into the scene's cameras;
+/// the error lists the cameras there are.
 pub(crate) fn find_camera(c: &str, scene: &aperture_scene::Scene) -> Result<usize, String> {
-    if let Some(i) = scene.cameras.iter().position(|cam| cam.name == c) {
-        return Ok(i);
-    }
-    match c.parse::<usize>() {
-        Ok(i) if i < scene.cameras.len() => Ok(i),
-        _ => Err(format!(
-            "invalid value '{c}' for '--camera': the scene's cameras are {}",
-            scene
-                .cameras
-                .iter()
-                .enumerate()
-                .map(|(i, c)| format!("{i} ({:?})", c.name))
-                .collect::<Vec<_>>()
-                .join(", ")
-        )),
-    }
+    scene
+        .select_camera(c)
+        .map_err(|e| format!("invalid value '{c}' for '--camera': {e}"))
 }
 
 /// `--width`/`--height`, the missing side (or both) from the camera's aspect.

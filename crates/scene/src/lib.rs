@@ -39,6 +39,7 @@ mod animation;
 mod basis;
 mod buffers;
 mod camera;
+mod camera_select;
 mod dof;
 mod draco;
 mod error;

@@ -243,10 +243,14 @@ impl Default for Dof {
 /// A camera placed in the world.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Camera {
-    /// Camera name (the glTF camera's, else its node's, else `camera N`).
+    /// Camera name (the glTF camera's, else its node's, else `camera N` with N its glTF
+    /// camera index, the number `--camera N` takes).
     pub name: String,
     /// Index of the node carrying the camera; `None` for the automatic camera.
     pub node: Option<u32>,
+    /// Index of the glTF camera (`cameras[i]`): the one camera numbering of names, `info` and
+    /// `--camera`; `None` for the automatic camera.
+    pub index: Option<u32>,
     /// Camera-to-world transform, rotation and translation only (scale removed, SPEC §1).
     /// The camera looks down its local −Z with +Y up.
     pub world_from_camera: Affine3A,
