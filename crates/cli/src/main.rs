@@ -12,6 +12,7 @@ mod frames;
 mod frames_tests;
 mod info;
 mod interrupt;
+mod load_warnings;
 mod material_args;
 mod merge_cmd;
 mod number_args;

@@ -285,7 +285,8 @@ pub struct RenderArgs {
     /// stopped; files are written whole or not at all).
     #[arg(long, requires = "frames")]
     pub skip_existing: bool,
-    /// No progress bar and no summary.
+    /// No progress bar, no summary and no load warnings (points skipped, extensions ignored:
+    /// `aperture info` lists them).
     #[arg(long, short)]
     pub quiet: bool,
     /// Progress display: a bar on a terminal, or JSON lines on stdout for programs (farm

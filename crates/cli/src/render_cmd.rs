@@ -26,7 +26,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let t_load = Instant::now();
     let (animated, scene) = load_posed(&args, &before.load)?;
     let plan = after_load(&args, &before, &scene)?;
-    for w in crate::first_image::scene_warnings(&scene, &plan.opts.env) {
+    let load_warnings = match args.quiet {
+        true => Vec::new(),
+        false => crate::load_warnings::load_warnings(&scene),
+    };
+    let scene_warnings = crate::first_image::scene_warnings(&scene, &plan.opts.env);
+    for w in load_warnings.into_iter().chain(scene_warnings) {
         eprintln!("warning: {}: {w}", args.scene.display());
     }
 
