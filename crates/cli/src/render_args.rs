@@ -166,7 +166,9 @@ pub struct RenderArgs {
     /// Seed of every sample value (the image is a pure function of scene, options and seed).
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=i32::MAX as i64))]
     pub seed: u32,
-    /// Worker threads [default: all cores]. The image does not depend on it.
+    /// Worker threads for everything the render does: loading, texture decoding, BVH building,
+    /// rendering, writing (the main thread only waits for them) [default: all cores]. The image
+    /// does not depend on it.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub threads: Option<u32>,
     /// Lens radius in scene units (turns depth of field on; 0 = pinhole).

@@ -15,8 +15,15 @@ use std::time::Instant;
 #[error("interrupted: {0} holds the samples taken so far (--save-partial)")]
 pub struct Interrupted(pub String);
 
-/// Runs `aperture render`.
+/// Runs `aperture render`: all of it (loading, texture decoding, BVH building, rendering,
+/// writing) on one pool of `--threads` workers, so that bound holds for the whole process.
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
+    let pool = crate::workers::worker_pool(args.threads)?;
+    pool.install(|| run_on(args, &pool))
+}
+
+/// [`run`] on `pool`'s workers.
+fn run_on(args: RenderArgs, pool: &rayon::ThreadPool) -> anyhow::Result<()> {
     let before = before_load(&args)?;
     // The library is needed before anything is loaded, rendered or written.
     let denoiser = match args.denoise {
@@ -35,7 +42,6 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         eprintln!("warning: {}: {w}", args.scene.display());
     }
 
-    let pool = crate::workers::worker_pool(args.threads)?;
     if let Some(frames) = args.frames {
         return crate::frames::run(
             &args,
@@ -44,7 +50,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             plan.format,
             &plan.opts,
             plan.quality,
-            &pool,
+            pool,
             denoiser.as_ref(),
         );
     }
