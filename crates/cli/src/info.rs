@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use crate::material_args::MaterialArgs;
 use aperture_accel::BvhQuality;
 use aperture_scene::{LightKind, LoadOptions, Projection, Scene};
 use serde_json::{json, Value};
@@ -153,19 +154,7 @@ fn node_bounds(s: &Scene) -> Vec<Value> {
         .collect()
 }
 
-/// Which meaning of transmission applies, why, and what it makes of the file's meshes.
-fn transmission_json(s: &Scene, mode: aperture_render::TransmissionMode) -> Value {
-    let (model, why) = mode.resolve(s);
-    let (refractive, thin) = aperture_render::transmissive_meshes(s, model);
-    json!({
-        "applies": model.to_string(),
-        "why": why,
-        "refractive_meshes": refractive,
-        "thin_walled_meshes": thin,
-    })
-}
-
-fn report(s: &Scene, mode: aperture_render::TransmissionMode) -> Value {
+fn report(s: &Scene, materials: &MaterialArgs) -> Value {
     let c = counts(s);
     let b = s.bounds();
     let bounds = if b.is_empty() {
@@ -201,7 +190,8 @@ fn report(s: &Scene, mode: aperture_render::TransmissionMode) -> Value {
         },
         "warnings": s.stats.warnings,
         "generator": s.stats.generator,
-        "transmission": transmission_json(s, mode),
+        "transmission": crate::info_materials::transmission_json(s, materials.transmission),
+        "single_sided": crate::info_materials::sides_json(s, materials.single_sided),
         "variants": s.stats.variants,
         "variant": s.stats.variant,
         "time": s.stats.time.map(f),
@@ -241,7 +231,7 @@ fn print_text(path: &std::path::Path, r: &Value) {
     println!("{}", path.display());
     print_counts(r);
     print_skipped_and_warnings(r);
-    print_materials(r);
+    crate::info_materials::print_materials(r);
     print_time(r);
     print_cameras(r);
 }
@@ -327,32 +317,6 @@ fn print_skipped_and_warnings(r: &Value) {
     }
 }
 
-/// Which transmission applies, and the material variants.
-fn print_materials(r: &Value) {
-    let tr = &r["transmission"];
-    println!(
-        "  transmission: {} ({}); {} refractive and {} thin-walled transmissive mesh(es)",
-        tr["applies"].as_str().unwrap_or_default(),
-        tr["why"].as_str().unwrap_or_default(),
-        count(&tr["refractive_meshes"]),
-        count(&tr["thin_walled_meshes"]),
-    );
-    let variants = r["variants"].as_array().cloned().unwrap_or_default();
-    if !variants.is_empty() {
-        println!(
-            "  material variants: {} (drawing {})",
-            variants
-                .iter()
-                .map(|v| v.to_string())
-                .collect::<Vec<_>>()
-                .join(", "),
-            r["variant"]
-                .as_str()
-                .map_or("the default materials".into(), |v| format!("{v:?}"))
-        );
-    }
-}
-
 /// The time the scene is posed at, and its animations.
 fn print_time(r: &Value) {
     match r["time"].as_f64() {
@@ -433,7 +397,7 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
     };
     let s = aperture_scene::load(&args.scene, &options)
         .map_err(|e| anyhow::anyhow!(e).context(format!("loading {}", args.scene.display())))?;
-    let r = report(&s, args.materials.transmission);
+    let r = report(&s, &args.materials);
     if args.json {
         println!("{}", serde_json::to_string_pretty(&r)?);
     } else {
@@ -510,7 +474,7 @@ mod tests {
 
     #[test]
     fn json_report_has_the_documented_keys_and_counts() {
-        let r = report(&scene(), Default::default());
+        let r = report(&scene(), &Default::default());
         assert_eq!(r["triangles"]["unique"], 2);
         assert_eq!(r["triangles"]["drawn"], 4);
         assert_eq!(r["triangles"]["emissive_drawn"], 2);
@@ -545,7 +509,7 @@ mod tests {
             ("KHR_xmp".into(), ExtensionStatus::Ignored),
         ];
         s.stats.hidden_nodes = 3;
-        let r = report(&s, Default::default());
+        let r = report(&s, &Default::default());
         assert_eq!(r["extensions"][0]["name"], "KHR_node_visibility");
         assert_eq!(r["extensions"][0]["status"], "supported");
         assert!(r["extensions"][0].get("why").is_none());
@@ -561,20 +525,20 @@ mod tests {
     fn recentred_scenes_report_file_coordinates() {
         let mut s = scene();
         s.world_origin = glam::DVec3::new(1e6, -2e6, 0.5);
-        let r = report(&s, Default::default());
+        let r = report(&s, &Default::default());
         assert_eq!(r["world_origin"], json!([1e6, -2e6, 0.5]));
         assert_eq!(r["bounds"]["min"], json!([1e6, -2e6, 0.5]));
         assert_eq!(r["bounds"]["max"], json!([1e6 + 3.0, -2e6 + 1.0, 1.5]));
         assert_eq!(r["cameras"][0]["position"], json!([1e6, -2e6, 0.5]));
         assert_eq!(
-            report(&scene(), Default::default())["world_origin"],
+            report(&scene(), &Default::default())["world_origin"],
             json!([0.0, 0.0, 0.0])
         );
     }
 
     #[test]
     fn empty_scene_has_null_bounds() {
-        let r = report(&Scene::default(), Default::default());
+        let r = report(&Scene::default(), &Default::default());
         assert_eq!(r["bounds"]["min"], Value::Null);
         assert_eq!(r["triangles"]["drawn"], 0);
     }

@@ -11,6 +11,7 @@ mod frames;
 #[cfg(test)]
 mod frames_tests;
 mod info;
+mod info_materials;
 mod interrupt;
 mod load_warnings;
 mod material_args;

@@ -308,6 +308,7 @@ fn render_options(args: &RenderArgs) -> RenderOptions {
         clamp: args.tracing.clamp(),
         filter: args.tracing.filter.into(),
         transmission: args.materials.transmission,
+        single_sided: args.materials.single_sided,
         energy_compensation: !args.materials.no_energy_compensation,
         sampler: match args.sampler {
             SamplerArg::Sobol => SamplerKind::Sobol,

@@ -41,25 +41,31 @@ pub enum TransmissionModel {
 /// ("Khronos glTF Blender I/O vX.Y.Z").
 const BLENDER_EXPORTER: &str = "glTF Blender I/O";
 
+/// Whether `generator` (`asset.generator`) is Blender's glTF exporter, and why in words: what
+/// the `auto` choices (`--transmission`, `--single-sided`) decide by.
+pub fn blender_export(generator: Option<&str>) -> (bool, String) {
+    match generator {
+        Some(g) if g.contains(BLENDER_EXPORTER) => (
+            true,
+            format!("asset.generator \"{g}\" is Blender's glTF exporter"),
+        ),
+        Some(g) => (
+            false,
+            format!("asset.generator \"{g}\" is not Blender's glTF exporter"),
+        ),
+        None => (false, "the file names no asset.generator".into()),
+    }
+}
+
 impl TransmissionMode {
     /// The model that applies to a file written by `generator`, and why.
     pub fn resolve_for(self, generator: Option<&str>) -> (TransmissionModel, String) {
         match self {
             Self::Gltf => (TransmissionModel::Gltf, "--transmission gltf".into()),
             Self::Blender => (TransmissionModel::Blender, "--transmission blender".into()),
-            Self::Auto => match generator {
-                Some(g) if g.contains(BLENDER_EXPORTER) => (
-                    TransmissionModel::Blender,
-                    format!("asset.generator \"{g}\" is Blender's glTF exporter"),
-                ),
-                Some(g) => (
-                    TransmissionModel::Gltf,
-                    format!("asset.generator \"{g}\" is not Blender's glTF exporter"),
-                ),
-                None => (
-                    TransmissionModel::Gltf,
-                    "the file names no asset.generator".into(),
-                ),
+            Self::Auto => match blender_export(generator) {
+                (true, why) => (TransmissionModel::Blender, why),
+                (false, why) => (TransmissionModel::Gltf, why),
             },
         }
     }
