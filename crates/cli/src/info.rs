@@ -37,24 +37,25 @@ struct Counts {
 
 fn counts(s: &Scene) -> Counts {
     let kind = |f: fn(&LightKind) -> bool| s.lights.iter().filter(|l| f(&l.kind)).count();
-    let emissive_per_mesh: Vec<usize> = s
-        .meshes
-        .iter()
-        .map(|m| {
-            m.material_ids
-                .iter()
-                .filter(|&&id| {
-                    s.materials
-                        .get(id as usize)
-                        .is_some_and(|m| m.is_emissive())
-                })
-                .count()
-        })
-        .collect();
+    let emissive = |ids: &[u32]| {
+        ids.iter()
+            .filter(|&&id| {
+                s.materials
+                    .get(id as usize)
+                    .is_some_and(|m| m.is_emissive())
+            })
+            .count()
+    };
+    // Per mesh with its own materials, and per material set (each counted once).
+    let per_mesh: Vec<usize> = s.meshes.iter().map(|m| emissive(&m.material_ids)).collect();
+    let per_set: Vec<usize> = s.material_sets.iter().map(|m| emissive(m)).collect();
     let emissive_drawn = s
         .instances
         .iter()
-        .map(|i| emissive_per_mesh.get(i.mesh as usize).copied().unwrap_or(0))
+        .map(|i| match i.materials {
+            0 => per_mesh.get(i.mesh as usize).copied().unwrap_or(0),
+            k => per_set.get(k as usize - 1).copied().unwrap_or(0),
+        })
         .sum();
     // Degenerate triangles are what the BVH builder leaves out, so ask it.
     let degenerate = aperture_render::build_accel(s, BvhQuality::Fast)
@@ -439,11 +440,13 @@ mod tests {
                     mesh: 0,
                     world_from_object: Affine3A::IDENTITY,
                     node: 0,
+                    materials: 0,
                 },
                 Instance {
                     mesh: 0,
                     world_from_object: Affine3A::from_translation(Vec3::new(2.0, 0.0, 0.0)),
                     node: 1,
+                    materials: 0,
                 },
             ],
             materials: vec![Material::default(), glow],

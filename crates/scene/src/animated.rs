@@ -16,7 +16,6 @@ use serde_json::Value;
 
 use glam::{DAffine3, DQuat, DVec3, Vec3};
 
-use crate::accessor::Buffers;
 use crate::animation::{self, AnimationInfo, Animations, NodeProperty, Target};
 use crate::buffers::load_buffers;
 use crate::camera::{self, CameraData};
@@ -27,8 +26,8 @@ use crate::origin::recentre;
 use crate::pointer::Pointer;
 use crate::skin::Skin;
 use crate::{
-    glb, mesh, morph, prepass, skin, Error, LightKind, LoadOptions, Material, Mesh, Scene,
-    SceneStats, Texture,
+    glb, morph, prepass, skin, Error, LightKind, LoadOptions, Material, Mesh, Scene, SceneStats,
+    Texture,
 };
 
 /// Watts per lumen at 555 nm: Blender's importer divides candela and lux by it (SPEC §4).
@@ -77,6 +76,13 @@ pub struct Animated {
     /// Drawn nodes, depth first from the selected scene's roots.
     order: Vec<usize>,
     meshes: HashMap<usize, LoadedMesh>,
+    /// glTF meshes drawing another's geometry (`crate::shared`): that mesh, and their
+    /// per-triangle materials when not its own.
+    aliases: HashMap<usize, (usize, Option<Vec<u32>>)>,
+    /// `Scene::material_sets`, the same at every pose.
+    material_sets: Vec<Vec<u32>>,
+    /// By node: its instances' `Instance::materials` when not 0.
+    node_materials: HashMap<usize, u32>,
     skins: Vec<Skin>,
     cameras: Vec<CameraData>,
     lights: Vec<LightData>,
@@ -209,7 +215,15 @@ impl Animated {
             .copied()
             .filter(|&i| !graph.hidden[i])
             .collect();
-        let mut meshes = read_meshes(&doc, &shown, &buffers, &mut stats, variant, &mut materials)?;
+        let read = crate::shared::read_meshes(
+            &doc,
+            &shown,
+            &buffers,
+            &mut stats,
+            variant,
+            &mut materials,
+        )?;
+        let (mut meshes, aliases) = (read.meshes, read.aliases);
         let material_index = materials.gltf_indices();
         generate_tangents(&mut meshes, &materials.materials);
         let material_list = std::mem::take(&mut materials.materials);
@@ -230,6 +244,9 @@ impl Animated {
             graph,
             order,
             meshes,
+            aliases,
+            material_sets: Vec::new(),
+            node_materials: HashMap::new(),
             skins,
             cameras,
             lights,
@@ -311,8 +328,10 @@ impl Animated {
         let rest = self.pose(None);
         let mut cache: HashMap<StaticKey, (u32, DVec3, bool)> = HashMap::new();
         for &ni in &self.order.clone() {
+            let Some(mi) = self.graph.nodes[ni].mesh.map(|m| self.geometry_of(ni, m)) else {
+                continue;
+            };
             let node = &self.graph.nodes[ni];
-            let Some(mi) = node.mesh else { continue };
             let Some(lm) = self.meshes.get(&mi) else {
                 continue;
             };
@@ -363,6 +382,25 @@ impl Animated {
             );
         }
         Ok(())
+    }
+
+    /// The glTF mesh whose geometry node `ni` draws for its mesh `mi` (`mi` unless it shares
+    /// another's accessors), noting the node's materials when they are not that mesh's.
+    fn geometry_of(&mut self, ni: usize, mi: usize) -> usize {
+        let Some((canon, set)) = self.aliases.get(&mi) else {
+            return mi;
+        };
+        if let Some(list) = set {
+            let k = match self.material_sets.iter().position(|s| s == list) {
+                Some(k) => k,
+                None => {
+                    self.material_sets.push(list.clone());
+                    self.material_sets.len() - 1
+                }
+            };
+            self.node_materials.insert(ni, k as u32 + 1);
+        }
+        *canon
     }
 
     /// Node transforms and weights at `time` (`None`: stored).
@@ -539,32 +577,6 @@ fn pointer_warnings(ignored: &[String], out: &mut Vec<String>) {
                 .into(),
         );
     }
-}
-
-/// Every mesh the nodes in `order` use, read once each (by glTF mesh index), its materials gathered
-/// into `materials`.
-fn read_meshes(
-    doc: &gltf::Document,
-    order: &[usize],
-    buffers: &Buffers,
-    stats: &mut SceneStats,
-    variant: Option<usize>,
-    materials: &mut Materials,
-) -> Result<HashMap<usize, LoadedMesh>, Error> {
-    let mut meshes = HashMap::new();
-    for &ni in order {
-        let Some(m) = doc.nodes().nth(ni).and_then(|n| n.mesh()) else {
-            continue;
-        };
-        if meshes.contains_key(&m.index()) {
-            continue;
-        }
-        let loaded = mesh::load_mesh(doc, &m, buffers, stats, variant, &mut |mi| {
-            materials.get(doc, mi)
-        })?;
-        meshes.insert(m.index(), loaded);
-    }
-    Ok(meshes)
 }
 
 /// MikkTSpace tangents for normal-mapped meshes, on the rest shape (deformed with it).

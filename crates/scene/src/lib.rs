@@ -56,6 +56,7 @@ mod origin;
 mod pbr;
 mod pointer;
 mod prepass;
+mod shared;
 mod skin;
 mod tangents;
 mod texels;

@@ -13,6 +13,7 @@
 //!     mesh: 1,
 //!     world_from_object: glam::Affine3A::IDENTITY,
 //!     node: 1,
+//!     materials: 0,
 //! });
 //! let geom = Geometry::with_transmission(&scene, MaterialOverride::None, TransmissionModel::Gltf);
 //! assert!(EmissiveLights::build(&geom).is_some());

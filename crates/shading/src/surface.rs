@@ -213,16 +213,15 @@ impl<'a> Geometry<'a> {
             .enumerate()
             .map(|(i, m)| material_info(i as u32, m, material_override, model))
             .collect();
+        let needs = scene.meshes_with_material(|id| {
+            info.get(id as usize)
+                .is_some_and(|i| i.transmits == Transmits::IfClosed)
+        });
         let closed: Vec<bool> = scene
             .meshes
             .iter()
-            .map(|mesh| {
-                let needs = mesh.material_ids.iter().any(|&id| {
-                    info.get(id as usize)
-                        .is_some_and(|i| i.transmits == Transmits::IfClosed)
-                });
-                needs && mesh.is_closed()
-            })
+            .zip(needs)
+            .map(|(mesh, needs)| needs && mesh.is_closed())
             .collect();
         let has_refractive = info
             .iter()
@@ -370,8 +369,9 @@ impl<'a> Geometry<'a> {
                 Vec3::new(b0, b1, b2),
             ),
             color,
-            material: mesh
-                .material_ids
+            material: self
+                .scene
+                .instance_materials(inst)
                 .get(triangle as usize)
                 .copied()
                 .unwrap_or(0),

@@ -188,6 +188,7 @@ pub fn scene(meshes: Vec<(Mesh, Affine3A)>, materials: Vec<Material>, camera: Ca
             mesh: i as u32,
             world_from_object: xf,
             node: i as u32,
+            materials: 0,
         });
     }
     s

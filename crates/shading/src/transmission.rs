@@ -81,18 +81,18 @@ impl TransmissionMode {
 /// of its transmissive materials refracts there).
 pub fn transmissive_meshes(scene: &Scene, model: TransmissionModel) -> (usize, usize) {
     let (mut refractive, mut thin) = (0, 0);
-    for mesh in &scene.meshes {
-        let materials = || {
-            mesh.material_ids
-                .iter()
-                .filter_map(|&id| scene.materials.get(id as usize))
-                .filter(|m| m.is_transmissive() && !m.unlit)
-        };
-        if materials().next().is_none() {
+    let material = |id: u32| scene.materials.get(id as usize);
+    let transmissive = |id: u32| material(id).is_some_and(|m| m.is_transmissive() && !m.unlit);
+    let has = scene.meshes_with_material(transmissive);
+    let volume = scene.meshes_with_material(|id| {
+        transmissive(id) && material(id).is_some_and(|m| m.volume.is_some_and(|v| v.is_volume()))
+    });
+    for (k, mesh) in scene.meshes.iter().enumerate() {
+        if !has[k] {
             continue;
         }
         let refracts = match model {
-            TransmissionModel::Gltf => materials().any(|m| m.volume.is_some_and(|v| v.is_volume())),
+            TransmissionModel::Gltf => volume[k],
             TransmissionModel::Blender => mesh.is_closed(),
         };
         if refracts {
