@@ -199,7 +199,8 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
     pub sampler: SamplerArg,
     /// Environment: uniform radiance as linear R,G,B, or an equirectangular .hdr or .exr image
-    /// (importance-sampled by luminance) [default: black].
+    /// (importance-sampled by luminance) [default: the file's EXT_lights_image_based light,
+    /// else black].
     #[arg(long, value_parser = parse_env, allow_hyphen_values = true)]
     pub env: Option<EnvArg>,
     /// Rotation of the environment image about the up axis (+Y), degrees, counter-clockwise

@@ -89,7 +89,7 @@ pub(crate) fn after_load(
         width,
         height,
         passes: before.passes,
-        env: environment(args, before.budget.limit)?,
+        env: environment(args, scene, before.budget.limit)?,
         cancel: crate::interrupt::install()?,
         ..render_options(args)
     };
@@ -322,10 +322,25 @@ fn render_options(args: &RenderArgs) -> RenderOptions {
     }
 }
 
-/// `--env`, `--env-rotation`, `--env-strength`; an image is held to `max_bytes`.
-fn environment(args: &RenderArgs, max_bytes: u64) -> anyhow::Result<Environment> {
+/// `--env`, `--env-rotation`, `--env-strength`; an image is held to `max_bytes`. Without
+/// `--env`, the file's own (`EXT_lights_image_based`), else black.
+fn environment(
+    args: &RenderArgs,
+    scene: &aperture_scene::Scene,
+    max_bytes: u64,
+) -> anyhow::Result<Environment> {
     Ok(match &args.env {
-        None => Environment::Constant(Vec3::ZERO),
+        None => match &scene.environment {
+            Some(e) => Environment::Image(std::sync::Arc::new(EnvImage {
+                width: e.width,
+                height: e.height,
+                texels: e.texels.clone(),
+                rotation: args.env_rotation.to_radians(),
+                strength: e.intensity * args.env_strength,
+                sampling: EnvSampling::Importance,
+            })),
+            None => Environment::Constant(Vec3::ZERO),
+        },
         Some(EnvArg::Color(c)) => Environment::Constant(*c * args.env_strength),
         Some(EnvArg::File(path)) => {
             let (width, height, texels) = load_env_image(path, max_bytes)

@@ -83,6 +83,8 @@ pub struct Animated {
     material_sets: Vec<Vec<u32>>,
     /// By node: its instances' `Instance::materials` when not 0.
     node_materials: HashMap<usize, u32>,
+    /// `EXT_lights_image_based`, the same at every pose.
+    environment: Option<std::sync::Arc<crate::ImageEnvironment>>,
     skins: Vec<Skin>,
     cameras: Vec<CameraData>,
     lights: Vec<LightData>,
@@ -235,6 +237,15 @@ impl Animated {
             options.skip_textures,
             &options.memory,
         )?;
+        let selected = options
+            .scene
+            .or_else(|| doc.default_scene().map(|s| s.index()))
+            .or((doc.scenes().len() > 0).then_some(0));
+        let environment = match options.skip_textures {
+            true => None,
+            false => crate::ibl::read(&doc, &root, selected, &buffers, base_dir, &options.memory)?
+                .map(std::sync::Arc::new),
+        };
         let skins = skin::read_skins(&doc, &buffers)?;
         let cameras = camera::read_cameras(&doc)?;
         let lights = read_lights(&doc)?;
@@ -247,6 +258,7 @@ impl Animated {
             aliases,
             material_sets: Vec::new(),
             node_materials: HashMap::new(),
+            environment,
             skins,
             cameras,
             lights,

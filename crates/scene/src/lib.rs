@@ -45,6 +45,7 @@ mod draco;
 mod error;
 mod glb;
 mod hash;
+mod ibl;
 mod load;
 mod material;
 mod material_ext;

@@ -40,6 +40,9 @@ pub struct Scene {
     /// The glTF nodes' names, by node index (`Instance::node` indexes it); empty for scenes
     /// built by hand. Compositors identify objects by them (Cryptomatte).
     pub node_names: Vec<Option<String>>,
+    /// The selected scene's `EXT_lights_image_based` light: what rays leaving the scene see
+    /// unless the command line gives an environment.
+    pub environment: Option<std::sync::Arc<ImageEnvironment>>,
     /// A hash of the file's bytes (the `.gltf` or `.glb` read, not its external resources),
     /// so parts of a render split across machines can be checked to come from the same
     /// scene; 0 for scenes built by hand.
@@ -75,6 +78,21 @@ pub struct Mesh {
     pub indices: Vec<[u32; 3]>,
     /// Material of each triangle (index into `Scene::materials`), as long as `indices`.
     pub material_ids: Vec<u32>,
+}
+
+/// An environment from the file (`EXT_lights_image_based`): an equirectangular image in the
+/// renderer's mapping (centre along +X, u towards +Z, top row straight up), already turned by
+/// the light's rotation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImageEnvironment {
+    /// Width in texels (2 × height).
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Linear radiance, rows top to bottom.
+    pub texels: Vec<Vec3>,
+    /// The light's `intensity`, a multiplier on every texel.
+    pub intensity: f32,
 }
 
 /// One placement of a mesh in the world.

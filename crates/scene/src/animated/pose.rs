@@ -63,6 +63,7 @@ impl Animated {
                 .unwrap_or(0);
         }
         out.material_sets = self.material_sets.clone();
+        out.environment = self.environment.clone();
         place_lights(&mut out.lights, &light_positions, origin)?;
         // Every node's origin (a focus object may be any node); whole transforms only for the
         // camera nodes that need them (48 bytes a node less for large scenes).
