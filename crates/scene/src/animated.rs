@@ -189,16 +189,8 @@ impl Animated {
         };
         let prepared = prepass::prepare(json)?;
         let (doc, root) = (prepared.document, prepared.root);
-        let mut stats = SceneStats {
-            skipped_features: prepared.skipped,
-            warnings: ignored_extension_warnings(&prepass::ignored(&prepared.extensions)),
-            extensions: prepared.extensions,
-            ..SceneStats::default()
-        };
-        stats.generator = doc.as_json().asset.generator.clone();
-        stats.variants = variant_names(&root);
-        let variant = resolve_variant(&stats.variants, options.variant.as_deref())?;
-        stats.variant = variant.map(|v| stats.variants[v].clone());
+        let (mut stats, variant) =
+            first_stats(prepared.skipped, prepared.extensions, &doc, &root, options)?;
         let mut buffers = load_buffers(&doc, &root, bin, base_dir, &options.memory)?;
         crate::meshopt::decode_views(&root, &mut buffers)?;
         let graph = node_graph(&doc, &buffers)?;
@@ -211,23 +203,17 @@ impl Animated {
         stats.animations = animations.info.clone();
 
         let mut materials = Materials::default();
-        // Hidden nodes' meshes are not even read (KHR_node_visibility).
-        let shown: Vec<usize> = order
-            .iter()
-            .copied()
-            .filter(|&i| !graph.hidden[i])
-            .collect();
-        let read = crate::shared::read_meshes(
+        let read = crate::shared::read_shown(
             &doc,
-            &shown,
+            &order,
+            &graph.hidden,
             &buffers,
             &mut stats,
             variant,
             &mut materials,
         )?;
-        let (mut meshes, aliases) = (read.meshes, read.aliases);
+        let (meshes, aliases) = (read.meshes, read.aliases);
         let material_index = materials.gltf_indices();
-        generate_tangents(&mut meshes, &materials.materials);
         let material_list = std::mem::take(&mut materials.materials);
         stats.warnings.append(&mut materials.warnings);
         let textures = materials.textures(
@@ -237,15 +223,7 @@ impl Animated {
             options.skip_textures,
             &options.memory,
         )?;
-        let selected = options
-            .scene
-            .or_else(|| doc.default_scene().map(|s| s.index()))
-            .or((doc.scenes().len() > 0).then_some(0));
-        let environment = match options.skip_textures {
-            true => None,
-            false => crate::ibl::read(&doc, &root, selected, &buffers, base_dir, &options.memory)?
-                .map(std::sync::Arc::new),
-        };
+        let environment = crate::ibl::scene_environment(&doc, &root, options, &buffers, base_dir)?;
         let skins = skin::read_skins(&doc, &buffers)?;
         let cameras = camera::read_cameras(&doc)?;
         let lights = read_lights(&doc)?;
@@ -503,6 +481,28 @@ impl Animated {
     }
 }
 
+/// What the load knows before reading any buffer: skipped features, extensions and the
+/// warnings for those ignored, the generator, the variants and the one chosen.
+fn first_stats(
+    skipped: Vec<String>,
+    extensions: Vec<(String, crate::ExtensionStatus)>,
+    doc: &gltf::Document,
+    root: &Value,
+    options: &LoadOptions,
+) -> Result<(SceneStats, Option<usize>), Error> {
+    let mut stats = SceneStats {
+        skipped_features: skipped,
+        warnings: ignored_extension_warnings(&prepass::ignored(&extensions)),
+        extensions,
+        ..SceneStats::default()
+    };
+    stats.generator = doc.as_json().asset.generator.clone();
+    stats.variants = variant_names(root);
+    let variant = resolve_variant(&stats.variants, options.variant.as_deref())?;
+    stats.variant = variant.map(|v| stats.variants[v].clone());
+    Ok((stats, variant))
+}
+
 /// The drawn nodes of the selected scene, depth first.
 fn drawn_order(
     doc: &gltf::Document,
@@ -588,25 +588,5 @@ fn pointer_warnings(ignored: &[String], out: &mut Vec<String>) {
              stored visibility at every time"
                 .into(),
         );
-    }
-}
-
-/// MikkTSpace tangents for normal-mapped meshes, on the rest shape (deformed with it).
-fn generate_tangents(meshes: &mut HashMap<usize, LoadedMesh>, materials: &[Material]) {
-    let mut keys: Vec<usize> = meshes.keys().copied().collect();
-    keys.sort_unstable();
-    let mut tmp = Scene {
-        meshes: keys
-            .iter()
-            .filter_map(|k| meshes.get_mut(k).map(|m| std::mem::take(&mut m.mesh)))
-            .collect(),
-        materials: materials.to_vec(),
-        ..Scene::default()
-    };
-    crate::tangents::generate_missing_tangents(&mut tmp);
-    for (k, m) in keys.iter().zip(tmp.meshes) {
-        if let Some(l) = meshes.get_mut(k) {
-            l.mesh = m;
-        }
     }
 }

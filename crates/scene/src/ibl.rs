@@ -17,8 +17,28 @@ use serde_json::Value;
 use crate::accessor::Buffers;
 use crate::{Error, ImageEnvironment, Texels};
 
+/// The image-based light of the scene `options` select (the file's default scene, else the
+/// first), shared between poses; none when textures are skipped (`info`).
+pub(crate) fn scene_environment(
+    doc: &gltf::Document,
+    root: &Value,
+    options: &crate::LoadOptions,
+    buffers: &Buffers,
+    base_dir: &Path,
+) -> Result<Option<std::sync::Arc<ImageEnvironment>>, Error> {
+    if options.skip_textures {
+        return Ok(None);
+    }
+    let selected = options
+        .scene
+        .or_else(|| doc.default_scene().map(|s| s.index()))
+        .or((doc.scenes().len() > 0).then_some(0));
+    let env = read(doc, root, selected, buffers, base_dir, &options.memory)?;
+    Ok(env.map(std::sync::Arc::new))
+}
+
 /// The image-based light the selected scene (`scene`, a `scenes` index) names, if any.
-pub(crate) fn read(
+fn read(
     doc: &gltf::Document,
     root: &Value,
     scene: Option<usize>,

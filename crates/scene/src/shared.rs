@@ -8,7 +8,7 @@ use std::collections::HashMap;
 use crate::accessor::Buffers;
 use crate::material::Materials;
 use crate::mesh::{self, LoadedMesh};
-use crate::{Error, SceneStats};
+use crate::{Error, Material, Scene, SceneStats};
 use gltf::mesh::Mode;
 
 /// What a primitive's geometry is read from: its mode, indices accessor and attribute
@@ -54,10 +54,27 @@ fn geometry_key(mesh: &gltf::Mesh<'_>) -> Option<Vec<PrimitiveKey>> {
         .collect()
 }
 
+/// [`read_meshes`] for the nodes of `order` that are shown (hidden nodes' meshes are not even
+/// read, `KHR_node_visibility`), with tangents generated where normal maps need them.
+pub(crate) fn read_shown(
+    doc: &gltf::Document,
+    order: &[usize],
+    hidden: &[bool],
+    buffers: &Buffers,
+    stats: &mut SceneStats,
+    variant: Option<usize>,
+    materials: &mut Materials,
+) -> Result<ReadMeshes, Error> {
+    let shown: Vec<usize> = order.iter().copied().filter(|&i| !hidden[i]).collect();
+    let mut read = read_meshes(doc, &shown, buffers, stats, variant, materials)?;
+    generate_tangents(&mut read.meshes, &materials.materials);
+    Ok(read)
+}
+
 /// Every mesh the nodes in `order` use, read once each (by glTF mesh index), its materials
 /// gathered into `materials`; a mesh with the geometry key of one read before is an alias of
 /// it (when its materials need the same tangents).
-pub(crate) fn read_meshes(
+fn read_meshes(
     doc: &gltf::Document,
     order: &[usize],
     buffers: &Buffers,
@@ -143,4 +160,24 @@ fn alias_materials(
         .flat_map(|(&(_, n), &o)| std::iter::repeat_n(o, n))
         .collect();
     Some(Some(list))
+}
+
+/// MikkTSpace tangents for normal-mapped meshes, on the rest shape (deformed with it).
+fn generate_tangents(meshes: &mut HashMap<usize, LoadedMesh>, materials: &[Material]) {
+    let mut keys: Vec<usize> = meshes.keys().copied().collect();
+    keys.sort_unstable();
+    let mut tmp = Scene {
+        meshes: keys
+            .iter()
+            .filter_map(|k| meshes.get_mut(k).map(|m| std::mem::take(&mut m.mesh)))
+            .collect(),
+        materials: materials.to_vec(),
+        ..Scene::default()
+    };
+    crate::tangents::generate_missing_tangents(&mut tmp);
+    for (k, m) in keys.iter().zip(tmp.meshes) {
+        if let Some(l) = meshes.get_mut(k) {
+            l.mesh = m;
+        }
+    }
 }

@@ -10,8 +10,10 @@
 //! - `auto` (the command line's default): `blender` when `asset.generator` names Blender's
 //!   glTF exporter, else `gltf`.
 
+use crate::surface::{Geometry, Surface};
 use crate::transmission::blender_export;
 use aperture_scene::Scene;
+use glam::Vec3;
 use std::fmt;
 use std::str::FromStr;
 
@@ -53,6 +55,23 @@ impl SidesMode {
     /// [`SidesMode::resolve_for`] the scene's file.
     pub fn resolve(self, scene: &Scene) -> (SidesModel, String) {
         self.resolve_for(scene.stats.generator.as_deref())
+    }
+}
+
+impl Geometry<'_> {
+    /// The same, with the backs of single-sided faces invisible under `model`
+    /// ([`SidesModel::Both`], the default, sees both sides).
+    pub fn with_sides(mut self, model: SidesModel) -> Self {
+        self.has_culled =
+            model == SidesModel::Gltf && self.scene.materials.iter().any(|m| !m.double_sided);
+        self
+    }
+
+    /// True when a ray along `dir` meets the back of a single-sided face at `s` and so does
+    /// not see it (glTF's back-face culling; never under [`SidesModel::Both`]).
+    #[inline]
+    pub fn is_culled(&self, s: &Surface, dir: Vec3) -> bool {
+        self.has_culled && s.ng.dot(dir) > 0.0 && !self.material(s.material).double_sided
     }
 }
 

@@ -9,7 +9,6 @@
 
 use crate::bsdf::{bend_towards, Bsdf, Dielectric, Frame};
 use crate::media::Medium;
-use crate::sides::SidesModel;
 use crate::texture;
 use crate::transmission::TransmissionModel;
 use aperture_scene::{AlphaMode, Material, Scene, TextureRef};
@@ -149,8 +148,9 @@ pub struct Geometry<'a> {
     pub has_refractive: bool,
     /// True when some surface may be thin-walled transmissive (shadow rays may pass it).
     pub has_thin: bool,
-    /// True when the backs of single-sided faces are invisible ([`SidesModel::Gltf`]) and some
-    /// material is single-sided: then rays may pass through surfaces seen from behind.
+    /// True when the backs of single-sided faces are invisible (`SidesModel::Gltf`, set by
+    /// `Geometry::with_sides`) and some material is single-sided: then rays may pass through
+    /// surfaces seen from behind.
     pub has_culled: bool,
     /// True when the meshes' vertex data is large enough for a hit's reads to miss the
     /// caches, so that asking for them ahead (`crate::hit_prefetch`) pays for itself.
@@ -244,21 +244,6 @@ impl<'a> Geometry<'a> {
             has_culled: false,
             prefetch_hits: prefetch_worth_it(scene),
         }
-    }
-
-    /// The same, with the backs of single-sided faces invisible under `model`
-    /// ([`SidesModel::Both`], the default, sees both sides).
-    pub fn with_sides(mut self, model: SidesModel) -> Self {
-        self.has_culled =
-            model == SidesModel::Gltf && self.scene.materials.iter().any(|m| !m.double_sided);
-        self
-    }
-
-    /// True when a ray along `dir` meets the back of a single-sided face at `s` and so does
-    /// not see it (glTF's back-face culling; never under [`SidesModel::Both`]).
-    #[inline]
-    pub fn is_culled(&self, s: &Surface, dir: Vec3) -> bool {
-        self.has_culled && s.ng.dot(dir) > 0.0 && !self.material(s.material).double_sided
     }
 
     /// What the hit shader knows of material `id`.
