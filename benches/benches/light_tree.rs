@@ -25,6 +25,7 @@ fn build(c: &mut Criterion) {
             mesh: 1,
             world_from_object: Affine3A::from_translation(at),
             node: 1,
+            materials: 0,
         });
     }
     let geom = Geometry::with_transmission(&scene, MaterialOverride::None, TransmissionModel::Gltf);

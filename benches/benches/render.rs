@@ -28,6 +28,7 @@ fn scene(lens_radius: f32) -> Scene {
             Vec3::new(0.5, 0.3, 1.0),
         ),
         node: 1,
+        materials: 0,
     });
     s
 }

@@ -27,6 +27,7 @@ fn scene() -> Scene {
             Vec3::new(0.0, 6.0, 6.0) + 2.0 * axis,
         ),
         node: 1,
+        materials: 0,
     });
     s
 }

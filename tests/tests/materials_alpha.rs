@@ -16,6 +16,7 @@ fn shadow_scene(alpha_mode: AlphaMode, left: u8, right: u8) -> Scene {
     let camera = Camera {
         name: "down".into(),
         node: None,
+        index: None,
         // Looking down −Y: the camera's −Z is world −Y, its +Y (image up) world −Z.
         world_from_camera: Affine3A::from_translation(Vec3::new(-1.0, 5.0, 0.0))
             * Affine3A::from_rotation_x(-std::f32::consts::FRAC_PI_2),

@@ -73,6 +73,7 @@ fn front_camera() -> Camera {
     Camera {
         name: "ortho".into(),
         node: None,
+        index: None,
         world_from_camera: Affine3A::from_translation(Vec3::new(0.0, 0.0, 5.0)),
         projection: Projection::Orthographic {
             xmag: 0.5,

@@ -29,6 +29,7 @@ fn quad(material: Material, textures: Vec<Texture>) -> Scene {
     let cam = Camera {
         name: "ortho".into(),
         node: None,
+        index: None,
         world_from_camera: Affine3A::from_translation(Vec3::new(0.0, 0.0, 5.0)),
         projection: Projection::Orthographic {
             xmag: 0.4,

@@ -35,6 +35,7 @@ fn ortho(z: f32, half: f32) -> Camera {
     Camera {
         name: "ortho".into(),
         node: None,
+        index: None,
         world_from_camera: Affine3A::from_translation(Vec3::new(0.0, 0.0, z)),
         projection: Projection::Orthographic {
             xmag: half,

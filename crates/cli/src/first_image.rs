@@ -26,13 +26,11 @@ pub(crate) fn scene_warnings(scene: &Scene, env: &Environment) -> Vec<String> {
         ));
     }
     let emissive = scene.instances.iter().any(|i| {
-        scene.meshes.get(i.mesh as usize).is_some_and(|m| {
-            m.material_ids.iter().any(|&id| {
-                scene
-                    .materials
-                    .get(id as usize)
-                    .is_some_and(|mat| mat.is_emissive())
-            })
+        scene.instance_materials(i).iter().any(|&id| {
+            scene
+                .materials
+                .get(id as usize)
+                .is_some_and(|mat| mat.is_emissive())
         })
     });
     if drawn && scene.lights.is_empty() && !emissive && env_black {

@@ -2,8 +2,9 @@
 
 use std::path::PathBuf;
 
+use crate::material_args::MaterialArgs;
 use aperture_accel::BvhQuality;
-use aperture_scene::{Camera, LightKind, LoadOptions, Projection, Scene};
+use aperture_scene::{LightKind, LoadOptions, Projection, Scene};
 use serde_json::{json, Value};
 
 /// Arguments of `aperture info`.
@@ -39,24 +40,25 @@ struct Counts {
 
 fn counts(s: &Scene) -> Counts {
     let kind = |f: fn(&LightKind) -> bool| s.lights.iter().filter(|l| f(&l.kind)).count();
-    let emissive_per_mesh: Vec<usize> = s
-        .meshes
-        .iter()
-        .map(|m| {
-            m.material_ids
-                .iter()
-                .filter(|&&id| {
-                    s.materials
-                        .get(id as usize)
-                        .is_some_and(|m| m.is_emissive())
-                })
-                .count()
-        })
-        .collect();
+    let emissive = |ids: &[u32]| {
+        ids.iter()
+            .filter(|&&id| {
+                s.materials
+                    .get(id as usize)
+                    .is_some_and(|m| m.is_emissive())
+            })
+            .count()
+    };
+    // Per mesh with its own materials, and per material set (each counted once).
+    let per_mesh: Vec<usize> = s.meshes.iter().map(|m| emissive(&m.material_ids)).collect();
+    let per_set: Vec<usize> = s.material_sets.iter().map(|m| emissive(m)).collect();
     let emissive_drawn = s
         .instances
         .iter()
-        .map(|i| emissive_per_mesh.get(i.mesh as usize).copied().unwrap_or(0))
+        .map(|i| match i.materials {
+            0 => per_mesh.get(i.mesh as usize).copied().unwrap_or(0),
+            k => per_set.get(k as usize - 1).copied().unwrap_or(0),
+        })
         .sum();
     // Degenerate triangles are what the BVH builder leaves out, so ask it.
     let degenerate = aperture_render::build_accel(s, BvhQuality::Fast)
@@ -90,7 +92,8 @@ fn file_point(origin: glam::DVec3, p: glam::Vec3) -> Value {
     json!([q.x, q.y, q.z])
 }
 
-fn camera_json(c: &Camera, origin: glam::DVec3) -> Value {
+fn camera_json(s: &Scene, i: usize) -> Value {
+    let (c, origin) = (&s.cameras[i], s.world_origin);
     let (projection, yfov, aspect, xmag, ymag) = match c.projection {
         Projection::Perspective { yfov, aspect_ratio } => {
             ("perspective", Some(yfov), aspect_ratio, None, None)
@@ -103,6 +106,8 @@ fn camera_json(c: &Camera, origin: glam::DVec3) -> Value {
     json!({
         "name": c.name,
         "node": c.node,
+        "index": c.index,
+        "select": s.camera_selector(i),
         "projection": projection,
         "yfov": yfov.map(f),
         "aspect_ratio": aspect.map(f),
@@ -153,19 +158,7 @@ fn node_bounds(s: &Scene) -> Vec<Value> {
         .collect()
 }
 
-/// Which meaning of transmission applies, why, and what it makes of the file's meshes.
-fn transmission_json(s: &Scene, mode: aperture_render::TransmissionMode) -> Value {
-    let (model, why) = mode.resolve(s);
-    let (refractive, thin) = aperture_render::transmissive_meshes(s, model);
-    json!({
-        "applies": model.to_string(),
-        "why": why,
-        "refractive_meshes": refractive,
-        "thin_walled_meshes": thin,
-    })
-}
-
-fn report(s: &Scene, mode: aperture_render::TransmissionMode) -> Value {
+fn report(s: &Scene, materials: &MaterialArgs) -> Value {
     let c = counts(s);
     let b = s.bounds();
     let bounds = if b.is_empty() {
@@ -201,7 +194,8 @@ fn report(s: &Scene, mode: aperture_render::TransmissionMode) -> Value {
         },
         "warnings": s.stats.warnings,
         "generator": s.stats.generator,
-        "transmission": transmission_json(s, mode),
+        "transmission": crate::info_materials::transmission_json(s, materials.transmission),
+        "single_sided": crate::info_materials::sides_json(s, materials.single_sided),
         "variants": s.stats.variants,
         "variant": s.stats.variant,
         "time": s.stats.time.map(f),
@@ -219,10 +213,8 @@ fn report(s: &Scene, mode: aperture_render::TransmissionMode) -> Value {
                 "selected": a.selected,
             }))
             .collect::<Vec<_>>(),
-        "cameras": s
-            .cameras
-            .iter()
-            .map(|c| camera_json(c, s.world_origin))
+        "cameras": (0..s.cameras.len())
+            .map(|i| camera_json(s, i))
             .collect::<Vec<_>>(),
     })
 }
@@ -243,7 +235,7 @@ fn print_text(path: &std::path::Path, r: &Value) {
     println!("{}", path.display());
     print_counts(r);
     print_skipped_and_warnings(r);
-    print_materials(r);
+    crate::info_materials::print_materials(r);
     print_time(r);
     crate::info_motion::print_motion(r);
     print_cameras(r);
@@ -330,32 +322,6 @@ fn print_skipped_and_warnings(r: &Value) {
     }
 }
 
-/// Which transmission applies, and the material variants.
-fn print_materials(r: &Value) {
-    let tr = &r["transmission"];
-    println!(
-        "  transmission: {} ({}); {} refractive and {} thin-walled transmissive mesh(es)",
-        tr["applies"].as_str().unwrap_or_default(),
-        tr["why"].as_str().unwrap_or_default(),
-        count(&tr["refractive_meshes"]),
-        count(&tr["thin_walled_meshes"]),
-    );
-    let variants = r["variants"].as_array().cloned().unwrap_or_default();
-    if !variants.is_empty() {
-        println!(
-            "  material variants: {} (drawing {})",
-            variants
-                .iter()
-                .map(|v| v.to_string())
-                .collect::<Vec<_>>()
-                .join(", "),
-            r["variant"]
-                .as_str()
-                .map_or("the default materials".into(), |v| format!("{v:?}"))
-        );
-    }
-}
-
 /// The time the scene is posed at, and its animations.
 fn print_time(r: &Value) {
     match r["time"].as_f64() {
@@ -387,9 +353,12 @@ fn print_cameras(r: &Value) {
     println!("  cameras: {}", cams.len());
     for c in &cams {
         let d = &c["dof"];
-        let node = match c["node"].as_u64() {
-            Some(i) => format!("node {i}"),
-            None => "automatic".into(),
+        let node = match (c["index"].as_u64(), c["node"].as_u64()) {
+            (Some(n), Some(j)) => format!(
+                "--camera {}: cameras[{n}] on node {j}",
+                c["select"].as_str().unwrap_or_default()
+            ),
+            _ => "automatic".into(),
         };
         let proj = match c["projection"].as_str() {
             Some("perspective") => format!(
@@ -435,7 +404,7 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
         .and_then(|a| a.scene_at(options.time).map(|s| (a, s)));
     let (animated, s) = loaded
         .map_err(|e| anyhow::anyhow!(e).context(format!("loading {}", args.scene.display())))?;
-    let mut r = report(&s, args.materials.transmission);
+    let mut r = report(&s, &args.materials);
     let when = (options.time, args.when.fps);
     r["motion"] = crate::info_motion::motion_json(&args.motion, &animated, &s, when)?;
     if args.json {
@@ -449,7 +418,7 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use aperture_scene::{Dof, Instance, Light, Material, Mesh};
+    use aperture_scene::{Camera, Dof, Instance, Light, Material, Mesh};
     use glam::{Affine3A, Vec3};
 
     /// Two instances of a two-triangle mesh whose second triangle is emissive.
@@ -479,11 +448,13 @@ mod tests {
                     mesh: 0,
                     world_from_object: Affine3A::IDENTITY,
                     node: 0,
+                    materials: 0,
                 },
                 Instance {
                     mesh: 0,
                     world_from_object: Affine3A::from_translation(Vec3::new(2.0, 0.0, 0.0)),
                     node: 1,
+                    materials: 0,
                 },
             ],
             materials: vec![Material::default(), glow],
@@ -495,6 +466,7 @@ mod tests {
             cameras: vec![Camera {
                 name: "Cam".into(),
                 node: Some(2),
+                index: Some(0),
                 world_from_camera: Affine3A::IDENTITY,
                 projection: Projection::Perspective {
                     yfov: 0.7,
@@ -513,7 +485,7 @@ mod tests {
 
     #[test]
     fn json_report_has_the_documented_keys_and_counts() {
-        let r = report(&scene(), Default::default());
+        let r = report(&scene(), &Default::default());
         assert_eq!(r["triangles"]["unique"], 2);
         assert_eq!(r["triangles"]["drawn"], 4);
         assert_eq!(r["triangles"]["emissive_drawn"], 2);
@@ -548,7 +520,7 @@ mod tests {
             ("KHR_xmp".into(), ExtensionStatus::Ignored),
         ];
         s.stats.hidden_nodes = 3;
-        let r = report(&s, Default::default());
+        let r = report(&s, &Default::default());
         assert_eq!(r["extensions"][0]["name"], "KHR_node_visibility");
         assert_eq!(r["extensions"][0]["status"], "supported");
         assert!(r["extensions"][0].get("why").is_none());
@@ -564,20 +536,20 @@ mod tests {
     fn recentred_scenes_report_file_coordinates() {
         let mut s = scene();
         s.world_origin = glam::DVec3::new(1e6, -2e6, 0.5);
-        let r = report(&s, Default::default());
+        let r = report(&s, &Default::default());
         assert_eq!(r["world_origin"], json!([1e6, -2e6, 0.5]));
         assert_eq!(r["bounds"]["min"], json!([1e6, -2e6, 0.5]));
         assert_eq!(r["bounds"]["max"], json!([1e6 + 3.0, -2e6 + 1.0, 1.5]));
         assert_eq!(r["cameras"][0]["position"], json!([1e6, -2e6, 0.5]));
         assert_eq!(
-            report(&scene(), Default::default())["world_origin"],
+            report(&scene(), &Default::default())["world_origin"],
             json!([0.0, 0.0, 0.0])
         );
     }
 
     #[test]
     fn empty_scene_has_null_bounds() {
-        let r = report(&Scene::default(), Default::default());
+        let r = report(&Scene::default(), &Default::default());
         assert_eq!(r["bounds"]["min"], Value::Null);
         assert_eq!(r["triangles"]["drawn"], 0);
     }

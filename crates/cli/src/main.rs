@@ -11,8 +11,10 @@ mod frames;
 #[cfg(test)]
 mod frames_tests;
 mod info;
+mod info_materials;
 mod info_motion;
 mod interrupt;
+mod load_warnings;
 mod material_args;
 mod merge_cmd;
 mod motion_args;

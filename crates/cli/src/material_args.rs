@@ -1,7 +1,7 @@
-//! `--transmission`, `--variant` and `--no-energy-compensation` (SPEC §5), shared by `render`
-//! and `info`.
+//! `--transmission`, `--single-sided`, `--variant` and `--no-energy-compensation` (SPEC §5),
+//! shared by `render` and `info`.
 
-use aperture_render::TransmissionMode;
+use aperture_render::{SidesMode, TransmissionMode};
 
 /// How materials are interpreted.
 #[derive(clap::Args, Debug, Clone, Default)]
@@ -12,6 +12,11 @@ pub struct MaterialArgs {
     /// for files written by Blender's glTF exporter, else `gltf`.
     #[arg(long, value_name = "auto|gltf|blender", default_value = "auto", value_parser = parse_transmission)]
     pub transmission: TransmissionMode,
+    /// What the back of a `doubleSided: false` face is: `gltf` = invisible to every ray (glTF's
+    /// back-face culling); `blender` = a surface like the front, as Cycles renders a Blender
+    /// import; `auto` = `blender` for files written by Blender's glTF exporter, else `gltf`.
+    #[arg(long, value_name = "auto|gltf|blender", default_value = "auto", value_parser = parse_sides)]
+    pub single_sided: SidesMode,
     /// Draw the materials of this KHR_materials_variants variant (its name, or its index in
     /// the file) [default: the default materials].
     #[arg(long, value_name = "NAME|INDEX")]
@@ -26,6 +31,11 @@ pub struct MaterialArgs {
 fn parse_transmission(s: &str) -> Result<TransmissionMode, String> {
     s.parse()
         .map_err(|e: aperture_render::ParseTransmissionError| e.to_string())
+}
+
+fn parse_sides(s: &str) -> Result<SidesMode, String> {
+    s.parse()
+        .map_err(|e: aperture_render::ParseSidesError| e.to_string())
 }
 
 #[cfg(test)]
@@ -43,6 +53,7 @@ mod tests {
     fn defaults_and_values() {
         let d = Cli::parse_from(["x"]).m;
         assert_eq!(d.transmission, TransmissionMode::Auto);
+        assert_eq!(d.single_sided, SidesMode::Auto);
         assert!(!d.no_energy_compensation && d.variant.is_none());
         let a = Cli::parse_from([
             "x",
@@ -57,5 +68,8 @@ mod tests {
         assert_eq!(a.variant.as_deref(), Some("Yellow"));
         assert!(a.no_energy_compensation);
         assert!(Cli::try_parse_from(["x", "--transmission", "glass"]).is_err());
+        let g = Cli::parse_from(["x", "--single-sided", "gltf"]).m;
+        assert_eq!(g.single_sided, SidesMode::Gltf);
+        assert!(Cli::try_parse_from(["x", "--single-sided", "front"]).is_err());
     }
 }

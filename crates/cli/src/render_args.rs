@@ -155,8 +155,10 @@ pub struct RenderArgs {
     /// Image height in pixels [default: from the width and the camera's aspect ratio].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub height: Option<u32>,
-    /// Camera by name or index [default: the first].
-    #[arg(long)]
+    /// Camera: its name, its glTF camera index N (`cameras[N]`, the N of `camera N` names and
+    /// of `info`'s list), or `node:J` for the camera node J (a glTF camera drawn by two nodes)
+    /// [default: the first camera node in drawing order, listed first by `info`].
+    #[arg(long, value_name = "NAME|N|node:J")]
     pub camera: Option<String>,
     /// Which glTF scene of the file [default: the file's default scene].
     #[arg(long = "scene", value_name = "N")]
@@ -164,7 +166,9 @@ pub struct RenderArgs {
     /// Seed of every sample value (the image is a pure function of scene, options and seed).
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=i32::MAX as i64))]
     pub seed: u32,
-    /// Worker threads [default: all cores]. The image does not depend on it.
+    /// Worker threads for everything the render does: loading, texture decoding, BVH building,
+    /// rendering, writing (the main thread only waits for them) [default: all cores]. The image
+    /// does not depend on it.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub threads: Option<u32>,
     /// Lens radius in scene units (turns depth of field on; 0 = pinhole).
@@ -198,7 +202,8 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
     pub sampler: SamplerArg,
     /// Environment: uniform radiance as linear R,G,B, or an equirectangular .hdr or .exr image
-    /// (importance-sampled by luminance) [default: black].
+    /// (importance-sampled by luminance) [default: the file's EXT_lights_image_based light,
+    /// else black].
     #[arg(long, value_parser = parse_env, allow_hyphen_values = true)]
     pub env: Option<EnvArg>,
     /// Rotation of the environment image about the up axis (+Y), degrees, counter-clockwise
@@ -286,7 +291,8 @@ pub struct RenderArgs {
     /// stopped; files are written whole or not at all).
     #[arg(long, requires = "frames")]
     pub skip_existing: bool,
-    /// No progress bar and no summary.
+    /// No progress bar, no summary and no load warnings (points skipped, extensions ignored:
+    /// `aperture info` lists them).
     #[arg(long, short)]
     pub quiet: bool,
     /// Progress display: a bar on a terminal, or JSON lines on stdout for programs (farm

@@ -15,8 +15,15 @@ use std::time::Instant;
 #[error("interrupted: {0} holds the samples taken so far (--save-partial)")]
 pub struct Interrupted(pub String);
 
-/// Runs `aperture render`.
+/// Runs `aperture render`: all of it (loading, texture decoding, BVH building, rendering,
+/// writing) on one pool of `--threads` workers, so that bound holds for the whole process.
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
+    let pool = crate::workers::worker_pool(args.threads)?;
+    pool.install(|| run_on(args, &pool))
+}
+
+/// [`run`] on `pool`'s workers.
+fn run_on(args: RenderArgs, pool: &rayon::ThreadPool) -> anyhow::Result<()> {
     let before = before_load(&args)?;
     // The library is needed before anything is loaded, rendered or written.
     let denoiser = match args.denoise {
@@ -26,11 +33,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let t_load = Instant::now();
     let (animated, scene) = load_posed(&args, &before.load)?;
     let plan = after_load(&args, &before, &scene)?;
-    for w in crate::first_image::scene_warnings(&scene, &plan.opts.env) {
+    let load_warnings = match args.quiet {
+        true => Vec::new(),
+        false => crate::load_warnings::load_warnings(&scene),
+    };
+    let scene_warnings = crate::first_image::scene_warnings(&scene, &plan.opts.env);
+    for w in load_warnings.into_iter().chain(scene_warnings) {
         eprintln!("warning: {}: {w}", args.scene.display());
     }
 
-    let pool = crate::workers::worker_pool(args.threads)?;
     if let Some(frames) = args.frames {
         return crate::frames::run(
             &args,
@@ -39,7 +50,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             plan.format,
             &plan.opts,
             plan.quality,
-            &pool,
+            pool,
             denoiser.as_ref(),
         );
     }

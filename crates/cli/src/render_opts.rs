@@ -89,7 +89,7 @@ pub(crate) fn after_load(
         width,
         height,
         passes: before.passes,
-        env: environment(args, before.budget.limit)?,
+        env: environment(args, scene, before.budget.limit)?,
         cancel: crate::interrupt::install()?,
         ..render_options(args)
     };
@@ -218,7 +218,7 @@ fn load_options(args: &RenderArgs, memory: aperture_budget::MemoryBudget) -> Loa
     }
 }
 
-/// `--camera` (a name, else an index) as an index into the scene's cameras.
+/// `--camera` (a name, a glTF camera index or `node:J`) as an index into the scene's cameras.
 fn camera_index(args: &RenderArgs, scene: &aperture_scene::Scene) -> usize {
     match &args.camera {
         None => 0,
@@ -226,25 +226,12 @@ fn camera_index(args: &RenderArgs, scene: &aperture_scene::Scene) -> usize {
     }
 }
 
-/// A camera given by name, else by index, as an index into the scene's cameras; the error
-/// lists the cameras there are.
+/// `--camera` (a name, a glTF camera index or `node:J`) as an index into the scene's cameras;
+/// the error lists the cameras there are.
 pub(crate) fn find_camera(c: &str, scene: &aperture_scene::Scene) -> Result<usize, String> {
-    if let Some(i) = scene.cameras.iter().position(|cam| cam.name == c) {
-        return Ok(i);
-    }
-    match c.parse::<usize>() {
-        Ok(i) if i < scene.cameras.len() => Ok(i),
-        _ => Err(format!(
-            "invalid value '{c}' for '--camera': the scene's cameras are {}",
-            scene
-                .cameras
-                .iter()
-                .enumerate()
-                .map(|(i, c)| format!("{i} ({:?})", c.name))
-                .collect::<Vec<_>>()
-                .join(", ")
-        )),
-    }
+    scene
+        .select_camera(c)
+        .map_err(|e| format!("invalid value '{c}' for '--camera': {e}"))
 }
 
 /// `--width`/`--height`, the missing side (or both) from the camera's aspect.
@@ -321,6 +308,7 @@ fn render_options(args: &RenderArgs) -> RenderOptions {
         clamp: args.tracing.clamp(),
         filter: args.tracing.filter.into(),
         transmission: args.materials.transmission,
+        single_sided: args.materials.single_sided,
         energy_compensation: !args.materials.no_energy_compensation,
         sampler: match args.sampler {
             SamplerArg::Sobol => SamplerKind::Sobol,
@@ -334,10 +322,25 @@ fn render_options(args: &RenderArgs) -> RenderOptions {
     }
 }
 
-/// `--env`, `--env-rotation`, `--env-strength`; an image is held to `max_bytes`.
-fn environment(args: &RenderArgs, max_bytes: u64) -> anyhow::Result<Environment> {
+/// `--env`, `--env-rotation`, `--env-strength`; an image is held to `max_bytes`. Without
+/// `--env`, the file's own (`EXT_lights_image_based`), else black.
+fn environment(
+    args: &RenderArgs,
+    scene: &aperture_scene::Scene,
+    max_bytes: u64,
+) -> anyhow::Result<Environment> {
     Ok(match &args.env {
-        None => Environment::Constant(Vec3::ZERO),
+        None => match &scene.environment {
+            Some(e) => Environment::Image(std::sync::Arc::new(EnvImage {
+                width: e.width,
+                height: e.height,
+                texels: e.texels.clone(),
+                rotation: args.env_rotation.to_radians(),
+                strength: e.intensity * args.env_strength,
+                sampling: EnvSampling::Importance,
+            })),
+            None => Environment::Constant(Vec3::ZERO),
+        },
         Some(EnvArg::Color(c)) => Environment::Constant(*c * args.env_strength),
         Some(EnvArg::File(path)) => {
             let (width, height, texels) = load_env_image(path, max_bytes)

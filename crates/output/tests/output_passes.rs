@@ -101,6 +101,7 @@ fn glass_scene() -> Scene {
             mesh: s.meshes.len() as u32 - 1,
             world_from_object: xf,
             node: s.instances.len() as u32,
+            materials: 0,
         });
     }
     s.node_names

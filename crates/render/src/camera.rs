@@ -299,6 +299,7 @@ pub(crate) fn test_scene_camera(dof: aperture_scene::Dof) -> aperture_scene::Cam
     aperture_scene::Camera {
         name: "test".into(),
         node: None,
+        index: None,
         world_from_camera: Affine3A::from_translation(Vec3::new(0.5, -1.0, 3.0))
             * Affine3A::from_rotation_y(0.3),
         projection: Projection::Perspective {

@@ -7,6 +7,7 @@ use crate::integrator::Clamp;
 use crate::passes::PassSet;
 use crate::sampler::{SamplerKind, MAX_SPP};
 use aperture_shading::environment::Environment;
+use aperture_shading::sides::SidesMode;
 use aperture_shading::surface::MaterialOverride;
 use aperture_shading::transmission::TransmissionMode;
 
@@ -51,6 +52,9 @@ pub struct RenderOptions {
     pub passes: PassSet,
     /// What transmissive surfaces are (`--transmission`): thin-walled or refractive.
     pub transmission: TransmissionMode,
+    /// What the back of a single-sided face is (`--single-sided`). `Blender` by default here
+    /// (both sides, what scenes built by hand expect); the command line's default is `Auto`.
+    pub single_sided: SidesMode,
     /// Give microfacet lobes back the energy single scattering loses, and layer materials by
     /// albedo scaling (on by default; off renders glTF Appendix B's formulas literally).
     pub energy_compensation: bool,
@@ -82,6 +86,7 @@ impl Default for RenderOptions {
             clamp: Clamp::OFF,
             passes: PassSet::NONE,
             transmission: TransmissionMode::Auto,
+            single_sided: SidesMode::Blender,
             energy_compensation: true,
             motion: None,
             vector: None,

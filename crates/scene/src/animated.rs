@@ -16,7 +16,6 @@ use serde_json::Value;
 
 use glam::{DAffine3, DQuat, DVec3, Vec3};
 
-use crate::accessor::Buffers;
 use crate::animation::{self, AnimationInfo, Animations, NodeProperty, Target};
 use crate::buffers::load_buffers;
 use crate::camera::{self, CameraData};
@@ -27,8 +26,8 @@ use crate::origin::recentre;
 use crate::pointer::Pointer;
 use crate::skin::Skin;
 use crate::{
-    glb, mesh, morph, prepass, skin, Error, LightKind, LoadOptions, Material, Mesh, Scene,
-    SceneStats, Texture,
+    glb, morph, prepass, skin, Error, LightKind, LoadOptions, Material, Mesh, Scene, SceneStats,
+    Texture,
 };
 
 /// Watts per lumen at 555 nm: Blender's importer divides candela and lux by it (SPEC §4).
@@ -77,6 +76,15 @@ pub struct Animated {
     /// Drawn nodes, depth first from the selected scene's roots.
     order: Vec<usize>,
     meshes: HashMap<usize, LoadedMesh>,
+    /// glTF meshes drawing another's geometry (`crate::shared`): that mesh, and their
+    /// per-triangle materials when not its own.
+    aliases: HashMap<usize, (usize, Option<Vec<u32>>)>,
+    /// `Scene::material_sets`, the same at every pose.
+    material_sets: Vec<Vec<u32>>,
+    /// By node: its instances' `Instance::materials` when not 0.
+    node_materials: HashMap<usize, u32>,
+    /// `EXT_lights_image_based`, the same at every pose.
+    environment: Option<std::sync::Arc<crate::ImageEnvironment>>,
     skins: Vec<Skin>,
     cameras: Vec<CameraData>,
     lights: Vec<LightData>,
@@ -181,16 +189,8 @@ impl Animated {
         };
         let prepared = prepass::prepare(json)?;
         let (doc, root) = (prepared.document, prepared.root);
-        let mut stats = SceneStats {
-            skipped_features: prepared.skipped,
-            warnings: ignored_extension_warnings(&prepass::ignored(&prepared.extensions)),
-            extensions: prepared.extensions,
-            ..SceneStats::default()
-        };
-        stats.generator = doc.as_json().asset.generator.clone();
-        stats.variants = variant_names(&root);
-        let variant = resolve_variant(&stats.variants, options.variant.as_deref())?;
-        stats.variant = variant.map(|v| stats.variants[v].clone());
+        let (mut stats, variant) =
+            first_stats(prepared.skipped, prepared.extensions, &doc, &root, options)?;
         let mut buffers = load_buffers(&doc, &root, bin, base_dir, &options.memory)?;
         crate::meshopt::decode_views(&root, &mut buffers)?;
         let graph = node_graph(&doc, &buffers)?;
@@ -203,15 +203,17 @@ impl Animated {
         stats.animations = animations.info.clone();
 
         let mut materials = Materials::default();
-        // Hidden nodes' meshes are not even read (KHR_node_visibility).
-        let shown: Vec<usize> = order
-            .iter()
-            .copied()
-            .filter(|&i| !graph.hidden[i])
-            .collect();
-        let mut meshes = read_meshes(&doc, &shown, &buffers, &mut stats, variant, &mut materials)?;
+        let read = crate::shared::read_shown(
+            &doc,
+            &order,
+            &graph.hidden,
+            &buffers,
+            &mut stats,
+            variant,
+            &mut materials,
+        )?;
+        let (meshes, aliases) = (read.meshes, read.aliases);
         let material_index = materials.gltf_indices();
-        generate_tangents(&mut meshes, &materials.materials);
         let material_list = std::mem::take(&mut materials.materials);
         stats.warnings.append(&mut materials.warnings);
         let textures = materials.textures(
@@ -221,6 +223,7 @@ impl Animated {
             options.skip_textures,
             &options.memory,
         )?;
+        let environment = crate::ibl::scene_environment(&doc, &root, options, &buffers, base_dir)?;
         let skins = skin::read_skins(&doc, &buffers)?;
         let cameras = camera::read_cameras(&doc)?;
         let lights = read_lights(&doc)?;
@@ -230,6 +233,10 @@ impl Animated {
             graph,
             order,
             meshes,
+            aliases,
+            material_sets: Vec::new(),
+            node_materials: HashMap::new(),
+            environment,
             skins,
             cameras,
             lights,
@@ -311,8 +318,10 @@ impl Animated {
         let rest = self.pose(None);
         let mut cache: HashMap<StaticKey, (u32, DVec3, bool)> = HashMap::new();
         for &ni in &self.order.clone() {
+            let Some(mi) = self.graph.nodes[ni].mesh.map(|m| self.geometry_of(ni, m)) else {
+                continue;
+            };
             let node = &self.graph.nodes[ni];
-            let Some(mi) = node.mesh else { continue };
             let Some(lm) = self.meshes.get(&mi) else {
                 continue;
             };
@@ -363,6 +372,25 @@ impl Animated {
             );
         }
         Ok(())
+    }
+
+    /// The glTF mesh whose geometry node `ni` draws for its mesh `mi` (`mi` unless it shares
+    /// another's accessors), noting the node's materials when they are not that mesh's.
+    fn geometry_of(&mut self, ni: usize, mi: usize) -> usize {
+        let Some((canon, set)) = self.aliases.get(&mi) else {
+            return mi;
+        };
+        if let Some(list) = set {
+            let k = match self.material_sets.iter().position(|s| s == list) {
+                Some(k) => k,
+                None => {
+                    self.material_sets.push(list.clone());
+                    self.material_sets.len() - 1
+                }
+            };
+            self.node_materials.insert(ni, k as u32 + 1);
+        }
+        *canon
     }
 
     /// Node transforms and weights at `time` (`None`: stored).
@@ -451,6 +479,28 @@ impl Animated {
         skin::refresh_flat_normals(&mut m, &lm.flat);
         Ok((m, centre))
     }
+}
+
+/// What the load knows before reading any buffer: skipped features, extensions and the
+/// warnings for those ignored, the generator, the variants and the one chosen.
+fn first_stats(
+    skipped: Vec<String>,
+    extensions: Vec<(String, crate::ExtensionStatus)>,
+    doc: &gltf::Document,
+    root: &Value,
+    options: &LoadOptions,
+) -> Result<(SceneStats, Option<usize>), Error> {
+    let mut stats = SceneStats {
+        skipped_features: skipped,
+        warnings: ignored_extension_warnings(&prepass::ignored(&extensions)),
+        extensions,
+        ..SceneStats::default()
+    };
+    stats.generator = doc.as_json().asset.generator.clone();
+    stats.variants = variant_names(root);
+    let variant = resolve_variant(&stats.variants, options.variant.as_deref())?;
+    stats.variant = variant.map(|v| stats.variants[v].clone());
+    Ok((stats, variant))
 }
 
 /// The drawn nodes of the selected scene, depth first.
@@ -542,51 +592,5 @@ fn pointer_warnings(ignored: &[String], out: &mut Vec<String>) {
              stored visibility at every time"
                 .into(),
         );
-    }
-}
-
-/// Every mesh the nodes in `order` use, read once each (by glTF mesh index), its materials gathered
-/// into `materials`.
-fn read_meshes(
-    doc: &gltf::Document,
-    order: &[usize],
-    buffers: &Buffers,
-    stats: &mut SceneStats,
-    variant: Option<usize>,
-    materials: &mut Materials,
-) -> Result<HashMap<usize, LoadedMesh>, Error> {
-    let mut meshes = HashMap::new();
-    for &ni in order {
-        let Some(m) = doc.nodes().nth(ni).and_then(|n| n.mesh()) else {
-            continue;
-        };
-        if meshes.contains_key(&m.index()) {
-            continue;
-        }
-        let loaded = mesh::load_mesh(doc, &m, buffers, stats, variant, &mut |mi| {
-            materials.get(doc, mi)
-        })?;
-        meshes.insert(m.index(), loaded);
-    }
-    Ok(meshes)
-}
-
-/// MikkTSpace tangents for normal-mapped meshes, on the rest shape (deformed with it).
-fn generate_tangents(meshes: &mut HashMap<usize, LoadedMesh>, materials: &[Material]) {
-    let mut keys: Vec<usize> = meshes.keys().copied().collect();
-    keys.sort_unstable();
-    let mut tmp = Scene {
-        meshes: keys
-            .iter()
-            .filter_map(|k| meshes.get_mut(k).map(|m| std::mem::take(&mut m.mesh)))
-            .collect(),
-        materials: materials.to_vec(),
-        ..Scene::default()
-    };
-    crate::tangents::generate_missing_tangents(&mut tmp);
-    for (k, m) in keys.iter().zip(tmp.meshes) {
-        if let Some(l) = meshes.get_mut(k) {
-            l.mesh = m;
-        }
     }
 }

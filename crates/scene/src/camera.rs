@@ -131,6 +131,7 @@ pub(crate) fn camera(
     Ok(Camera {
         name,
         node: Some(node as u32),
+        index: Some(at.camera as u32),
         world_from_camera,
         projection: data.projection,
         dof,
@@ -189,6 +190,7 @@ pub(crate) fn automatic_camera(
     Ok(Camera {
         name,
         node: None,
+        index: None,
         world_from_camera,
         projection,
         dof,

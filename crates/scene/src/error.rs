@@ -179,6 +179,14 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// `--camera` names no camera of the scene.
+    #[error("no camera {wanted} in the scene (it has: {available})")]
+    NoSuchCamera {
+        /// The selector asked for (`name`, `N`, `node:J`).
+        wanted: String,
+        /// The scene's cameras, `N "name"` (`node:J` added when a camera has two nodes).
+        available: String,
+    },
     /// `--animation` names an animation the file does not have.
     #[error("no animation {wanted} in the file (it has: {available})")]
     NoSuchAnimation {

@@ -22,6 +22,8 @@ pub(crate) struct LoadedMesh {
     pub flat: Vec<std::ops::Range<u32>>,
     /// `mesh.weights`, the default morph weights.
     pub weights: Vec<f32>,
+    /// Each triangle primitive's material and triangle count, in the order merged.
+    pub part_materials: Vec<(u32, usize)>,
 }
 
 /// Appends `src` (or `n` copies of `zero` when absent) to `dst` when the merged mesh has the
@@ -107,7 +109,7 @@ fn merge_influences(parts: &[Part]) -> Option<Influences> {
 }
 
 /// The material `KHR_materials_variants` maps to variant `variant` on this primitive, if any.
-fn variant_material(prim: &gltf::Primitive<'_>, variant: usize) -> Option<usize> {
+pub(crate) fn variant_material(prim: &gltf::Primitive<'_>, variant: usize) -> Option<usize> {
     let mappings = prim
         .extension_value("KHR_materials_variants")?
         .get("mappings")?
@@ -198,6 +200,10 @@ fn merge_parts(mesh: &gltf::Mesh<'_>, parts: Vec<Part>) -> Result<LoadedMesh, Er
         ..Mesh::default()
     };
     let mut flat = Vec::new();
+    let part_materials = parts
+        .iter()
+        .map(|p| (p.material, p.triangles.len()))
+        .collect();
     for p in parts {
         let base = m.positions.len() as u32;
         let count = p.positions.len();
@@ -226,5 +232,6 @@ fn merge_parts(mesh: &gltf::Mesh<'_>, parts: Vec<Part>) -> Result<LoadedMesh, Er
         influences,
         flat,
         weights: mesh.weights().map(<[f32]>::to_vec).unwrap_or_default(),
+        part_materials,
     })
 }

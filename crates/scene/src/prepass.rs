@@ -19,6 +19,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_unlit",
     "KHR_mesh_quantization",
     "EXT_mesh_gpu_instancing",
+    "EXT_lights_image_based",
     "KHR_materials_ior",
     "KHR_materials_specular",
     "KHR_draco_mesh_compression",
@@ -309,18 +310,18 @@ mod tests {
 
     #[test]
     fn unsupported_required_extension_is_named() {
-        let e = prepare(br#"{"asset":{"version":"2.0"},"extensionsRequired":["KHR_lights_punctual","EXT_lights_image_based"]}"#)
+        let e = prepare(br#"{"asset":{"version":"2.0"},"extensionsRequired":["KHR_lights_punctual","EXT_ACME_unknown"]}"#)
             .err()
             .unwrap();
-        assert!(e.to_string().contains("EXT_lights_image_based"), "{e}");
+        assert!(e.to_string().contains("EXT_ACME_unknown"), "{e}");
         assert!(matches!(e, Error::UnsupportedExtension { index: 1, .. }));
     }
 
     #[test]
     fn used_only_extensions_are_ignored_and_required_supported_ones_pass() {
-        let p = prepare(br#"{"asset":{"version":"2.0"},"extensionsUsed":["EXT_lights_image_based","EXT_mesh_gpu_instancing"],"extensionsRequired":["EXT_mesh_gpu_instancing","KHR_mesh_quantization"]}"#)
+        let p = prepare(br#"{"asset":{"version":"2.0"},"extensionsUsed":["EXT_ACME_unknown","EXT_mesh_gpu_instancing"],"extensionsRequired":["EXT_mesh_gpu_instancing","KHR_mesh_quantization"]}"#)
             .unwrap();
-        assert_eq!(ignored(&p.extensions), ["EXT_lights_image_based"]);
+        assert_eq!(ignored(&p.extensions), ["EXT_ACME_unknown"]);
     }
 
     #[test]

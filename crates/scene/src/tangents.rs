@@ -57,7 +57,7 @@ impl mikktspace::Geometry for Faces<'_> {
 /// The UV set whose directions the material's tangent frame follows, if it needs one: its
 /// normal map's, else its clear coat normal map's, else (`KHR_materials_anisotropy`, whose
 /// direction is given in tangent space) its anisotropy texture's, or set 0.
-fn tangent_uv_set(m: &crate::Material) -> Option<u32> {
+pub(crate) fn tangent_uv_set(m: &crate::Material) -> Option<u32> {
     if let Some(t) = m.normal_texture {
         return Some(t.tex_coord);
     }

@@ -14,8 +14,13 @@ pub struct Scene {
     pub meshes: Vec<Mesh>,
     /// Placements of meshes in the world (one per drawing node, or per `EXT_mesh_gpu_instancing` instance).
     pub instances: Vec<Instance>,
-    /// Materials; `Mesh::material_ids` index into this list.
+    /// Materials; `Mesh::material_ids` and [`Scene::material_sets`] index into this list.
     pub materials: Vec<Material>,
+    /// Per-triangle materials of instances that draw a mesh with other materials than its
+    /// own ([`Instance::materials`] `k` > 0 reads set `k − 1`, as long as its mesh's
+    /// `indices`): glTF meshes whose primitives share their geometry accessors share one
+    /// [`Mesh`] (and BVH) whatever their materials.
+    pub material_sets: Vec<Vec<u32>>,
     /// Decoded textures; `TextureRef::texture` indexes into this list.
     pub textures: Vec<Texture>,
     /// Punctual lights in world space.
@@ -35,6 +40,9 @@ pub struct Scene {
     /// The glTF nodes' names, by node index (`Instance::node` indexes it); empty for scenes
     /// built by hand. Compositors identify objects by them (Cryptomatte).
     pub node_names: Vec<Option<String>>,
+    /// The selected scene's `EXT_lights_image_based` light: what rays leaving the scene see
+    /// unless the command line gives an environment.
+    pub environment: Option<std::sync::Arc<ImageEnvironment>>,
     /// A hash of the file's bytes (the `.gltf` or `.glb` read, not its external resources),
     /// so parts of a render split across machines can be checked to come from the same
     /// scene; 0 for scenes built by hand.
@@ -72,6 +80,21 @@ pub struct Mesh {
     pub material_ids: Vec<u32>,
 }
 
+/// An environment from the file (`EXT_lights_image_based`): an equirectangular image in the
+/// renderer's mapping (centre along +X, u towards +Z, top row straight up), already turned by
+/// the light's rotation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImageEnvironment {
+    /// Width in texels (2 × height).
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Linear radiance, rows top to bottom.
+    pub texels: Vec<Vec3>,
+    /// The light's `intensity`, a multiplier on every texel.
+    pub intensity: f32,
+}
+
 /// One placement of a mesh in the world.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Instance {
@@ -84,6 +107,9 @@ pub struct Instance {
     pub world_from_object: Affine3A,
     /// Index of the glTF node that draws this instance.
     pub node: u32,
+    /// Which materials it draws its mesh with: 0, the mesh's own (`Mesh::material_ids`);
+    /// `k` > 0, `Scene::material_sets[k − 1]`.
+    pub materials: u32,
 }
 
 impl Instance {
@@ -243,10 +269,14 @@ impl Default for Dof {
 /// A camera placed in the world.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Camera {
-    /// Camera name (the glTF camera's, else its node's, else `camera N`).
+    /// Camera name (the glTF camera's, else its node's, else `camera N` with N its glTF
+    /// camera index, the number `--camera N` takes).
     pub name: String,
     /// Index of the node carrying the camera; `None` for the automatic camera.
     pub node: Option<u32>,
+    /// Index of the glTF camera (`cameras[i]`): the one camera numbering of names, `info` and
+    /// `--camera`; `None` for the automatic camera.
+    pub index: Option<u32>,
     /// Camera-to-world transform, rotation and translation only (scale removed, SPEC §1).
     /// The camera looks down its local −Z with +Y up.
     pub world_from_camera: Affine3A,
@@ -389,6 +419,48 @@ impl Scene {
             Some(Some(name)) => name.clone(),
             _ => format!("nodes[{node}]"),
         }
+    }
+
+    /// The material of each triangle of `instance`'s mesh as that instance draws it (empty
+    /// when the mesh or the set does not exist).
+    pub fn instance_materials(&self, instance: &Instance) -> &[u32] {
+        match instance.materials {
+            0 => self
+                .meshes
+                .get(instance.mesh as usize)
+                .map_or(&[], |m| m.material_ids.as_slice()),
+            k => self
+                .material_sets
+                .get(k as usize - 1)
+                .map_or(&[], Vec::as_slice),
+        }
+    }
+
+    /// Per mesh: whether some triangle of it, drawn by some instance (or by its own materials),
+    /// has a material `wanted` accepts.
+    pub fn meshes_with_material(&self, wanted: impl Fn(u32) -> bool) -> Vec<bool> {
+        let mut out: Vec<bool> = self
+            .meshes
+            .iter()
+            .map(|m| m.material_ids.iter().any(|&id| wanted(id)))
+            .collect();
+        let sets: Vec<bool> = self
+            .material_sets
+            .iter()
+            .map(|s| s.iter().any(|&id| wanted(id)))
+            .collect();
+        for inst in self.instances.iter().filter(|i| i.materials > 0) {
+            if sets
+                .get(inst.materials as usize - 1)
+                .copied()
+                .unwrap_or(false)
+            {
+                if let Some(o) = out.get_mut(inst.mesh as usize) {
+                    *o = true;
+                }
+            }
+        }
+        out
     }
 
     /// Triangles stored (each unique mesh counted once).

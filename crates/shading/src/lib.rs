@@ -13,6 +13,7 @@
 //!     mesh: 1,
 //!     world_from_object: glam::Affine3A::IDENTITY,
 //!     node: 1,
+//!     materials: 0,
 //! });
 //! let geom = Geometry::with_transmission(&scene, MaterialOverride::None, TransmissionModel::Gltf);
 //! assert!(EmissiveLights::build(&geom).is_some());
@@ -32,6 +33,7 @@ pub mod lights;
 pub mod media;
 pub mod punctual;
 mod shade_extended;
+pub mod sides;
 pub mod spectrum;
 pub mod surface;
 pub mod test_scenes;
@@ -45,6 +47,7 @@ pub use bsdf::{
 };
 pub use color::srgb_to_linear;
 pub use environment::{EnvImage, EnvSampling, Environment};
+pub use sides::{single_sided_materials, ParseSidesError, SidesMode, SidesModel};
 pub use surface::{Geometry, MaterialOverride};
 pub use texture::transform_uv;
 pub use transmission::{

@@ -50,7 +50,7 @@ impl EmissiveLights {
         for (ii, inst) in scene.instances.iter().enumerate() {
             let mesh = &scene.meshes[inst.mesh as usize];
             let mut map: Option<Box<[u32]>> = None;
-            for (ti, &mid) in mesh.material_ids.iter().enumerate() {
+            for (ti, &mid) in scene.instance_materials(inst).iter().enumerate() {
                 if !emissive.get(mid as usize).copied().unwrap_or(false) {
                     continue;
                 }

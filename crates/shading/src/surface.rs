@@ -148,6 +148,10 @@ pub struct Geometry<'a> {
     pub has_refractive: bool,
     /// True when some surface may be thin-walled transmissive (shadow rays may pass it).
     pub has_thin: bool,
+    /// True when the backs of single-sided faces are invisible (`SidesModel::Gltf`, set by
+    /// `Geometry::with_sides`) and some material is single-sided: then rays may pass through
+    /// surfaces seen from behind.
+    pub has_culled: bool,
     /// True when the meshes' vertex data is large enough for a hit's reads to miss the
     /// caches, so that asking for them ahead (`crate::hit_prefetch`) pays for itself.
     pub prefetch_hits: bool,
@@ -209,16 +213,15 @@ impl<'a> Geometry<'a> {
             .enumerate()
             .map(|(i, m)| material_info(i as u32, m, material_override, model))
             .collect();
+        let needs = scene.meshes_with_material(|id| {
+            info.get(id as usize)
+                .is_some_and(|i| i.transmits == Transmits::IfClosed)
+        });
         let closed: Vec<bool> = scene
             .meshes
             .iter()
-            .map(|mesh| {
-                let needs = mesh.material_ids.iter().any(|&id| {
-                    info.get(id as usize)
-                        .is_some_and(|i| i.transmits == Transmits::IfClosed)
-                });
-                needs && mesh.is_closed()
-            })
+            .zip(needs)
+            .map(|(mesh, needs)| needs && mesh.is_closed())
             .collect();
         let has_refractive = info
             .iter()
@@ -238,6 +241,7 @@ impl<'a> Geometry<'a> {
             closed,
             has_refractive,
             has_thin,
+            has_culled: false,
             prefetch_hits: prefetch_worth_it(scene),
         }
     }
@@ -350,8 +354,9 @@ impl<'a> Geometry<'a> {
                 Vec3::new(b0, b1, b2),
             ),
             color,
-            material: mesh
-                .material_ids
+            material: self
+                .scene
+                .instance_materials(inst)
                 .get(triangle as usize)
                 .copied()
                 .unwrap_or(0),

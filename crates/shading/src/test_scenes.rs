@@ -8,6 +8,7 @@ pub fn look_at_camera(eye: Vec3, target: Vec3, yfov: f32, dof: Dof) -> Camera {
     Camera {
         name: "test camera".into(),
         node: None,
+        index: None,
         world_from_camera: {
             let forward = (target - eye).normalize();
             let right = forward.cross(Vec3::Y).normalize();
@@ -187,6 +188,7 @@ pub fn scene(meshes: Vec<(Mesh, Affine3A)>, materials: Vec<Material>, camera: Ca
             mesh: i as u32,
             world_from_object: xf,
             node: i as u32,
+            materials: 0,
         });
     }
     s
@@ -236,6 +238,7 @@ pub fn bokeh(size: f32, z: f32, yfov: f32, dof: Dof, radiance: f32) -> Scene {
     let cam = Camera {
         name: "bokeh".into(),
         node: None,
+        index: None,
         world_from_camera: Affine3A::IDENTITY,
         projection: Projection::Perspective {
             yfov,

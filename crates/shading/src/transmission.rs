@@ -41,25 +41,31 @@ pub enum TransmissionModel {
 /// ("Khronos glTF Blender I/O vX.Y.Z").
 const BLENDER_EXPORTER: &str = "glTF Blender I/O";
 
+/// Whether `generator` (`asset.generator`) is Blender's glTF exporter, and why in words: what
+/// the `auto` choices (`--transmission`, `--single-sided`) decide by.
+pub fn blender_export(generator: Option<&str>) -> (bool, String) {
+    match generator {
+        Some(g) if g.contains(BLENDER_EXPORTER) => (
+            true,
+            format!("asset.generator \"{g}\" is Blender's glTF exporter"),
+        ),
+        Some(g) => (
+            false,
+            format!("asset.generator \"{g}\" is not Blender's glTF exporter"),
+        ),
+        None => (false, "the file names no asset.generator".into()),
+    }
+}
+
 impl TransmissionMode {
     /// The model that applies to a file written by `generator`, and why.
     pub fn resolve_for(self, generator: Option<&str>) -> (TransmissionModel, String) {
         match self {
             Self::Gltf => (TransmissionModel::Gltf, "--transmission gltf".into()),
             Self::Blender => (TransmissionModel::Blender, "--transmission blender".into()),
-            Self::Auto => match generator {
-                Some(g) if g.contains(BLENDER_EXPORTER) => (
-                    TransmissionModel::Blender,
-                    format!("asset.generator \"{g}\" is Blender's glTF exporter"),
-                ),
-                Some(g) => (
-                    TransmissionModel::Gltf,
-                    format!("asset.generator \"{g}\" is not Blender's glTF exporter"),
-                ),
-                None => (
-                    TransmissionModel::Gltf,
-                    "the file names no asset.generator".into(),
-                ),
+            Self::Auto => match blender_export(generator) {
+                (true, why) => (TransmissionModel::Blender, why),
+                (false, why) => (TransmissionModel::Gltf, why),
             },
         }
     }
@@ -75,18 +81,18 @@ impl TransmissionMode {
 /// of its transmissive materials refracts there).
 pub fn transmissive_meshes(scene: &Scene, model: TransmissionModel) -> (usize, usize) {
     let (mut refractive, mut thin) = (0, 0);
-    for mesh in &scene.meshes {
-        let materials = || {
-            mesh.material_ids
-                .iter()
-                .filter_map(|&id| scene.materials.get(id as usize))
-                .filter(|m| m.is_transmissive() && !m.unlit)
-        };
-        if materials().next().is_none() {
+    let material = |id: u32| scene.materials.get(id as usize);
+    let transmissive = |id: u32| material(id).is_some_and(|m| m.is_transmissive() && !m.unlit);
+    let has = scene.meshes_with_material(transmissive);
+    let volume = scene.meshes_with_material(|id| {
+        transmissive(id) && material(id).is_some_and(|m| m.volume.is_some_and(|v| v.is_volume()))
+    });
+    for (k, mesh) in scene.meshes.iter().enumerate() {
+        if !has[k] {
             continue;
         }
         let refracts = match model {
-            TransmissionModel::Gltf => materials().any(|m| m.volume.is_some_and(|v| v.is_volume())),
+            TransmissionModel::Gltf => volume[k],
             TransmissionModel::Blender => mesh.is_closed(),
         };
         if refracts {

@@ -266,6 +266,7 @@ fn instanced_emitters_are_leaves_per_instance() {
             mesh: 1,
             world_from_object: Affine3A::from_translation(Vec3::new(k as f32 * 3.0, 2.0, 0.0)),
             node: 1,
+            materials: 0,
         });
     }
     let geom = Geometry::with_transmission(&scene, MaterialOverride::None, TransmissionModel::Gltf);

@@ -63,6 +63,7 @@ fn front_ortho(scene: &Scene, w: u32, h: u32) -> aperture_scene::Camera {
     aperture_scene::Camera {
         name: "front".into(),
         node: None,
+        index: None,
         world_from_camera: glam::Affine3A::from_translation(Vec3::new(
             b.center().x,
             b.center().y,

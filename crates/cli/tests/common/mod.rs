@@ -198,3 +198,40 @@ pub fn run_in(args: &[&str], dir: &Path) -> Output {
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
+
+/// The scene crate's GLB writer (one writer for every test that builds a file).
+#[path = "../../../scene/tests/common/glb.rs"]
+pub mod glb;
+
+/// A GLB of `doc` whose buffer 0 holds a unit quad in z = 0 facing +Z: positions
+/// (accessor 0, 4 × VEC3 float, bytes 0..48) and its two triangles' indices (accessor 1,
+/// 6 × u16, bytes 48..60); `doc` may add accessors after these.
+pub fn quad_glb(doc: &serde_json::Value) -> Vec<u8> {
+    let mut bin = Vec::new();
+    for v in [
+        -1.0f32, -1.0, 0.0, 1.0, -1.0, 0.0, 1.0, 1.0, 0.0, -1.0, 1.0, 0.0,
+    ] {
+        bin.extend_from_slice(&v.to_le_bytes());
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    glb::glb(doc, &bin)
+}
+
+/// The JSON of [`quad_glb`]'s buffer, views and two accessors.
+pub fn quad_json() -> serde_json::Value {
+    serde_json::json!({
+        "asset": {"version": "2.0"},
+        "buffers": [{"byteLength": 60}],
+        "bufferViews": [
+            {"buffer": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 12}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [-1.0, -1.0, 0.0], "max": [1.0, 1.0, 0.0]},
+            {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"}
+        ]
+    })
+}

@@ -272,9 +272,9 @@ impl Integrator<'_> {
     }
 
     /// Fraction of light arriving along a shadow ray from `origin` in unit direction `dir` over
-    /// `dist`, inside a medium absorbing `sigma_a`: alpha-cut and blended surfaces and
-    /// thin-walled ideal transmission let light through, refractive boundaries do not (light
-    /// through them bends).
+    /// `dist`, inside a medium absorbing `sigma_a`: alpha-cut and blended surfaces,
+    /// thin-walled ideal transmission and the backs of culled single-sided faces let light
+    /// through, refractive boundaries do not (light through them bends).
     pub(super) fn visibility(
         &self,
         origin: Vec3,
@@ -283,7 +283,7 @@ impl Integrator<'_> {
         sigma_a: Vec3,
     ) -> Vec3 {
         let (mut ray, absorbed) = shadow_ray(origin, dir, dist, sigma_a, time);
-        if !self.geom.has_alpha && !self.geom.has_thin {
+        if !self.geom.has_alpha && !self.geom.has_thin && !self.geom.has_culled {
             return if self.accel.occluded(&ray) {
                 Vec3::ZERO
             } else {
@@ -297,6 +297,8 @@ impl Integrator<'_> {
             };
             let s = self.hit_surface(&ray, &hit, true);
             tr *= match self.geom.kind(hit.instance, s.material) {
+                // The back of a single-sided face is not there for this ray (glTF culling).
+                _ if self.geom.is_culled(&s, dir) => Vec3::ONE,
                 SurfaceKind::Opaque => Vec3::splat(self.geom.transmittance(&s)),
                 SurfaceKind::Thin => {
                     self.geom

@@ -139,7 +139,7 @@ impl Integrator<'_> {
             path.features = Features::default();
         }
         path.light_passes = self.light_passes;
-        path.defer = defer && !self.geom.has_alpha && !self.geom.has_thin;
+        path.defer = defer && !self.geom.has_alpha && !self.geom.has_thin && !self.geom.has_culled;
         path.pending.clear();
         p.w = Walk::start(origin, dir);
         p.covered = false;

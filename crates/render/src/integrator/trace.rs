@@ -47,7 +47,7 @@ impl Integrator<'_> {
         first: Option<Option<Hit>>,
         w: &mut Walk,
     ) -> Option<(Hit, Surface, f32)> {
-        if self.geom.has_alpha || self.geom.has_refractive {
+        if self.geom.has_alpha || self.geom.has_refractive || self.geom.has_culled {
             return self.trace_passing(ray, stream, vertex, u_alpha, first, w);
         }
         // Nothing to pass through: the first hit is the surface (inline, so that a ray that
@@ -57,7 +57,8 @@ impl Integrator<'_> {
         Some((hit, s, self.accel.spawn_point(ray, &hit).error))
     }
 
-    /// [`Integrator::trace`] in a scene with alpha-cut, blended or refractive surfaces.
+    /// [`Integrator::trace`] in a scene with alpha-cut, blended or refractive surfaces, or
+    /// single-sided faces whose backs no ray sees.
     fn trace_passing(
         &self,
         ray: &Ray,
@@ -79,14 +80,15 @@ impl Integrator<'_> {
             if sigma != Vec3::ZERO {
                 w.beta *= absorption(sigma, hit.t * r.dir.length());
             }
-            let opaque = !self.geom.has_alpha || {
-                let u = if pass == 0 {
-                    u_alpha
-                } else {
-                    stream.extra(vertex, pass)
-                };
-                self.geom.is_opaque(&s, u)
-            };
+            let opaque = !self.geom.is_culled(&s, r.dir)
+                && (!self.geom.has_alpha || {
+                    let u = if pass == 0 {
+                        u_alpha
+                    } else {
+                        stream.extra(vertex, pass)
+                    };
+                    self.geom.is_opaque(&s, u)
+                });
             if opaque && !self.is_false_interface(&hit, &s, &r, w) {
                 return Some((hit, s, error));
             }
@@ -129,7 +131,8 @@ impl Integrator<'_> {
         for _ in 0..MAX_ALPHA_PASSES {
             let hit = self.accel.intersect(&r)?;
             let s = self.hit_surface(&r, &hit, true);
-            if !self.geom.has_alpha || self.geom.is_opaque(&s, 0.5) {
+            let seen = !self.geom.is_culled(&s, r.dir);
+            if seen && (!self.geom.has_alpha || self.geom.is_opaque(&s, 0.5)) {
                 return Some((s.p, hit.instance));
             }
             let error = self.accel.spawn_point(&r, &hit).error;

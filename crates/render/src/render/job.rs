@@ -129,7 +129,8 @@ pub(super) fn integrator<'a>(
     opts: &'a RenderOptions,
 ) -> Integrator<'a> {
     let (model, _) = opts.transmission.resolve(scene);
-    let geom = Geometry::with_transmission(scene, opts.material_override, model);
+    let (sides, _) = opts.single_sided.resolve(scene);
+    let geom = Geometry::with_transmission(scene, opts.material_override, model).with_sides(sides);
     let emissive = EmissiveLights::build(&geom);
     let light_tree = LightTree::for_scene(&geom, emissive.as_ref());
     let mut integrator = Integrator {

@@ -31,6 +31,7 @@ fn busy_scene() -> Scene {
         mesh: 1,
         world_from_object: Affine3A::from_translation(Vec3::new(1.0, 0.5, 1.0)),
         node: 1,
+        materials: 0,
     });
     s
 }

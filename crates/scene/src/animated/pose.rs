@@ -66,6 +66,15 @@ impl Animated {
         out.world_origin = origin;
         let relative = |m: DAffine3| relative_to(m, origin);
         out.instances = instances(&placed, origin)?;
+        for inst in &mut out.instances {
+            inst.materials = self
+                .node_materials
+                .get(&(inst.node as usize))
+                .copied()
+                .unwrap_or(0);
+        }
+        out.material_sets = self.material_sets.clone();
+        out.environment = self.environment.clone();
         place_lights(&mut out.lights, &light_positions, origin)?;
         // Every node's origin (a focus object may be any node); whole transforms only for the
         // camera nodes that need them (48 bytes a node less for large scenes).
@@ -317,6 +326,7 @@ fn instances(placed: &[(u32, DAffine3, u32)], origin: DVec3) -> Result<Vec<Insta
                 mesh,
                 world_from_object: finite_world(node as usize, to_f32(relative_to(world, origin)))?,
                 node,
+                materials: 0,
             })
         })
         .collect()

@@ -157,24 +157,39 @@ fn glass_entry(mu: f32, alpha: f32, eta: f32) -> [f32; 2] {
 
 /// `f(0..n)` computed on plain OS threads (never rayon: these run inside a `OnceLock`
 /// initialiser that render workers may reach, and a rayon thread waiting in a parallel loop
-/// steals other jobs, which could re-enter the initialiser and deadlock).
+/// steals other jobs, which could re-enter the initialiser and deadlock). The calling thread
+/// takes the first share; the others go to at most `threads() - 1` new threads.
 fn parallel_map<T: Send + Default + Clone>(n: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |t| t.get())
-        .min(16);
     let mut out = vec![T::default(); n];
-    let chunk = n.div_ceil(threads).max(1);
+    let chunk = n.div_ceil(threads()).max(1);
+    let fill = |c: usize, part: &mut [T]| {
+        for (i, o) in part.iter_mut().enumerate() {
+            *o = f(c * chunk + i);
+        }
+    };
     std::thread::scope(|scope| {
-        for (c, part) in out.chunks_mut(chunk).enumerate() {
-            let f = &f;
-            scope.spawn(move || {
-                for (i, o) in part.iter_mut().enumerate() {
-                    *o = f(c * chunk + i);
-                }
-            });
+        let mut parts = out.chunks_mut(chunk).enumerate();
+        let first = parts.next();
+        for (c, part) in parts {
+            let fill = &fill;
+            scope.spawn(move || fill(c, part));
+        }
+        if let Some((c, part)) = first {
+            fill(c, part);
         }
     });
     out
+}
+
+/// How many threads may compute a table: the size of the rayon pool the caller runs in (the
+/// `--threads` bound: a render's workers reach the tables), else one per core, at most 16.
+fn threads() -> usize {
+    if rayon::current_thread_index().is_some() {
+        return rayon::current_num_threads().clamp(1, 16);
+    }
+    std::thread::available_parallelism()
+        .map_or(1, |t| t.get())
+        .min(16)
 }
 
 struct Table2 {

@@ -1,0 +1,183 @@
+//! The meshes the drawn nodes use, each read once, and glTF meshes whose primitives share their
+//! geometry accessors read once between them (issue 50): a file that draws one sphere with 100
+//! materials as 100 glTF meshes over the same accessors stores one [`crate::Mesh`], and its
+//! instances name their materials in [`crate::Scene::material_sets`].
+
+use std::collections::HashMap;
+
+use crate::accessor::Buffers;
+use crate::material::Materials;
+use crate::mesh::{self, LoadedMesh};
+use crate::{Error, Material, Scene, SceneStats};
+use gltf::mesh::Mode;
+
+/// What a primitive's geometry is read from: its mode, indices accessor and attribute
+/// accessors by name (sorted).
+type PrimitiveKey = (u32, Option<usize>, Vec<(String, usize)>);
+
+/// The meshes read, and the glTF meshes that reuse another's geometry.
+pub(crate) struct ReadMeshes {
+    /// By glTF mesh index: the meshes read.
+    pub meshes: HashMap<usize, LoadedMesh>,
+    /// By glTF mesh index: the mesh whose geometry it draws, and its per-triangle materials
+    /// when they differ from that mesh's (`None`: the same materials).
+    pub aliases: HashMap<usize, (usize, Option<Vec<u32>>)>,
+}
+
+/// The geometry key of `mesh`, or `None` when it may not share: morph targets or joints (they
+/// deform per glTF mesh), Draco streams, or primitives that are not triangles.
+fn geometry_key(mesh: &gltf::Mesh<'_>) -> Option<Vec<PrimitiveKey>> {
+    mesh.primitives()
+        .map(|p| {
+            let not_triangles = matches!(
+                p.mode(),
+                Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip
+            );
+            let deforms = p.morph_targets().next().is_some()
+                || p.attributes()
+                    .any(|(s, _)| s.to_string().starts_with("JOINTS"));
+            let draco = p.extension_value("KHR_draco_mesh_compression").is_some();
+            if not_triangles || deforms || draco {
+                return None;
+            }
+            let mut attributes: Vec<(String, usize)> = p
+                .attributes()
+                .map(|(s, a)| (s.to_string(), a.index()))
+                .collect();
+            attributes.sort();
+            Some((
+                p.mode().as_gl_enum(),
+                p.indices().map(|a| a.index()),
+                attributes,
+            ))
+        })
+        .collect()
+}
+
+/// [`read_meshes`] for the nodes of `order` that are shown (hidden nodes' meshes are not even
+/// read, `KHR_node_visibility`), with tangents generated where normal maps need them.
+pub(crate) fn read_shown(
+    doc: &gltf::Document,
+    order: &[usize],
+    hidden: &[bool],
+    buffers: &Buffers,
+    stats: &mut SceneStats,
+    variant: Option<usize>,
+    materials: &mut Materials,
+) -> Result<ReadMeshes, Error> {
+    let shown: Vec<usize> = order.iter().copied().filter(|&i| !hidden[i]).collect();
+    let mut read = read_meshes(doc, &shown, buffers, stats, variant, materials)?;
+    generate_tangents(&mut read.meshes, &materials.materials);
+    Ok(read)
+}
+
+/// Every mesh the nodes in `order` use, read once each (by glTF mesh index), its materials
+/// gathered into `materials`; a mesh with the geometry key of one read before is an alias of
+/// it (when its materials need the same tangents).
+fn read_meshes(
+    doc: &gltf::Document,
+    order: &[usize],
+    buffers: &Buffers,
+    stats: &mut SceneStats,
+    variant: Option<usize>,
+    materials: &mut Materials,
+) -> Result<ReadMeshes, Error> {
+    let mut out = ReadMeshes {
+        meshes: HashMap::new(),
+        aliases: HashMap::new(),
+    };
+    let mut by_key: HashMap<Vec<PrimitiveKey>, usize> = HashMap::new();
+    for &ni in order {
+        let Some(m) = doc.nodes().nth(ni).and_then(|n| n.mesh()) else {
+            continue;
+        };
+        let mi = m.index();
+        if out.meshes.contains_key(&mi) || out.aliases.contains_key(&mi) {
+            continue;
+        }
+        let key = geometry_key(&m);
+        if let Some(&canon) = key.as_ref().and_then(|k| by_key.get(k)) {
+            let own = primitive_materials(doc, &m, variant, materials);
+            if let Some(set) = alias_materials(&out.meshes[&canon], &own, materials) {
+                stats.primitives += own.len();
+                out.aliases.insert(mi, (canon, set));
+                continue;
+            }
+        }
+        let loaded = mesh::load_mesh(doc, &m, buffers, stats, variant, &mut |i| {
+            materials.get(doc, i)
+        })?;
+        if let Some(k) = key {
+            by_key.entry(k).or_insert(mi);
+        }
+        out.meshes.insert(mi, loaded);
+    }
+    Ok(out)
+}
+
+/// Our material of each primitive of `mesh` (its variant's, else its own).
+fn primitive_materials(
+    doc: &gltf::Document,
+    mesh: &gltf::Mesh<'_>,
+    variant: Option<usize>,
+    materials: &mut Materials,
+) -> Vec<u32> {
+    mesh.primitives()
+        .map(|p| {
+            let index = variant
+                .and_then(|v| mesh::variant_material(&p, v))
+                .or(p.material().index());
+            materials.get(doc, index)
+        })
+        .collect()
+}
+
+/// The per-triangle materials of a mesh drawing `canon`'s geometry with primitive materials
+/// `own`: `Some(None)` when they are `canon`'s, `Some(Some(list))` otherwise, `None` when the
+/// two need tangents differently (generated for `canon`'s materials only).
+fn alias_materials(
+    canon: &LoadedMesh,
+    own: &[u32],
+    materials: &Materials,
+) -> Option<Option<Vec<u32>>> {
+    if own.len() != canon.part_materials.len() {
+        return None;
+    }
+    let uv_set = |id: u32| {
+        materials
+            .materials
+            .get(id as usize)
+            .and_then(crate::tangents::tangent_uv_set)
+    };
+    let pairs = canon.part_materials.iter().zip(own);
+    if pairs.clone().any(|(&(c, _), &o)| uv_set(c) != uv_set(o)) {
+        return None;
+    }
+    if pairs.clone().all(|(&(c, _), &o)| c == o) {
+        return Some(None);
+    }
+    let list = pairs
+        .flat_map(|(&(_, n), &o)| std::iter::repeat_n(o, n))
+        .collect();
+    Some(Some(list))
+}
+
+/// MikkTSpace tangents for normal-mapped meshes, on the rest shape (deformed with it).
+fn generate_tangents(meshes: &mut HashMap<usize, LoadedMesh>, materials: &[Material]) {
+    let mut keys: Vec<usize> = meshes.keys().copied().collect();
+    keys.sort_unstable();
+    let mut tmp = Scene {
+        meshes: keys
+            .iter()
+            .filter_map(|k| meshes.get_mut(k).map(|m| std::mem::take(&mut m.mesh)))
+            .collect(),
+        materials: materials.to_vec(),
+        ..Scene::default()
+    };
+    crate::tangents::generate_missing_tangents(&mut tmp);
+    for (k, m) in keys.iter().zip(tmp.meshes) {
+        if let Some(l) = meshes.get_mut(k) {
+            l.mesh = m;
+        }
+    }
+}

@@ -1,0 +1,128 @@
+//! What the back of a single-sided face is (`--single-sided auto|gltf|blender`), decided as
+//! transmission's meaning is (`crate::transmission`).
+//!
+//! glTF asks for back-face culling where a material is not `doubleSided`: the back of such a
+//! face is seen by no ray (camera, shadow or bounce), as if it were not there. Cycles, after
+//! Blender imports the file, renders both sides (Blender's "Backface Culling" setting is a
+//! viewport and EEVEE option). So:
+//! - `gltf`: the back of a `doubleSided: false` face is invisible to every ray;
+//! - `blender`: both sides are surfaces, as Cycles shows them;
+//! - `auto` (the command line's default): `blender` when `asset.generator` names Blender's
+//!   glTF exporter, else `gltf`.
+
+use crate::surface::{Geometry, Surface};
+use crate::transmission::blender_export;
+use aperture_scene::Scene;
+use glam::Vec3;
+use std::fmt;
+use std::str::FromStr;
+
+/// The `--single-sided` choice.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SidesMode {
+    /// Decide from the file's `asset.generator`.
+    #[default]
+    Auto,
+    /// glTF's meaning: the back of a single-sided face is invisible.
+    Gltf,
+    /// Cycles' meaning: both sides are seen.
+    Blender,
+}
+
+/// A resolved [`SidesMode`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SidesModel {
+    /// Backs of single-sided faces are seen by no ray.
+    Gltf,
+    /// Every face has two sides (what renders of scenes built by hand have always had).
+    #[default]
+    Both,
+}
+
+impl SidesMode {
+    /// The model that applies to a file written by `generator`, and why.
+    pub fn resolve_for(self, generator: Option<&str>) -> (SidesModel, String) {
+        match self {
+            Self::Gltf => (SidesModel::Gltf, "--single-sided gltf".into()),
+            Self::Blender => (SidesModel::Both, "--single-sided blender".into()),
+            Self::Auto => match blender_export(generator) {
+                (true, why) => (SidesModel::Both, why),
+                (false, why) => (SidesModel::Gltf, why),
+            },
+        }
+    }
+
+    /// [`SidesMode::resolve_for`] the scene's file.
+    pub fn resolve(self, scene: &Scene) -> (SidesModel, String) {
+        self.resolve_for(scene.stats.generator.as_deref())
+    }
+}
+
+impl Geometry<'_> {
+    /// The same, with the backs of single-sided faces invisible under `model`
+    /// ([`SidesModel::Both`], the default, sees both sides).
+    pub fn with_sides(mut self, model: SidesModel) -> Self {
+        self.has_culled =
+            model == SidesModel::Gltf && self.scene.materials.iter().any(|m| !m.double_sided);
+        self
+    }
+
+    /// True when a ray along `dir` meets the back of a single-sided face at `s` and so does
+    /// not see it (glTF's back-face culling; never under [`SidesModel::Both`]).
+    #[inline]
+    pub fn is_culled(&self, s: &Surface, dir: Vec3) -> bool {
+        self.has_culled && s.ng.dot(dir) > 0.0 && !self.material(s.material).double_sided
+    }
+}
+
+/// How many of `scene`'s materials are single-sided (not `doubleSided`).
+pub fn single_sided_materials(scene: &Scene) -> usize {
+    scene.materials.iter().filter(|m| !m.double_sided).count()
+}
+
+impl fmt::Display for SidesModel {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Gltf => "gltf",
+            Self::Both => "blender",
+        })
+    }
+}
+
+/// A `--single-sided` value that is not `auto`, `gltf` or `blender`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown single-sided mode {0:?} (expected auto, gltf or blender)")]
+pub struct ParseSidesError(pub String);
+
+impl FromStr for SidesMode {
+    type Err = ParseSidesError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "auto" => Ok(Self::Auto),
+            "gltf" => Ok(Self::Gltf),
+            "blender" => Ok(Self::Blender),
+            _ => Err(ParseSidesError(s.to_owned())),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn auto_follows_the_generator() {
+        let blender = Some("Khronos glTF Blender I/O v4.2.70");
+        assert_eq!(SidesMode::Auto.resolve_for(blender).0, SidesModel::Both);
+        assert_eq!(
+            SidesMode::Auto.resolve_for(Some("Khronos Sample")).0,
+            SidesModel::Gltf
+        );
+        assert_eq!(SidesMode::Auto.resolve_for(None).0, SidesModel::Gltf);
+        assert_eq!(SidesMode::Gltf.resolve_for(blender).0, SidesModel::Gltf);
+        assert_eq!(SidesMode::Blender.resolve_for(None).0, SidesModel::Both);
+        assert_eq!("gltf".parse(), Ok(SidesMode::Gltf));
+        assert!("front".parse::<SidesMode>().is_err());
+    }
+}
