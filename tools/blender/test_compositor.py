@@ -332,7 +332,7 @@ def cycles_sockets():
     for flag in ("z", "normal", "position", "diffuse_direct", "diffuse_indirect", "diffuse_color",
                  "glossy_direct", "glossy_indirect", "glossy_color", "transmission_direct",
                  "transmission_indirect", "transmission_color", "emit", "environment",
-                 "cryptomatte_object", "cryptomatte_material"):
+                 "cryptomatte_object", "cryptomatte_material", "vector"):
         setattr(vl, "use_pass_" + flag, True)
     vl.cycles.denoising_store_passes = True
     vl.cycles.pass_debug_sample_count = True
@@ -364,7 +364,7 @@ def test_names_against_cycles(all_passes):
     # node) with its Alpha.
     cycles["Combined"] = cycles.pop("Image", None)
     wrong = {k: (v, cycles.get(k)) for k, v in ours.items() if cycles.get(k) != v}
-    check("names.cycles", len(ours) == 25 and not wrong,
+    check("names.cycles", len(ours) == 26 and not wrong,
           f"{len(ours)} sockets of an aperture --passes all EXR, each a pass of a Cycles render "
           f"with the same name and type; mismatches (ours, Cycles'): {wrong}")
 

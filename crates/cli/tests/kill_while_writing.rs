@@ -301,13 +301,17 @@ fn a_killed_frame_sequence_leaves_whole_frames_and_resumes_where_it_stopped() {
         seen_partial_sequence,
         "every sequence finished before its kill"
     );
-    // The resumes above may have finished the sequence: one more from scratch, killed about
-    // two frames in (six take three times as long), then resumed to the end.
+    // The resumes above may have finished the sequence: one more from scratch, killed as soon
+    // as its first frame is whole (a sleep of two frames' time let a quick sequence finish on
+    // a loaded machine), then resumed to the end.
     for f in 1..=6 {
         let _ = std::fs::remove_file(frame(f));
     }
     let mut child = sequence().spawn().unwrap();
-    std::thread::sleep(one.mul_f64(2.0));
+    let started = Instant::now();
+    while !frame(1).exists() && started.elapsed() < one.mul_f64(50.0) {
+        std::thread::sleep(Duration::from_millis(1));
+    }
     let _ = child.kill();
     child.wait().unwrap();
     let missing: Vec<u32> = (1..=6).filter(|&f| !frame(f).exists()).collect();
