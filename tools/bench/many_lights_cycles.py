@@ -11,7 +11,7 @@ Run with the bpy venv's Python (``tools/blender/run_test.sh`` installs it):
 
 Both renderers see the same file: Cycles imports it with Blender's glTF importer (point lights
 of radius 0; materials replaced by Lambert of their base colour plus their emission, as
-``tools/reference/bench_renderers.py`` does), aperture renders it with ``--override-material
+``tools/reference/bench_renderers.py``'s ``cycles_material``), aperture renders it with ``--override-material
 diffuse``. Both: 1-pixel box filter, 6 bounces, no clamp, no adaptive sampling, no denoiser.
 For each seed (1 and 2) Cycles and aperture render in turn, so the machine's drift hits both.
 Times: Cycles' ``bpy.ops.render.render`` with persistent data after a warm-up render (no scene
@@ -33,34 +33,15 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "blender"))
+sys.path.insert(0, os.path.join(HERE, "..", "reference"))
 sys.path.insert(0, HERE)
 
 BOUNCES = 6
 
 
-def lambert(nt):
-    """A node tree's Principled BSDF replaced by Diffuse of its base colour, plus its emission."""
-    pbsdf = next(n for n in nt.nodes if n.type == "BSDF_PRINCIPLED")
-    out = next(n for n in nt.nodes if n.type == "OUTPUT_MATERIAL")
-    diff = nt.nodes.new("ShaderNodeBsdfDiffuse")
-    diff.inputs["Roughness"].default_value = 0.0
-    diff.inputs["Color"].default_value = pbsdf.inputs["Base Color"].default_value
-    shader = diff.outputs["BSDF"]
-    strength = pbsdf.inputs["Emission Strength"].default_value
-    colour = list(pbsdf.inputs["Emission Color"].default_value)
-    if strength > 0 and max(colour[:3]) > 0:
-        em = nt.nodes.new("ShaderNodeEmission")
-        em.inputs["Color"].default_value = colour
-        em.inputs["Strength"].default_value = strength
-        add = nt.nodes.new("ShaderNodeAddShader")
-        nt.links.new(shader, add.inputs[0])
-        nt.links.new(em.outputs["Emission"], add.inputs[1])
-        shader = add.outputs["Shader"]
-    nt.links.new(shader, out.inputs["Surface"])
-
-
 def cycles_scene(path, args):
     """The file imported into an empty Blender scene, set to render as aperture does."""
+    import bench_renderers
     import bpy
     import cycles_settings
 
@@ -79,7 +60,7 @@ def cycles_scene(path, args):
     sc.view_settings.view_transform = "Standard"
     for mat in bpy.data.materials:
         if mat.use_nodes:
-            lambert(mat.node_tree)
+            bench_renderers.cycles_material(bpy, mat)
     for light in bpy.data.lights:
         light.shadow_soft_size = 0.0
     sc.camera = next(o for o in sc.objects if o.type == "CAMERA")
