@@ -44,6 +44,14 @@ fn build(c: &mut Criterion) {
     g.bench_function("tree_100k", |b| {
         b.iter(|| black_box(LightTree::build(&geom, Some(&em))))
     });
+    // The same build on one thread: what the parallel subtrees save.
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a one-thread pool");
+    g.bench_function("tree_100k_one_thread", |b| {
+        b.iter(|| one.install(|| black_box(LightTree::build(&geom, Some(&em)))))
+    });
     g.finish();
 }
 

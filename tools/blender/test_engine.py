@@ -234,6 +234,35 @@ def test_frame():
           f"the ball's image moves from x = {xa:.1f} (frame 1) to {xb:.1f} (frame 20)")
 
 
+def red_spread(img):
+    """Centre and spread (standard deviation, px) along x of the image's red excess."""
+    w = np.clip(img[..., 0] - img[..., 1], 0.0, None).sum(axis=0)
+    x = np.arange(w.size)
+    centre = float((w * x).sum() / w.sum())
+    return centre, float(np.sqrt((w * (x - centre) ** 2).sum() / w.sum()))
+
+
+def test_motion_blur():
+    """F12 with Blender's motion blur on: the moving ball smears along its path about where it
+    stands at the frame, and the engine asks aperture for that frame of the animation."""
+    sc = bpy.context.scene
+    sc.frame_set(10)
+    still = render(name="still10")
+    sc.render.use_motion_blur = True
+    sc.render.motion_blur_shutter = 3.0
+    try:
+        blurred = render(name="blur10")
+        cmd = list(engine_module().LAST_RUN["command"])
+    finally:
+        sc.render.use_motion_blur = False
+        sc.frame_set(1)
+    (xs, ss), (xb, sb) = red_spread(still), red_spread(blurred)
+    asked = "--frame" in cmd and cmd[cmd.index("--frame") + 1] == "10"
+    check("engine.motion-blur", asked and sb > ss + 1.0 and abs(xb - xs) < 2.0,
+          f"shutter 3 frames: the ball's red spreads {sb:.2f} px along x against {ss:.2f} still, "
+          f"centred at {xb:.1f} against {xs:.1f}; the command asks for frame 10: {asked}")
+
+
 def test_world():
     sc = bpy.context.scene
     bg = sc.world.node_tree.nodes["Background"]
@@ -377,6 +406,7 @@ def run():
     test_border(base)
     test_camera(base)
     test_frame()
+    test_motion_blur()
     test_world()
     test_denoise()
     test_error()

@@ -253,6 +253,46 @@ fn tree_does_not_depend_on_the_input_order() {
     }
 }
 
+/// Large subtrees are built in parallel: the tree is the same on one thread as on three, and
+/// its probabilities still sum to one (the parts are joined where they belong).
+#[test]
+fn tree_does_not_depend_on_the_thread_count() {
+    let mut rng = Rng(11);
+    let mut lights = lights(&mut rng, 1500);
+    for l in &mut lights {
+        l.kind = LightKind::Point;
+    }
+    let tris = triangles(&mut rng, 6000);
+    let build = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let all = leaves(&lights, &tris);
+        pool.install(|| LightTree::from_leaves(all, &lights, tris.len()).unwrap())
+    };
+    let (one, three) = (build(1), build(3));
+    assert_eq!(one.leaves(), three.leaves());
+    let c = Case {
+        lights: lights.clone(),
+        tris: tris.clone(),
+        tree: three,
+    };
+    for _ in 0..40 {
+        let (p, n, u) = (rng.v(30.0), rng.dir(), rng.f());
+        let (a, b) = (
+            one.pick(&lights, p, n, false, u),
+            c.tree.pick(&lights, p, n, false, u),
+        );
+        assert_eq!(
+            (a.pick, a.probability.to_bits()),
+            (b.pick, b.probability.to_bits())
+        );
+        let sum = total_probability(&c, p, n, true);
+        assert!((sum - 1.0).abs() < 1e-3, "sum {sum} at {p} {n}");
+    }
+}
+
 /// One emissive ball instanced many times: a leaf per triangle of each instance, all of the
 /// same mesh.
 #[test]

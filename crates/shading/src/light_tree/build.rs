@@ -1,5 +1,5 @@
 //! Building the light tree: leaves from the scene's lights, then top-down splits where
-//! [`super::split`] says, on one thread, deterministically.
+//! [`super::split`] says; large subtrees in parallel, the result the same for any thread count.
 
 use super::bounds::Reach;
 use super::split::{self, Split};
@@ -12,6 +12,10 @@ use glam::Vec3;
 
 /// A leaf waiting for its place: its bound, light and the centre it is sorted by.
 type Item = (LightBounds, Leaf, Vec3);
+
+/// Subtrees of this many lights or more are built beside their sibling (`rayon::join`, on the
+/// caller's pool): the tree is the same as one thread's, node for node.
+const PARALLEL_MIN: usize = 2048;
 
 impl LightTree {
     /// The tree of the scene's point and spot lights and of its emissive triangles; `None`
@@ -79,6 +83,32 @@ impl LightTree {
         Some(tree)
     }
 
+    /// An empty tree for a subtree built beside its sibling ([`LightTree::split`]).
+    fn part() -> Self {
+        Self {
+            nodes: Vec::new(),
+            leaves: Vec::new(),
+            trails: Vec::new(),
+            punctual_leaf: Vec::new(),
+            triangle_leaf: Vec::new(),
+            directional: Vec::new(),
+        }
+    }
+
+    /// Appends a subtree built apart, its node and leaf indices moved past this tree's, where
+    /// the one-thread build would have placed it; returns the index of its root.
+    fn append(&mut self, part: Self) -> u32 {
+        let root = self.nodes.len() as u32;
+        let first_leaf = self.leaves.len() as u32;
+        self.nodes.extend(part.nodes.into_iter().map(|mut n| {
+            n.second += if n.leaf { first_leaf } else { root };
+            n
+        }));
+        self.leaves.extend(part.leaves);
+        self.trails.extend(part.trails);
+        root
+    }
+
     /// Appends the subtree of `items` (not empty) at `depth` reached by `trail`, depth first
     /// (a node's first child follows it); returns its bound.
     fn split(&mut self, items: &mut [Item], depth: u32, trail: u64) -> LightBounds {
@@ -105,11 +135,25 @@ impl LightTree {
         items.select_nth_unstable_by(mid, |a, b| {
             a.2[axis].total_cmp(&b.2[axis]).then(a.1.cmp(&b.1))
         });
+        let parallel = items.len() >= PARALLEL_MIN;
         let (left, right) = items.split_at_mut(mid);
         // Depth stays below 64: past `MEDIAN_DEPTH` each level halves the items.
-        let a = self.split(left, depth + 1, trail);
-        let second = self.nodes.len() as u32;
-        let b = self.split(right, depth + 1, trail | (1u64 << depth.min(63)));
+        let right_trail = trail | (1u64 << depth.min(63));
+        let (a, second, b) = if parallel {
+            let (a, (b, sub)) = rayon::join(
+                || self.split(left, depth + 1, trail),
+                || {
+                    let mut sub = Self::part();
+                    let b = sub.split(right, depth + 1, right_trail);
+                    (b, sub)
+                },
+            );
+            (a, self.append(sub), b)
+        } else {
+            let a = self.split(left, depth + 1, trail);
+            let second = self.nodes.len() as u32;
+            (a, second, self.split(right, depth + 1, right_trail))
+        };
         let bounds = a.union(&b);
         self.nodes[at] = Node {
             bounds: Reach::new(&bounds),
