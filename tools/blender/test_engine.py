@@ -234,33 +234,49 @@ def test_frame():
           f"the ball's image moves from x = {xa:.1f} (frame 1) to {xb:.1f} (frame 20)")
 
 
-def red_spread(img):
-    """Centre and spread (standard deviation, px) along x of the image's red excess."""
-    w = np.clip(img[..., 0] - img[..., 1], 0.0, None).sum(axis=0)
+def footprint(img, empty):
+    """Centre and spread (standard deviation, px) along x of where `img` differs from the same
+    view without the ball (`empty`): the ball's image with its shadow."""
+    w = np.abs(img[..., :3] - empty[..., :3]).sum(axis=(0, 2))
     x = np.arange(w.size)
     centre = float((w * x).sum() / w.sum())
     return centre, float(np.sqrt((w * (x - centre) ** 2).sum() / w.sum()))
 
 
 def test_motion_blur():
-    """F12 with Blender's motion blur on: the moving ball smears along its path about where it
-    stands at the frame, and the engine asks aperture for that frame of the animation."""
+    """F12 with Blender's motion blur on (shutter 6 frames, centred at frame 10): the engine asks
+    for frame 10, and the ball's footprint is its still one spread by its path over the shutter
+    (from where it stands at frames 7 and 13): a box of length L adds L²/12 to the variance."""
     sc = bpy.context.scene
-    sc.frame_set(10)
-    still = render(name="still10")
-    sc.render.use_motion_blur = True
-    sc.render.motion_blur_shutter = 3.0
+    ball = bpy.data.objects["Ball"]
     try:
-        blurred = render(name="blur10")
+        sc.frame_set(10)
+        ball.hide_render = True
+        empty = render(name="empty10")
+        ball.hide_render = False
+        ends = []
+        for f in (7, 13):
+            sc.frame_set(f)
+            ends.append(footprint(render(name=f"still{f}"), empty)[0])
+        sc.frame_set(10)
+        still = footprint(render(name="still10"), empty)
+        sc.render.use_motion_blur = True
+        sc.render.motion_blur_shutter = 6.0
+        blurred = footprint(render(name="blur10"), empty)
         cmd = list(engine_module().LAST_RUN["command"])
     finally:
+        ball.hide_render = False
         sc.render.use_motion_blur = False
         sc.frame_set(1)
-    (xs, ss), (xb, sb) = red_spread(still), red_spread(blurred)
+    length = ends[1] - ends[0]
+    added = math.sqrt(max(blurred[1] ** 2 - still[1] ** 2, 0.0))
     asked = "--frame" in cmd and cmd[cmd.index("--frame") + 1] == "10"
-    check("engine.motion-blur", asked and sb > ss + 1.0 and abs(xb - xs) < 2.0,
-          f"shutter 3 frames: the ball's red spreads {sb:.2f} px along x against {ss:.2f} still, "
-          f"centred at {xb:.1f} against {xs:.1f}; the command asks for frame 10: {asked}")
+    check("engine.motion-blur",
+          asked and length > 10 and abs(added - length / math.sqrt(12)) < 0.3 * length / math.sqrt(12)
+          and abs(blurred[0] - still[0]) < 1.5,
+          f"shutter 6 frames: the footprint spreads {blurred[1]:.2f} px against {still[1]:.2f} still, "
+          f"adding {added:.2f} where a {length:.1f} px path adds {length / math.sqrt(12):.2f}; "
+          f"centred at {blurred[0]:.1f} against {still[0]:.1f}; the command asks for frame 10: {asked}")
 
 
 def test_world():
