@@ -63,8 +63,9 @@ impl Probe {
             .iter()
             .map(|h| {
                 h.map(|(i, t)| {
-                    let mesh = scene.instances[i as usize].mesh as usize;
-                    scene.meshes[mesh].material_ids[t as usize]
+                    // The instance's materials: a mesh shared by meshes of other materials
+                    // is drawn with each one's (issue 50).
+                    scene.instance_materials(&scene.instances[i as usize])[t as usize]
                 })
             })
             .collect();
