@@ -276,7 +276,7 @@ fn variants_switch_materials() {
         let names = node_names(&path);
         let fabric = node(&names, "GlamVelvetSofa_fabric");
         let inst = scene.instances.iter().find(|i| i.node == fabric).unwrap();
-        let id = scene.meshes[inst.mesh as usize].material_ids[0];
+        let id = scene.instance_materials(inst)[0];
         (
             scene.materials[id as usize]
                 .name
