@@ -8,6 +8,7 @@
 //! meshes deformed per pose follow them.
 
 mod pose;
+mod visibility;
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -96,6 +97,8 @@ pub struct Animated {
     shapes: HashMap<usize, Shape>,
     /// Per node: it or an ancestor is moved by a selected channel.
     moves: Vec<bool>,
+    /// Per node: it or an ancestor has its `KHR_node_visibility` flag keyed.
+    toggles: Vec<bool>,
     options: LoadOptions,
     stats: SceneStats,
     draws_nothing: bool,
@@ -196,17 +199,18 @@ impl Animated {
         let graph = node_graph(&doc, &buffers)?;
         let order = drawn_order(&doc, options, &graph, &mut stats)?;
         stats.nodes = order.len();
-        stats.hidden_nodes = order.iter().filter(|&&i| graph.hidden[i]).count();
 
         let animations = animation::parse(&doc, &buffers, &root, &options.animation)?;
-        pointer_warnings(&animations.ignored_pointers, &mut stats.warnings);
+        pointer_warnings(&animations, &mut stats.warnings);
         stats.animations = animations.info.clone();
+        let (toggles, never_shown) =
+            visibility::plan(&graph, &animations.channels, &order, &mut stats);
 
         let mut materials = Materials::default();
         let read = crate::shared::read_shown(
             &doc,
             &order,
-            &graph.hidden,
+            &never_shown,
             &buffers,
             &mut stats,
             variant,
@@ -230,6 +234,7 @@ impl Animated {
 
         let mut animated = Animated {
             moves: vec![false; graph.nodes.len()],
+            toggles,
             graph,
             order,
             meshes,
@@ -577,8 +582,10 @@ fn ignored_extension_warnings(ignored: &[&str]) -> Vec<String> {
         .collect()
 }
 
-/// What the user should know of the `KHR_animation_pointer` pointers aperture ignores.
-fn pointer_warnings(ignored: &[String], out: &mut Vec<String>) {
+/// What the user should know of the `KHR_animation_pointer` pointers aperture ignores, and
+/// of channels evaluated otherwise than keyed.
+fn pointer_warnings(animations: &Animations, out: &mut Vec<String>) {
+    let ignored = &animations.ignored_pointers;
     if !ignored.is_empty() {
         out.push(format!(
             "KHR_animation_pointer: {} pointer(s) at what aperture does not animate, ignored: {}",
@@ -586,11 +593,5 @@ fn pointer_warnings(ignored: &[String], out: &mut Vec<String>) {
             ignored.join(", ")
         ));
     }
-    if ignored.iter().any(|p| p.contains("KHR_node_visibility")) {
-        out.push(
-            "KHR_node_visibility: animated visibility is not evaluated yet; every node keeps its \
-             stored visibility at every time"
-                .into(),
-        );
-    }
+    out.extend(animations.warnings.iter().cloned());
 }

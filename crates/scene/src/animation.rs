@@ -89,6 +89,8 @@ pub(crate) struct Animations {
     pub info: Vec<AnimationInfo>,
     /// Pointers that were ignored (what they point at is not animated by aperture).
     pub ignored_pointers: Vec<String>,
+    /// What the user should know of channels that are evaluated otherwise than keyed.
+    pub warnings: Vec<String>,
 }
 
 impl Sampler {
@@ -503,17 +505,47 @@ fn read_channel(
         ));
     }
     if selected {
+        let (values, interpolation) = match target {
+            Target::Pointer(Pointer::NodeVisible(_)) => {
+                bool_keys(values, *interpolation, &cat, out)
+            }
+            _ => (values.clone(), *interpolation),
+        };
         out.channels.push(Channel {
             target,
             sampler: Sampler {
                 times: times.clone(),
-                values: values.clone(),
+                values,
                 width,
-                interpolation: *interpolation,
+                interpolation,
             },
         });
     }
     Ok(span)
+}
+
+/// The keys of a bool channel (`KHR_node_visibility`'s `visible`) as STEP keys: a bool cannot
+/// be interpolated, and `KHR_animation_pointer` requires STEP for it; a LINEAR or CUBICSPLINE
+/// sampler is held at each key's value (warned), not blended into a value that is neither.
+fn bool_keys(
+    values: &[f32],
+    interpolation: Interpolation,
+    at: &str,
+    out: &mut Animations,
+) -> (Vec<f32>, Interpolation) {
+    if interpolation == Interpolation::Step {
+        return (values.to_vec(), interpolation);
+    }
+    out.warnings.push(format!(
+        "{at}: KHR_node_visibility's visible is a bool keyed with {interpolation:?} \
+         interpolation (KHR_animation_pointer requires STEP): each key held until the next"
+    ));
+    let keys = match interpolation {
+        // In-tangent, value, out-tangent per key: the values only.
+        Interpolation::CubicSpline => values.iter().skip(1).step_by(3).copied().collect(),
+        _ => values.to_vec(),
+    };
+    (keys, Interpolation::Step)
 }
 
 /// The animations as `0 "Walk", 1 (unnamed)` for messages.
@@ -531,49 +563,4 @@ fn names(info: &[AnimationInfo]) -> String {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn sampler(times: &[f32], values: &[f32], width: usize, i: Interpolation) -> Sampler {
-        Sampler {
-            times: times.to_vec(),
-            values: values.to_vec(),
-            width,
-            interpolation: i,
-        }
-    }
-
-    #[test]
-    fn step_linear_and_clamping() {
-        let s = sampler(&[1.0, 2.0], &[10.0, 20.0], 1, Interpolation::Linear);
-        assert_eq!(s.sample(0.0, false), [10.0]);
-        assert_eq!(s.sample(1.25, false), [12.5]);
-        assert_eq!(s.sample(5.0, false), [20.0]);
-        let s = sampler(&[1.0, 2.0], &[10.0, 20.0], 1, Interpolation::Step);
-        assert_eq!(s.sample(1.99, false), [10.0]);
-        assert_eq!(s.sample(2.0, false), [20.0]);
-    }
-
-    #[test]
-    fn cubic_spline_hits_keys_and_follows_tangents() {
-        // Keys 0 -> 1 over one second with out-tangent 0 and in-tangent 0: smoothstep.
-        let s = sampler(
-            &[0.0, 1.0],
-            &[0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
-            1,
-            Interpolation::CubicSpline,
-        );
-        assert_eq!(s.sample(0.0, false), [0.0]);
-        assert!((s.sample(0.5, false)[0] - 0.5).abs() < 1e-12);
-        assert!((s.sample(0.25, false)[0] - (3.0 * 0.0625 - 2.0 * 0.015625)).abs() < 1e-12);
-    }
-
-    #[test]
-    fn slerp_takes_the_short_way_at_constant_speed() {
-        let a = DQuat::IDENTITY;
-        let b = DQuat::from_rotation_y(std::f64::consts::FRAC_PI_2);
-        let h = slerp(a, -b, 0.5);
-        let want = DQuat::from_rotation_y(std::f64::consts::FRAC_PI_4);
-        assert!(h.dot(want).abs() > 1.0 - 1e-12, "{h:?}");
-    }
-}
+mod tests;

@@ -80,6 +80,8 @@ pub(crate) struct NodeGraph {
     /// `KHR_node_visibility`: the node or an ancestor is stored `visible: false`. Hidden nodes
     /// draw nothing and light nothing; their transforms still place cameras and focus objects.
     pub hidden: Vec<bool>,
+    /// The node's own stored flag is `visible: false` (what an animated flag replaces).
+    pub own_hidden: Vec<bool>,
 }
 
 /// A node's own `KHR_node_visibility` flag (visible unless it says `false`).
@@ -216,6 +218,7 @@ pub(crate) fn node_graph(doc: &gltf::Document, buffers: &Buffers) -> Result<Node
         children,
         topological,
         hidden,
+        own_hidden: own,
     })
 }
 

@@ -1,7 +1,8 @@
 //! `KHR_animation_pointer` targets aperture animates (SPEC §7): node TRS and weights, mesh
 //! weights, camera `yfov`/`znear`/`zfar`/`xmag`/`ymag`, light colour/intensity/cone angles/range,
 //! material factors and texture transforms, and the numeric depth-of-field keys of SPEC §3 at
-//! `/cameras/{i}/extras/<key>`. Anything else is ignored (the loader warns once, naming them).
+//! `/cameras/{i}/extras/<key>`, and `KHR_node_visibility`'s `visible` flag. Anything else is
+//! ignored (the loader warns once, naming them).
 
 use glam::{Vec2, Vec3, Vec4};
 use serde_json::Value;
@@ -13,6 +14,9 @@ use crate::{Material, TextureRef, TextureTransform};
 pub(crate) enum Pointer {
     /// `/nodes/{i}/translation|rotation|scale|weights`.
     Node(usize, NodeProperty),
+    /// `/nodes/{i}/extensions/KHR_node_visibility/visible`: a bool, keyed as unsigned bytes
+    /// (0 is false, anything else true) with STEP interpolation (`KHR_animation_pointer`).
+    NodeVisible(usize),
     /// `/meshes/{i}/weights`: the default weights of every node drawing the mesh without its own.
     MeshWeights(usize),
     /// `/cameras/{i}/perspective/...` or `/orthographic/...`.
@@ -113,7 +117,7 @@ impl Pointer {
             Pointer::Node(_, NodeProperty::Translation | NodeProperty::Scale) => 3,
             Pointer::Node(_, NodeProperty::Rotation) => 4,
             Pointer::Node(_, NodeProperty::Weights) | Pointer::MeshWeights(_) => return None,
-            Pointer::Camera(..) | Pointer::CameraExtra(..) => 1,
+            Pointer::Camera(..) | Pointer::CameraExtra(..) | Pointer::NodeVisible(_) => 1,
             Pointer::Light(_, LightProperty::Color) => 3,
             Pointer::Light(..) => 1,
             Pointer::Material(_, p) => match p {
@@ -208,6 +212,9 @@ pub(crate) fn parse(pointer: &str, root: &Value) -> Option<Pointer> {
                 _ => return None,
             },
         ),
+        ["nodes", i, "extensions", "KHR_node_visibility", "visible"] => {
+            Pointer::NodeVisible(index(i, "nodes")?)
+        }
         ["meshes", i, "weights"] => Pointer::MeshWeights(index(i, "meshes")?),
         ["cameras", i, "extras", key] => {
             Pointer::CameraExtra(index(i, "cameras")?, DOF_KEYS.iter().find(|k| *k == key)?)
@@ -349,6 +356,11 @@ mod tests {
             None
         );
         assert_eq!(p("/meshes/0/weights"), Some(Pointer::MeshWeights(0)));
+        assert_eq!(
+            p("/nodes/0/extensions/KHR_node_visibility/visible"),
+            Some(Pointer::NodeVisible(0))
+        );
+        assert_eq!(p("/nodes/1/extensions/KHR_node_visibility/visible"), None);
         assert_eq!(p("nodes/0/rotation"), None);
     }
 

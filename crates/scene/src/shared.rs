@@ -54,8 +54,9 @@ fn geometry_key(mesh: &gltf::Mesh<'_>) -> Option<Vec<PrimitiveKey>> {
         .collect()
 }
 
-/// [`read_meshes`] for the nodes of `order` that are shown (hidden nodes' meshes are not even
-/// read, `KHR_node_visibility`), with tangents generated where normal maps need them.
+/// [`read_meshes`] for the nodes of `order` that may be shown (`hidden`: hidden at every time,
+/// stored hidden and not keyed visible, `KHR_node_visibility`; their meshes are not even read),
+/// with tangents generated where normal maps need them.
 pub(crate) fn read_shown(
     doc: &gltf::Document,
     order: &[usize],

@@ -392,8 +392,12 @@ pub struct SceneStats {
     /// required one aperture lacks never gets here: the load is refused).
     pub extensions: Vec<(String, ExtensionStatus)>,
     /// Nodes of the selected scene hidden by `KHR_node_visibility` (themselves or an
-    /// ancestor): not drawn, not lights, not in Cryptomatte.
+    /// ancestor): not drawn, not lights, not in Cryptomatte. At the posed time when the flags
+    /// are keyed.
     pub hidden_nodes: usize,
+    /// Nodes of the selected scene whose own `KHR_node_visibility` flag a selected
+    /// `KHR_animation_pointer` channel keys (evaluated at each time).
+    pub keyed_visibility_nodes: usize,
     /// Features present in the file but not evaluated.
     pub skipped_features: Vec<String>,
     /// Warnings for the user (one line each).

@@ -45,7 +45,9 @@ impl Animated {
         let mut camera_data = self.cameras.clone();
         let mut materials = self.materials.clone();
         self.apply_pointers(&pose, &mut light_data, &mut camera_data, &mut materials)?;
-        for &ni in self.order.iter().filter(|&&ni| !self.graph.hidden[ni]) {
+        let hidden = self.hidden_at(&pose);
+        stats.hidden_nodes = self.order.iter().filter(|&&ni| hidden[ni]).count();
+        for &ni in self.order.iter().filter(|&&ni| !hidden[ni]) {
             let node = &self.graph.nodes[ni];
             let world = pose.world[ni];
             if let Some(mi) = node.mesh {
@@ -256,7 +258,8 @@ impl Animated {
                         }
                     }
                 }
-                Pointer::Node(..) | Pointer::MeshWeights(_) => {}
+                // Visibility is read by `hidden_at`; nodes and mesh weights by the pose.
+                Pointer::Node(..) | Pointer::MeshWeights(_) | Pointer::NodeVisible(_) => {}
             }
         }
         Ok(())
