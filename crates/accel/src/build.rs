@@ -76,31 +76,76 @@ enum BlasJob {
     Reuse(Blas),
 }
 
-/// What the previous frame offers: per mesh, its unchanged bottom-level BVH, and the
-/// world-space BVH (with its count of triangles degenerate in world space) when it holds the
-/// same instances (`key`).
+/// What the previous frame offers.
+struct Previous {
+    /// Per mesh: its unchanged bottom-level BVH, for the meshes that need one now.
+    taken: Vec<Option<Blas>>,
+    /// The world-space BVH (with its count of triangles degenerate in world space) when it
+    /// holds the same placements (`key`).
+    flat_taken: Option<(Blas, usize)>,
+    /// The unchanged bottom-level BVHs of meshes that need none now, kept for a later frame.
+    spare: Vec<(u32, Blas)>,
+}
+
+/// What the previous frame offers (see [`Previous`]). The bottom-level BVH of a mesh no
+/// instance draws in its own BVH this frame (keyed hidden, say) is kept aside rather than
+/// dropped, so a mesh that is shown again is not rebuilt.
 fn take_previous(
     mut previous: Option<Accel>,
     mesh_count: usize,
     own_blas: &[bool],
     hints: &FrameHints<'_>,
-    key: u64,
-    flat: &[(u32, InstanceInput)],
-) -> (Vec<Option<Blas>>, Option<(Blas, usize)>) {
+    (key, flat): (u64, &[(u32, InstanceInput)]),
+) -> Previous {
     let reusable = |m: usize| m < hints.deforming_from && hints.deforming_from != usize::MAX;
-    let mut taken = vec![None; mesh_count];
-    let mut flat_taken = None;
-    if let Some(prev) = previous.as_mut() {
-        for m in (0..mesh_count).filter(|&m| own_blas[m] && reusable(m)) {
-            if let Some(&b) = prev.blas_of_mesh.get(m).filter(|&&b| b != u32::MAX) {
-                taken[m] = Some(std::mem::take(&mut prev.blases[b as usize]));
-            }
-        }
-        if prev.flat.is_some_and(|(k, _)| k == key) && !flat.is_empty() {
-            flat_taken = Some((std::mem::take(&mut prev.blases[0]), prev.flat_degenerate));
+    let mut out = Previous {
+        taken: vec![None; mesh_count],
+        flat_taken: None,
+        spare: Vec::new(),
+    };
+    let Some(prev) = previous.as_mut() else {
+        return out;
+    };
+    let mut kept: Vec<Option<Blas>> = vec![None; mesh_count];
+    for m in (0..mesh_count).filter(|&m| reusable(m)) {
+        if let Some(&b) = prev.blas_of_mesh.get(m).filter(|&&b| b != u32::MAX) {
+            kept[m] = Some(std::mem::take(&mut prev.blases[b as usize]));
         }
     }
-    (taken, flat_taken)
+    for (m, blas) in prev.spare.drain(..) {
+        if let Some(k) = kept.get_mut(m as usize).filter(|_| reusable(m as usize)) {
+            k.get_or_insert(blas);
+        }
+    }
+    for (m, k) in kept.into_iter().enumerate() {
+        match k {
+            Some(blas) if own_blas[m] => out.taken[m] = Some(blas),
+            Some(blas) => out.spare.push((m as u32, blas)),
+            None => {}
+        }
+    }
+    match prev.flat.take() {
+        Some((k, ids)) if k == key && ids.len() == flat.len() && !flat.is_empty() => {
+            let mut blas = std::mem::take(&mut prev.blases[0]);
+            renumber(&mut blas.tri_instance, &ids, flat);
+            out.flat_taken = Some((blas, prev.flat_degenerate));
+        }
+        _ => {}
+    }
+    out
+}
+
+/// The instance of each triangle of a world-space BVH built over `old` (its instances,
+/// ascending) renamed to the instance at the same place of `flat` (the same placements).
+fn renumber(tri_instance: &mut [u32], old: &[u32], flat: &[(u32, InstanceInput)]) {
+    if old.iter().zip(flat).all(|(o, (n, _))| o == n) {
+        return;
+    }
+    for id in tri_instance {
+        if let Ok(k) = old.binary_search(id) {
+            *id = flat[k].0;
+        }
+    }
 }
 
 /// The meshes' validity counts into `stats`, drawn triangles counted per use.
@@ -215,8 +260,11 @@ impl Accel {
         stats.flattened_instances = flat.len();
 
         let key = flat_key(&flat);
-        let (taken, flat_taken) =
-            take_previous(previous, meshes.len(), &own_blas, &hints, key, &flat);
+        let Previous {
+            taken,
+            flat_taken,
+            spare,
+        } = take_previous(previous, meshes.len(), &own_blas, &hints, (key, &flat));
 
         let checked: Vec<Checked> = meshes
             .par_iter()
@@ -249,16 +297,33 @@ impl Accel {
             quality,
         );
         accel.blas_of_mesh = jobs.blas_of_mesh;
-        accel.flat = has_flat.then_some((key, flat.len()));
+        accel.flat = has_flat.then(|| (key, flat.iter().map(|(id, _)| *id).collect()));
         accel.flat_degenerate = jobs.flat_degenerate;
-        accel.instance_magnitude = vec![0.0f32; instances.len()];
-        for (id, inst, _) in &usable {
+        accel.spare = spare;
+        accel.set_magnitudes(meshes, instances, &usable, hints.motion);
+        accel.count_structure(&mut stats);
+        stats.build_time = start.elapsed();
+        accel.stats = stats;
+        accel
+    }
+
+    /// Per input instance, the bound on the magnitudes its points meet
+    /// (`instance_magnitude`, for spawning points).
+    fn set_magnitudes(
+        &mut self,
+        meshes: &[MeshInput<'_>],
+        instances: &[InstanceInput],
+        usable: &[Usable],
+        motion: &[Option<MotionTransform>],
+    ) {
+        self.instance_magnitude = vec![0.0f32; instances.len()];
+        for (id, inst, _) in usable {
             let mesh = &meshes[inst.mesh as usize];
-            accel.instance_magnitude[*id as usize] = magnitude(mesh, &inst.world_from_object);
+            self.instance_magnitude[*id as usize] = magnitude(mesh, &inst.world_from_object);
         }
         // A moving instance's points meet the magnitudes of every place it passes: the bound
         // at its keys and between them (sampled as its swept box is).
-        for (id, keys) in hints.motion.iter().enumerate() {
+        for (id, keys) in motion.iter().enumerate() {
             let (Some(keys), Some(inst)) = (keys, instances.get(id)) else {
                 continue;
             };
@@ -266,13 +331,9 @@ impl Accel {
             let most = (0..=32)
                 .map(|k| magnitude(mesh, &keys.at(k as f32 / 32.0)))
                 .fold(0.0f32, f32::max);
-            let m = &mut accel.instance_magnitude[id];
+            let m = &mut self.instance_magnitude[id];
             *m = m.max(most);
         }
-        accel.count_structure(&mut stats);
-        stats.build_time = start.elapsed();
-        accel.stats = stats;
-        accel
     }
 
     /// The sizes of the built structure into `stats`: trees, entries, nodes, depth, memory.
@@ -369,6 +430,7 @@ impl Accel {
             blas_of_mesh: Vec::new(),
             flat: None,
             flat_degenerate: 0,
+            spare: Vec::new(),
             motions,
         }
     }

@@ -133,10 +133,14 @@ pub struct Accel {
     stats: AccelStats,
     /// Per input mesh: its bottom-level BVH in `blases`, or `u32::MAX` (flattened, or not drawn).
     blas_of_mesh: Vec<u32>,
-    /// The world-space BVH's key and instance count, when there is one (`blases[0]`).
-    flat: Option<(u64, usize)>,
+    /// The world-space BVH's key and its instances (ascending), when there is one (`blases[0]`).
+    flat: Option<(u64, Vec<u32>)>,
     /// Triangles that only became degenerate in world space when flattened.
     flat_degenerate: usize,
+    /// Bottom-level BVHs of unchanged meshes this frame does not use (by mesh), kept for the
+    /// next frame's [`Accel::build_frame`]: a mesh keyed hidden for a while is not rebuilt
+    /// when shown again. Never walked.
+    spare: Vec<(u32, Blas)>,
     /// The transforms of moving entries ([`Entry::motion`]).
     motions: Vec<MotionTransform>,
 }

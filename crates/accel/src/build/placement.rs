@@ -58,8 +58,10 @@ impl FrameHints<'_> {
     };
 }
 
-/// A key of the world-space BVH's contents: which instances of which meshes, with which
-/// transforms. Equal keys (and static meshes) mean an equal BVH.
+/// A key of the world-space BVH's contents: which meshes, with which transforms, in order.
+/// Equal keys (and static meshes) mean an equal BVH but for the instance each triangle
+/// names: instances that come and go before them (keyed visibility) renumber the same
+/// placements, whose BVH is then taken over with its instance numbers changed.
 pub(super) fn flat_key(flat: &[(u32, InstanceInput)]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     let mut eat = |w: u32| {
@@ -67,8 +69,7 @@ pub(super) fn flat_key(flat: &[(u32, InstanceInput)]) -> u64 {
             h = (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
         }
     };
-    for (id, inst) in flat {
-        eat(*id);
+    for (_, inst) in flat {
         eat(inst.mesh);
         for v in inst.world_from_object.to_cols_array() {
             eat(v.to_bits());
