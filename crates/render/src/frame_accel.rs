@@ -33,7 +33,8 @@ pub fn auto_bvh_quality(triangles: usize, samples: u64) -> BvhQuality {
 /// What of a posed scene may change between frames, for [`Accel::build_frame`].
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SceneHints {
-    /// Per instance of the scene: its node moves with time.
+    /// Per instance of the scene: its node moves with time, or its visibility is keyed (it
+    /// comes and goes, and kept out of the world-space BVH, it does not make that be rebuilt).
     pub moving: Vec<bool>,
     /// Meshes from this index on deform with time.
     pub deforming_from: usize,
@@ -51,12 +52,12 @@ impl SceneHints {
     /// The hints of `scene`, posed from `animated`.
     pub fn new(animated: &Animated, scene: &Scene) -> Self {
         let moving_nodes = animated.moving_nodes();
+        let toggling_nodes = animated.toggling_nodes();
+        let changes = |node: u32| {
+            moving_nodes.binary_search(&node).is_ok() || toggling_nodes.binary_search(&node).is_ok()
+        };
         Self {
-            moving: scene
-                .instances
-                .iter()
-                .map(|i| moving_nodes.binary_search(&i.node).is_ok())
-                .collect(),
+            moving: scene.instances.iter().map(|i| changes(i.node)).collect(),
             deforming_from: animated.static_mesh_count(),
         }
     }

@@ -76,7 +76,6 @@ pub fn for_each_frame<E>(
 ) -> Result<(), E> {
     let total = frames.frames().count();
     let mut previous: Option<Accel> = None;
-    let mut hints: Option<SceneHints> = None;
     for (index, frame) in frames.frames().enumerate() {
         let mut posed = PosedFrame {
             frame,
@@ -95,15 +94,11 @@ pub fn for_each_frame<E>(
             .scene_at(Some(time))
             .map_err(|source| pose_error(frame, source))?;
         posed.pose_secs = t0.elapsed().as_secs_f64();
-        let h = hints.get_or_insert_with(|| SceneHints::new(animated, &scene));
-        // A posed scene with another instance count (cannot happen for one file) rebuilds all.
-        let reuse = if h.moving.len() == scene.instances.len() {
-            previous.take()
-        } else {
-            *h = SceneHints::new(animated, &scene);
-            None
-        };
-        let accel = build_frame_accel(&scene, quality, h, reuse);
+        // The hints of this frame's instances (keyed visibility changes which there are): the
+        // single-frame render's, so the image is the same. Bottom-level BVHs are taken over
+        // by mesh, the world-space one by its placements, whatever instances came or went.
+        let hints = SceneHints::new(animated, &scene);
+        let accel = build_frame_accel(&scene, quality, &hints, previous.take());
         posed.setup_secs = t0.elapsed().as_secs_f64();
         posed.posed = Some((&scene, &accel));
         each(posed)?;
