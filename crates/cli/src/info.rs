@@ -187,6 +187,7 @@ fn report(s: &Scene, materials: &MaterialArgs) -> Value {
         "node_bounds": node_bounds(s),
         "world_origin": [s.world_origin.x, s.world_origin.y, s.world_origin.z],
         "hidden_nodes": s.stats.hidden_nodes,
+        "keyed_visibility_nodes": s.stats.keyed_visibility_nodes,
         "extensions": extensions_json(&s.stats.extensions),
         "skipped": {
             "primitives": s.stats.skipped_primitives,
@@ -306,6 +307,12 @@ fn print_skipped_and_warnings(r: &Value) {
         println!(
             "  hidden: {} node(s) (KHR_node_visibility; not drawn, not lights)",
             count(&r["hidden_nodes"])
+        );
+    }
+    if count(&r["keyed_visibility_nodes"]) > 0 {
+        println!(
+            "  keyed visibility: {} node(s) (KHR_animation_pointer; shown and hidden per frame)",
+            count(&r["keyed_visibility_nodes"])
         );
     }
     if count(&skipped["primitives"]) > 0 {
@@ -520,6 +527,7 @@ mod tests {
             ("KHR_xmp".into(), ExtensionStatus::Ignored),
         ];
         s.stats.hidden_nodes = 3;
+        s.stats.keyed_visibility_nodes = 2;
         let r = report(&s, &Default::default());
         assert_eq!(r["extensions"][0]["name"], "KHR_node_visibility");
         assert_eq!(r["extensions"][0]["status"], "supported");
@@ -530,6 +538,7 @@ mod tests {
             .unwrap()
             .contains("optional"));
         assert_eq!(r["hidden_nodes"], 3);
+        assert_eq!(r["keyed_visibility_nodes"], 2);
     }
 
     #[test]
