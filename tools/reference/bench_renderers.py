@@ -146,7 +146,20 @@ def cycles_load(scene, gltf, size, threads):
     return sc
 
 
-def cycles_renderer(scene, gltf, size, threads, tmp):
+def cycles_denoising(sc, on):
+    """Cycles' own denoiser as a Blender user has it by default for F12, set explicitly: Open
+    Image Denoise on the CPU with albedo and normal, accurate prefilter, high quality."""
+    cy = sc.cycles
+    cy.use_denoising = on
+    if on:
+        cy.denoiser = "OPENIMAGEDENOISE"
+        cy.denoising_input_passes = "RGB_ALBEDO_NORMAL"
+        cy.denoising_prefilter = "ACCURATE"
+        cy.denoising_quality = "HIGH"
+        cy.denoising_use_gpu = False
+
+
+def cycles_renderer(scene, gltf, size, threads, tmp, denoise=False):
     """render(spp, seed) -> (image, seconds): the seconds are `bpy.ops.render.render(write_still=
     True)` (with persistent data: session start, render, film read-back, the EXR write -- the
     render_post and render_write handlers fire within 1 ms of the call's end; no scene sync or
@@ -158,7 +171,9 @@ def cycles_renderer(scene, gltf, size, threads, tmp):
 
     sc = cycles_load(scene, gltf, size, threads)
 
-    def render(spp, seed):
+    def render(spp, seed, raw=False):
+        # raw: the reference, never denoised (its error is what a denoised image is judged by)
+        cycles_denoising(sc, denoise and not raw)
         sc.cycles.samples, sc.cycles.seed = spp, seed
         # A new output path each time: else a persistent session renders with the old samples
         # and seed (sc.update_tag() also works, but re-syncs more: +0.15 s on the interior).
@@ -187,7 +202,7 @@ def mitsuba_renderer(scene, out, size, threads, variant):
     mi.set_variant(variant)
     dr.set_thread_count(threads)
     loaded = mi.load_dict(mitsuba_dict(mi, scene, os.path.join(out, "scenes", "ply"), size))
-    return lambda spp, seed: bm.render(dr, mi, loaded, spp, seed)
+    return lambda spp, seed, raw=False: bm.render(dr, mi, loaded, spp, seed)
 
 
 def exr_render_time(path):
@@ -202,7 +217,9 @@ def exr_render_time(path):
         attrs, _ = exr.attributes(f.read())
     if "aperture:renderTime" not in attrs:
         raise ValueError(f"{path}: no aperture:renderTime")
-    return float(np.frombuffer(attrs["aperture:renderTime"][1], "<f4")[0])
+    # A denoised render's wait is the render and the denoiser (Cycles' time holds both).
+    return sum(float(np.frombuffer(attrs[k][1], "<f4")[0])
+               for k in ("aperture:renderTime", "aperture:denoiseTime") if k in attrs)
 
 
 def read_exr_rgb(path):
@@ -225,7 +242,7 @@ def read_exr_rgb(path):
 WARM_MAX_SPP = 256
 
 
-def aperture_renderer(scene, gltf, binary, size, threads, tmp, bvh="medium"):
+def aperture_renderer(scene, gltf, binary, size, threads, tmp, bvh="medium", denoise=False):
     """aperture: one `aperture render` process per render; the seconds are the render time the
     EXR header records (the traced image only: scene loading and BVH build excluded), beauty
     only (`--passes none`: Mitsuba and Cycles render no Depth, Normal or Cryptomatte either). The BVH
@@ -243,14 +260,15 @@ def aperture_renderer(scene, gltf, binary, size, threads, tmp, bvh="medium"):
     # calls, so one comparison (one more EXR read) settles it for all of them.
     still = []
 
-    def render(spp, seed):
+    def render(spp, seed, raw=False):
         last = 2 if spp <= WARM_MAX_SPP else 1
+        dn = ["--denoise"] if denoise and not raw else []
         pattern = os.path.join(tmp, "aperture_####.exr")
         cmd = [binary, "render", gltf, "-o", pattern, "--frames", f"1..{last}",
                "--width", str(size[0]), "--height", str(size[1]),
                "--spp", str(spp), "--seed", str(seed), "--threads", str(threads),
                "--max-bounces", str(MAX_BOUNCES), "--filter", "box", "--override-material", "diffuse",
-               "--bvh-quality", bvh, "--passes", "none", "--quiet", *env]
+               "--bvh-quality", bvh, "--passes", "none", "--quiet", *dn, *env]
         subprocess.run(cmd, check=True)
         exr = pattern.replace("####", f"{last:04d}")
         img = read_exr_rgb(exr)

@@ -332,8 +332,8 @@ def gltf_path(scene, out):
 def reference(render, spp, path):
     """Average of two independent halves; its noise RMSE is rmse(a, b) / 2. Saved as .npy + .json."""
     t0 = time.perf_counter()
-    a, _ = render(spp // 2, REFERENCE_SEEDS[0])
-    b, _ = render(spp // 2, REFERENCE_SEEDS[1])
+    a, _ = render(spp // 2, REFERENCE_SEEDS[0], raw=True)
+    b, _ = render(spp // 2, REFERENCE_SEEDS[1], raw=True)
     ref = 0.5 * (a + b)
     meta = {"spp": spp, "noise_rmse": float(np.sqrt(np.mean((a - b) ** 2)) / 2.0),
             "mean_rgb": ref.reshape(-1, 3).mean(0).tolist(), "seconds": time.perf_counter() - t0}
@@ -477,8 +477,9 @@ def make_renderer(args, tmp):
     if args.renderer == "mitsuba":
         return mitsuba_renderer(scene, args.output, size, args.threads, args.variant), size
     if args.renderer == "cycles":
-        return cycles_renderer(scene, gltf, size, args.threads, tmp), size
-    return aperture_renderer(scene, gltf, args.aperture, size, args.threads, tmp, args.bvh_quality), size
+        return cycles_renderer(scene, gltf, size, args.threads, tmp, args.denoise), size
+    return aperture_renderer(scene, gltf, args.aperture, size, args.threads, tmp, args.bvh_quality,
+                             args.denoise), size
 
 
 def run_series(args):
@@ -516,7 +517,8 @@ class Worker:
         cmd = [python, os.path.abspath(__file__), "worker", "--renderer", renderer, "--scene", name,
                "-o", args.output, "--reference-spp", str(args.reference_spp), "--threads", str(args.threads),
                "--size", args.size, "--aperture", args.aperture, "--variant", args.variant,
-               "--bvh-quality", args.bvh_quality, "--result-fd", str(write_end)]
+               "--bvh-quality", args.bvh_quality, "--result-fd", str(write_end),
+               *(["--denoise"] if args.denoise else [])]
         self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, text=True, pass_fds=(write_end,))
         os.close(write_end)
         self.answers = os.fdopen(read)
@@ -625,6 +627,9 @@ def parser():
     ap.add_argument("--target-multiples", default="4,8,16",
                     help="RMSE targets as multiples of the noisiest reference's noise RMSE")
     ap.add_argument("--target", action="append", help="SCENE=RMSE,RMSE...: explicit targets (repeatable)")
+    ap.add_argument("--denoise", action="store_true",
+                    help="budgets denoised (aperture --denoise; Cycles' OIDN, albedo+normal, accurate "
+                         "prefilter), references not: the error of a denoised image against the truth")
     ap.add_argument("--scene", help="series: the scene")
     ap.add_argument("--renderer", choices=RENDERERS, help="series: the renderer")
     ap.add_argument("--result-fd", type=int, help="worker: where its answers go")

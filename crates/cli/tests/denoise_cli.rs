@@ -86,6 +86,8 @@ fn render_denoise_writes_the_denoised_beauty_and_the_noisy_one() {
     }
     let img = read_exr(&exr).unwrap();
     assert_eq!(img.meta("aperture:denoised"), Some(&MetaValue::Int(1)));
+    // The denoiser's seconds are recorded beside the render's (benches add them).
+    assert!(matches!(img.meta("aperture:denoiseTime"), Some(MetaValue::Float(s)) if *s > 0.0));
     assert!(img.layer("Noisy Image").is_some() && img.layer("Denoising Albedo").is_some());
     assert!(png.is_file());
     // A denoised file is not denoised again.

@@ -55,6 +55,11 @@ pub struct Image {
     pub rgba: Vec<[f32; 4]>,
     /// How EXR stores the beauty (half with `--half`; the values here are f32 either way).
     pub beauty_type: SampleType,
+    /// The EXR layer of the beauty's `R`,`G`,`B`,`A`: empty for the unprefixed channels
+    /// aperture writes; a file read from Blender keeps its `ViewLayer.Combined`, so that
+    /// written again its passes stay in one view layer (Blender's Image node shows only the
+    /// view layer of its first pass).
+    pub beauty_layer: String,
     /// Extra passes, written to EXR as layers (`depth.Z`, `normal.X`, ...); PNG ignores them.
     pub layers: Vec<Layer>,
     /// Header metadata (camera, aperture, focus, samples, seed, render time, ...).
@@ -105,10 +110,19 @@ impl Image {
             height,
             rgba: vec![[0.0; 4]; width as usize * height as usize],
             beauty_type: SampleType::F32,
+            beauty_layer: String::new(),
             layers: Vec::new(),
             metadata: Vec::new(),
             placement: None,
         }
+    }
+
+    /// The beauty's four channel names in EXR: `R`,`G`,`B`,`A` within [`Image::beauty_layer`].
+    pub fn beauty_channel_names(&self) -> [String; 4] {
+        ["R", "G", "B", "A"].map(|c| match self.beauty_layer.as_str() {
+            "" => c.to_owned(),
+            layer => format!("{layer}.{c}"),
+        })
     }
 
     /// Number of pixels, `width * height`.
@@ -122,7 +136,11 @@ impl Image {
         self.validate_beauty()?;
         let pixels = self.pixel_count();
         // Full channel names as they will appear in the file; the beauty names are taken.
-        let mut full_names: Vec<String> = ["R", "G", "B", "A"].map(String::from).to_vec();
+        if self.beauty_layer.contains('\0') {
+            let name = &self.beauty_layer;
+            return Err(invalid_name(NameKind::Layer, name, "contains NUL"));
+        }
+        let mut full_names: Vec<String> = self.beauty_channel_names().to_vec();
         for (index, layer) in self.layers.iter().enumerate() {
             let what = || format!("layer {index} (`{}`)", layer.name);
             if layer.name.contains('\0') {

@@ -13,6 +13,9 @@ use std::path::Path;
 
 /// Header attribute (i32) that is 1 in a denoised file.
 pub const DENOISED: &str = "aperture:denoised";
+/// Header attribute (f32): seconds the denoiser took (filters built and run), beside
+/// `aperture:renderTime`, which excludes it; their sum is what a user waits for the image.
+pub const DENOISE_TIME: &str = "aperture:denoiseTime";
 
 /// `passes` and the two the denoiser reads (albedo and normal), rendered for it.
 pub(crate) fn with_aux(passes: aperture_render::PassSet) -> aperture_render::PassSet {

@@ -207,6 +207,8 @@ fn exr_layout(
         layout.channels.extend(denoised::noisy_channels(exr.half));
         let flag = denoised::DENOISED.to_string();
         layout.metadata.push((flag, MetaValue::Int(0)));
+        let secs = denoised::DENOISE_TIME.to_string();
+        layout.metadata.push((secs, MetaValue::Float(0.0)));
     }
     layout
 }
@@ -272,10 +274,13 @@ fn render_exr_with(
         }
         if let Some(d) = denoiser {
             let d = (!cancelled).then_some(d);
+            let start = std::time::Instant::now();
             let values = denoised::denoise_rows(&held, &specs, window.width, window.height, d)?;
+            let secs = start.elapsed().as_secs_f32();
             rows.push_rows(&values)?;
             let flag = denoised::DENOISED.to_string();
             late.push((flag, MetaValue::Int(i32::from(d.is_some()))));
+            late.push((denoised::DENOISE_TIME.to_string(), MetaValue::Float(secs)));
         }
         Ok(late)
     })?;

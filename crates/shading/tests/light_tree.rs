@@ -4,7 +4,7 @@
 
 use aperture_scene::{Instance, Light, LightKind};
 use aperture_shading::light_choice::{punctual_importance, Pick};
-use aperture_shading::light_tree::{Leaf, LightBounds, LightTree};
+use aperture_shading::light_tree::{Leaf, LightBounds, LightTree, TreeMemo};
 use aperture_shading::lights::EmissiveLights;
 use aperture_shading::{test_scenes, Geometry, MaterialOverride, TransmissionModel};
 use glam::{Affine3A, Vec3};
@@ -325,4 +325,41 @@ fn instanced_emitters_are_leaves_per_instance() {
         .chain((0..lights.len()).map(|i| tree.punctual_probability(lights, p, n, false, i)))
         .sum();
     assert!((sum - 1.0).abs() < 1e-4, "{sum}");
+}
+
+/// The memo hands out the tree it built while the leaves stay the same (a frame's next band,
+/// a still sequence's next frame), builds again when a light moves, and what it hands out
+/// picks as a fresh build does.
+#[test]
+fn the_memo_rebuilds_only_when_a_light_moves() {
+    let mut scene = test_scenes::lit_plane(1.0);
+    let n = aperture_shading::light_tree::PUNCTUAL_THRESHOLD;
+    scene.lights = lights(&mut Rng(7), n + 2); // two are directional
+    let memo = TreeMemo::new();
+    let tree_of = |scene: &aperture_scene::Scene| {
+        let geom =
+            Geometry::with_transmission(scene, MaterialOverride::None, TransmissionModel::Gltf);
+        (memo.for_scene(&geom, None), LightTree::build(&geom, None))
+    };
+    let first = tree_of(&scene).0.unwrap();
+    let again = tree_of(&scene).0.unwrap();
+    assert!(std::sync::Arc::ptr_eq(&first, &again));
+    assert_eq!(memo.builds(), 1);
+    scene.lights[3].position += Vec3::new(0.0, 0.5, 0.0);
+    let (moved, fresh) = tree_of(&scene);
+    let (moved, fresh) = (moved.unwrap(), fresh.unwrap());
+    assert!(!std::sync::Arc::ptr_eq(&first, &moved));
+    assert_eq!(memo.builds(), 2);
+    let (p, normal) = (Vec3::new(1.0, 0.0, 2.0), Vec3::Y);
+    for u in [0.01, 0.3, 0.77] {
+        let (a, b) = (
+            moved.pick(&scene.lights, p, normal, false, u),
+            fresh.pick(&scene.lights, p, normal, false, u),
+        );
+        assert_eq!(format!("{a:?}"), format!("{b:?}"));
+    }
+    // Fewer lights than the tree's threshold: no tree, no build.
+    scene.lights.truncate(n);
+    assert!(tree_of(&scene).0.is_none());
+    assert_eq!(memo.builds(), 2);
 }

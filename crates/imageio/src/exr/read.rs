@@ -74,13 +74,10 @@ fn header_of(reader: impl std::io::Read, path: &Path) -> Result<ExrHeader, Error
         if header.layer_size != size || header.own_attributes.layer_position != position {
             return Err(unsupported("parts with different data windows"));
         }
-        let prefix = match &header.own_attributes.layer_name {
-            Some(name) if !name.as_slice().is_empty() => format!("{}.", string(name.as_slice())),
-            _ => String::new(),
-        };
+        let part = header.own_attributes.layer_name.as_ref();
         for c in &header.channels.list {
             channels.push(ChannelSpec {
-                name: format!("{prefix}{}", string(c.name.as_slice())),
+                name: full_name(part, c.name.as_slice()),
                 sample_type: match c.sample_type {
                     ::exr::meta::attribute::SampleType::F16 => SampleType::F16,
                     _ => SampleType::F32,
@@ -117,7 +114,7 @@ fn header_of(reader: impl std::io::Read, path: &Path) -> Result<ExrHeader, Error
 /// - Beauty: the unnamed `R`,`G`,`B`,`A`; `A` = 1 when absent. A luminance-only file (`Y`)
 ///   gives grey. Failing both, the first layer holding `R`,`G`,`B` (preferring one named
 ///   `...Combined`, as in Blender's multilayer files) is the beauty and is not repeated
-///   among the layers.
+///   among the layers; its name is kept as [`Image::beauty_layer`].
 /// - Half and uint samples are converted to f32 (half exactly; uint above 2^24 rounds).
 /// - Layers come back sorted by name, channels within one in the order `R G B A X Y Z W U V`
 ///   then alphabetical; channels outside any layer form the layer named `""`.
@@ -257,6 +254,9 @@ fn decode_exr_inner(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, 
     let layers = group_layers(channels, pixels);
 
     let metadata = metadata(&image, beauty_part);
+    let beauty_layer = beauty_prefix.map_or(String::new(), |p| {
+        p.strip_suffix('.').unwrap_or_default().to_owned()
+    });
 
     let too_big = || unsupported("image larger than u32".into());
     let (width, height) = (
@@ -270,6 +270,7 @@ fn decode_exr_inner(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, 
         height,
         rgba,
         beauty_type,
+        beauty_layer,
         layers,
         metadata,
         placement,
@@ -339,12 +340,9 @@ fn channels_by_name(image: &FlatImage, path: &Path) -> Result<BTreeMap<String, C
         if part.size != size || part.attributes.layer_position != position {
             return Err(unsupported("parts with different data windows".into()));
         }
-        let prefix = match &part.attributes.layer_name {
-            Some(name) if !name.as_slice().is_empty() => format!("{}.", string(name.as_slice())),
-            _ => String::new(),
-        };
+        let name = part.attributes.layer_name.as_ref();
         for channel in &part.channel_data.list {
-            let full = format!("{prefix}{}", string(channel.name.as_slice()));
+            let full = full_name(name, channel.name.as_slice());
             let (samples, kind): (Vec<f32>, _) = match &channel.sample_data {
                 FlatSamples::F16(v) => (v.iter().map(|h| h.to_f32()).collect(), SampleType::F16),
                 FlatSamples::F32(v) => (v.clone(), SampleType::F32),
@@ -357,6 +355,20 @@ fn channels_by_name(image: &FlatImage, path: &Path) -> Result<BTreeMap<String, C
         }
     }
     Ok(channels)
+}
+
+/// A channel's full name (`layer.channel`) in a part named `part`. Parts written as the exr
+/// crate writes them name the layer and hold short channel names (`R`); Blender 5's multi-part
+/// files, as OpenEXR's own convention has it, repeat the part's name in each channel's
+/// (`ViewLayer.Depth.Z` in part `ViewLayer.Depth`), which must not be prefixed again.
+fn full_name(part: Option<&::exr::meta::attribute::Text>, channel: &[u8]) -> String {
+    let channel = string(channel);
+    match part.map(|p| string(p.as_slice())) {
+        Some(part) if !part.is_empty() && !channel.starts_with(&format!("{part}.")) => {
+            format!("{part}.{channel}")
+        }
+        _ => channel,
+    }
 }
 
 /// The beauty's channel prefix: `""` for unprefixed `R,G,B`, `None` for luminance `Y`, else a

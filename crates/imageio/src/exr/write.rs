@@ -418,12 +418,13 @@ fn finish_file_header(file: &mut File, late: &LateValues, path: &Path) -> Result
     }
 }
 
-/// The layout of `image`: beauty `R,G,B,A` unprefixed, each layer's channels as
-/// `layer.channel`.
+/// The layout of `image`: the beauty's `R,G,B,A` (unprefixed unless it has a
+/// [`Image::beauty_layer`]), each layer's channels as `layer.channel`.
 fn image_layout(image: &Image) -> ExrLayout {
-    let mut channels: Vec<ChannelSpec> = ["R", "G", "B", "A"]
+    let mut channels: Vec<ChannelSpec> = image
+        .beauty_channel_names()
         .map(|name| ChannelSpec {
-            name: name.into(),
+            name,
             sample_type: image.beauty_type,
         })
         .into();
@@ -484,7 +485,7 @@ pub fn encode_exr(image: &Image, path: &Path) -> Result<Vec<u8>, Error> {
 ///
 /// The file is one scan-line part, ZIP-compressed (lossless, 16 rows a block), rows top to
 /// bottom: the beauty in the unnamed layer's `R`,`G`,`B`,`A` (premultiplied, as EXR expects),
-/// so every viewer shows it; each [`crate::Layer`] as `name.channel` channels beside it, in
+/// so every viewer shows it (or in [`Image::beauty_layer`]'s, for a file read from Blender); each [`crate::Layer`] as `name.channel` channels beside it, in
 /// its [`SampleType`]; [`Image::metadata`] as header attributes; [`Image::placement`] as the
 /// data window inside the display window. The bytes depend only on `image`.
 pub fn write_exr(path: &Path, image: &Image) -> Result<(), Error> {

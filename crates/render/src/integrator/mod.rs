@@ -43,7 +43,7 @@ pub(crate) struct Integrator<'a> {
     pub accel: &'a Accel,
     pub emissive: Option<EmissiveLights>,
     /// The light tree, for scenes with many lights (else the exhaustive choice).
-    pub light_tree: Option<LightTree>,
+    pub light_tree: Option<std::sync::Arc<LightTree>>,
     pub env: EnvLight,
     pub max_bounces: u32,
     pub clamp: Clamp,

@@ -13,7 +13,11 @@ use crate::spares::Spares;
 use aperture_accel::Accel;
 use aperture_scene::Scene;
 use aperture_shading::environment::EnvLight;
-use aperture_shading::light_tree::LightTree;
+use aperture_shading::light_tree::TreeMemo;
+
+/// The process's last light tree: a frame's bands and a sequence's frames in which no light
+/// or emitter moved use it again instead of building the same tree (see [`TreeMemo`]).
+static LIGHT_TREE: TreeMemo = TreeMemo::new();
 use aperture_shading::lights::EmissiveLights;
 use aperture_shading::surface::Geometry;
 use glam::Vec3;
@@ -132,7 +136,7 @@ pub(super) fn integrator<'a>(
     let (sides, _) = opts.single_sided.resolve(scene);
     let geom = Geometry::with_transmission(scene, opts.material_override, model).with_sides(sides);
     let emissive = EmissiveLights::build(&geom);
-    let light_tree = LightTree::for_scene(&geom, emissive.as_ref());
+    let light_tree = LIGHT_TREE.for_scene(&geom, emissive.as_ref());
     let mut integrator = Integrator {
         geom,
         accel,

@@ -188,7 +188,7 @@ fn light_tree_converges_to_the_exhaustive_choice() {
         assert!(integrator.light_tree.is_none() && integrator.pick_light);
         if tree {
             let em = integrator.emissive.as_ref();
-            integrator.light_tree = LightTree::build(&integrator.geom, em);
+            integrator.light_tree = LightTree::build(&integrator.geom, em).map(Into::into);
         }
         image_mean(
             &integrator,

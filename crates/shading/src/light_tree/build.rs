@@ -21,6 +21,17 @@ impl LightTree {
     /// The tree of the scene's point and spot lights and of its emissive triangles; `None`
     /// when none of them sends light.
     pub fn build(geom: &Geometry<'_>, emissive: Option<&EmissiveLights>) -> Option<Self> {
+        let (leaves, triangles) = Self::leaves_of(geom, emissive);
+        Self::from_leaves(leaves, &geom.scene.lights, triangles)
+    }
+
+    /// What [`LightTree::build`] builds from: the leaves (the scene's point and spot lights
+    /// and its emissive triangles, with their bounds) and the number of emissive triangles.
+    /// Linear in the lights; the build that follows is the costly part.
+    pub fn leaves_of(
+        geom: &Geometry<'_>,
+        emissive: Option<&EmissiveLights>,
+    ) -> (Vec<(LightBounds, Leaf)>, usize) {
         let lights = &geom.scene.lights;
         let mut leaves = Vec::new();
         for (i, l) in lights.iter().enumerate() {
@@ -39,7 +50,7 @@ impl LightTree {
                 }
             }
         }
-        Self::from_leaves(leaves, lights, triangles)
+        (leaves, triangles)
     }
 
     /// The tree over `leaves` (bounds and lights) of a scene with these punctual `lights` and

@@ -17,10 +17,12 @@
 pub mod bounds;
 mod build;
 pub mod pick;
+mod reuse;
 mod sample;
 mod split;
 
 pub use bounds::LightBounds;
+pub use reuse::TreeMemo;
 
 use crate::lights::EmissiveLights;
 use crate::surface::Geometry;

@@ -73,6 +73,7 @@ fn reads_blender_multilayer_and_luminance_files() {
     ]);
     let image = decode_exr(&blender, "t".as_ref()).unwrap();
     assert!(image.rgba.iter().all(|px| *px == [1.0, 2.0, 3.0, 0.5]));
+    assert_eq!(image.beauty_layer, "ViewLayer.Combined");
     let names: Vec<&str> = image.layers.iter().map(|l| l.name.as_str()).collect();
     assert_eq!(names, ["ViewLayer.Depth", "ViewLayer.Normal"]);
     assert_eq!(image.layers[1].channels, ["R", "G", "B"]);
@@ -84,4 +85,66 @@ fn reads_blender_multilayer_and_luminance_files() {
 
     let none = decode_exr(&write(&[("depth.Z", 1.0)]), "t".as_ref()).unwrap_err();
     assert!(matches!(none, Error::NoBeauty { .. }), "{none}");
+}
+
+/// Blender 5 writes a multilayer EXR as one part per pass, each named as its layer and holding
+/// channels with their full names (`ViewLayer.Depth.Z` in part `ViewLayer.Depth`).
+#[test]
+fn reads_blender_5_multi_part_files() {
+    let n = 4;
+    let part = |name: &str, channels: &[(&str, f32)]| {
+        let list = channels
+            .iter()
+            .map(|(c, v)| {
+                AnyChannel::new(
+                    Text::from(format!("{name}.{c}").as_str()),
+                    FlatSamples::F32(vec![*v; n]),
+                )
+            })
+            .collect();
+        ExrLayer::new(
+            (2, 2),
+            LayerAttributes::named(name),
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(list),
+        )
+    };
+    let layers: SmallVec<[_; 2]> = [
+        part(
+            "ViewLayer.Combined",
+            &[("R", 1.0), ("G", 2.0), ("B", 3.0), ("A", 0.5)],
+        ),
+        part("ViewLayer.Depth", &[("Z", 7.0)]),
+        part(
+            "ViewLayer.Denoising Albedo",
+            &[("R", 0.1), ("G", 0.2), ("B", 0.3)],
+        ),
+    ]
+    .into_iter()
+    .collect();
+    let mut bytes = Vec::new();
+    ExrImage::from_layers(
+        ::exr::meta::header::ImageAttributes::new(::exr::prelude::IntegerBounds::from_dimensions(
+            (2, 2),
+        )),
+        layers,
+    )
+    .write()
+    .to_buffered(Cursor::new(&mut bytes))
+    .unwrap();
+    let image = decode_exr(&bytes, "t".as_ref()).unwrap();
+    assert!(image.rgba.iter().all(|px| *px == [1.0, 2.0, 3.0, 0.5]));
+    let names: Vec<&str> = image.layers.iter().map(|l| l.name.as_str()).collect();
+    assert_eq!(names, ["ViewLayer.Denoising Albedo", "ViewLayer.Depth"]);
+    assert_eq!(image.layers[0].channels, ["R", "G", "B"]);
+    let dir = scratch_dir("blender5");
+    let path = dir.join("multi.exr");
+    std::fs::write(&path, &bytes).unwrap();
+    let names: Vec<String> = read_exr_header(&path)
+        .unwrap()
+        .channels
+        .into_iter()
+        .map(|c| c.name)
+        .collect();
+    assert!(names.iter().any(|c| c == "ViewLayer.Depth.Z"), "{names:?}");
 }
