@@ -6,16 +6,17 @@ mod check;
 mod placement;
 mod tree;
 
+use crate::deform::Deform;
 use crate::node::Node;
 use crate::walk::detect_avx2;
 use crate::{
     Accel, AccelStats, Blas, BvhQuality, Entry, InstanceInput, MeshInput, MotionTransform, Tri,
-    FLATTENED, NO_MOTION,
+    VertexMotion, FLATTENED, NO_MOTION,
 };
 use check::{check_mesh, flatten, Checked};
 use glam::{Affine3A, Vec3};
 use obvhs::aabb::Aabb;
-use placement::{flat_key, placement, Placement};
+use placement::{deform_of, flat_key, placement, Placement};
 pub use placement::{FrameHints, FLATTEN_SHARED_LIMIT};
 use rayon::prelude::*;
 use tree::{build_blas, build_cwbvh, tree_depth};
@@ -55,13 +56,15 @@ fn swept_world_bounds(motion: &MotionTransform, object: (Vec3, Vec3)) -> Aabb {
 }
 
 /// A bound on the magnitudes met when moving an instance's points between object and world
-/// space, `|T| + |M| max|p_obj|`, for [`Accel::spawn_point`].
-fn magnitude(mesh: &MeshInput<'_>, m: &Affine3A) -> f32 {
+/// space, `|T| + |M| max|p_obj|`, for [`Accel::spawn_point`]; `max|p_obj|` over every key
+/// of a deforming mesh too.
+fn magnitude(mesh: &MeshInput<'_>, deform: Option<&VertexMotion>, m: &Affine3A) -> f32 {
     let obj = mesh
         .positions
         .iter()
         .filter(|p| p.is_finite())
-        .fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+        .fold(0.0f32, |m, p| m.max(p.abs().max_element()))
+        .max(deform.map_or(0.0, VertexMotion::max_abs));
     let rows = m.matrix3.transpose();
     let norm = [rows.x_axis, rows.y_axis, rows.z_axis]
         .iter()
@@ -70,9 +73,43 @@ fn magnitude(mesh: &MeshInput<'_>, m: &Affine3A) -> f32 {
     m.translation.abs().max_element() + norm * obj
 }
 
+/// Per input instance, the bound on the magnitudes met moving its points between object and
+/// world space ([`magnitude`]), for [`Accel::spawn_point`].
+fn instance_magnitudes(
+    meshes: &[MeshInput<'_>],
+    instances: &[InstanceInput],
+    usable: &[Usable],
+    hints: &FrameHints<'_>,
+) -> Vec<f32> {
+    let mut out = vec![0.0f32; instances.len()];
+    for (id, inst, _) in usable {
+        let mesh = &meshes[inst.mesh as usize];
+        let keys = deform_of(meshes, hints, inst.mesh as usize);
+        out[*id as usize] = magnitude(mesh, keys, &inst.world_from_object);
+    }
+    // A moving instance's points meet the magnitudes of every place it passes: the bound
+    // at its keys and between them (sampled as its swept box is).
+    for (id, keys) in hints.motion.iter().enumerate() {
+        let (Some(keys), Some(inst)) = (keys, instances.get(id)) else {
+            continue;
+        };
+        // An instance of no mesh is not drawn (counted as skipped).
+        let Some(mesh) = meshes.get(inst.mesh as usize) else {
+            continue;
+        };
+        let deform = deform_of(meshes, hints, inst.mesh as usize);
+        let most = (0..=32)
+            .map(|k| magnitude(mesh, deform, &keys.at(k as f32 / 32.0)))
+            .fold(0.0f32, f32::max);
+        let m = &mut out[id];
+        *m = m.max(most);
+    }
+    out
+}
+
 /// A bottom-level BVH to make: built from triangles, or taken from the previous frame.
 enum BlasJob {
-    Build(Vec<(Tri, u32)>, bool),
+    Build(Vec<(Tri, u32)>, bool, Option<Deform>),
     Reuse(Blas),
 }
 
@@ -97,7 +134,11 @@ fn take_previous(
     hints: &FrameHints<'_>,
     (key, flat): (u64, &[(u32, InstanceInput)]),
 ) -> Previous {
-    let reusable = |m: usize| m < hints.deforming_from && hints.deforming_from != usize::MAX;
+    let reusable = |m: usize| {
+        m < hints.deforming_from
+            && hints.deforming_from != usize::MAX
+            && hints.deforming.get(m).is_none_or(Option::is_none)
+    };
     let mut out = Previous {
         taken: vec![None; mesh_count],
         flat_taken: None,
@@ -108,7 +149,13 @@ fn take_previous(
     };
     let mut kept: Vec<Option<Blas>> = vec![None; mesh_count];
     for m in (0..mesh_count).filter(|&m| reusable(m)) {
-        if let Some(&b) = prev.blas_of_mesh.get(m).filter(|&&b| b != u32::MAX) {
+        // A tree built over a shutter's swept triangles is no still mesh's.
+        let still = |b: &&u32| {
+            prev.blases
+                .get(**b as usize)
+                .is_some_and(|t| t.deform.is_none())
+        };
+        if let Some(&b) = prev.blas_of_mesh.get(m).filter(still) {
             kept[m] = Some(std::mem::take(&mut prev.blases[b as usize]));
         }
     }
@@ -173,7 +220,7 @@ struct BlasJobs {
 /// The world-space BVH's job (taken from `flat_taken` or built from `flat`), then one per
 /// mesh with a BVH of its own (taken from `taken` or built from its checked triangles).
 fn blas_jobs(
-    meshes: &[MeshInput<'_>],
+    (meshes, hints): (&[MeshInput<'_>], &FrameHints<'_>),
     flat: &[(u32, InstanceInput)],
     flat_taken: Option<(Blas, usize)>,
     checked: Vec<Checked>,
@@ -191,7 +238,7 @@ fn blas_jobs(
             None => {
                 let (tris, degenerate) = flatten(meshes, flat);
                 flat_degenerate = degenerate;
-                BlasJob::Build(tris, true)
+                BlasJob::Build(tris, true, None)
             }
         });
     }
@@ -208,7 +255,9 @@ fn blas_jobs(
             }
             None if !c.shared.is_empty() => {
                 blas_of_mesh[m] = jobs.len() as u32;
-                jobs.push(BlasJob::Build(c.shared, false));
+                let deform = deform_of(meshes, hints, m)
+                    .and_then(|keys| Deform::new(&c.shared, meshes[m].indices, keys));
+                jobs.push(BlasJob::Build(c.shared, false, deform));
             }
             None => {}
         }
@@ -273,7 +322,14 @@ impl Accel {
             .collect();
         count_checked(&mut stats, &checked, &uses);
 
-        let jobs = blas_jobs(meshes, &flat, flat_taken, checked, taken, &own_blas);
+        let jobs = blas_jobs(
+            (meshes, &hints),
+            &flat,
+            flat_taken,
+            checked,
+            taken,
+            &own_blas,
+        );
         stats.degenerate_triangles += jobs.flat_degenerate;
         stats.reused_blases = jobs
             .jobs
@@ -284,7 +340,9 @@ impl Accel {
             .jobs
             .into_par_iter()
             .map(|job| match job {
-                BlasJob::Build(tris, keep_instance) => build_blas(tris, quality, keep_instance),
+                BlasJob::Build(tris, keep_instance, deform) => {
+                    build_blas(tris, quality, keep_instance, deform)
+                }
                 BlasJob::Reuse(blas) => blas,
             })
             .collect();
@@ -300,40 +358,11 @@ impl Accel {
         accel.flat = has_flat.then(|| (key, flat.iter().map(|(id, _)| *id).collect()));
         accel.flat_degenerate = jobs.flat_degenerate;
         accel.spare = spare;
-        accel.set_magnitudes(meshes, instances, &usable, hints.motion);
+        accel.instance_magnitude = instance_magnitudes(meshes, instances, &usable, &hints);
         accel.count_structure(&mut stats);
         stats.build_time = start.elapsed();
         accel.stats = stats;
         accel
-    }
-
-    /// Per input instance, the bound on the magnitudes its points meet
-    /// (`instance_magnitude`, for spawning points).
-    fn set_magnitudes(
-        &mut self,
-        meshes: &[MeshInput<'_>],
-        instances: &[InstanceInput],
-        usable: &[Usable],
-        motion: &[Option<MotionTransform>],
-    ) {
-        self.instance_magnitude = vec![0.0f32; instances.len()];
-        for (id, inst, _) in usable {
-            let mesh = &meshes[inst.mesh as usize];
-            self.instance_magnitude[*id as usize] = magnitude(mesh, &inst.world_from_object);
-        }
-        // A moving instance's points meet the magnitudes of every place it passes: the bound
-        // at its keys and between them (sampled as its swept box is).
-        for (id, keys) in motion.iter().enumerate() {
-            let (Some(keys), Some(inst)) = (keys, instances.get(id)) else {
-                continue;
-            };
-            let mesh = &meshes[inst.mesh as usize];
-            let most = (0..=32)
-                .map(|k| magnitude(mesh, &keys.at(k as f32 / 32.0)))
-                .fold(0.0f32, f32::max);
-            let m = &mut self.instance_magnitude[id];
-            *m = m.max(most);
-        }
     }
 
     /// The sizes of the built structure into `stats`: trees, entries, nodes, depth, memory.
@@ -349,6 +378,9 @@ impl Accel {
             .map(|b| {
                 b.nodes.len() * size_of::<Node>()
                     + b.tris.len() * size_of::<Tri>()
+                    + b.deform
+                        .as_ref()
+                        .map_or(0, |d| d.keys.len() * size_of::<[Vec3; 3]>())
                     + b.tri_instance.len() * 4
             })
             .sum::<usize>()

@@ -16,6 +16,11 @@
 //!   bound cannot prove are decided again in `f64` (close to the origin on large triangles).
 //! - **Misses**: a ray starting outside the scene's bounds whose segment misses them (widened by
 //!   the box test's slack) is answered without a walk, in every query.
+//! - **Motion**: instances moving within a shutter ([`FrameHints::motion`]) are bounded over it
+//!   and placed at each ray's [`Ray::time`]; meshes deforming within it
+//!   ([`FrameHints::deforming`], [`VertexMotion`]) get a tree over their swept triangles whose
+//!   leaves test each triangle interpolated at the ray's time. Both are walked ray by ray;
+//!   still scenes keep every path above untouched.
 //! - **Secondary rays** start from [`SpawnPoint::origin`] (or [`offset_ray_origin`]).
 //! - **Batches**: [`Accel::intersect_batch`] and [`Accel::occluded_batch`] answer exactly as the
 //!   one-ray queries but walk [`BATCH_LANES`] rays at once, interleaved, which hides much of
@@ -43,6 +48,7 @@
 
 mod build;
 mod cover;
+mod deform;
 mod motion;
 mod node;
 mod packet;
@@ -56,6 +62,7 @@ mod types;
 mod walk;
 
 pub use build::{FrameHints, FLATTEN_SHARED_LIMIT};
+pub use deform::{lerp_point, VertexMotion};
 pub use motion::MotionTransform;
 pub use packet::{PACKET_CONE_COS, PACKET_LANES};
 pub use rayfile::{read_rays, write_rays, RayFileError};
@@ -87,6 +94,9 @@ struct Blas {
     bounds: Option<(Vec3, Vec3)>,
     /// `bounds`, or a zero box for an empty tree (sizes the box test's rounding slack).
     box_bounds: (Vec3, Vec3),
+    /// For a mesh deforming within the shutter: its triangles keyed over it (the nodes then
+    /// bound the swept triangles, and `tris` holds the frame's, for lookups only).
+    deform: Option<Box<deform::Deform>>,
 }
 
 /// One leaf of the top-level BVH: a BVH placed in the world.

@@ -1,6 +1,7 @@
 //! The queries: closest hit and occlusion for one ray, a batch or many rays (on rayon's
 //! threads), brute force for tests, and triangle lookup.
 
+use crate::deform::Deformed;
 use crate::node::BoxRay;
 use crate::triangle::TriRay;
 use crate::walk::*;
@@ -189,9 +190,10 @@ impl Accel {
             [entry]
                 if stack_len(self.max_blas_depth) <= INLINE_STACK && entry.motion == NO_MOTION =>
             {
+                // A deforming tree's triangles are interpolated per ray: ray by ray too.
                 self.blases
                     .get(entry.blas as usize)
-                    .filter(|b| !b.nodes.is_empty())
+                    .filter(|b| !b.nodes.is_empty() && b.deform.is_none())
                     .map(|b| (entry, b))
             }
             _ => None,
@@ -354,7 +356,13 @@ impl Accel {
     ) -> Option<L::Answer> {
         let blas = self.blases.get(entry.blas as usize)?;
         let (br, mut leaf) = Self::walk_start::<AVX2, L>(entry, blas, ray);
-        let stopped = traverse::<AVX2, _>(&blas.nodes, &br, tmax, stack, &mut leaf);
+        let stopped = match &blas.deform {
+            None => traverse::<AVX2, _>(&blas.nodes, &br, tmax, stack, &mut leaf),
+            Some(d) => {
+                let deformed = Deformed::<_, AVX2>::new(&mut leaf, d, ray.time);
+                traverse::<AVX2, _>(&blas.nodes, &br, tmax, stack, deformed)
+            }
+        };
         Some(leaf.answer(blas, entry, stopped))
     }
 
@@ -390,7 +398,14 @@ impl Accel {
             let (o, d) = Self::object_ray(entry, ray);
             let tr = TriRay::new(o, d);
             for (i, tri) in blas.tris.iter().enumerate() {
-                if let Some(h) = crate::triangle::intersect::<false>(&tr, tri, ray.tmin, tmax) {
+                let tri = match &blas.deform {
+                    None => *tri,
+                    Some(def) => match def.triangle(i, def.segment(ray.time)) {
+                        Some(t) => t,
+                        None => continue,
+                    },
+                };
+                if let Some(h) = crate::triangle::intersect::<false>(&tr, &tri, ray.tmin, tmax) {
                     tmax = h.0;
                     best = Some(Self::make_hit(blas, entry, i, h));
                 }

@@ -32,6 +32,11 @@ pub fn motion_json(
         .filter_map(|(k, _)| scene.instances.get(k))
         .map(|i| json!(scene.node_name(i.node)))
         .collect();
+    let deforms =
+        |i: &&aperture_scene::Instance| matches!(m.meshes.get(i.mesh as usize), Some(Some(_)));
+    let deforming: Vec<Value> = (scene.instances.iter().filter(deforms))
+        .map(|i| json!(scene.node_name(i.node)))
+        .collect();
     Ok(json!({
         "motion_blur": true,
         "shutter_frames": shutter.frames,
@@ -41,6 +46,7 @@ pub fn motion_json(
         "motion_steps": settings.steps,
         "camera_moves": m.camera.is_some(),
         "moving_instances": moving,
+        "deforming_instances": deforming,
     }))
 }
 
@@ -57,9 +63,10 @@ pub fn print_motion(r: &Value) {
         return;
     }
     let moving = m["moving_instances"].as_array().map_or(0, Vec::len);
+    let deforming = m["deforming_instances"].as_array().map_or(0, Vec::len);
     println!(
         "  motion blur: shutter {} frame(s) {}, open {} s to {} s, {} steps; camera {}, {} \
-         moving instance(s)",
+         moving instance(s), {} deforming",
         m["shutter_frames"],
         m["position"].as_str().unwrap_or_default(),
         secs(&m["interval"][0]),
@@ -70,6 +77,7 @@ pub fn print_motion(r: &Value) {
         } else {
             "still"
         },
-        moving
+        moving,
+        deforming
     );
 }

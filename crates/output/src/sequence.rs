@@ -148,9 +148,10 @@ pub fn render_sequence(
                     frame: f.frame,
                     source,
                 })?;
-            // Instances moving within the shutter need a structure bounding them over it: the
-            // frame's is rebuilt with their motion (nothing of it reused).
-            let moving = opts.motion.as_deref().filter(|m| !m.instances.is_empty());
+            // Instances moving and meshes deforming within the shutter need a structure
+            // bounding them over it: the frame's is rebuilt with their motion (nothing of it
+            // reused).
+            let moving = opts.motion.as_deref().filter(|m| m.moves_geometry());
             let rebuilt = moving.map(|m| {
                 let hints = SceneHints::new(seq.animated, scene);
                 build_motion_accel(scene, seq.quality, &hints, None, Some(m))

@@ -77,7 +77,8 @@ pub fn build_frame_accel(
 }
 
 /// [`build_frame_accel`] with the instances that move within the frame's shutter (`motion`)
-/// bounded over it and walked at each ray's time.
+/// bounded over it and walked at each ray's time, and the meshes that deform within it built
+/// over their swept triangles and intersected as interpolated at each ray's time.
 pub fn build_motion_accel(
     scene: &Scene,
     quality: BvhQuality,
@@ -106,6 +107,7 @@ pub fn build_motion_accel(
         moving: &hints.moving,
         deforming_from: hints.deforming_from,
         motion: &keys,
+        deforming: motion.map_or(&[], |m| &m.meshes),
         ..FrameHints::STILL
     };
     Accel::build_frame(&meshes, &instances, quality, frame, previous)

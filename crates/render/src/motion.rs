@@ -3,10 +3,13 @@
 //!
 //! A sample's time is a named sample dimension ([`crate::SampleStream::time`]), mapped by the
 //! [`Shutter`] (rolling or not) to a normalised time `τ ∈ [0, 1]` over the frame's interval;
-//! the camera is the [`CameraPath`] at `τ`. With motion blur off nothing here is built and
-//! every sample is at the frame's instant, as before.
+//! the camera is the [`CameraPath`] at `τ`, rigid instances are keyed transforms and deforming
+//! meshes are vertex positions at the motion steps (both interpolated by the accel at `τ`).
+//! With motion blur off nothing here is built and every sample is at the frame's instant, as
+//! before.
 
 mod camera_path;
+mod deforming;
 mod instances;
 mod pose;
 mod settings;
@@ -14,6 +17,7 @@ mod shutter;
 mod vector;
 
 pub use camera_path::CameraPath;
+pub use deforming::deform_surface;
 pub use instances::MovingInstance;
 pub use pose::pose_frame_motion;
 pub use settings::{MotionOverrides, MotionSettings, DEFAULT_MOTION_STEPS, MAX_MOTION_STEPS};
@@ -32,6 +36,11 @@ pub struct FrameMotion {
     /// Per instance of the frame's scene: how it moves within the interval (`None`: still).
     /// Empty when no instance moves.
     pub instances: Vec<Option<MovingInstance>>,
+    /// Per mesh of the frame's scene: its vertices at the motion steps when it deforms within
+    /// the interval (`None`: it keeps the frame's shape), in the mesh's object space at each
+    /// step (an instance drawing it is placed by its own keys in `instances`, or by the
+    /// frame's placement). Empty when no mesh deforms.
+    pub meshes: Vec<Option<aperture_accel::VertexMotion>>,
 }
 
 impl FrameMotion {
@@ -52,7 +61,13 @@ impl FrameMotion {
 
     /// True when something within the interval moves (else samples need no time).
     pub fn moves(&self) -> bool {
-        self.camera.is_some() || !self.instances.is_empty()
+        self.camera.is_some() || !self.instances.is_empty() || !self.meshes.is_empty()
+    }
+
+    /// True when geometry moves or deforms within the interval: the frame's ray-query
+    /// structure must be built with this motion ([`crate::build_motion_accel`]).
+    pub fn moves_geometry(&self) -> bool {
+        !self.instances.is_empty() || !self.meshes.is_empty()
     }
 
     /// The keys of each moving instance, for the accel ([`aperture_accel::FrameHints::motion`]).

@@ -5,13 +5,16 @@ use aperture_accel::MotionTransform;
 use aperture_render::motion::{
     raster_of, CameraPath, FrameMotion, FrameNeighbours, MovingInstance, Shutter,
 };
-use aperture_render::test_scenes::{emitter, look_at_camera, quad, scene};
+use aperture_render::test_scenes::{emitter, look_at_camera, scene};
 use aperture_render::{build_accel, build_motion_accel, render_window, SceneHints};
-use aperture_render::{Camera, FilterKind, Pass, RenderOptions, Window};
+use aperture_render::{Pass, RenderOptions, Window};
 use aperture_render::{SampleStream, SamplerKind};
 use aperture_scene::{Dof, Scene};
 use glam::{Affine3A, Quat, Vec3};
 use std::sync::Arc;
+
+mod motion_common;
+use motion_common::*;
 
 #[test]
 fn time_samples_are_stratified() {
@@ -75,44 +78,6 @@ fn time_is_independent_of_the_pixel_and_lens_dimensions() {
     }
 }
 
-const W: u32 = 200;
-const H: u32 = 40;
-const YFOV: f32 = 0.5;
-/// Stripe width in world units at distance [`DIST`].
-const STRIPE: f32 = 0.4;
-const DIST: f32 = 10.0;
-
-/// A thin vertical emissive stripe `DIST` in front of a pinhole camera at the origin.
-fn stripe_scene() -> Scene {
-    let cam = look_at_camera(Vec3::ZERO, Vec3::NEG_Z, YFOV, Dof::default());
-    // The quad faces +Y; turned to face the camera (+Z), STRIPE wide and tall enough.
-    let xf = Affine3A::from_scale_rotation_translation(
-        Vec3::new(STRIPE, 1.0, 20.0),
-        Quat::from_rotation_x(std::f32::consts::FRAC_PI_2),
-        Vec3::new(0.0, 0.0, -DIST),
-    );
-    scene(vec![(quad(1.0, 0), xf)], vec![emitter(Vec3::ONE)], cam)
-}
-
-/// The scene's camera turned by `angle` radians about +Y.
-fn turned(scene: &Scene, angle: f32) -> Camera {
-    let mut c = Camera::new(&scene.cameras[0], W, H);
-    c.world_from_camera = Affine3A::from_rotation_y(angle) * c.world_from_camera;
-    c
-}
-
-/// Options of the stripe renders, with `motion`.
-fn options(motion: Option<FrameMotion>) -> RenderOptions {
-    RenderOptions {
-        width: W,
-        height: H,
-        spp: 64,
-        filter: FilterKind::Box,
-        motion: motion.map(Arc::new),
-        ..RenderOptions::default()
-    }
-}
-
 /// The camera turning from `-angle/2` to `angle/2` over the shutter.
 fn turning(scene: &Scene, angle: f32) -> FrameMotion {
     let keys = (0..9)
@@ -123,16 +88,8 @@ fn turning(scene: &Scene, angle: f32) -> FrameMotion {
         interval: (0.0, 1.0),
         camera: CameraPath::new(keys),
         instances: Vec::new(),
+        meshes: Vec::new(),
     }
-}
-
-/// Columns of the middle row that received any light: (first, last).
-fn lit_extent(film: &aperture_render::Film) -> (u32, u32) {
-    let lit: Vec<u32> = (0..W).filter(|&x| film.pixel(x, H / 2)[0] > 1e-4).collect();
-    (
-        *lit.first().expect("the stripe is seen"),
-        *lit.last().unwrap(),
-    )
 }
 
 #[test]
@@ -227,6 +184,7 @@ fn a_still_frame_motion_changes_nothing() {
         interval: (0.0, 1.0),
         camera: CameraPath::new(vec![camera; 3]),
         instances: Vec::new(),
+        meshes: Vec::new(),
     };
     assert!(still_motion.camera.is_none());
     let a = render_window(&scene, &accel, &camera, &options(None), whole, &|_, _| {}).unwrap();
@@ -268,6 +226,7 @@ fn moving_sphere(shift: f32) -> (Scene, FrameMotion) {
         interval: (0.0, 1.0),
         camera: None,
         instances: vec![Some(moving)],
+        meshes: Vec::new(),
     };
     (scene, motion)
 }

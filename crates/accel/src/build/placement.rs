@@ -42,6 +42,11 @@ pub struct FrameHints<'a> {
     /// `world_from_object`); empty: nothing moves. A moving instance is walked at each ray's
     /// [`Ray::time`](crate::Ray::time) and bounded over its whole interval.
     pub motion: &'a [Option<crate::MotionTransform>],
+    /// Per mesh: its vertices keyed over the shutter when it deforms within it (`None`, or a
+    /// vertex count other than the mesh's: it stays as given); empty: nothing deforms. Such a
+    /// mesh gets a bottom-level BVH of its own over its swept triangles, walked at each ray's
+    /// [`Ray::time`](crate::Ray::time); the mesh's `positions` are the frame's (for lookups).
+    pub deforming: &'a [Option<crate::VertexMotion>],
 }
 
 /// The default of [`FrameHints::flatten_shared_up_to`]: 2^20 drawn triangles, so flattening
@@ -55,7 +60,19 @@ impl FrameHints<'_> {
         deforming_from: usize::MAX,
         flatten_shared_up_to: FLATTEN_SHARED_LIMIT,
         motion: &[],
+        deforming: &[],
     };
+}
+
+/// The keys of mesh `m` when it deforms within the shutter (`hints.deforming`, for as many
+/// vertices as it has).
+pub(super) fn deform_of<'h>(
+    meshes: &[MeshInput<'_>],
+    hints: &FrameHints<'h>,
+    m: usize,
+) -> Option<&'h crate::VertexMotion> {
+    let keys = hints.deforming.get(m)?.as_ref()?;
+    (keys.vertex_count() == meshes.get(m)?.positions.len()).then_some(keys)
 }
 
 /// A key of the world-space BVH's contents: which meshes, with which transforms, in order.
@@ -113,6 +130,7 @@ pub(super) fn placement(
         !hints.moving.get(id as usize).copied().unwrap_or(false)
             && hints.motion.get(id as usize).is_none_or(Option::is_none)
             && m < hints.deforming_from
+            && deform_of(meshes, hints, m).is_none()
     };
     let static_drawn: usize = usable
         .iter()

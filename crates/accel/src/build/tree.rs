@@ -1,6 +1,7 @@
 //! One BVH from boxes with obvhs (PLOC, reinsertion, CWBVH conversion), and a bottom-level
 //! BVH from triangles.
 
+use crate::deform::Deform;
 use crate::node::{layout::nodes_from_cwbvh, Node};
 use crate::{Blas, BvhQuality, Tri};
 use glam::Vec3;
@@ -95,18 +96,30 @@ fn aabb_of(p: &[Vec3; 3]) -> Aabb {
     Aabb::new(lo.into(), hi.into())
 }
 
-/// Builds one bottom-level BVH from kept triangles (`(vertices, original index, instance)`).
-pub(super) fn build_blas(tris: Vec<(Tri, u32)>, quality: BvhQuality, keep_instance: bool) -> Blas {
-    let aabbs: Vec<Aabb> = tris.iter().map(|(t, _)| aabb_of(&t.p)).collect();
+/// Builds one bottom-level BVH from kept triangles (`(vertices, original index, instance)`);
+/// with `deform` (their keys over the shutter, in the order of `tris`), over the boxes the
+/// triangles sweep.
+pub(super) fn build_blas(
+    tris: Vec<(Tri, u32)>,
+    quality: BvhQuality,
+    keep_instance: bool,
+    deform: Option<Deform>,
+) -> Blas {
+    let aabbs: Vec<Aabb> = match &deform {
+        None => tris.iter().map(|(t, _)| aabb_of(&t.p)).collect(),
+        Some(d) => (0..tris.len())
+            .map(|i| {
+                let (lo, hi) = d.swept_box(i);
+                Aabb::new(lo.into(), hi.into())
+            })
+            .collect(),
+    };
     let (nodes, order) = build_cwbvh(&aabbs, quality);
-    drop(aabbs);
-    let bounds = tris.iter().fold(None, |acc: Option<(Vec3, Vec3)>, (t, _)| {
-        let (lo, hi) = (
-            t.p[0].min(t.p[1]).min(t.p[2]),
-            t.p[0].max(t.p[1]).max(t.p[2]),
-        );
+    let bounds = aabbs.iter().fold(None, |acc: Option<(Vec3, Vec3)>, b| {
+        let (lo, hi) = (Vec3::from(b.min), Vec3::from(b.max));
         Some(acc.map_or((lo, hi), |(a, b)| (a.min(lo), b.max(hi))))
     });
+    drop(aabbs);
     let ordered: Vec<Tri> = order.iter().map(|&i| tris[i as usize].0).collect();
     let tri_instance = if keep_instance {
         order.iter().map(|&i| tris[i as usize].1).collect()
@@ -122,5 +135,6 @@ pub(super) fn build_blas(tris: Vec<(Tri, u32)>, quality: BvhQuality, keep_instan
         depth,
         bounds,
         box_bounds,
+        deform: deform.map(|d| Box::new(d.reorder(&order))),
     }
 }

@@ -58,6 +58,9 @@ pub(crate) struct Integrator<'a> {
     /// Per instance, how it moves within the shutter (empty: nothing moves): a surface found
     /// on a moving instance is moved to where the instance is at the ray's time.
     pub moving: &'a [Option<crate::motion::MovingInstance>],
+    /// Per mesh, its vertices over the shutter when it deforms within it (empty: none does):
+    /// a surface found on it is the triangle at the ray's time.
+    pub deforming: &'a [Option<aperture_accel::VertexMotion>],
 }
 
 impl Integrator<'_> {

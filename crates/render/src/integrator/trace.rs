@@ -19,17 +19,32 @@ fn absorption(sigma: Vec3, t: f32) -> Vec3 {
 }
 
 impl Integrator<'_> {
-    /// The surface of `hit` on `ray`: shaded where the instance is at the frame's instant,
-    /// then moved to where it is at the ray's time when it moves within the shutter.
+    /// The surface of `hit` on `ray`: shaded where the instance is at the frame's instant, its
+    /// triangle taken at the ray's time when its mesh deforms within the shutter, then moved
+    /// to where the instance is at the ray's time when it moves within the shutter.
     #[inline(always)]
     pub(super) fn hit_surface(&self, ray: &Ray, hit: &Hit, shading: bool) -> Surface {
         let mut s = self
             .geom
             .surface_at(hit.instance, hit.triangle, hit.u, hit.v, shading);
+        if !self.deforming.is_empty() {
+            self.deform_hit(&mut s, hit, ray.time);
+        }
         if let Some(Some(m)) = self.moving.get(hit.instance as usize) {
             m.move_surface(&mut s, ray.time);
         }
         s
+    }
+
+    /// `s` (of `hit`) on its mesh's triangle at normalised time `tau`, when that mesh deforms.
+    #[cold]
+    fn deform_hit(&self, s: &mut Surface, hit: &Hit, tau: f32) {
+        let Some(inst) = self.geom.scene.instances.get(hit.instance as usize) else {
+            return;
+        };
+        if let Some(Some(keys)) = self.deforming.get(inst.mesh as usize) {
+            crate::motion::deform_surface(s, keys, &inst.world_from_object, tau);
+        }
     }
 
     /// The closest surface along `ray` that scatters, passing through alpha-cut or blended

@@ -149,6 +149,7 @@ pub(super) fn integrator<'a>(
         energy_compensation: opts.energy_compensation,
         pick_light: false,
         moving: opts.motion.as_deref().map_or(&[], |m| &m.instances),
+        deforming: opts.motion.as_deref().map_or(&[], |m| &m.meshes),
     };
     integrator.pick_light = integrator.light_tree.is_some() || integrator.candidates().choose();
     integrator

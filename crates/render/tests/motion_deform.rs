@@ -1,0 +1,112 @@
+//! Meshes deforming within the shutter (motion steps, SPEC §7): a stripe whose vertices move
+//! leaves a streak as long as their screen motion, and keys that do not move change nothing.
+
+use aperture_accel::VertexMotion;
+use aperture_render::motion::{FrameMotion, Shutter};
+use aperture_render::{build_accel, build_motion_accel, render_window, SceneHints, Window};
+use aperture_scene::Scene;
+use glam::Vec3;
+
+mod motion_common;
+use motion_common::*;
+
+/// The stripe's mesh keyed at `steps` times: vertex `v` at key `k` moved along the stripe's
+/// width (world x) by `offset(v, k / (steps − 1))` world units.
+fn keyed(scene: &Scene, steps: usize, offset: impl Fn(Vec3, f32) -> f32) -> FrameMotion {
+    let frame = &scene.meshes[0].positions;
+    let keys: Vec<Vec<Vec3>> = (0..steps)
+        .map(|k| {
+            let tau = k as f32 / (steps - 1) as f32;
+            // Object x is world x scaled by the stripe's width.
+            let shift = |p: &Vec3| *p + Vec3::X * offset(*p, tau) / STRIPE;
+            frame.iter().map(shift).collect()
+        })
+        .collect();
+    let refs: Vec<&[Vec3]> = keys.iter().map(Vec::as_slice).collect();
+    FrameMotion {
+        shutter: Shutter::default(),
+        interval: (0.0, 1.0),
+        camera: None,
+        instances: Vec::new(),
+        meshes: vec![VertexMotion::new(&refs)],
+    }
+}
+
+/// The stripe rendered still, and with `motion` (built into the accel as a render does).
+fn still_and_blurred(motion: FrameMotion) -> (aperture_render::Film, aperture_render::Film) {
+    let scene = stripe_scene();
+    let camera = turned(&scene, 0.0);
+    let whole = Window::whole(W, H);
+    let accel = build_accel(&scene, Default::default());
+    let still = render_window(&scene, &accel, &camera, &options(None), whole, &|_, _| {});
+    let hints = SceneHints::still();
+    let accel = build_motion_accel(&scene, Default::default(), &hints, None, Some(&motion));
+    let opts = options(Some(motion));
+    let film = render_window(&scene, &accel, &camera, &opts, whole, &|_, _| {});
+    (still.unwrap(), film.unwrap())
+}
+
+#[test]
+fn a_morphed_stripe_leaves_a_streak_as_long_as_its_screen_motion() {
+    let f_px = 0.5 * H as f32 / (0.5 * YFOV).tan();
+    for (shift, steps) in [(1.0f32, 3), (2.5, 3), (2.5, 6)] {
+        // Every vertex moves from x = −shift/2 to +shift/2: the stripe translates.
+        let motion = keyed(&stripe_scene(), steps, |_, tau| shift * (tau - 0.5));
+        assert!(motion.meshes[0].is_some());
+        let (still, film) = still_and_blurred(motion);
+        let (s0, s1) = lit_extent(&still);
+        let (b0, b1) = lit_extent(&film);
+        let streak = (b1 - b0) as f32 - (s1 - s0) as f32;
+        let want = f_px * shift / DIST;
+        assert!(
+            (streak - want).abs() < 2.0,
+            "shift {shift}, {steps} steps: streak {streak} px, want {want}"
+        );
+        let centre = 0.5 * (b0 + b1) as f32 - 0.5 * (s0 + s1) as f32;
+        assert!(
+            centre.abs() <= 1.0,
+            "shift {shift}: centred {centre} px off"
+        );
+        // The row keeps the still stripe's energy (the stripe keeps its width).
+        let sum = |f: &aperture_render::Film| (0..W).map(|x| f.pixel(x, H / 2)[0]).sum::<f32>();
+        let ratio = sum(&film) / sum(&still);
+        assert!((ratio - 1.0).abs() < 0.05, "shift {shift}: energy {ratio}");
+    }
+}
+
+#[test]
+fn a_stretching_stripe_streaks_on_its_moving_side_only() {
+    // The right edge moves 1.2 units right over the shutter; the left edge stays: a
+    // deformation no rigid motion gives.
+    let f_px = 0.5 * H as f32 / (0.5 * YFOV).tan();
+    let reach = 1.2;
+    let motion = keyed(&stripe_scene(), 3, |p, tau| {
+        if p.x > 0.0 {
+            reach * tau
+        } else {
+            0.0
+        }
+    });
+    let (still, film) = still_and_blurred(motion);
+    let (s0, s1) = lit_extent(&still);
+    let (b0, b1) = lit_extent(&film);
+    assert!(b0.abs_diff(s0) <= 1, "left edge {b0}, still {s0}");
+    let grown = (b1 - s1) as f32;
+    let want = f_px * reach / DIST;
+    assert!(
+        (grown - want).abs() < 2.0,
+        "right edge grew {grown} px, want {want}"
+    );
+}
+
+#[test]
+fn keys_that_do_not_move_render_the_still_image_bit_for_bit() {
+    // The deforming path whole (swept tree, interpolated triangles and surfaces, a time per
+    // sample) with keys equal to the frame's vertices: the still image, bit for bit.
+    let motion = keyed(&stripe_scene(), 3, |_, _| 0.0);
+    assert!(motion.meshes[0]
+        .as_ref()
+        .is_some_and(VertexMotion::is_still));
+    let (still, film) = still_and_blurred(motion);
+    assert_eq!(still.to_rgba(), film.to_rgba());
+}
