@@ -22,7 +22,7 @@ pub use instances::MovingInstance;
 pub use pose::pose_frame_motion;
 pub use settings::{MotionOverrides, MotionSettings, DEFAULT_MOTION_STEPS, MAX_MOTION_STEPS};
 pub use shutter::{RollingShutter, Shutter, ShutterPosition, DEFAULT_SHUTTER_FRAMES};
-pub use vector::{pose_neighbours, raster_of, FrameNeighbours};
+pub use vector::{pose_neighbours, raster_of, DeformedNeighbours, FrameNeighbours};
 
 /// What moves within one frame's shutter.
 #[derive(Debug, Clone, PartialEq)]

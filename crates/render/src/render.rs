@@ -159,7 +159,7 @@ fn centre_rays(job: &Job<'_>, film: &mut Film) {
     let forward = cam.world_from_camera.transform_vector3(Vec3::NEG_Z);
     // The frame's instant: where moving instances are at the frame itself.
     let time = job.opts.motion.as_deref().map_or(0.0, |m| m.frame_time());
-    let hits: Vec<Option<(Vec3, u32)>> = (0..w.pixels())
+    let hits: Vec<Option<(Vec3, aperture_accel::Hit)>> = (0..w.pixels())
         .into_par_iter()
         .map(|i| {
             let (x, y) = (w.x0 + (i as u32 % w.width), w.y0 + (i as u32 / w.width));
@@ -187,9 +187,9 @@ fn centre_rays(job: &Job<'_>, film: &mut Film) {
     }
     if job.opts.passes.contains(Pass::Vector) {
         let instances = &job.integrator.geom.scene.instances;
-        let on = |&(p, i): &(Vec3, u32)| {
-            let object_from_world = instances.get(i as usize)?.world_from_object.inverse();
-            Some((p, i, object_from_world))
+        let on = |&(p, hit): &(Vec3, aperture_accel::Hit)| {
+            let inst = instances.get(hit.instance as usize)?;
+            Some((p, hit, inst.mesh, inst.world_from_object))
         };
         film.vector = match job.opts.vector.as_deref() {
             None => vec![[0.0; 4]; hits.len()],

@@ -301,6 +301,7 @@ fn the_vector_pass_of_a_translating_sphere_is_its_screen_motion() {
         camera_prev: camera,
         camera_next: camera,
         instances: vec![Some((shifted(-step), shifted(step)))],
+        meshes: Vec::new(),
     };
     let opts = RenderOptions {
         spp: 1,

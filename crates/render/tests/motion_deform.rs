@@ -2,10 +2,12 @@
 //! leaves a streak as long as their screen motion, and keys that do not move change nothing.
 
 use aperture_accel::VertexMotion;
-use aperture_render::motion::{FrameMotion, Shutter};
+use aperture_render::motion::{DeformedNeighbours, FrameMotion, FrameNeighbours, Shutter};
 use aperture_render::{build_accel, build_motion_accel, render_window, SceneHints, Window};
+use aperture_render::{Pass, RenderOptions};
 use aperture_scene::Scene;
 use glam::Vec3;
+use std::sync::Arc;
 
 mod motion_common;
 use motion_common::*;
@@ -109,4 +111,60 @@ fn keys_that_do_not_move_render_the_still_image_bit_for_bit() {
         .is_some_and(VertexMotion::is_still));
     let (still, film) = still_and_blurred(motion);
     assert_eq!(still.to_rgba(), film.to_rgba());
+}
+
+/// The `Vector` pass follows a deforming mesh's vertices: the stripe's vertices, a `step` to
+/// the left at the previous frame and to the right at the next (its instance still), give
+/// every pixel on it the screen motion of that step (Cycles' order and signs, as for a
+/// moving instance in `motion_blur.rs`).
+#[test]
+fn the_vector_pass_of_a_morphed_stripe_is_its_vertices_screen_motion() {
+    let f_px = 0.5 * H as f32 / (0.5 * YFOV).tan();
+    let scene = stripe_scene();
+    let camera = turned(&scene, 0.0);
+    let step = 0.05;
+    let mesh = &scene.meshes[0];
+    // Object x is world x scaled by the stripe's width.
+    let moved = |dx: f32| -> Vec<Vec3> {
+        let shift = Vec3::X * dx / STRIPE;
+        mesh.positions.iter().map(|p| *p + shift).collect()
+    };
+    let neighbours = FrameNeighbours {
+        camera_prev: camera,
+        camera_next: camera,
+        instances: vec![None],
+        meshes: vec![Some(Arc::new(DeformedNeighbours {
+            indices: mesh.indices.clone(),
+            prev: moved(-step),
+            next: moved(step),
+        }))],
+    };
+    let opts = RenderOptions {
+        spp: 1,
+        passes: [Pass::Vector, Pass::Depth].into_iter().collect(),
+        vector: Some(Arc::new(neighbours)),
+        ..options(None)
+    };
+    let accel = build_accel(&scene, Default::default());
+    let film = render_window(
+        &scene,
+        &accel,
+        &camera,
+        &opts,
+        Window::whole(W, H),
+        &|_, _| {},
+    );
+    let film = film.unwrap();
+    let motion = f_px * step / DIST;
+    let mut checked = 0;
+    for (v, depth) in film.vector.iter().zip(&film.depth) {
+        if *depth >= aperture_render::DEPTH_BACKGROUND {
+            continue;
+        }
+        for (got, want) in v.iter().zip([-motion, 0.0, -motion, 0.0]) {
+            assert!((got - want).abs() < 0.05, "{v:?}, motion {motion} px");
+        }
+        checked += 1;
+    }
+    assert!(checked > 20, "the stripe covers {checked} pixels");
 }

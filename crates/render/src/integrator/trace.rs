@@ -138,7 +138,12 @@ impl Integrator<'_> {
     /// Depth, Position and Vector passes show (with the instance it lies on). Deterministic,
     /// unlike a sample: alpha-blended surfaces
     /// count as solid where their alpha is at least ½.
-    pub fn first_surface(&self, origin: Vec3, dir: Vec3, time: f32) -> Option<(Vec3, u32)> {
+    pub fn first_surface(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        time: f32,
+    ) -> Option<(Vec3, aperture_accel::Hit)> {
         let mut r = Ray {
             time,
             ..Ray::new(origin, dir)
@@ -148,7 +153,7 @@ impl Integrator<'_> {
             let s = self.hit_surface(&r, &hit, true);
             let seen = !self.geom.is_culled(&s, r.dir);
             if seen && (!self.geom.has_alpha || self.geom.is_opaque(&s, 0.5)) {
-                return Some((s.p, hit.instance));
+                return Some((s.p, hit));
             }
             let error = self.accel.spawn_point(&r, &hit).error;
             let n = if s.ng.dot(r.dir) > 0.0 { s.ng } else { -s.ng };

@@ -7,8 +7,10 @@
 //! raster space is y down, so the y components change sign.
 
 use crate::camera::{Camera, CameraModel};
-use aperture_scene::{Animated, Error, Scene};
+use aperture_accel::Hit;
+use aperture_scene::{Animated, Error, Mesh, Scene};
 use glam::{Affine3A, Vec2, Vec3, Vec3A};
+use std::sync::Arc;
 
 /// The cameras and instance placements of the frames before and after the rendered one.
 #[derive(Debug, Clone, PartialEq)]
@@ -20,6 +22,21 @@ pub struct FrameNeighbours {
     /// Per instance of the frame's scene: `world_from_object` at the previous and next frames
     /// (`None`: the instance is not in those poses; it counts as still).
     pub instances: Vec<Option<(Affine3A, Affine3A)>>,
+    /// Per mesh of the frame's scene whose vertices are elsewhere at the previous or next
+    /// frame (skins, morph targets): its vertices there; `None` when still.
+    pub meshes: Vec<Option<Arc<DeformedNeighbours>>>,
+}
+
+/// A deforming mesh's triangles and its vertex positions (object space) at the previous and
+/// the next frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DeformedNeighbours {
+    /// The mesh's triangles (the frame's, the same at every time).
+    pub indices: Vec<[u32; 3]>,
+    /// Positions at the previous frame.
+    pub prev: Vec<Vec3>,
+    /// Positions at the next frame.
+    pub next: Vec<Vec3>,
 }
 
 /// Where `camera` images world point `p`, in raster coordinates (x right, y down); `None`
@@ -43,18 +60,31 @@ pub fn raster_of(camera: &Camera, p: Vec3) -> Option<Vec2> {
 }
 
 impl FrameNeighbours {
-    /// The pass value of world point `p` seen by `camera` at the frame, on `instance` (placed
-    /// by `object_from_world` at the frame) or on nothing (the background: zero).
-    pub fn vector(&self, camera: &Camera, hit: Option<(Vec3, u32, Affine3A)>) -> [f32; 4] {
-        let Some((p, instance, object_from_world)) = hit else {
+    /// The pass value of world point `p` seen by `camera` at the frame, the point of `hit` on
+    /// an instance of `mesh` (placed by `world_from_object` at the frame), or on nothing (the
+    /// background: zero). On a deforming mesh the point is the one of the same barycentric
+    /// coordinates on its triangle as the neighbouring frames pose it (Cycles follows the
+    /// vertices' motion too).
+    pub fn vector(&self, camera: &Camera, hit: Option<(Vec3, Hit, u32, Affine3A)>) -> [f32; 4] {
+        let Some((p, hit, mesh, world_from_object)) = hit else {
             return [0.0; 4];
         };
-        let (p_prev, p_next) = match self.instances.get(instance as usize) {
-            Some(Some((prev, next))) => {
-                let o = object_from_world.transform_point3(p);
-                (prev.transform_point3(o), next.transform_point3(o))
+        let placed = self.instances.get(hit.instance as usize).copied().flatten();
+        let keys = self.meshes.get(mesh as usize).and_then(Option::as_ref);
+        let (p_prev, p_next) = match (placed, keys) {
+            (None, None) => (p, p),
+            (placed, keys) => {
+                let o = world_from_object.inverse().transform_point3(p);
+                let (o_prev, o_next) = match keys {
+                    Some(k) => (
+                        on_triangle(&k.indices, &k.prev, &hit, o),
+                        on_triangle(&k.indices, &k.next, &hit, o),
+                    ),
+                    None => (o, o),
+                };
+                let (prev, next) = placed.unwrap_or((world_from_object, world_from_object));
+                (prev.transform_point3(o_prev), next.transform_point3(o_next))
             }
-            _ => (p, p),
         };
         let project = |cam: &Camera, q: Vec3| raster_of(cam, q);
         match (
@@ -71,6 +101,19 @@ impl FrameNeighbours {
     }
 }
 
+/// The point of barycentric coordinates `hit.u`, `hit.v` on `hit`'s triangle of `indices`
+/// with vertices at `positions`; `fallback` when the triangle is not there.
+fn on_triangle(indices: &[[u32; 3]], positions: &[Vec3], hit: &Hit, fallback: Vec3) -> Vec3 {
+    let corner = |k: usize| -> Option<Vec3> {
+        let i = *indices.get(hit.triangle as usize)?.get(k)?;
+        positions.get(i as usize).copied()
+    };
+    match (corner(0), corner(1), corner(2)) {
+        (Some(a), Some(b), Some(c)) => a * (1.0 - hit.u - hit.v) + b * hit.u + c * hit.v,
+        _ => fallback,
+    }
+}
+
 /// The neighbours of the frame at `frame_time` seconds (`fps` frames a second) posed as
 /// `frame`, for camera `camera` and a `width × height` image; `None` when the camera is not
 /// in a neighbouring pose.
@@ -82,8 +125,10 @@ pub fn pose_neighbours(
 ) -> Result<Option<FrameNeighbours>, Error> {
     let mut cameras = Vec::with_capacity(2);
     let mut placements: Vec<Vec<Option<Affine3A>>> = Vec::with_capacity(2);
+    let mut positions: Vec<Vec<Vec<Vec3>>> = Vec::with_capacity(2);
     for dt in [-1.0, 1.0] {
         let scene = animated.shape_at(Some((frame_time + dt / fps) as f32))?;
+        positions.push(scene.meshes.iter().map(|m| m.positions.clone()).collect());
         let offset = Vec3A::from((scene.world_origin - frame.world_origin).as_vec3());
         let Some(cam) = scene.cameras.get(camera) else {
             return Ok(None);
@@ -124,9 +169,35 @@ pub fn pose_neighbours(
     let instances = (placements[0].iter().zip(&placements[1]))
         .map(|(a, b)| Some(((*a)?, (*b)?)))
         .collect();
+    let [prev, next] = <[_; 2]>::try_from(positions).unwrap_or_default();
     Ok(Some(FrameNeighbours {
         camera_prev: cameras[0],
         camera_next: cameras[1],
         instances,
+        meshes: deformed(&frame.meshes, prev, next),
     }))
+}
+
+/// Per mesh of the frame, its positions at the previous and next frames when either differs
+/// from the frame's (with as many vertices).
+fn deformed(
+    meshes: &[Mesh],
+    prev: Vec<Vec<Vec3>>,
+    next: Vec<Vec<Vec3>>,
+) -> Vec<Option<Arc<DeformedNeighbours>>> {
+    let (mut prev, mut next) = (prev.into_iter(), next.into_iter());
+    meshes
+        .iter()
+        .map(|m| {
+            let (p, n) = (prev.next()?, next.next()?);
+            let fits = p.len() == m.positions.len() && n.len() == m.positions.len();
+            (fits && (p != m.positions || n != m.positions)).then(|| {
+                Arc::new(DeformedNeighbours {
+                    indices: m.indices.clone(),
+                    prev: p,
+                    next: n,
+                })
+            })
+        })
+        .collect()
 }
