@@ -254,9 +254,6 @@ fn decode_exr_inner(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, 
     let layers = group_layers(channels, pixels);
 
     let metadata = metadata(&image, beauty_part);
-    let beauty_layer = beauty_prefix.map_or(String::new(), |p| {
-        p.strip_suffix('.').unwrap_or_default().to_owned()
-    });
 
     let too_big = || unsupported("image larger than u32".into());
     let (width, height) = (
@@ -270,7 +267,7 @@ fn decode_exr_inner(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, 
         height,
         rgba,
         beauty_type,
-        beauty_layer,
+        beauty_layer: beauty_prefix.map_or(String::new(), layer_of),
         layers,
         metadata,
         placement,
@@ -369,6 +366,11 @@ fn full_name(part: Option<&::exr::meta::attribute::Text>, channel: &[u8]) -> Str
         }
         _ => channel,
     }
+}
+
+/// The layer a channel prefix (`ViewLayer.Combined.`) names (`ViewLayer.Combined`).
+fn layer_of(prefix: String) -> String {
+    prefix.strip_suffix('.').unwrap_or_default().to_owned()
 }
 
 /// The beauty's channel prefix: `""` for unprefixed `R,G,B`, `None` for luminance `Y`, else a
