@@ -5,6 +5,9 @@
 use aperture_accel::{Accel, BvhQuality, FrameHints, InstanceInput, MeshInput, Ray, VertexMotion};
 use glam::{Affine3A, Vec3};
 
+mod common;
+use common::grid_indices;
+
 /// A unit square in the plane z = 0 (two triangles) shifted by `dx` along x.
 fn square(dx: f32) -> Vec<Vec3> {
     [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)]
@@ -94,18 +97,6 @@ fn grid(n: u32, shift: f32, h: f32) -> Vec<Vec3> {
         }
     }
     p
-}
-
-fn grid_indices(n: u32) -> Vec<[u32; 3]> {
-    let mut t = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let a = j * (n + 1) + i;
-            t.push([a, a + 1, a + n + 2]);
-            t.push([a, a + n + 2, a + n + 1]);
-        }
-    }
-    t
 }
 
 #[test]

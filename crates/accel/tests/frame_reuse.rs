@@ -1,11 +1,11 @@
 //! Animation frames: `Accel::build_frame` with the previous frame's structure reuses the
 //! bottom-level BVHs of unchanged meshes and answers every ray exactly as a build without it.
 
-use aperture_accel::{Accel, BvhQuality, FrameHints, InstanceInput, MeshInput, Ray};
+use aperture_accel::{Accel, BvhQuality, FrameHints, InstanceInput, MeshInput};
 use glam::{Affine3A, Quat, Vec3};
 
 mod common;
-use common::{grid, Geometry};
+use common::{grid, view_rays as rays, Geometry};
 
 /// Mesh 0: static, drawn twice (one moving instance); mesh 1: static, drawn once by a still
 /// instance (flattened); mesh 2: static, drawn once by a moving instance; mesh 3: deforming.
@@ -58,17 +58,6 @@ fn build(t: f32, previous: Option<Accel>) -> Accel {
         ..FrameHints::STILL
     };
     Accel::build_frame(&inputs, &instances, BvhQuality::Medium, hints, previous)
-}
-
-fn rays() -> Vec<Ray> {
-    let mut out = Vec::new();
-    for j in 0..60 {
-        for i in 0..80 {
-            let d = Vec3::new(i as f32 / 80.0 - 0.5, j as f32 / 60.0 - 0.5, -1.0).normalize();
-            out.push(Ray::new(Vec3::new(0.01, 0.02, 1.0), d));
-        }
-    }
-    out
 }
 
 #[test]

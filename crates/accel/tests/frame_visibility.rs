@@ -3,11 +3,11 @@
 //! instances that stay (renumbered when one before them left) and the bottom-level BVH of a
 //! mesh hidden for a frame, and answers every ray exactly as a build without it.
 
-use aperture_accel::{Accel, BvhQuality, FrameHints, InstanceInput, MeshInput, Ray};
+use aperture_accel::{Accel, BvhQuality, FrameHints, InstanceInput, MeshInput};
 use glam::{Affine3A, Quat, Vec3};
 
 mod common;
-use common::{grid, Geometry};
+use common::{grid, view_rays as rays, Geometry};
 
 fn meshes() -> Vec<Geometry> {
     vec![grid(12, 0.1), grid(9, 0.3), grid(7, 0.0)]
@@ -53,17 +53,6 @@ fn build(k: usize, previous: Option<Accel>) -> Accel {
         ..FrameHints::STILL
     };
     Accel::build_frame(&inputs, &instances, BvhQuality::Medium, hints, previous)
-}
-
-fn rays() -> Vec<Ray> {
-    let mut out = Vec::new();
-    for j in 0..60 {
-        for i in 0..80 {
-            let d = Vec3::new(i as f32 / 80.0 - 0.5, j as f32 / 60.0 - 0.5, -1.0).normalize();
-            out.push(Ray::new(Vec3::new(0.01, 0.02, 1.0), d));
-        }
-    }
-    out
 }
 
 #[test]

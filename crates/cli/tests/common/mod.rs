@@ -207,6 +207,11 @@ pub mod glb;
 /// (accessor 0, 4 × VEC3 float, bytes 0..48) and its two triangles' indices (accessor 1,
 /// 6 × u16, bytes 48..60); `doc` may add accessors after these.
 pub fn quad_glb(doc: &serde_json::Value) -> Vec<u8> {
+    quad_glb_with(doc, &[])
+}
+
+/// [`quad_glb`] with `tail` (what `doc`'s added accessors read) from byte 60 of buffer 0.
+pub fn quad_glb_with(doc: &serde_json::Value, tail: &[u8]) -> Vec<u8> {
     let mut bin = Vec::new();
     for v in [
         -1.0f32, -1.0, 0.0, 1.0, -1.0, 0.0, 1.0, 1.0, 0.0, -1.0, 1.0, 0.0,
@@ -216,6 +221,7 @@ pub fn quad_glb(doc: &serde_json::Value) -> Vec<u8> {
     for i in [0u16, 1, 2, 0, 2, 3] {
         bin.extend_from_slice(&i.to_le_bytes());
     }
+    bin.extend_from_slice(tail);
     glb::glb(doc, &bin)
 }
 
