@@ -126,9 +126,16 @@ pub fn pose_neighbours(
     let mut cameras = Vec::with_capacity(2);
     let mut placements: Vec<Vec<Option<Affine3A>>> = Vec::with_capacity(2);
     let mut positions: Vec<Vec<Vec<Vec3>>> = Vec::with_capacity(2);
+    // Meshes before this one never deform: only the others' positions are taken.
+    let first = animated.static_mesh_count();
     for dt in [-1.0, 1.0] {
-        let scene = animated.shape_at(Some((frame_time + dt / fps) as f32))?;
-        positions.push(scene.meshes.iter().map(|m| m.positions.clone()).collect());
+        let mut scene = animated.shape_at(Some((frame_time + dt / fps) as f32))?;
+        let may_deform = scene.meshes.iter_mut().skip(first);
+        positions.push(
+            may_deform
+                .map(|m| std::mem::take(&mut m.positions))
+                .collect(),
+        );
         let offset = Vec3A::from((scene.world_origin - frame.world_origin).as_vec3());
         let Some(cam) = scene.cameras.get(camera) else {
             return Ok(None);
@@ -174,21 +181,22 @@ pub fn pose_neighbours(
         camera_prev: cameras[0],
         camera_next: cameras[1],
         instances,
-        meshes: deformed(&frame.meshes, prev, next),
+        meshes: deformed(&frame.meshes, first, prev, next),
     }))
 }
 
-/// Per mesh of the frame, its positions at the previous and next frames when either differs
-/// from the frame's (with as many vertices).
+/// Per mesh of the frame, its positions at the previous and next frames (`prev`, `next`: of
+/// the meshes from `first` on) when either differs from the frame's (with as many vertices).
 fn deformed(
     meshes: &[Mesh],
+    first: usize,
     prev: Vec<Vec<Vec3>>,
     next: Vec<Vec<Vec3>>,
 ) -> Vec<Option<Arc<DeformedNeighbours>>> {
     let (mut prev, mut next) = (prev.into_iter(), next.into_iter());
-    meshes
-        .iter()
-        .map(|m| {
+    let still = meshes.iter().take(first).map(|_| None);
+    still
+        .chain(meshes.iter().skip(first).map(|m| {
             let (p, n) = (prev.next()?, next.next()?);
             let fits = p.len() == m.positions.len() && n.len() == m.positions.len();
             (fits && (p != m.positions || n != m.positions)).then(|| {
@@ -198,6 +206,6 @@ fn deformed(
                     next: n,
                 })
             })
-        })
+        }))
         .collect()
 }
