@@ -84,6 +84,20 @@ pub(crate) struct NodeGraph {
     pub own_hidden: Vec<bool>,
 }
 
+/// Per node: `own` holds for it or for an ancestor (`topological`: parents first), as a
+/// hidden node hides its subtree.
+pub(crate) fn inherited(
+    topological: &[usize],
+    parent: &[Option<usize>],
+    own: impl Fn(usize) -> bool,
+) -> Vec<bool> {
+    let mut out = vec![false; parent.len()];
+    for &i in topological {
+        out[i] = own(i) || parent[i].is_some_and(|p| out[p]);
+    }
+    out
+}
+
 /// A node's own `KHR_node_visibility` flag (visible unless it says `false`).
 fn visible(node: &gltf::Node<'_>) -> bool {
     node.extension_value("KHR_node_visibility")
@@ -207,10 +221,7 @@ pub(crate) fn node_graph(doc: &gltf::Document, buffers: &Buffers) -> Result<Node
         });
     }
     let own: Vec<bool> = doc.nodes().map(|n| !visible(&n)).collect();
-    let mut hidden = vec![false; n];
-    for &i in &topological {
-        hidden[i] = own[i] || parent[i].is_some_and(|p| hidden[p]);
-    }
+    let hidden = inherited(&topological, &parent, |i| own[i]);
     Ok(NodeGraph {
         nodes,
         names: doc.nodes().map(|n| n.name().map(str::to_owned)).collect(),

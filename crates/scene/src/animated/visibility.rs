@@ -7,7 +7,7 @@ use std::borrow::Cow;
 
 use super::{Animated, Pose};
 use crate::animation::{Channel, Target};
-use crate::nodes::NodeGraph;
+use crate::nodes::{inherited, NodeGraph};
 use crate::pointer::Pointer;
 use crate::SceneStats;
 
@@ -41,22 +41,15 @@ fn keyed(channels: &[Channel], nodes: usize) -> Vec<bool> {
 
 /// Per node: its visibility may change with time (it or an ancestor is keyed).
 fn toggles(graph: &NodeGraph, keyed: &[bool]) -> Vec<bool> {
-    let mut out = vec![false; graph.nodes.len()];
-    for &i in &graph.topological {
-        out[i] = keyed[i] || graph.parent[i].is_some_and(|p| out[p]);
-    }
-    out
+    inherited(&graph.topological, &graph.parent, |i| keyed[i])
 }
 
 /// Per node: hidden at every time (it or an ancestor is stored hidden and not keyed), so its
 /// mesh need not even be read; a node keyed visible at some time is read like a shown one.
 fn never_shown(graph: &NodeGraph, keyed: &[bool]) -> Vec<bool> {
-    let mut out = vec![false; graph.nodes.len()];
-    for &i in &graph.topological {
-        let own = graph.own_hidden[i] && !keyed[i];
-        out[i] = own || graph.parent[i].is_some_and(|p| out[p]);
-    }
-    out
+    inherited(&graph.topological, &graph.parent, |i| {
+        graph.own_hidden[i] && !keyed[i]
+    })
 }
 
 impl Animated {
@@ -88,10 +81,7 @@ impl Animated {
         let Some(own) = own else {
             return Cow::Borrowed(&self.graph.hidden);
         };
-        let mut hidden = vec![false; own.len()];
-        for &i in &self.graph.topological {
-            hidden[i] = own[i] || self.graph.parent[i].is_some_and(|p| hidden[p]);
-        }
-        Cow::Owned(hidden)
+        let g = &self.graph;
+        Cow::Owned(inherited(&g.topological, &g.parent, |i| own[i]))
     }
 }
