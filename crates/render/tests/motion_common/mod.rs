@@ -56,3 +56,29 @@ pub fn lit_extent(film: &aperture_render::Film) -> (u32, u32) {
         *lit.last().unwrap(),
     )
 }
+
+/// Asserts that `film`'s middle row is `still`'s blurred into a streak `want` pixels longer
+/// (within 2), centred on it (within 1 px, a centred shutter) and with the same energy (within
+/// 5 %); `what` names the case.
+pub fn assert_centred_streak(
+    still: &aperture_render::Film,
+    film: &aperture_render::Film,
+    want: f32,
+    what: &str,
+) {
+    let (s0, s1) = lit_extent(still);
+    let (b0, b1) = lit_extent(film);
+    let streak = (b1 - b0) as f32 - (s1 - s0) as f32;
+    assert!(
+        (streak - want).abs() < 2.0,
+        "{what}: streak {streak} px, want {want}"
+    );
+    let centre = 0.5 * (b0 + b1) as f32 - 0.5 * (s0 + s1) as f32;
+    assert!(
+        centre.abs() <= 1.0,
+        "{what}: streak centred {centre} px off"
+    );
+    let sum = |f: &aperture_render::Film| (0..W).map(|x| f.pixel(x, H / 2)[0]).sum::<f32>();
+    let ratio = sum(film) / sum(still);
+    assert!((ratio - 1.0).abs() < 0.05, "{what}: energy {ratio}");
+}
