@@ -8,6 +8,7 @@ use super::{Leaf, LightBounds, LightTree};
 use crate::lights::EmissiveLights;
 use crate::surface::Geometry;
 use aperture_scene::{Light, LightKind};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// What a tree was built from: its leaves, the directional lights beside it, the number of
@@ -23,7 +24,7 @@ struct Inputs {
 #[derive(Default)]
 pub struct TreeMemo {
     last: Mutex<Option<(Inputs, Arc<LightTree>)>>,
-    builds: Mutex<u64>,
+    builds: AtomicU64,
 }
 
 impl TreeMemo {
@@ -31,13 +32,13 @@ impl TreeMemo {
     pub const fn new() -> Self {
         Self {
             last: Mutex::new(None),
-            builds: Mutex::new(0),
+            builds: AtomicU64::new(0),
         }
     }
 
     /// How many trees this memo has built (the others it handed out were kept ones).
     pub fn builds(&self) -> u64 {
-        *self.builds.lock().unwrap_or_else(|e| e.into_inner())
+        self.builds.load(Ordering::Relaxed)
     }
 
     /// [`LightTree::for_scene`], reusing the last tree when its inputs are the same.
@@ -68,7 +69,7 @@ impl TreeMemo {
             lights,
             triangles,
         )?);
-        *self.builds.lock().unwrap_or_else(|e| e.into_inner()) += 1;
+        self.builds.fetch_add(1, Ordering::Relaxed);
         *last = Some((inputs, Arc::clone(&tree)));
         Some(tree)
     }
