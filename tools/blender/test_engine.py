@@ -349,6 +349,12 @@ def test_denoise():
     denoised = render(name="denoised")
     cmd = engine_module().LAST_RUN["command"]
     noisy = render(socket="Noisy Image", name="noisy")
+    props = type(s).bl_rna.properties
+    cycles_defaults = (props["denoise_prefilter"].default, props["denoise_quality"].default)
+    s.denoise_prefilter, s.denoise_quality = "FAST", "BALANCED"
+    quick = render(name="quick")
+    quick_cmd = " ".join(engine_module().LAST_RUN["command"])
+    s.denoise_prefilter, s.denoise_quality = cycles_defaults
     s.denoise = False
     raw = render(name="raw")
     lib = cmd[cmd.index("--oidn") + 1] if "--oidn" in cmd else None
@@ -363,6 +369,15 @@ def test_denoise():
     check("engine.denoise", same_noisy and changed > 1e-4 and abs(ratio - 1.0) < 0.02,
           f"Noisy Image equals the undenoised render: {same_noisy}; Combined denoised (mean "
           f"change {changed:.4f}, brightness ratio {ratio:.4f})")
+    differs = float(np.abs(quick[..., :3] - denoised[..., :3]).mean())
+    quick_ratio = float(quick[..., :3].mean() / raw[..., :3].mean())
+    check("engine.denoise-settings", cycles_defaults == ("ACCURATE", "HIGH")
+          and "--denoise-prefilter accurate --denoise-quality high" in " ".join(cmd)
+          and "--denoise-prefilter fast --denoise-quality balanced" in quick_cmd
+          and differs > 1e-5 and abs(quick_ratio - 1.0) < 0.02,
+          f"defaults {cycles_defaults}, as Cycles'; Prefilter Fast and Quality Balanced reach "
+          f"the command and change the image (mean change {differs:.5f}, brightness ratio "
+          f"{quick_ratio:.4f})")
 
 
 def test_error():

@@ -146,20 +146,25 @@ def cycles_load(scene, gltf, size, threads):
     return sc
 
 
-def cycles_denoising(sc, on):
-    """Cycles' own denoiser as a Blender user has it by default for F12, set explicitly: Open
-    Image Denoise on the CPU with albedo and normal, accurate prefilter, high quality."""
+# A denoiser's settings as (prefilter, quality); Cycles' defaults for F12.
+DENOISE_DEFAULT = ("accurate", "high")
+
+
+def cycles_denoising(sc, settings):
+    """Cycles' own denoiser, on with `settings` (prefilter, quality; DENOISE_DEFAULT is what a
+    Blender user has by default for F12) or off with None, set explicitly: Open Image Denoise
+    on the CPU with albedo and normal."""
     cy = sc.cycles
-    cy.use_denoising = on
-    if on:
+    cy.use_denoising = settings is not None
+    if settings is not None:
         cy.denoiser = "OPENIMAGEDENOISE"
         cy.denoising_input_passes = "RGB_ALBEDO_NORMAL"
-        cy.denoising_prefilter = "ACCURATE"
-        cy.denoising_quality = "HIGH"
+        cy.denoising_prefilter = settings[0].upper()
+        cy.denoising_quality = settings[1].upper()
         cy.denoising_use_gpu = False
 
 
-def cycles_renderer(scene, gltf, size, threads, tmp, denoise=False):
+def cycles_renderer(scene, gltf, size, threads, tmp, denoise=None):
     """render(spp, seed) -> (image, seconds): the seconds are `bpy.ops.render.render(write_still=
     True)` (with persistent data: session start, render, film read-back, the EXR write -- the
     render_post and render_write handlers fire within 1 ms of the call's end; no scene sync or
@@ -173,7 +178,7 @@ def cycles_renderer(scene, gltf, size, threads, tmp, denoise=False):
 
     def render(spp, seed, raw=False):
         # raw: the reference, never denoised (its error is what a denoised image is judged by)
-        cycles_denoising(sc, denoise and not raw)
+        cycles_denoising(sc, None if raw else denoise)
         sc.cycles.samples, sc.cycles.seed = spp, seed
         # A new output path each time: else a persistent session renders with the old samples
         # and seed (sc.update_tag() also works, but re-syncs more: +0.15 s on the interior).
@@ -242,7 +247,7 @@ def read_exr_rgb(path):
 WARM_MAX_SPP = 256
 
 
-def aperture_renderer(scene, gltf, binary, size, threads, tmp, bvh="medium", denoise=False):
+def aperture_renderer(scene, gltf, binary, size, threads, tmp, bvh="medium", denoise=None):
     """aperture: one `aperture render` process per render; the seconds are the render time the
     EXR header records (the traced image only: scene loading and BVH build excluded), beauty
     only (`--passes none`: Mitsuba and Cycles render no Depth, Normal or Cryptomatte either). The BVH
@@ -262,7 +267,8 @@ def aperture_renderer(scene, gltf, binary, size, threads, tmp, bvh="medium", den
 
     def render(spp, seed, raw=False):
         last = 2 if spp <= WARM_MAX_SPP else 1
-        dn = ["--denoise"] if denoise and not raw else []
+        dn = [] if raw or denoise is None else [
+            "--denoise", "--denoise-prefilter", denoise[0], "--denoise-quality", denoise[1]]
         pattern = os.path.join(tmp, "aperture_####.exr")
         cmd = [binary, "render", gltf, "-o", pattern, "--frames", f"1..{last}",
                "--width", str(size[0]), "--height", str(size[1]),

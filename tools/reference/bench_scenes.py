@@ -48,7 +48,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import bench_mitsuba as bm  # noqa: E402  (render in passes, metrics, the CSV writer)
 import make_reference as mr  # noqa: E402  (glTF writer, meshes, matrices, Mitsuba sensor)
-from bench_renderers import aperture_renderer, cycles_renderer, mitsuba_renderer  # noqa: E402
+from bench_renderers import (DENOISE_DEFAULT, aperture_renderer, cycles_renderer,  # noqa: E402
+                             mitsuba_renderer)
 
 REPO = mr.REPO
 WIDTH, HEIGHT = 320, 240
@@ -477,9 +478,18 @@ def make_renderer(args, tmp):
     if args.renderer == "mitsuba":
         return mitsuba_renderer(scene, args.output, size, args.threads, args.variant), size
     if args.renderer == "cycles":
-        return cycles_renderer(scene, gltf, size, args.threads, tmp, args.denoise), size
+        return cycles_renderer(scene, gltf, size, args.threads, tmp,
+                               denoise_settings(args, args.cycles_denoise_settings)), size
     return aperture_renderer(scene, gltf, args.aperture, size, args.threads, tmp, args.bvh_quality,
-                             args.denoise), size
+                             denoise_settings(args, args.denoise_settings)), size
+
+
+def denoise_settings(args, text):
+    """(prefilter, quality) from "PREFILTER,QUALITY" when --denoise, else None."""
+    if not args.denoise:
+        return None
+    prefilter, quality = text.lower().split(",")
+    return prefilter, quality
 
 
 def run_series(args):
@@ -518,6 +528,8 @@ class Worker:
                "-o", args.output, "--reference-spp", str(args.reference_spp), "--threads", str(args.threads),
                "--size", args.size, "--aperture", args.aperture, "--variant", args.variant,
                "--bvh-quality", args.bvh_quality, "--result-fd", str(write_end),
+               "--denoise-settings", args.denoise_settings,
+               "--cycles-denoise-settings", args.cycles_denoise_settings,
                *(["--denoise"] if args.denoise else [])]
         self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, text=True, pass_fds=(write_end,))
         os.close(write_end)
@@ -628,8 +640,14 @@ def parser():
                     help="RMSE targets as multiples of the noisiest reference's noise RMSE")
     ap.add_argument("--target", action="append", help="SCENE=RMSE,RMSE...: explicit targets (repeatable)")
     ap.add_argument("--denoise", action="store_true",
-                    help="budgets denoised (aperture --denoise; Cycles' OIDN, albedo+normal, accurate "
-                         "prefilter), references not: the error of a denoised image against the truth")
+                    help="budgets denoised (aperture --denoise; Cycles' OIDN, albedo+normal), "
+                         "references not: the error of a denoised image against the truth")
+    default = ",".join(DENOISE_DEFAULT)
+    ap.add_argument("--denoise-settings", default=default,
+                    help="with --denoise: aperture's PREFILTER,QUALITY (accurate|fast|none, "
+                         "high|balanced|fast; default Cycles' own)")
+    ap.add_argument("--cycles-denoise-settings", default=default,
+                    help="with --denoise: Cycles' PREFILTER,QUALITY (default: F12's)")
     ap.add_argument("--scene", help="series: the scene")
     ap.add_argument("--renderer", choices=RENDERERS, help="series: the renderer")
     ap.add_argument("--result-fd", type=int, help="worker: where its answers go")

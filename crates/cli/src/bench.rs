@@ -103,6 +103,9 @@ pub struct BenchArgs {
     /// Renders per configuration and budget; the time reported is their median.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
     pub repeats: u32,
+    /// The `denoised` configuration's library and settings (see `aperture render --denoise`).
+    #[command(flatten)]
+    pub denoise: crate::denoise_cmd::DenoiseOptions,
     /// Bounces, clamps and pixel filter, as `aperture render` takes them, for every render
     /// (the generated reference included: a given --reference must use the same clamps).
     #[command(flatten)]
@@ -164,10 +167,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         None => None,
     };
     let (width, height) = image_size(&args, cam, reference.as_ref())?;
-    let denoiser = match args.configs.contains(&Config::Denoised) {
-        true => Some(crate::denoise_cmd::load_denoiser(None)?),
-        false => None,
-    };
+    let denoiser = args
+        .denoise
+        .load_if(args.configs.contains(&Config::Denoised))?;
     let pool = crate::workers::worker_pool(args.threads)?;
     let threads = pool.current_num_threads();
     let clamp = args.tracing.clamp();

@@ -2,8 +2,89 @@
 //! and `merge --denoise`.
 
 use anyhow::Context as _;
-use aperture_denoise::Denoiser;
-use std::path::{Path, PathBuf};
+use aperture_denoise::{Denoiser, Prefilter, Quality, Settings};
+use std::path::PathBuf;
+
+/// How to denoise, shared by `render --denoise`, `merge --denoise`, `denoise` and `bench`:
+/// the library and Cycles' two Denoising settings.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct DenoiseOptions {
+    /// The libOpenImageDenoise.so.2 to load (or its folder), before all other places.
+    #[arg(long, value_name = "PATH")]
+    pub oidn: Option<PathBuf>,
+    /// The denoising network, as Cycles' Denoising "Quality": high (the default), balanced
+    /// (with the accurate prefilter about half high's time; otherwise the same), fast (a
+    /// small network for the image, for previews).
+    #[arg(long, value_enum, value_name = "QUALITY")]
+    pub denoise_quality: Option<QualityArg>,
+    /// How the albedo and normal guide it, as Cycles' Denoising "Prefilter": accurate (the
+    /// default: each denoised first, three filters in all), fast (taken as noisy, one filter),
+    /// none (taken as noise-free, one filter; for converged albedo and normal).
+    #[arg(long, value_enum, value_name = "PREFILTER")]
+    pub denoise_prefilter: Option<PrefilterArg>,
+}
+
+/// `--denoise-quality`.
+#[derive(clap::ValueEnum, Debug, Clone, Copy)]
+pub enum QualityArg {
+    /// The final-frame network.
+    High,
+    /// OIDN's earlier network (half high's time with the accurate prefilter).
+    Balanced,
+    /// A small network for the image, for previews.
+    Fast,
+}
+
+/// `--denoise-prefilter`.
+#[derive(clap::ValueEnum, Debug, Clone, Copy)]
+pub enum PrefilterArg {
+    /// Albedo and normal denoised first.
+    Accurate,
+    /// Albedo and normal cleaned with the beauty.
+    Fast,
+    /// Albedo and normal taken as noise-free.
+    None,
+}
+
+impl DenoiseOptions {
+    /// Whether any of these was given (they mean nothing without `--denoise`).
+    pub fn given(&self) -> bool {
+        self.oidn.is_some() || self.denoise_quality.is_some() || self.denoise_prefilter.is_some()
+    }
+
+    /// The settings asked for, Cycles' defaults for the rest.
+    pub fn settings(&self) -> Settings {
+        let quality = match self.denoise_quality {
+            Some(QualityArg::Fast) => Quality::Fast,
+            Some(QualityArg::Balanced) => Quality::Balanced,
+            Some(QualityArg::High) | None => Quality::High,
+        };
+        let prefilter = match self.denoise_prefilter {
+            Some(PrefilterArg::None) => Prefilter::None,
+            Some(PrefilterArg::Fast) => Prefilter::Fast,
+            Some(PrefilterArg::Accurate) | None => Prefilter::Accurate,
+        };
+        Settings { quality, prefilter }
+    }
+
+    /// The denoiser when `wanted`; without it, an error if any option was given anyway.
+    pub fn load_if(&self, wanted: bool) -> anyhow::Result<Option<Denoiser>> {
+        match (wanted, self.given()) {
+            (true, _) => Ok(Some(self.load()?)),
+            (false, true) => anyhow::bail!(
+                "--oidn, --denoise-quality and --denoise-prefilter only apply when denoising (--denoise)"
+            ),
+            (false, false) => Ok(None),
+        }
+    }
+
+    /// Loads Open Image Denoise (`--oidn`, else `APERTURE_OIDN`, else the documented search)
+    /// with these settings, before anything is rendered or written; the error is one line
+    /// saying how to get it.
+    pub fn load(&self) -> anyhow::Result<Denoiser> {
+        Ok(Denoiser::load(self.oidn.as_deref())?.with_settings(self.settings()))
+    }
+}
 
 /// Arguments of `aperture denoise`.
 #[derive(clap::Args, Debug)]
@@ -16,9 +97,9 @@ pub struct DenoiseArgs {
     /// The denoised image: EXR (passes kept, the noisy beauty as `Noisy Image`) or PNG.
     #[arg(short, long, value_name = "OUT.exr|png")]
     pub output: PathBuf,
-    /// The Open Image Denoise library to use (see `--oidn` of `aperture render`).
-    #[arg(long, value_name = "PATH")]
-    pub oidn: Option<PathBuf>,
+    /// The library and the settings (see `aperture render --denoise`).
+    #[command(flatten)]
+    pub denoise: DenoiseOptions,
     /// PNG exposure in stops.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
@@ -27,16 +108,10 @@ pub struct DenoiseArgs {
     pub quiet: bool,
 }
 
-/// Loads Open Image Denoise (`--oidn`, else `APERTURE_OIDN`, else the documented search),
-/// before anything is rendered or written; the error is one line saying how to get it.
-pub fn load_denoiser(oidn: Option<&Path>) -> anyhow::Result<Denoiser> {
-    Ok(Denoiser::load(oidn)?)
-}
-
 /// Runs `aperture denoise`.
 pub fn run(args: DenoiseArgs) -> anyhow::Result<()> {
     aperture_imageio::Format::from_path(&args.output)?;
-    let denoiser = load_denoiser(args.oidn.as_deref())?;
+    let denoiser = args.denoise.load()?;
     let t0 = std::time::Instant::now();
     let png = aperture_imageio::PngOptions {
         exposure: args.exposure,
@@ -46,10 +121,11 @@ pub fn run(args: DenoiseArgs) -> anyhow::Result<()> {
         .with_context(|| format!("denoising {}", args.input.display()))?;
     if !args.quiet {
         eprintln!(
-            "{}: denoised with Open Image Denoise {} ({}), {:.2} s",
+            "{}: denoised with Open Image Denoise {} ({}; {}), {:.2} s",
             args.output.display(),
             denoiser.version_string(),
             denoiser.path().display(),
+            denoiser.settings(),
             t0.elapsed().as_secs_f64()
         );
     }

@@ -22,9 +22,9 @@ pub struct MergeArgs {
     /// Parts must not be denoised themselves: denoising is not linear.
     #[arg(long)]
     pub denoise: bool,
-    /// With --denoise: the libOpenImageDenoise.so.2 to load (or its folder).
-    #[arg(long, value_name = "PATH", requires = "denoise")]
-    pub oidn: Option<PathBuf>,
+    /// With --denoise: the library and the settings (see `aperture render --denoise`).
+    #[command(flatten)]
+    pub denoise_options: crate::denoise_cmd::DenoiseOptions,
     /// No summary.
     #[arg(long, short)]
     pub quiet: bool,
@@ -42,10 +42,7 @@ pub fn run(args: MergeArgs) -> anyhow::Result<()> {
             args.output.display()
         );
     }
-    let denoiser = match args.denoise {
-        true => Some(crate::denoise_cmd::load_denoiser(args.oidn.as_deref())?),
-        false => None,
-    };
+    let denoiser = args.denoise_options.load_if(args.denoise)?;
     let t0 = std::time::Instant::now();
     let opts = MergeOptions {
         allow_partial: args.allow_partial,

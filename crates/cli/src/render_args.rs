@@ -267,7 +267,8 @@ pub struct RenderArgs {
     #[arg(long, conflicts_with = "frames")]
     pub save_partial: bool,
     /// Denoise the beauty with Intel Open Image Denoise 2.x (its RT filter, HDR, albedo and
-    /// normal prefiltered, quality high, as Cycles): the EXR's R,G,B (and the PNG) are the
+    /// normal prefiltered, quality high, as Cycles; faster: --denoise-quality,
+    /// --denoise-prefilter): the EXR's R,G,B (and the PNG) are the
     /// denoised image, the EXR keeps the noisy one as `Noisy Image` and the Denoising passes.
     /// The library is loaded at run time, found in this order: --oidn, APERTURE_OIDN, the
     /// system library path, tools/oidn/install.sh's copy in ~/.cache/aperture/oidn, a pyoidn
@@ -275,10 +276,9 @@ pub struct RenderArgs {
     /// parts cannot be merged: render parts without it and use `aperture merge --denoise`.
     #[arg(long)]
     pub denoise: bool,
-    /// With --denoise: the libOpenImageDenoise.so.2 to load (or its folder), before all other
-    /// places.
-    #[arg(long, value_name = "PATH", requires = "denoise")]
-    pub oidn: Option<PathBuf>,
+    /// With --denoise: the library and the settings.
+    #[command(flatten)]
+    pub denoise_options: crate::denoise_cmd::DenoiseOptions,
     /// A part of a render split across machines: --region, --tile, --sample-offset.
     #[command(flatten)]
     pub split: crate::split_args::SplitArgs,

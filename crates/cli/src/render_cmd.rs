@@ -26,10 +26,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
 fn run_on(args: RenderArgs, pool: &rayon::ThreadPool) -> anyhow::Result<()> {
     let before = before_load(&args)?;
     // The library is needed before anything is loaded, rendered or written.
-    let denoiser = match args.denoise {
-        true => Some(crate::denoise_cmd::load_denoiser(args.oidn.as_deref())?),
-        false => None,
-    };
+    let denoiser = args.denoise_options.load_if(args.denoise)?;
     let t_load = Instant::now();
     let (animated, scene) = load_posed(&args, &before.load)?;
     let plan = after_load(&args, &before, &scene)?;

@@ -64,6 +64,33 @@ fn render_denoise_without_the_library_fails_first_and_writes_nothing() {
 }
 
 #[test]
+fn denoise_settings_without_denoise_are_refused_before_loading() {
+    let dir = Scratch::new("denoise-settings-alone");
+    let out = dir.path("out.png");
+    for flag in [
+        ["--denoise-quality", "fast"],
+        ["--denoise-prefilter", "none"],
+    ] {
+        let mut args = vec![
+            "render",
+            "/nonexistent/scene.glb",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend(flag);
+        let o = run(&args);
+        let err = stderr(&o);
+        assert!(!o.status.success());
+        assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+        assert!(
+            err.contains("--denoise") && !err.contains("scene.glb"),
+            "{err}"
+        );
+        assert!(!out.exists());
+    }
+}
+
+#[test]
 fn render_denoise_writes_the_denoised_beauty_and_the_noisy_one() {
     if !have_oidn() {
         return;
@@ -90,6 +117,41 @@ fn render_denoise_writes_the_denoised_beauty_and_the_noisy_one() {
     assert!(matches!(img.meta("aperture:denoiseTime"), Some(MetaValue::Float(s)) if *s > 0.0));
     assert!(img.layer("Noisy Image").is_some() && img.layer("Denoising Albedo").is_some());
     assert!(png.is_file());
+    let said = |img: &aperture_imageio::Image| match img.meta("aperture:denoiser") {
+        Some(MetaValue::Text(t)) => t.clone(),
+        other => panic!("aperture:denoiser is {other:?}"),
+    };
+    // Cycles' defaults, said in the header; the faster settings change the image.
+    assert!(
+        said(&img).ends_with("quality high, prefilter accurate"),
+        "{}",
+        said(&img)
+    );
+    let quick = dir.path("quick.exr");
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        quick.to_str().unwrap(),
+    ];
+    args.extend(SMALL);
+    args.extend([
+        "--denoise",
+        "--denoise-quality",
+        "fast",
+        "--denoise-prefilter",
+        "fast",
+    ]);
+    let o = run(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let quick = read_exr(&quick).unwrap();
+    assert!(
+        said(&quick).ends_with("quality fast, prefilter fast"),
+        "{}",
+        said(&quick)
+    );
+    assert_eq!(quick.layer("Noisy Image"), img.layer("Noisy Image"));
+    assert_ne!(quick.rgba, img.rgba);
     // A denoised file is not denoised again.
     let o = run(&[
         "denoise",

@@ -2,9 +2,11 @@
 //! dependency, so a machine without OIDN builds and renders as before, and only denoising
 //! needs the library. [`Denoiser::load`] finds it in the order [`locate`] documents.
 //!
-//! The filtering is OIDN's "accurate" path, as Blender Cycles does it: the albedo and normal
-//! are each denoised first by their own `RT` filter, then the beauty's `RT` filter (HDR,
-//! `quality` high) takes them with `cleanAux` set.
+//! The filtering is by default OIDN's "accurate" path, as Blender Cycles does it: the albedo and
+//! normal are each denoised first by their own `RT` filter, then the beauty's `RT` filter (HDR,
+//! `quality` high) takes them with `cleanAux` set. [`Settings`] offers Cycles' two other
+//! prefilters and OIDN's faster networks, which trade quality for time (one filter instead of
+//! three, a smaller network).
 //!
 //! ```
 //! use aperture_denoise::{DenoiseError, Denoiser};
@@ -33,14 +35,13 @@
 mod error;
 mod ffi;
 pub mod locate;
+mod settings;
 
 pub use error::{DenoiseError, HOW_TO_GET};
 pub use locate::{Candidate, Origin};
+pub use settings::{Prefilter, Quality, Settings};
 
 use std::path::{Path, PathBuf};
-
-/// OIDN's `OIDN_QUALITY_HIGH`.
-const QUALITY_HIGH: i32 = 6;
 
 /// The images of one denoising: packed RGB rows of `width * height` pixels each.
 #[derive(Debug, Clone, Copy)]
@@ -63,6 +64,7 @@ pub struct Denoiser {
     path: PathBuf,
     origin: Origin,
     version: i32,
+    settings: Settings,
 }
 
 impl std::fmt::Debug for Denoiser {
@@ -71,6 +73,7 @@ impl std::fmt::Debug for Denoiser {
             .field("path", &self.path)
             .field("origin", &self.origin)
             .field("version", &self.version_string())
+            .field("settings", &self.settings)
             .finish()
     }
 }
@@ -119,7 +122,19 @@ impl Denoiser {
             path: c.path.clone(),
             origin: c.origin,
             version,
+            settings: Settings::default(),
         })
+    }
+
+    /// The same library and device, filtering with `settings` from now on.
+    pub fn with_settings(mut self, settings: Settings) -> Self {
+        self.settings = settings;
+        self
+    }
+
+    /// The settings every [`Denoiser::denoise`] uses.
+    pub fn settings(&self) -> Settings {
+        self.settings
     }
 
     /// The library loaded (a bare file name when the system's search found it).
@@ -138,8 +153,8 @@ impl Denoiser {
         format!("{}.{}.{}", v / 10000, v / 100 % 100, v % 100)
     }
 
-    /// Denoises `images.colour`: albedo and normal prefiltered, then the beauty with
-    /// `cleanAux`, HDR, quality high. Returns the denoised RGB, same size.
+    /// Denoises `images.colour` with the albedo and normal as [`Settings::prefilter`] says, HDR,
+    /// at [`Settings::quality`]. Returns the denoised RGB, same size.
     pub fn denoise(&self, images: &Images<'_>) -> Result<Vec<[f32; 3]>, DenoiseError> {
         let n = images.width * images.height;
         for (what, px) in [
@@ -156,8 +171,17 @@ impl Denoiser {
                 });
             }
         }
-        let albedo = self.prefilter("albedo", images, images.albedo)?;
-        let normal = self.prefilter("normal", images, images.normal)?;
+        let prefiltered;
+        let (albedo, normal) = match self.settings.prefilter {
+            Prefilter::Accurate => {
+                prefiltered = (
+                    self.prefilter("albedo", images, images.albedo)?,
+                    self.prefilter("normal", images, images.normal)?,
+                );
+                (&prefiltered.0[..], &prefiltered.1[..])
+            }
+            Prefilter::Fast | Prefilter::None => (images.albedo, images.normal),
+        };
         let mut out = vec![[0.0f32; 3]; n];
         let run = ffi::Run {
             kind: "RT",
@@ -165,11 +189,14 @@ impl Denoiser {
             height: images.height,
             inputs: &[
                 ("color", images.colour),
-                ("albedo", &albedo),
-                ("normal", &normal),
+                ("albedo", albedo),
+                ("normal", normal),
             ],
-            bools: &[("hdr", true), ("cleanAux", true)],
-            ints: &[("quality", QUALITY_HIGH)],
+            bools: &[
+                ("hdr", true),
+                ("cleanAux", self.settings.prefilter.clean_aux()),
+            ],
+            ints: &[("quality", self.settings.quality.oidn())],
         };
         self.device
             .run(&run, &mut out)
@@ -195,7 +222,7 @@ impl Denoiser {
             height: images.height,
             inputs: &inputs,
             bools: &[],
-            ints: &[("quality", QUALITY_HIGH)],
+            ints: &[("quality", self.settings.quality.oidn())],
         };
         self.device
             .run(&run, &mut out)

@@ -13,6 +13,9 @@ use std::path::Path;
 
 /// Header attribute (i32) that is 1 in a denoised file.
 pub const DENOISED: &str = "aperture:denoised";
+/// Header attribute (text): the denoiser and its settings, e.g. `Open Image Denoise 2.5.1,
+/// quality high, prefilter accurate`.
+pub const DENOISER: &str = "aperture:denoiser";
 /// Header attribute (f32): seconds the denoiser took (filters built and run), beside
 /// `aperture:renderTime`, which excludes it; their sum is what a user waits for the image.
 pub const DENOISE_TIME: &str = "aperture:denoiseTime";
@@ -164,6 +167,15 @@ fn store(v: f32, half: bool) -> f32 {
     }
 }
 
+/// The value of [`DENOISER`] for `denoiser`.
+pub fn describe(denoiser: &Denoiser) -> String {
+    format!(
+        "Open Image Denoise {}, {}",
+        denoiser.version_string(),
+        denoiser.settings()
+    )
+}
+
 /// Denoises `image` in place (see the module documentation): a [`NOISY_IMAGE`] layer (with
 /// the albedo layer's view-layer prefix, if any) holds the old beauty.
 pub fn denoise_image(image: &mut Image, denoiser: &Denoiser) -> Result<(), DenoisingError> {
@@ -217,8 +229,13 @@ pub fn denoise_image(image: &mut Image, denoiser: &Denoiser) -> Result<(), Denoi
     if had_noisy.is_none() {
         image.layers.push(noisy);
     }
-    image.metadata.retain(|(k, _)| k != DENOISED);
+    image
+        .metadata
+        .retain(|(k, _)| k != DENOISED && k != DENOISER);
     image.metadata.push((DENOISED.into(), MetaValue::Int(1)));
+    image
+        .metadata
+        .push((DENOISER.into(), MetaValue::Text(describe(denoiser))));
     Ok(())
 }
 

@@ -178,14 +178,14 @@ pub fn render_exr_denoised(
 }
 
 /// The file [`render_exr`] writes: its channels (the `Noisy Image` ones last when
-/// `denoising`) and header, late values to be filled in.
+/// denoising) and header, late values to be filled in.
 fn exr_layout(
     scene: &Scene,
     camera: &aperture_render::camera::Camera,
     opts: &RenderOptions,
     window: Window,
     exr: &ExrOptions,
-    denoising: bool,
+    denoiser: Option<&Denoiser>,
 ) -> ExrLayout {
     let whole = Window::whole(opts.width, opts.height);
     let mut layout = ExrLayout {
@@ -203,8 +203,12 @@ fn exr_layout(
         let flag = header::late::INTERRUPTED.to_string();
         layout.metadata.push((flag, MetaValue::Int(0)));
     }
-    if denoising {
+    if let Some(d) = denoiser {
         layout.channels.extend(denoised::noisy_channels(exr.half));
+        let name = denoised::DENOISER.to_string();
+        layout
+            .metadata
+            .push((name, MetaValue::Text(denoised::describe(d))));
         let flag = denoised::DENOISED.to_string();
         layout.metadata.push((flag, MetaValue::Int(0)));
         let secs = denoised::DENOISE_TIME.to_string();
@@ -229,7 +233,7 @@ fn render_exr_with(
         passes,
         ..opts.clone()
     };
-    let layout = exr_layout(scene, &camera, &opts, window, exr, denoiser.is_some());
+    let layout = exr_layout(scene, &camera, &opts, window, exr, denoiser);
     let specs = channels::channels(passes, exr.half);
     let bpp = film_bytes_per_pixel(passes, opts.adaptive.is_some(), layout.channels.len());
     let bands = bands(window, band_rows(window, exr.band_bytes, bpp));

@@ -123,14 +123,16 @@ def blender_oidn():
 
 
 def denoise_arguments(s):
-    """`--denoise` and the library: the panel's, else APERTURE_OIDN (aperture reads it), else
-    Blender's own, else aperture's search."""
+    """`--denoise`, its settings and the library: the panel's, else APERTURE_OIDN (aperture
+    reads it), else Blender's own, else aperture's search."""
     if not s.denoise:
         return []
     lib = bpy.path.abspath(s.oidn) if s.oidn else None
     if lib is None and not os.environ.get("APERTURE_OIDN"):
         lib = blender_oidn()
-    return ["--denoise"] + (["--oidn", lib] if lib else [])
+    settings = ["--denoise-prefilter", s.denoise_prefilter.lower(),
+                "--denoise-quality", s.denoise_quality.lower()]
+    return ["--denoise"] + settings + (["--oidn", lib] if lib else [])
 
 
 def command(binary, glb, out, scene, view_layer):

@@ -13,6 +13,17 @@ TRANSMISSION = [
     ("GLTF", "glTF", "The Khronos meaning: transmission without volume is thin-walled"),
     ("BLENDER", "Blender", "Every transmissive closed mesh refracts, as Cycles shows it"),
 ]
+# Cycles' Denoising Prefilter and Quality, with its defaults (`--denoise-prefilter`, `-quality`).
+DENOISE_PREFILTERS = [
+    ("NONE", "None", "Albedo and normal taken as noise-free (one filter)"),
+    ("FAST", "Fast", "Albedo and normal cleaned with the image (one filter)"),
+    ("ACCURATE", "Accurate", "Albedo and normal denoised first (three filters, the best image)"),
+]
+DENOISE_QUALITIES = [
+    ("HIGH", "High", "The final-frame network"),
+    ("BALANCED", "Balanced", "Half High's time with the Accurate prefilter, else the same"),
+    ("FAST", "Fast", "A small network for the image, for previews"),
+]
 
 
 class ApertureSettings(bpy.types.PropertyGroup):
@@ -52,6 +63,18 @@ class ApertureSettings(bpy.types.PropertyGroup):
         "as Cycles; `aperture render --denoise`); the noisy image stays as the Noisy Image pass",
         default=True,
     )
+    denoise_prefilter: bpy.props.EnumProperty(
+        name="Prefilter",
+        description="How the albedo and normal guide the denoiser, as Cycles' Prefilter",
+        items=DENOISE_PREFILTERS,
+        default="ACCURATE",
+    )
+    denoise_quality: bpy.props.EnumProperty(
+        name="Quality",
+        description="The denoising network's size (time against quality), as Cycles' Quality",
+        items=DENOISE_QUALITIES,
+        default="HIGH",
+    )
     oidn: bpy.props.StringProperty(
         name="OIDN Library",
         description="libOpenImageDenoise.so.2 to denoise with (empty: APERTURE_OIDN if set, "
@@ -86,7 +109,8 @@ class RENDER_PT_aperture(bpy.types.Panel):
         layout.use_property_split = True
         for name in ("samples", "noise_threshold", "max_bounces", "clamp_direct",
                      "clamp_indirect", "filter", "seed", "transmission", "denoising_data",
-                     "denoise", "oidn", "binary", "keep_files"):
+                     "denoise", "denoise_prefilter", "denoise_quality", "oidn", "binary",
+                     "keep_files"):
             layout.prop(s, name)
 
 
