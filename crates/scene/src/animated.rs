@@ -8,6 +8,7 @@
 //! meshes deformed per pose follow them.
 
 mod pose;
+mod variants;
 mod visibility;
 
 use std::collections::HashMap;
@@ -30,6 +31,7 @@ use crate::{
     glb, morph, prepass, skin, Error, LightKind, LoadOptions, Material, Mesh, Scene, SceneStats,
     Texture,
 };
+use variants::{resolve_variant, variant_names};
 
 /// Watts per lumen at 555 nm: Blender's importer divides candela and lux by it (SPEC §4).
 const LUMENS_PER_WATT: f32 = 683.0;
@@ -118,49 +120,6 @@ struct Pose {
     pointers: Vec<(Pointer, Vec<f64>)>,
 }
 
-/// The names of the file's `KHR_materials_variants` (`variants[i]` when unnamed).
-fn variant_names(root: &Value) -> Vec<String> {
-    let list = root
-        .get("extensions")
-        .and_then(|e| e.get("KHR_materials_variants"))
-        .and_then(|v| v.get("variants"))
-        .and_then(Value::as_array);
-    list.into_iter()
-        .flatten()
-        .enumerate()
-        .map(|(i, v)| {
-            v.get("name")
-                .and_then(Value::as_str)
-                .map_or_else(|| format!("variants[{i}]"), str::to_owned)
-        })
-        .collect()
-}
-
-/// The index of the variant `--variant` names (a name, else an index written as digits).
-fn resolve_variant(names: &[String], wanted: Option<&str>) -> Result<Option<usize>, Error> {
-    let Some(wanted) = wanted else {
-        return Ok(None);
-    };
-    if let Some(i) = names.iter().position(|n| n == wanted) {
-        return Ok(Some(i));
-    }
-    match wanted.parse::<usize>() {
-        Ok(i) if i < names.len() => Ok(Some(i)),
-        _ => Err(Error::NoSuchVariant {
-            wanted: format!("{wanted:?}"),
-            available: if names.is_empty() {
-                "none".into()
-            } else {
-                names
-                    .iter()
-                    .map(|n| format!("{n:?}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            },
-        }),
-    }
-}
-
 impl Animated {
     /// Loads and decodes a `.gltf` or `.glb` file once.
     pub fn load(path: &Path, options: &LoadOptions) -> Result<Self, Error> {
@@ -184,6 +143,20 @@ impl Animated {
 
     /// Loads from the bytes of a `.gltf` or `.glb` file; external URIs resolve inside `base_dir`.
     pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Result<Self, Error> {
+        // The parsing crates keep overflow checks in release builds (Cargo.toml): a size from
+        // a hostile header that wraps, or any other panic of the loader, is an error here.
+        let load = || Self::unguarded(bytes, base_dir, options);
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(load)).unwrap_or_else(|panic| {
+            let message = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            Err(Error::Panicked { message })
+        })
+    }
+
+    fn unguarded(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Result<Self, Error> {
         let (json, bin) = if glb::is_glb(bytes) {
             let g = glb::parse(bytes)?;
             (g.json, g.bin)

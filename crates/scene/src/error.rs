@@ -220,4 +220,11 @@ pub enum Error {
         /// The sizes.
         source: aperture_budget::OverBudget,
     },
+    /// The loader panicked: a value it cannot handle (with overflow checks, a size that
+    /// wraps). A bug, reported as an error rather than a crash; the fuzzers still see it.
+    #[error("the loader panicked ({message}): a bug, please report the file")]
+    Panicked {
+        /// The panic's message.
+        message: String,
+    },
 }

@@ -88,8 +88,11 @@ fn options() -> LoadOptions {
 /// `data` as a `.glb` or `.gltf` file: loaded, then posed as stored and at two times (so
 /// animation samplers, skins, morph targets and pointers are evaluated).
 pub fn load(data: &[u8]) {
-    let Ok(doc) = Animated::load_bytes(data, Path::new(NO_FOLDER), &options()) else {
-        return;
+    let doc = match Animated::load_bytes(data, Path::new(NO_FOLDER), &options()) {
+        Ok(doc) => doc,
+        // The loader's own guard caught a panic: still a finding.
+        Err(e @ aperture_scene::Error::Panicked { .. }) => panic!("{e}"),
+        Err(_) => return,
     };
     let _ = doc.scene_at(None);
     if doc.is_animated() {
