@@ -95,7 +95,9 @@ def aperture_render(path, tmp, spp, seed, args):
                     "--height", str(args.height), "--spp", str(spp), "--seed", str(seed),
                     "--threads", str(args.threads), "--max-bounces", str(BOUNCES),
                     "--filter", "box", "--override-material", "diffuse", "--passes", "none",
-                    "--quiet"], check=True, stdout=subprocess.DEVNULL)
+                    # Cycles draws the files' single-sided faces from both sides (Blender's
+                    # meaning); aperture's automatic choice gives these non-Blender files glTF's.
+                    "--single-sided", "blender", "--quiet"], check=True, stdout=subprocess.DEVNULL)
     return read_beauty(out), header_float(out, "aperture:renderTime")
 
 
