@@ -34,6 +34,21 @@ fn have_oidn() -> bool {
 
 const SMALL: [&str; 6] = ["--width", "64", "--height", "36", "--spp", "4"];
 
+/// `aperture render` of the demo at [`SMALL`] into `out`, with `extra` arguments; it succeeds.
+fn render_demo(out: &Path, extra: &[&str]) {
+    let scene = demo_scene();
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    args.extend(SMALL);
+    args.extend(extra);
+    let o = run(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
 #[test]
 fn render_denoise_without_the_library_fails_first_and_writes_nothing() {
     let dir = Scratch::new("denoise-nolib");
@@ -98,18 +113,8 @@ fn render_denoise_writes_the_denoised_beauty_and_the_noisy_one() {
     let dir = Scratch::new("denoise-render");
     let exr = dir.path("d.exr");
     let png = dir.path("d.png");
-    let scene = demo_scene();
     for out in [&exr, &png] {
-        let mut args = vec![
-            "render",
-            scene.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-        ];
-        args.extend(SMALL);
-        args.extend(["--denoise", "--quiet"]);
-        let o = run(&args);
-        assert!(o.status.success(), "{}", stderr(&o));
+        render_demo(out, &["--denoise", "--quiet"]);
     }
     let img = read_exr(&exr).unwrap();
     assert_eq!(img.meta("aperture:denoised"), Some(&MetaValue::Int(1)));
@@ -128,22 +133,8 @@ fn render_denoise_writes_the_denoised_beauty_and_the_noisy_one() {
         said(&img)
     );
     let quick = dir.path("quick.exr");
-    let mut args = vec![
-        "render",
-        scene.to_str().unwrap(),
-        "-o",
-        quick.to_str().unwrap(),
-    ];
-    args.extend(SMALL);
-    args.extend([
-        "--denoise",
-        "--denoise-quality",
-        "fast",
-        "--denoise-prefilter",
-        "fast",
-    ]);
-    let o = run(&args);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let faster = ["--denoise-quality", "fast", "--denoise-prefilter", "fast"];
+    render_demo(&quick, &[&["--denoise", "--quiet"][..], &faster].concat());
     let quick = read_exr(&quick).unwrap();
     assert!(
         said(&quick).ends_with("quality fast, prefilter fast"),
@@ -262,23 +253,14 @@ fn merge_refuses_denoised_tiles_and_merge_denoise_denoises_once() {
         return;
     }
     let dir = Scratch::new("denoise-merge");
-    let scene = demo_scene();
     let tile = |k: u32, denoise: bool| {
         let out = dir.path(&format!("t{k}.exr"));
         let tile = format!("{k}/2");
-        let mut args = vec![
-            "render",
-            scene.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-        ];
-        args.extend(SMALL);
-        args.extend(["--tile", &tile, "--quiet"]);
+        let mut extra = vec!["--tile", &tile, "--quiet"];
         if denoise {
-            args.push("--denoise");
+            extra.push("--denoise");
         }
-        let o = run(&args);
-        assert!(o.status.success(), "{}", stderr(&o));
+        render_demo(&out, &extra);
         out.to_str().unwrap().to_string()
     };
     let (t0, t1) = (tile(0, true), tile(1, false));
