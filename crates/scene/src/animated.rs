@@ -147,11 +147,7 @@ impl Animated {
         // a hostile header that wraps, or any other panic of the loader, is an error here.
         let load = || Self::unguarded(bytes, base_dir, options);
         std::panic::catch_unwind(std::panic::AssertUnwindSafe(load)).unwrap_or_else(|panic| {
-            let message = panic
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_default();
+            let message = crate::error::panic_message(&*panic);
             Err(Error::Panicked { message })
         })
     }

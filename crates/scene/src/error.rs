@@ -228,3 +228,13 @@ pub enum Error {
         message: String,
     },
 }
+
+/// The message a caught panic carried (`panic!` with a literal or a formatted string), or
+/// nothing.
+pub(crate) fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_default()
+}

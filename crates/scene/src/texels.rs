@@ -156,11 +156,7 @@ pub fn decode_texture(
 /// builds with overflow checks), and one bad texture must not bring down the process.
 fn decode_checked(bytes: &[u8], image: usize, h: Header) -> Result<(u32, u32, Texels), Error> {
     std::panic::catch_unwind(|| decode_unguarded(bytes, image, h)).unwrap_or_else(|panic| {
-        let message = panic
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_default();
+        let message = crate::error::panic_message(&*panic);
         Err(Error::Invalid {
             at: format!("images[{image}]"),
             reason: format!("the image decoder panicked on damaged data: {message}"),
