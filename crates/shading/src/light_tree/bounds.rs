@@ -152,6 +152,26 @@ impl Reach {
         }
     }
 
+    /// The fields as [`super::wide::Wide`] stores them in its lanes: centre, squared radius,
+    /// axis, `cos θ_o`, `sin θ_o`, `cos θ_e`, power, two-sided (1 or 0).
+    pub(super) fn lanes(&self) -> [f32; 12] {
+        let (c, a) = (self.centre, self.axis);
+        [
+            c.x,
+            c.y,
+            c.z,
+            self.radius2,
+            a.x,
+            a.y,
+            a.z,
+            self.cos_o,
+            self.sin_o,
+            self.cos_e,
+            self.phi,
+            if self.two_sided { 1.0 } else { 0.0 },
+        ]
+    }
+
     /// [`LightBounds::importance`] (pbrt-v4's `LightBounds::Importance`): the same arithmetic,
     /// with the cases that end at zero or need no angle taken first.
     #[inline]
@@ -208,9 +228,17 @@ fn clamp_importance(importance: f32) -> f32 {
 /// The smallest cone (axis, cosine of half-angle) holding two cones (pbrt-v4's
 /// `DirectionCone::Union`), widened by [`CONE_SLACK`] for rounding.
 fn cone_union(a: Vec3, cos_a: f32, b: Vec3, cos_b: f32) -> (Vec3, f32) {
+    // The whole sphere holds everything; the same axis needs no angle (and the build's buckets
+    // meet both cases most: merged cones soon cover the sphere, a mesh's faces share normals).
+    if cos_a <= -1.0 || cos_b <= -1.0 {
+        return (a, -1.0);
+    }
+    if a == b {
+        return (a, cos_a.min(cos_b));
+    }
     let theta_a = cos_a.clamp(-1.0, 1.0).acos();
     let theta_b = cos_b.clamp(-1.0, 1.0).acos();
-    let theta_d = a.dot(b).clamp(-1.0, 1.0).acos();
+    let theta_d = angle_between(a, b);
     let pi = std::f32::consts::PI;
     if (theta_d + theta_b).min(pi) <= theta_a {
         return (a, cos_a);
@@ -229,6 +257,18 @@ fn cone_union(a: Vec3, cos_a: f32, b: Vec3, cos_b: f32) -> (Vec3, f32) {
     (axis, (theta_o.cos() - CONE_SLACK).max(-1.0))
 }
 
+/// The angle between unit vectors, accurate when they are close (pbrt's `AngleBetween`):
+/// `acos` of their dot product is off by 3e-4 rad for vectors one rounding apart, which made
+/// two triangles of one plane a cone around the whole sphere.
+fn angle_between(a: Vec3, b: Vec3) -> f32 {
+    let half = |v: Vec3| (v.length() * 0.5).clamp(-1.0, 1.0).asin();
+    if a.dot(b) < 0.0 {
+        std::f32::consts::PI - 2.0 * half(a + b)
+    } else {
+        2.0 * half(a - b)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -239,6 +279,25 @@ mod tests {
         assert!(axis.dot(Vec3::X) >= cos && axis.dot(Vec3::Y) >= cos);
         assert!((cos - std::f32::consts::FRAC_PI_4.cos()).abs() < 1e-3);
         assert_eq!(cone_union(Vec3::X, 1.0, -Vec3::X, 1.0).1, -1.0);
+    }
+
+    /// Equal normals whose dot product rounds below 1 (two triangles of one plane) stay a
+    /// narrow cone: their `acos` angle, 3e-4 rad with no axis to turn about, once made them
+    /// the whole sphere.
+    #[test]
+    fn equal_normals_stay_a_narrow_cone() {
+        let a = Vec3::new(0.473_290_1, 0.045_734_37, 0.879_718_6);
+        assert!(a.dot(a) < 1.0, "the case needs a dot product below 1");
+        let (axis, cos) = cone_union(a, 1.0, a, 1.0);
+        assert!(cos > 0.999 && axis == a, "{cos}");
+        assert_eq!(cone_union(a, 1.0, a, 0.5), (a, 0.5));
+        let b = Vec3::new(a.x, a.y, f32::from_bits(a.z.to_bits() + 1));
+        let (axis, cos) = cone_union(a, 1.0, b, 1.0);
+        assert!(
+            cos > 0.999 && axis.dot(a) >= cos && axis.dot(b) >= cos,
+            "{cos}"
+        );
+        assert_eq!(cone_union(a, 1.0, b, -1.0).1, -1.0);
     }
 
     #[test]

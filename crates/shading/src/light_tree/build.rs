@@ -1,17 +1,14 @@
-//! Building the light tree: leaves from the scene's lights, then top-down splits where
-//! [`super::split`] says; large subtrees in parallel, the result the same for any thread count.
+//! Building the light tree: leaves from the scene's lights, then a binary tree of top-down
+//! splits where [`super::split`] says (large subtrees in parallel, the result the same for any
+//! thread count), collapsed into the 4-wide tree the descent reads ([`super::collapse`]).
 
 use super::bounds::Reach;
-use super::split::{self, Split};
-use super::{Leaf, LightBounds, LightTree, Node};
+use super::split::{self, Item, Split};
+use super::{Leaf, LightBounds, LightTree};
 use crate::color::luminance;
 use crate::lights::EmissiveLights;
 use crate::surface::Geometry;
 use aperture_scene::{Light, LightKind};
-use glam::Vec3;
-
-/// A leaf waiting for its place: its bound, light and the centre it is sorted by.
-type Item = (LightBounds, Leaf, Vec3);
 
 /// Subtrees of this many lights or more are built beside their sibling (`rayon::join`, on the
 /// caller's pool): the tree is the same as one thread's, node for node.
@@ -66,14 +63,6 @@ impl LightTree {
         let directional = (0..lights.len() as u32)
             .filter(|&i| matches!(lights[i as usize].kind, LightKind::Directional))
             .collect();
-        let mut tree = Self {
-            nodes: Vec::with_capacity(2 * leaves.len()),
-            leaves: Vec::with_capacity(leaves.len()),
-            trails: Vec::with_capacity(leaves.len()),
-            punctual_leaf: vec![u32::MAX; lights.len()],
-            triangle_leaf: vec![u32::MAX; triangles],
-            directional,
-        };
         let mut items: Vec<Item> = leaves
             .into_iter()
             .map(|(b, l)| (b, l, b.centre()))
@@ -81,7 +70,14 @@ impl LightTree {
         // One order whatever the caller's, so that the tree (whose bucket bounds depend on the
         // order of their unions) is the same.
         items.sort_unstable_by_key(|it| it.1);
-        tree.split(&mut items, 0, 0);
+        let mut binary = Binary::part();
+        binary.nodes.reserve(2 * items.len());
+        binary.leaves.reserve(items.len());
+        binary.split(&mut items, 0);
+        let mut tree = Self::collapse(&binary, lights);
+        tree.directional = directional;
+        tree.punctual_leaf = vec![u32::MAX; lights.len()];
+        tree.triangle_leaf = vec![u32::MAX; triangles];
         for (i, leaf) in tree.leaves.iter().enumerate() {
             let slot = match *leaf {
                 Leaf::Punctual(l) => tree.punctual_leaf.get_mut(l as usize),
@@ -93,16 +89,30 @@ impl LightTree {
         }
         Some(tree)
     }
+}
 
-    /// An empty tree for a subtree built beside its sibling ([`LightTree::split`]).
+/// One node of the binary tree: an inner node's first child follows it, `second` is its other
+/// child; a leaf's `second` is its index in [`Binary::leaves`].
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Node {
+    pub bounds: Reach,
+    pub second: u32,
+    pub leaf: bool,
+}
+
+/// The binary tree the build makes first, depth first from its root.
+pub(super) struct Binary {
+    pub nodes: Vec<Node>,
+    /// Every leaf's light.
+    pub leaves: Vec<Leaf>,
+}
+
+impl Binary {
+    /// An empty tree, or one for a subtree built beside its sibling ([`Binary::split`]).
     fn part() -> Self {
         Self {
             nodes: Vec::new(),
             leaves: Vec::new(),
-            trails: Vec::new(),
-            punctual_leaf: Vec::new(),
-            triangle_leaf: Vec::new(),
-            directional: Vec::new(),
         }
     }
 
@@ -116,13 +126,12 @@ impl LightTree {
             n
         }));
         self.leaves.extend(part.leaves);
-        self.trails.extend(part.trails);
         root
     }
 
-    /// Appends the subtree of `items` (not empty) at `depth` reached by `trail`, depth first
-    /// (a node's first child follows it); returns its bound.
-    fn split(&mut self, items: &mut [Item], depth: u32, trail: u64) -> LightBounds {
+    /// Appends the subtree of `items` (not empty) at `depth`, depth first (a node's first
+    /// child follows it); returns its bound.
+    fn split(&mut self, items: &mut [Item], depth: u32) -> LightBounds {
         let at = self.nodes.len();
         if let [(bounds, leaf, _)] = items {
             self.nodes.push(Node {
@@ -131,7 +140,6 @@ impl LightTree {
                 leaf: true,
             });
             self.leaves.push(*leaf);
-            self.trails.push(trail);
             return *bounds;
         }
         self.nodes.push(Node {
@@ -139,8 +147,7 @@ impl LightTree {
             second: 0,
             leaf: false,
         });
-        let bounds: Vec<(LightBounds, Vec3)> = items.iter().map(|it| (it.0, it.2)).collect();
-        let Split { axis, count: mid } = split::choose(&bounds, depth);
+        let Split { axis, count: mid } = split::choose(items, depth);
         // The `mid` items of smallest centre go first (buckets follow the coordinate); ties
         // broken by the light, so that the order never depends on the input's.
         items.select_nth_unstable_by(mid, |a, b| {
@@ -148,22 +155,20 @@ impl LightTree {
         });
         let parallel = items.len() >= PARALLEL_MIN;
         let (left, right) = items.split_at_mut(mid);
-        // Depth stays below 64: past `MEDIAN_DEPTH` each level halves the items.
-        let right_trail = trail | (1u64 << depth.min(63));
         let (a, second, b) = if parallel {
             let (a, (b, sub)) = rayon::join(
-                || self.split(left, depth + 1, trail),
+                || self.split(left, depth + 1),
                 || {
                     let mut sub = Self::part();
-                    let b = sub.split(right, depth + 1, right_trail);
+                    let b = sub.split(right, depth + 1);
                     (b, sub)
                 },
             );
             (a, self.append(sub), b)
         } else {
-            let a = self.split(left, depth + 1, trail);
+            let a = self.split(left, depth + 1);
             let second = self.nodes.len() as u32;
-            (a, second, self.split(right, depth + 1, right_trail))
+            (a, second, self.split(right, depth + 1))
         };
         let bounds = a.union(&b);
         self.nodes[at] = Node {

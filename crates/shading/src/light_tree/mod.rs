@@ -5,8 +5,10 @@
 //!
 //! A vertex descends from the root, choosing a child in proportion to its importance there;
 //! the pick's probability is the product of these choices, exact, and evaluated again for a
-//! light met by a BSDF-sampled ray by following the leaf's trail of choices
-//! ([`LightTree::triangle_probability`]), so MIS sees the same probability. Directional lights
+//! light met by a BSDF-sampled ray from the leaf's ancestors
+//! ([`LightTree::triangle_probability`]), so MIS sees the same probability. The tree is built
+//! binary (pbrt's splits) and read 4-wide: each node weighs four children at once
+//! ([`wide`]). Directional lights
 //! have no position: they are picked beside the tree ([`pick`]).
 //!
 //! Below [`PUNCTUAL_THRESHOLD`] point and spot lights the exhaustive choice
@@ -16,10 +18,12 @@
 
 pub mod bounds;
 mod build;
+mod collapse;
 pub mod pick;
 mod reuse;
 mod sample;
 mod split;
+mod wide;
 
 pub use bounds::LightBounds;
 pub use reuse::TreeMemo;
@@ -29,12 +33,13 @@ use crate::surface::Geometry;
 use aperture_scene::Light;
 
 /// Point and spot lights from which a scene uses the tree: below it the exhaustive choice's
-/// exact importances give less noise per unit of time (street grid of
-/// `tools/bench/many_lights.py`: variance × time 3.9× lower than the tree's at 100 lights,
-/// 2.1× higher at 1,000; see BENCHMARKS.md). Emissive triangles alone never ask for the
+/// exact importances give less noise per unit of time (street grids of
+/// `tools/bench/many_lights.py`, two layouts: the tree's variance × time 1.3–1.4× the
+/// exhaustive choice's at 64 lights, 0.84–1.24× at 100, 0.84–0.88× at 128, 0.37 at 400;
+/// see BENCHMARKS.md). Emissive triangles alone never ask for the
 /// tree: the exhaustive choice costs the same for any number of them (one candidate, an alias
 /// table), and on 5,000 panels it was 1.8× more efficient.
-pub const PUNCTUAL_THRESHOLD: usize = 512;
+pub const PUNCTUAL_THRESHOLD: usize = 128;
 
 /// A leaf of the tree: one light.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -45,23 +50,19 @@ pub enum Leaf {
     Triangle(u32),
 }
 
-/// One node: an inner node's first child follows it, `second` is its other child; a leaf's
-/// `second` is its index in [`LightTree::leaves`].
-#[derive(Debug, Clone, Copy)]
-struct Node {
-    bounds: bounds::Reach,
-    second: u32,
-    leaf: bool,
-}
-
 /// The light tree of a scene.
 #[derive(Debug)]
 pub struct LightTree {
-    nodes: Vec<Node>,
+    /// The whole tree's bound: its importance beside the directional lights.
+    root: bounds::Reach,
+    /// The wide nodes, the root first.
+    nodes: Vec<wide::Wide>,
+    /// Each node's parent and its lane there (the root's parent: `u32::MAX`).
+    parents: Vec<(u32, u8)>,
     /// Every leaf's light.
     leaves: Vec<Leaf>,
-    /// Each leaf's choices from the root, bit `k` set when depth `k` took the second child.
-    trails: Vec<u64>,
+    /// Each leaf's node and lane.
+    leaf_at: Vec<(u32, u8)>,
     /// Leaf of each scene light (`u32::MAX`: not in the tree).
     punctual_leaf: Vec<u32>,
     /// Leaf of each emissive triangle.

@@ -1,8 +1,9 @@
 //! The last light tree built, kept for the next render with the same leaves: the next band
 //! of a frame, the next frame of a sequence in which no light or emitter moved. Building is
-//! what costs (870 ms for 100 k emissive triangles); gathering the leaves to compare is linear.
-//! The comparison is exact (bounds bit for bit, the same directional lights), so a kept tree
-//! is the tree a build would give and images do not depend on what was rendered before.
+//! what costs (0.25 s for 100 k emissive triangles on 2 cores); gathering the leaves to
+//! compare is linear. The comparison is exact (bounds bit for bit, the same directional
+//! lights), so a kept tree is the tree a build would give and images do not depend on what
+//! was rendered before.
 
 use super::{Leaf, LightBounds, LightTree};
 use crate::lights::EmissiveLights;

@@ -1,13 +1,15 @@
 //! The descent: from the root, a child in proportion to its importance at the vertex, down to
-//! one leaf, and the same choices followed again along a leaf's trail for its probability.
+//! one leaf; and the same choices' probabilities gathered again from a leaf's ancestors.
 
-use super::{Leaf, LightTree, Node};
+use super::wide::{self, Wide, LEAF_BIT};
+use super::{Leaf, LightTree};
 use crate::light_choice::punctual_importance;
 use aperture_scene::Light;
 use glam::Vec3;
 
-/// Largest f32 below 1: a remapped uniform number stays in `[0, 1)`.
-const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
+/// Levels a leaf's probability can gather: the wide tree has at most half the binary tree's
+/// levels, which stay below 64 ([`super::split`]).
+const MAX_DEPTH: usize = 64;
 
 /// Where the descent is: the point, its normal on the side light is received from, and
 /// whether light from both sides counts.
@@ -20,36 +22,34 @@ pub(super) struct Receiver<'a> {
 }
 
 impl LightTree {
-    /// A node's importance at the receiver: a punctual leaf's exact irradiance, else its
-    /// bound's.
+    /// The importances of a node's four children at the receiver: their bounds', a spot
+    /// light's leaf its exact irradiance.
     #[inline]
-    fn node_importance(&self, node: &Node, r: &Receiver<'_>) -> f32 {
-        if node.leaf {
-            if let Some(Leaf::Punctual(l)) = self.leaves.get(node.second as usize) {
-                return r.lights.get(*l as usize).map_or(0.0, |light| {
-                    punctual_importance(light, r.p, r.n, r.two_sided)
-                });
+    fn weights(&self, node: &Wide, r: &Receiver<'_>) -> [f32; 4] {
+        let mut w = node.importance(r.p, r.n, r.two_sided).to_array();
+        if node.spots != 0 {
+            for (k, wk) in w.iter_mut().enumerate() {
+                if node.spots >> k & 1 == 1 {
+                    *wk = self.exact(node.children[k], r);
+                }
             }
         }
-        node.bounds.importance(r.p, r.n, r.two_sided)
+        w
+    }
+
+    /// The exact importance of a punctual light's leaf (child code `child`).
+    fn exact(&self, child: u32, r: &Receiver<'_>) -> f32 {
+        match self.leaves.get((child & !LEAF_BIT) as usize) {
+            Some(Leaf::Punctual(l)) => r.lights.get(*l as usize).map_or(0.0, |light| {
+                punctual_importance(light, r.p, r.n, r.two_sided)
+            }),
+            _ => 0.0,
+        }
     }
 
     /// The importance of the whole tree at the receiver.
     pub(super) fn root_importance(&self, r: &Receiver<'_>) -> f32 {
-        self.nodes
-            .first()
-            .map_or(0.0, |n| self.node_importance(n, r))
-    }
-
-    /// The probability of the first child of inner node `at`; `None` when neither child can
-    /// light the receiver.
-    #[inline]
-    fn first_probability(&self, at: usize, r: &Receiver<'_>) -> Option<f32> {
-        let node = &self.nodes[at];
-        let a = self.node_importance(self.nodes.get(at + 1)?, r);
-        let b = self.node_importance(self.nodes.get(node.second as usize)?, r);
-        let total = a + b;
-        (total > 0.0 && total.is_finite()).then(|| a / total)
+        self.root.importance(r.p, r.n, r.two_sided)
     }
 
     /// One leaf for the receiver from the uniform `u`: the leaf's index, its probability
@@ -57,57 +57,45 @@ impl LightTree {
     pub(super) fn descend(&self, r: &Receiver<'_>, mut u: f32) -> Option<(usize, f32, f32)> {
         let mut at = 0usize;
         let mut probability = 1.0f32;
-        loop {
+        for _ in 0..MAX_DEPTH {
             let node = self.nodes.get(at)?;
-            if node.leaf {
-                return Some((node.second as usize, probability, u));
-            }
-            let pa = self.first_probability(at, r)?;
-            if u < pa {
-                probability *= pa;
-                u = (u / pa).min(ONE_BELOW);
-                at += 1;
-            } else {
-                let pb = 1.0 - pa;
-                probability *= pb;
-                u = ((u - pa) / pb).clamp(0.0, ONE_BELOW);
-                at = node.second as usize;
-            }
+            let (k, pk, next) = wide::choose(self.weights(node, r), u)?;
+            probability *= pk;
+            u = next;
             if probability <= 0.0 {
                 return None;
             }
+            let child = node.children[k];
+            if child & LEAF_BIT != 0 {
+                return Some(((child & !LEAF_BIT) as usize, probability, u));
+            }
+            at = child as usize;
         }
+        None
     }
 
-    /// The probability that [`LightTree::descend`] reaches `leaf` at the receiver.
+    /// The probability that [`LightTree::descend`] reaches `leaf` at the receiver: the same
+    /// choices' probabilities, multiplied in the descent's order.
     pub(super) fn leaf_probability(&self, r: &Receiver<'_>, leaf: usize) -> f32 {
-        let Some(&trail) = self.trails.get(leaf) else {
+        let Some(&(mut at, mut lane)) = self.leaf_at.get(leaf) else {
             return 0.0;
         };
-        let mut at = 0usize;
-        let mut probability = 1.0f32;
-        for depth in 0..64 {
-            let Some(node) = self.nodes.get(at) else {
+        let mut chances = [0.0f32; MAX_DEPTH];
+        let mut depth = 0;
+        while at != u32::MAX {
+            let Some(node) = self.nodes.get(at as usize) else {
                 return 0.0;
             };
-            if node.leaf {
-                return if node.second as usize == leaf {
-                    probability
-                } else {
-                    0.0
-                };
-            }
-            let Some(pa) = self.first_probability(at, r) else {
+            if depth == MAX_DEPTH {
                 return 0.0;
-            };
-            if trail >> depth & 1 == 0 {
-                probability *= pa;
-                at += 1;
-            } else {
-                probability *= 1.0 - pa;
-                at = node.second as usize;
             }
+            chances[depth] = wide::lane_probability(self.weights(node, r), lane as usize);
+            depth += 1;
+            (at, lane) = self.parents[at as usize];
         }
-        0.0
+        if depth == 0 {
+            return 0.0;
+        }
+        chances[..depth].iter().rev().fold(1.0, |p, &c| p * c)
     }
 }
