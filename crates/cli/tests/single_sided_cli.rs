@@ -2,6 +2,7 @@
 //! white sky is invisible under glTF's meaning and red under Cycles' (`--single-sided`), `auto`
 //! choosing by `asset.generator`; a double-sided quad is red under every mode. On the Khronos
 //! TextureSettingsTest, the "single-sided" test cell shows its red ✗ only under `blender`.
+//! The back of a culled single-sided emitter lights nothing, by light sampling either.
 
 mod common;
 
@@ -27,6 +28,59 @@ fn quad_from_behind(double_sided: bool, generator: Option<&str>) -> Vec<u8> {
     quad_glb(&doc)
 }
 
+/// A white floor (double-sided) and above it a single-sided emissive quad facing up, seen from
+/// beside the floor below the quad: only the quad's back faces the floor and the camera.
+fn emitter_facing_away() -> Vec<u8> {
+    let mut doc = quad_json();
+    doc["materials"] = json!([
+        {"doubleSided": true, "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0],
+            "metallicFactor": 0.0}},
+        {"doubleSided": false, "emissiveFactor": [1.0, 1.0, 1.0],
+            "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0}}
+    ]);
+    let prim = |m: usize| {
+        json!({"primitives": [{"attributes": {"POSITION": 0}, "indices": 1,
+        "material": m}]})
+    };
+    doc["meshes"] = json!([prim(0), prim(1)]);
+    doc["cameras"] = json!([{"type": "perspective", "perspective": {"yfov": 1.0, "znear": 0.1}}]);
+    // −90° about x: the quad's +z normal turns to +y.
+    let up = [
+        -std::f64::consts::FRAC_1_SQRT_2,
+        0.0,
+        0.0,
+        std::f64::consts::FRAC_1_SQRT_2,
+    ];
+    doc["nodes"] = json!([
+        {"mesh": 0, "rotation": up, "scale": [5.0, 5.0, 1.0]},
+        {"mesh": 1, "rotation": up, "translation": [0.0, 1.0, 0.0]},
+        {"camera": 0, "translation": [0.0, 0.5, 3.0]}]);
+    doc["scenes"] = json!([{"nodes": [0, 1, 2]}]);
+    quad_glb(&doc)
+}
+
+#[test]
+fn back_of_a_single_sided_emitter_lights_nothing() {
+    let dir = Scratch::new("single-sided-emitter");
+    let file = emitter_facing_away();
+    let args = |mode| {
+        [
+            "--single-sided",
+            mode,
+            "--env",
+            "0,0,0",
+            "--max-bounces",
+            "0",
+        ]
+    };
+    let gltf = mean(&dir, &file, "gltf", &args("gltf"));
+    let blender = mean(&dir, &file, "blender", &args("blender"));
+    // Culled, nothing is lit and nothing emits towards the camera; both sides shown, the
+    // quad's back glows and lights the floor.
+    assert_eq!(gltf, [0.0; 3], "light sampling met the culled back");
+    assert!(blender[1] > 0.05, "{blender:?}");
+}
+
 /// The mean colour of a render of `file` with `args`.
 fn mean(dir: &Scratch, file: &[u8], name: &str, args: &[&str]) -> [f32; 3] {
     let scene = dir.path(&format!("{name}.glb"));
@@ -37,9 +91,7 @@ fn mean(dir: &Scratch, file: &[u8], name: &str, args: &[&str]) -> [f32; 3] {
         .arg(&scene)
         .arg("-o")
         .arg(&out)
-        .args([
-            "--width", "8", "--height", "8", "--spp", "4", "--env", "1,1,1", "--quiet",
-        ])
+        .args(["--width", "8", "--height", "8", "--spp", "4", "--quiet"])
         .args(args)
         .status()
         .unwrap();
@@ -78,7 +130,7 @@ fn back_of_a_single_sided_quad_under_each_mode() {
             &dir,
             &quad_from_behind(double, generator),
             &format!("case{k}"),
-            &["--single-sided", mode],
+            &["--single-sided", mode, "--env", "1,1,1"],
         );
         assert_eq!(
             sees_quad(rgb),

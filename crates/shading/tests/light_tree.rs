@@ -363,3 +363,92 @@ fn the_memo_rebuilds_only_when_a_light_moves() {
     assert!(tree_of(&scene).0.is_none());
     assert_eq!(memo.builds(), 2);
 }
+
+/// The tree serves a scene from either threshold: many point and spot lights (directional
+/// ones do not count), or many emissive triangles alone.
+#[test]
+fn the_tree_is_wanted_from_either_threshold() {
+    use aperture_shading::light_tree::{EMISSIVE_THRESHOLD, PUNCTUAL_THRESHOLD};
+    let point = |k: usize| Light {
+        name: None,
+        kind: LightKind::Point,
+        position: Vec3::new(k as f32, 1.0, 0.0),
+        direction: Vec3::NEG_Y,
+        intensity: Vec3::ONE,
+    };
+    let sun = Light {
+        kind: LightKind::Directional,
+        ..point(0)
+    };
+    let with = |n: usize| -> Vec<Light> { (0..n).map(point).chain([sun.clone()]).collect() };
+    assert!(!LightTree::wanted(
+        &with(PUNCTUAL_THRESHOLD - 1),
+        EMISSIVE_THRESHOLD - 1
+    ));
+    assert!(LightTree::wanted(&with(PUNCTUAL_THRESHOLD), 0));
+    assert!(LightTree::wanted(&with(1), EMISSIVE_THRESHOLD));
+    assert!(!LightTree::wanted(
+        &vec![sun.clone(); PUNCTUAL_THRESHOLD],
+        0
+    ));
+    // One emissive ball of 1,280 triangles and one point light: the tree, every triangle a
+    // leaf; a ball of 80 triangles keeps the exhaustive choice.
+    for (subdivisions, wanted) in [(3, true), (1, false)] {
+        let mut scene = test_scenes::lit_plane(1.0);
+        scene.materials.push(test_scenes::emitter(Vec3::ONE));
+        scene.meshes.push(test_scenes::icosphere(subdivisions, 1));
+        scene.instances.push(Instance {
+            mesh: 1,
+            world_from_object: Affine3A::from_translation(Vec3::new(0.0, 2.0, 0.0)),
+            node: 1,
+            materials: 0,
+        });
+        let geom =
+            Geometry::with_transmission(&scene, MaterialOverride::None, TransmissionModel::Gltf);
+        let em = EmissiveLights::build(&geom).unwrap();
+        let tree = LightTree::for_scene(&geom, Some(&em));
+        assert_eq!(tree.is_some(), wanted, "{} triangles", em.triangles.len());
+        if let Some(tree) = tree {
+            assert_eq!(tree.leaf_count(), em.triangles.len() + scene.lights.len());
+        }
+    }
+}
+
+/// A single-sided emitter whose back glTF's culling hides lights only its front: from inside
+/// a ball of outward faces the tree picks none of its triangles; with both sides shown (or
+/// from outside) it does.
+#[test]
+fn culled_emitters_light_only_their_front() {
+    use aperture_shading::SidesModel;
+    let mut scene = test_scenes::lit_plane(1.0);
+    scene.materials.push(aperture_scene::Material {
+        double_sided: false,
+        ..test_scenes::emitter(Vec3::ONE)
+    });
+    let material = scene.materials.len() as u32 - 1;
+    scene.meshes.push(test_scenes::icosphere(1, material));
+    let centre = Vec3::new(0.0, 3.0, 0.0);
+    scene.instances.push(Instance {
+        mesh: 1,
+        world_from_object: Affine3A::from_translation(centre),
+        node: 1,
+        materials: 0,
+    });
+    for (model, inside) in [(SidesModel::Gltf, false), (SidesModel::Both, true)] {
+        let geom =
+            Geometry::with_transmission(&scene, MaterialOverride::None, TransmissionModel::Gltf)
+                .with_sides(model);
+        let em = EmissiveLights::build(&geom).unwrap();
+        let tree = LightTree::build(&geom, Some(&em)).unwrap();
+        let total = |p: Vec3, n: Vec3| -> f32 {
+            (0..em.triangles.len())
+                .map(|i| tree.triangle_probability(&scene.lights, p, n, true, i))
+                .sum()
+        };
+        assert_eq!(total(centre, Vec3::Y) > 0.0, inside, "{model:?}");
+        assert!(
+            total(centre + Vec3::new(0.0, 4.0, 0.0), Vec3::NEG_Y) > 0.0,
+            "{model:?}"
+        );
+    }
+}

@@ -180,7 +180,9 @@ impl Integrator<'_> {
         let dist = d2.sqrt();
         let wi = d / dist;
         let cos_l = q.ng.dot(wi).abs();
-        if !(d2 > 0.0 && cos_l > 0.0 && q.area > 0.0) {
+        // The back of a culled single-sided emitter is not there: no ray meets it, so light
+        // sampling must not either (else MIS would weigh light the other strategy never sees).
+        if !(d2 > 0.0 && cos_l > 0.0 && q.area > 0.0) || self.geom.is_culled(&q, wi) {
             return;
         }
         let Some(origin) = v.origin_towards(wi) else {

@@ -69,8 +69,9 @@ impl LightBounds {
         })
     }
 
-    /// The bound of an emissive triangle (two-sided, as the integrator's emitters) of power
-    /// `phi`; `None` for non-finite corners or no power.
+    /// The bound of an emissive triangle (two-sided, as emitters are unless glTF's culling
+    /// hides their backs: the tree's leaves make those one-sided) of power `phi`; `None` for
+    /// non-finite corners or no power.
     pub fn triangle(p: [Vec3; 3], phi: f32) -> Option<Self> {
         let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
         if !(phi > 0.0 && phi.is_finite() && lo.is_finite() && hi.is_finite()) {

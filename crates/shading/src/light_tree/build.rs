@@ -40,9 +40,18 @@ impl LightTree {
         if let Some(em) = emissive {
             triangles = em.triangles.len();
             for (i, (t, &phi)) in em.triangles.iter().zip(&em.power).enumerate() {
-                let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]
-                    .map(|(b1, b2)| geom.emitter_surface(t.instance, t.triangle, b1, b2).p);
-                if let Some(b) = LightBounds::triangle(corners, phi) {
+                let [s0, s1, s2] = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]
+                    .map(|(b1, b2)| geom.emitter_surface(t.instance, t.triangle, b1, b2));
+                // A single-sided emitter whose back rays do not see (glTF's culling) lights
+                // only the side its normal points to: culled when met along that normal.
+                let one_sided = geom.is_culled(&s0, s0.ng);
+                if let Some(mut b) = LightBounds::triangle([s0.p, s1.p, s2.p], phi) {
+                    // The front is where the surface's normal points (mirrored instances
+                    // included); a degenerate triangle keeps its whole sphere.
+                    if one_sided && b.axis != glam::Vec3::ZERO {
+                        b.axis = s0.ng;
+                        b.two_sided = false;
+                    }
                     leaves.push((b, Leaf::Triangle(i as u32)));
                 }
             }
