@@ -224,27 +224,14 @@ impl Candidates<'_> {
         // The same weights in the same order as `total`, so the walk ends where `target`
         // falls; should rounding leave it past the end, the last candidate that can light the
         // point takes the rest.
-        let target = u * total;
-        let mut below = 0.0f32;
-        let mut last = None;
         let all = (0..self.lights.len())
             .map(Pick::Punctual)
-            .chain([Pick::Emitters]);
-        for pick in all {
-            let w = weight(pick);
-            if w <= 0.0 {
-                continue;
-            }
-            last = Some((pick, w, below));
-            if target < below + w {
-                break;
-            }
-            below += w;
-        }
-        if let Some((pick, w, below)) = last {
+            .chain([Pick::Emitters])
+            .map(|pick| (pick, weight(pick)));
+        if let Some((pick, w, x)) = walk(all, u * total) {
             choice.pick = Some(pick);
             choice.probability = w / total;
-            choice.u = remap(target - below, w);
+            choice.u = remap(x, w);
         }
         choice
     }
@@ -252,8 +239,34 @@ impl Candidates<'_> {
 
 /// `x / w` in `[0, 1)`.
 #[inline]
-fn remap(x: f32, w: f32) -> f32 {
+pub(crate) fn remap(x: f32, w: f32) -> f32 {
     (x / w).clamp(0.0, 1.0 - f32::EPSILON / 2.0)
+}
+
+/// The candidate where `target` (a uniform number times the weights' total) falls when the
+/// `weighted` candidates are laid end to end in their order: the candidate, its weight and how
+/// far into it `target` falls. Candidates of no weight are skipped; should rounding leave
+/// `target` past the end, the last candidate with weight takes it. The caller's total must sum
+/// the same weights in the same order.
+#[inline]
+pub(crate) fn walk<T>(
+    weighted: impl IntoIterator<Item = (T, f32)>,
+    target: f32,
+) -> Option<(T, f32, f32)> {
+    let mut below = 0.0f32;
+    let mut last = None;
+    for (c, w) in weighted {
+        if w <= 0.0 {
+            continue;
+        }
+        let end = target < below + w;
+        last = Some((c, w, below));
+        if end {
+            break;
+        }
+        below += w;
+    }
+    last.map(|(c, w, below)| (c, w, target - below))
 }
 
 #[cfg(test)]

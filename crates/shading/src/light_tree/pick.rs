@@ -4,12 +4,9 @@
 
 use super::sample::Receiver;
 use super::{Leaf, LightTree};
-use crate::light_choice::{punctual_importance, Choice, Pick};
+use crate::light_choice::{punctual_importance, remap, walk, Choice, Pick};
 use aperture_scene::Light;
 use glam::Vec3;
-
-/// Largest f32 below 1.
-const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
 impl LightTree {
     /// One light at `p` (normal `n` on the side light is received from; both sides when
@@ -150,27 +147,14 @@ impl LightTree {
             return None;
         }
         let tree = self.root_importance(r);
-        let target = u * total;
-        let mut below = 0.0f32;
-        let mut last = None;
         // The same weights in the same order as `total`.
         let all = self
             .directional
             .iter()
             .map(|&i| (Some(i), self.directional_importance(r, i)))
             .chain([(None, tree)]);
-        for (light, w) in all {
-            if w <= 0.0 {
-                continue;
-            }
-            last = Some((light, w, below));
-            if target < below + w {
-                break;
-            }
-            below += w;
-        }
-        let (light, w, below) = last?;
-        let u = ((target - below) / w).clamp(0.0, ONE_BELOW);
+        let (light, w, x) = walk(all, u * total)?;
+        let u = remap(x, w);
         let pr = w / total;
         Some(match light {
             Some(i) => (Top::Directional(i as usize, pr), u),

@@ -5,6 +5,7 @@
 //! nodes (1,000 lights + 2,000 panels: the descent was 46 % of the render time).
 
 use super::bounds::Reach;
+use crate::light_choice::{remap, walk};
 use glam::{BVec4A, Vec3, Vec4};
 
 /// A child: a node's index, or a leaf's index with this bit set.
@@ -12,9 +13,6 @@ pub(super) const LEAF_BIT: u32 = 1 << 31;
 
 /// An unused lane's child.
 pub(super) const EMPTY: u32 = u32::MAX;
-
-/// Largest f32 below 1: a remapped uniform number stays in `[0, 1)`.
-const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// Up to four children's bounds, lane by lane ([`Reach`]'s fields), and who they are.
 #[derive(Debug, Clone, Copy)]
@@ -137,21 +135,8 @@ pub(super) fn choose(w: [f32; 4], u: f32) -> Option<(usize, f32, f32)> {
     if !(total > 0.0 && total.is_finite()) {
         return None;
     }
-    let target = u * total;
-    let mut below = 0.0f32;
-    let mut last = None;
-    for (k, &wk) in w.iter().enumerate() {
-        if wk <= 0.0 {
-            continue;
-        }
-        last = Some((k, wk, below));
-        if target < below + wk {
-            break;
-        }
-        below += wk;
-    }
-    let (k, wk, below) = last?;
-    Some((k, wk / total, ((target - below) / wk).clamp(0.0, ONE_BELOW)))
+    let (k, wk, x) = walk(w.into_iter().enumerate(), u * total)?;
+    Some((k, wk / total, remap(x, wk)))
 }
 
 /// The probability [`choose`] gives lane `k` of importances `w`.
