@@ -364,11 +364,11 @@ fn the_memo_rebuilds_only_when_a_light_moves() {
     assert_eq!(memo.builds(), 2);
 }
 
-/// The tree serves a scene from either threshold: many point and spot lights (directional
-/// ones do not count), or many emissive triangles alone.
+/// The tree serves a scene from its count of point and spot lights (directional ones do not
+/// count); emissive triangles alone, however many, keep the exhaustive choice.
 #[test]
-fn the_tree_is_wanted_from_either_threshold() {
-    use aperture_shading::light_tree::{EMISSIVE_THRESHOLD, PUNCTUAL_THRESHOLD};
+fn the_tree_is_wanted_from_the_punctual_threshold() {
+    use aperture_shading::light_tree::PUNCTUAL_THRESHOLD;
     let point = |k: usize| Light {
         name: None,
         kind: LightKind::Point,
@@ -381,37 +381,23 @@ fn the_tree_is_wanted_from_either_threshold() {
         ..point(0)
     };
     let with = |n: usize| -> Vec<Light> { (0..n).map(point).chain([sun.clone()]).collect() };
-    assert!(!LightTree::wanted(
-        &with(PUNCTUAL_THRESHOLD - 1),
-        EMISSIVE_THRESHOLD - 1
-    ));
-    assert!(LightTree::wanted(&with(PUNCTUAL_THRESHOLD), 0));
-    assert!(LightTree::wanted(&with(1), EMISSIVE_THRESHOLD));
-    assert!(!LightTree::wanted(
-        &vec![sun.clone(); PUNCTUAL_THRESHOLD],
-        0
-    ));
-    // One emissive ball of 1,280 triangles and one point light: the tree, every triangle a
-    // leaf; a ball of 80 triangles keeps the exhaustive choice.
-    for (subdivisions, wanted) in [(3, true), (1, false)] {
-        let mut scene = test_scenes::lit_plane(1.0);
-        scene.materials.push(test_scenes::emitter(Vec3::ONE));
-        scene.meshes.push(test_scenes::icosphere(subdivisions, 1));
-        scene.instances.push(Instance {
-            mesh: 1,
-            world_from_object: Affine3A::from_translation(Vec3::new(0.0, 2.0, 0.0)),
-            node: 1,
-            materials: 0,
-        });
-        let geom =
-            Geometry::with_transmission(&scene, MaterialOverride::None, TransmissionModel::Gltf);
-        let em = EmissiveLights::build(&geom).unwrap();
-        let tree = LightTree::for_scene(&geom, Some(&em));
-        assert_eq!(tree.is_some(), wanted, "{} triangles", em.triangles.len());
-        if let Some(tree) = tree {
-            assert_eq!(tree.leaf_count(), em.triangles.len() + scene.lights.len());
-        }
-    }
+    assert!(!LightTree::wanted(&with(PUNCTUAL_THRESHOLD - 1)));
+    assert!(LightTree::wanted(&with(PUNCTUAL_THRESHOLD)));
+    assert!(!LightTree::wanted(&vec![sun.clone(); PUNCTUAL_THRESHOLD]));
+    // One emissive ball of 1,280 triangles and one point light: no tree.
+    let mut scene = test_scenes::lit_plane(1.0);
+    scene.materials.push(test_scenes::emitter(Vec3::ONE));
+    scene.meshes.push(test_scenes::icosphere(3, 1));
+    scene.instances.push(Instance {
+        mesh: 1,
+        world_from_object: Affine3A::from_translation(Vec3::new(0.0, 2.0, 0.0)),
+        node: 1,
+        materials: 0,
+    });
+    let geom = Geometry::with_transmission(&scene, MaterialOverride::None, TransmissionModel::Gltf);
+    let em = EmissiveLights::build(&geom).unwrap();
+    assert_eq!(em.triangles.len(), 1280);
+    assert!(LightTree::for_scene(&geom, Some(&em)).is_none());
 }
 
 /// A single-sided emitter whose back glTF's culling hides lights only its front: from inside

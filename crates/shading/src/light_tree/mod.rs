@@ -11,11 +11,11 @@
 //! ([`wide`]). Directional lights have no position: they are picked beside the tree
 //! ([`pick`]).
 //!
-//! Below [`PUNCTUAL_THRESHOLD`] point and spot lights and [`EMISSIVE_THRESHOLD`] emissive
-//! triangles the exhaustive choice ([`crate::light_choice`]) is kept: it evaluates every
-//! punctual light exactly and picks a triangle by power, which for fewer lights gives less
-//! noise per unit of time than the descent; its images stay as they were. From either on, the
-//! tree holds every point and spot light and every emissive triangle, each its own leaf.
+//! Below [`PUNCTUAL_THRESHOLD`] point and spot lights the exhaustive choice
+//! ([`crate::light_choice`]) is kept: it evaluates every punctual light exactly and takes the
+//! emitters as one candidate (a triangle by power), which for fewer lights gives less noise per
+//! unit of time than the descent; its images stay as they were. From it on, the tree holds
+//! every point and spot light and every emissive triangle, each its own leaf.
 
 pub mod bounds;
 mod build;
@@ -35,16 +35,13 @@ use aperture_scene::Light;
 
 /// Point and spot lights from which a scene uses the tree: below it the exhaustive choice's
 /// exact importances give less noise per unit of time (street grids of
-/// `tools/bench/many_lights.py`, two layouts: the tree's variance × time 1.3–1.4× the
+/// `tools/bench/many_lights.py`, two layouts: the tree's variance × time 1.3–1.8× the
 /// exhaustive choice's at 64 lights, 0.84–1.24× at 100, 0.84–0.88× at 128, 0.37 at 400;
-/// see BENCHMARKS.md).
+/// see BENCHMARKS.md). Emissive triangles alone never ask for the tree: on the sample files
+/// with most of them (the demo, StainedGlassLamp, ToyCar, LightsPunctualLamp) the tree's
+/// variance × time was 1.07–1.43× the exhaustive choice's, whose cost does not grow with them
+/// (one candidate, an alias table), though it won on panels spread over a street (0.77–0.86×).
 pub const PUNCTUAL_THRESHOLD: usize = 128;
-
-/// Emissive triangles from which a scene uses the tree, whatever its punctual lights: below
-/// it the exhaustive choice (the emitters as one candidate, a triangle by power from an alias
-/// table) costs less per sample for as little noise (panels of 2 triangles: the tree's
-/// variance × time 1.20× at 50 triangles, 0.97× at 100, 0.82× at 200, 0.77–0.86× at 10,000).
-pub const EMISSIVE_THRESHOLD: usize = 200;
 
 /// A leaf of the tree: one light.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -77,20 +74,19 @@ pub struct LightTree {
 }
 
 impl LightTree {
-    /// Whether a scene with these lights and this many emissive triangles uses the tree (see
-    /// [`PUNCTUAL_THRESHOLD`], [`EMISSIVE_THRESHOLD`]).
-    pub fn wanted(lights: &[Light], emissive_triangles: usize) -> bool {
+    /// Whether a scene with these lights uses the tree (see [`PUNCTUAL_THRESHOLD`]).
+    pub fn wanted(lights: &[Light]) -> bool {
         let positional = lights
             .iter()
             .filter(|l| !matches!(l.kind, aperture_scene::LightKind::Directional))
             .count();
-        positional >= PUNCTUAL_THRESHOLD || emissive_triangles >= EMISSIVE_THRESHOLD
+        positional >= PUNCTUAL_THRESHOLD
     }
 
     /// The tree when the scene [wants](LightTree::wanted) one, else `None` (the exhaustive
     /// choice serves it).
     pub fn for_scene(geom: &Geometry<'_>, emissive: Option<&EmissiveLights>) -> Option<Self> {
-        if !Self::wanted(&geom.scene.lights, triangles(emissive)) {
+        if !Self::wanted(&geom.scene.lights) {
             return None;
         }
         Self::build(geom, emissive)
@@ -105,9 +101,4 @@ impl LightTree {
     pub fn leaves(&self) -> &[Leaf] {
         &self.leaves
     }
-}
-
-/// The number of emissive triangles.
-fn triangles(emissive: Option<&EmissiveLights>) -> usize {
-    emissive.map_or(0, |em| em.triangles.len())
 }

@@ -49,7 +49,7 @@ impl TreeMemo {
         emissive: Option<&EmissiveLights>,
     ) -> Option<Arc<LightTree>> {
         let lights = &geom.scene.lights;
-        if !LightTree::wanted(lights, super::triangles(emissive)) {
+        if !LightTree::wanted(lights) {
             return None;
         }
         let (leaves, triangles) = LightTree::leaves_of(geom, emissive);
