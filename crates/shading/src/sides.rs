@@ -71,7 +71,14 @@ impl Geometry<'_> {
     /// not see it (glTF's back-face culling; never under [`SidesModel::Both`]).
     #[inline]
     pub fn is_culled(&self, s: &Surface, dir: Vec3) -> bool {
-        self.has_culled && s.ng.dot(dir) > 0.0 && !self.material(s.material).double_sided
+        s.ng.dot(dir) > 0.0 && self.has_back_culled(s)
+    }
+
+    /// True when no ray sees the back of the face at `s`: only the side its `ng` points to is
+    /// there (a culled single-sided face; never under [`SidesModel::Both`]).
+    #[inline]
+    pub fn has_back_culled(&self, s: &Surface) -> bool {
+        self.has_culled && !self.material(s.material).double_sided
     }
 }
 

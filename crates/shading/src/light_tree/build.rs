@@ -43,8 +43,8 @@ impl LightTree {
                 let [s0, s1, s2] = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]
                     .map(|(b1, b2)| geom.emitter_surface(t.instance, t.triangle, b1, b2));
                 // A single-sided emitter whose back rays do not see (glTF's culling) lights
-                // only the side its normal points to: culled when met along that normal.
-                let one_sided = geom.is_culled(&s0, s0.ng);
+                // only the side its normal points to.
+                let one_sided = geom.has_back_culled(&s0);
                 if let Some(mut b) = LightBounds::triangle([s0.p, s1.p, s2.p], phi) {
                     // The front is where the surface's normal points (mirrored instances
                     // included); a degenerate triangle keeps its whole sphere.
@@ -83,7 +83,7 @@ impl LightTree {
         binary.nodes.reserve(2 * items.len());
         binary.leaves.reserve(items.len());
         binary.split(&mut items, 0);
-        let mut tree = Self::collapse(&binary, lights);
+        let mut tree = Self::collapse(binary, lights);
         tree.directional = directional;
         tree.punctual_leaf = vec![u32::MAX; lights.len()];
         tree.triangle_leaf = vec![u32::MAX; triangles];

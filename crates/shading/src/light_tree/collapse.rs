@@ -10,12 +10,12 @@ use aperture_scene::{Light, LightKind};
 impl LightTree {
     /// The wide tree of `binary` (not empty), whose punctual leaves index `lights`; the
     /// caller fills in the lights' leaves and the directional lights.
-    pub(super) fn collapse(binary: &Binary, lights: &[Light]) -> Self {
+    pub(super) fn collapse(binary: Binary, lights: &[Light]) -> Self {
         let mut tree = Self {
             root: binary.nodes[0].bounds,
             nodes: Vec::with_capacity(binary.nodes.len() / 3 + 1),
             parents: Vec::with_capacity(binary.nodes.len() / 3 + 1),
-            leaves: binary.leaves.clone(),
+            leaves: Vec::new(),
             leaf_at: vec![(u32::MAX, 0); binary.leaves.len()],
             punctual_leaf: Vec::new(),
             triangle_leaf: Vec::new(),
@@ -25,9 +25,10 @@ impl LightTree {
         let root = if binary.nodes[0].leaf {
             Lanes::one(0)
         } else {
-            Lanes::of(binary, 0)
+            Lanes::of(&binary, 0)
         };
-        tree.wide(binary, lights, &root, (u32::MAX, 0));
+        tree.wide(&binary, lights, &root, (u32::MAX, 0));
+        tree.leaves = binary.leaves;
         tree
     }
 
