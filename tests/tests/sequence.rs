@@ -1,10 +1,11 @@
 //! Frame sequences (SPEC §7): loaded once, each frame rebuilds only the BVHs of what changed,
 //! and `--skip-existing` leaves finished frames alone.
 
-use aperture_output::sequence::{self, FrameFormat, FrameReport, Sequence};
+use aperture_output::sequence::{self, FrameReport, Sequence};
+use aperture_output::write::ImageFormat;
 use aperture_output::ExrOptions;
 use aperture_render::sequence::FrameRange;
-use aperture_render::RenderOptions;
+use aperture_render::{RenderOptions, Session};
 use aperture_scene::{Animated, LoadOptions};
 
 fn render(
@@ -21,18 +22,19 @@ fn render(
     };
     let seq = Sequence {
         motion: None,
-        animated,
         frames: FrameRange::parse(frames).unwrap(),
         fps: 24.0,
         opts: &opts,
         quality: Default::default(),
         pattern,
-        format: FrameFormat::Exr(ExrOptions::default()),
+        format: ImageFormat::Exr(ExrOptions::default()),
         skip_existing: skip,
         denoiser: None,
     };
     let mut reports = Vec::new();
-    sequence::render_sequence(&seq, &|_, _| {}, &mut |r| reports.push(r.clone())).unwrap();
+    let mut session = Session::new(animated.clone());
+    let mut keep = |r: &FrameReport| reports.push(r.clone());
+    sequence::render_sequence(&mut session, &seq, &|_, _| {}, &mut keep).unwrap();
     reports
 }
 

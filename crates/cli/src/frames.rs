@@ -4,27 +4,23 @@
 use crate::progress::Progress;
 use crate::render_args::RenderArgs;
 use aperture_accel::BvhQuality;
-use aperture_output::sequence::{self, FrameFormat, FrameReport, Sequence};
+use aperture_output::sequence::{self, FrameReport, Sequence};
+use aperture_output::write::ImageFormat;
 use aperture_render::motion::MotionSettings;
 use aperture_render::sequence::FrameRange;
-use aperture_render::RenderOptions;
-use aperture_scene::Animated;
+use aperture_render::{RenderOptions, Session};
 use std::time::Instant;
 
-/// Renders the frames of `--frames` with the options and output format of one frame.
-#[allow(clippy::too_many_arguments)]
+/// Renders the frames of `--frames` from `session` with the options and output of one frame.
 pub fn run(
     args: &RenderArgs,
-    animated: &Animated,
+    session: &mut Session,
     frames: FrameRange,
-    format: FrameFormat,
+    (format, denoiser): (ImageFormat, Option<&aperture_denoise::Denoiser>),
     opts: &RenderOptions,
     quality: BvhQuality,
-    pool: &rayon::ThreadPool,
-    denoiser: Option<&aperture_denoise::Denoiser>,
 ) -> anyhow::Result<()> {
     let seq = Sequence {
-        animated,
         frames,
         fps: args.when.fps,
         opts,
@@ -34,36 +30,34 @@ pub fn run(
         skip_existing: args.skip_existing,
         denoiser,
         motion: Some(MotionSettings::resolve(
-            &animated.motion_extras(),
+            &session.animated().motion_extras(),
             &args.motion.overrides(),
         )),
     };
     let start = Instant::now();
     let (mut rendered, mut secs) = (0usize, 0.0f64);
     let quiet = args.quiet;
-    pool.install(|| {
-        let progress = Progress::with_mode(quiet, args.progress);
-        let samples = u64::from(opts.width) * u64::from(opts.height) * u64::from(opts.spp);
-        let mut frames_left = frames.frames();
+    let progress = Progress::with_mode(quiet, args.progress);
+    let samples = u64::from(opts.width) * u64::from(opts.height) * u64::from(opts.spp);
+    let mut frames_left = frames.frames();
+    progress.set_samples(samples, frames_left.next());
+    let report = |done, total| progress.update(done, total);
+    let done = sequence::render_sequence(session, &seq, &report, &mut |r: &FrameReport| {
+        if let Some(w) = &r.rendered {
+            rendered += 1;
+            secs += w.total_secs;
+            progress.frame_written(Some(r.frame), &r.path, w.total_secs);
+        }
         progress.set_samples(samples, frames_left.next());
-        let report = |done, total| progress.update(done, total);
-        let done = sequence::render_sequence(&seq, &report, &mut |r: &FrameReport| {
-            if let Some(w) = &r.rendered {
-                rendered += 1;
-                secs += w.total_secs;
-                progress.frame_written(Some(r.frame), &r.path, w.total_secs);
-            }
-            progress.set_samples(samples, frames_left.next());
-            // Dropped samples are reported even with --quiet, as for one frame.
-            let dropped = r.rendered.is_some_and(|w| w.summary.dropped > 0);
-            if !quiet || dropped {
-                let line = frame_line(r, rendered, secs, start.elapsed().as_secs_f64());
-                progress.next_frame(&line);
-            }
-        });
-        progress.finish();
-        done
-    })?;
+        // Dropped samples are reported even with --quiet, as for one frame.
+        let dropped = r.rendered.is_some_and(|w| w.summary.dropped > 0);
+        if !quiet || dropped {
+            let line = frame_line(r, rendered, secs, start.elapsed().as_secs_f64());
+            progress.next_frame(&line);
+        }
+    });
+    progress.finish();
+    done?;
     Ok(())
 }
 

@@ -1,14 +1,9 @@
 //! `--motion-blur`, `--no-motion-blur`, `--shutter`, `--shutter-position`, `--motion-steps`
-//! (SPEC §7): the command line's say over the file's motion-blur settings, and the frame's
-//! motion posed from them.
+//! (SPEC §7): the command line's say over the file's motion-blur settings.
 
 use crate::number_args::positive_f32;
-use aperture_render::motion::{
-    pose_frame_motion, pose_neighbours, FrameMotion, FrameNeighbours, MotionOverrides,
-    MotionSettings, ShutterPosition, MAX_MOTION_STEPS,
-};
-use aperture_scene::{Animated, Scene};
-use std::sync::Arc;
+use aperture_render::motion::{MotionOverrides, MotionSettings, ShutterPosition, MAX_MOTION_STEPS};
+use aperture_scene::Animated;
 
 /// Blender's `motion_blur_position`.
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,57 +57,26 @@ impl MotionArgs {
     }
 }
 
-/// The frames before and after the one at `time` seconds (`None`: the stored pose, which has
-/// no neighbours) of `scene`, for the `Vector` pass when it is asked for.
-pub fn frame_vector(
-    opts: &aperture_render::RenderOptions,
-    animated: &Animated,
-    scene: &Scene,
-    (time, fps): (Option<f32>, f32),
-) -> anyhow::Result<Option<Arc<FrameNeighbours>>> {
-    let (Some(time), true) = (time, opts.passes.contains(aperture_render::Pass::Vector)) else {
-        return Ok(None);
-    };
-    let n = pose_neighbours(
-        animated,
-        (f64::from(time), f64::from(fps)),
-        scene,
-        (opts.camera, opts.width, opts.height),
-    )?;
-    Ok(n.map(Arc::new))
-}
-
-/// The motion within the shutter of the frame at `time` seconds (`None`: the stored pose) of
-/// `scene`, posed from `animated`; `None` when motion blur is off, and with a warning when
-/// it is on without a time to put the shutter around in an animated file.
-pub fn frame_motion(
+/// The motion-blur settings of a frame at `time` seconds (`None`: the stored pose): the
+/// file's keys under the flags; `None` when motion blur is off, and with a warning when it is
+/// on without a time to put the shutter around in an animated file.
+pub fn settings(
     args: &MotionArgs,
     animated: &Animated,
-    scene: &Scene,
-    (time, fps): (Option<f32>, f32),
-    (camera, width, height): (usize, u32, u32),
-) -> anyhow::Result<Option<Arc<FrameMotion>>> {
-    let settings = MotionSettings::resolve(&scene.stats.motion, &args.overrides());
-    if settings.shutter.is_none() {
-        return Ok(None);
-    }
-    let Some(time) = time else {
+    time: Option<f64>,
+) -> Option<MotionSettings> {
+    let settings = MotionSettings::resolve(&animated.motion_extras(), &args.overrides());
+    settings.shutter?;
+    if time.is_none() {
         if animated.is_animated() {
             eprintln!(
                 "warning: motion blur needs a time (--frame N or --time S): the stored pose \
                  is rendered without it"
             );
         }
-        return Ok(None);
-    };
-    let motion = pose_frame_motion(
-        animated,
-        &settings,
-        (f64::from(time), f64::from(fps)),
-        scene,
-        (camera, width, height),
-    )?;
-    Ok(motion.map(Arc::new))
+        return None;
+    }
+    Some(settings)
 }
 
 #[cfg(test)]

@@ -3,10 +3,10 @@
 use crate::progress::Progress;
 use crate::render_args::RenderArgs;
 use crate::render_opts::{after_load, before_load, usage_error};
-use crate::render_summary::print_summary;
+use crate::render_summary::{print_summary, JobTimes};
 use anyhow::Context as _;
-use aperture_output::sequence::FrameFormat;
-use aperture_render::RenderOptions;
+use aperture_output::write::ImageOutput;
+use aperture_render::{Frame, FrameSpec, Pass, RenderOptions, Session, SessionError};
 use aperture_scene::LoadOptions;
 use std::time::Instant;
 
@@ -19,90 +19,72 @@ pub struct Interrupted(pub String);
 /// writing) on one pool of `--threads` workers, so that bound holds for the whole process.
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let pool = crate::workers::worker_pool(args.threads)?;
-    pool.install(|| run_on(args, &pool))
+    pool.install(|| run_on(args))
 }
 
-/// [`run`] on `pool`'s workers.
-fn run_on(args: RenderArgs, pool: &rayon::ThreadPool) -> anyhow::Result<()> {
+/// [`run`] on the pool's workers: the file loaded into a session, the frame posed, the image
+/// written, the summary printed.
+fn run_on(args: RenderArgs) -> anyhow::Result<()> {
+    let t_job = Instant::now();
     let before = before_load(&args)?;
     // The library is needed before anything is loaded, rendered or written.
     let denoiser = args.denoise_options.load_if(args.denoise)?;
-    let t_load = Instant::now();
-    let (animated, scene) = load_posed(&args, &before.load)?;
-    let plan = after_load(&args, &before, &scene)?;
+    let first = args
+        .frames
+        .map(|f| f.start as f64 / f64::from(args.when.fps))
+        .or(before.load.time.map(f64::from));
+    let mut session = load_session(&args, &before.load)?;
+    let scene = session.pose(first)?;
+    let plan = after_load(&args, &before, scene)?;
     let load_warnings = match args.quiet {
         true => Vec::new(),
-        false => crate::load_warnings::load_warnings(&scene),
+        false => crate::load_warnings::load_warnings(scene),
     };
-    let scene_warnings = crate::first_image::scene_warnings(&scene, &plan.opts.env);
+    let scene_warnings = crate::first_image::scene_warnings(scene, &plan.opts.env);
     for w in load_warnings.into_iter().chain(scene_warnings) {
         eprintln!("warning: {}: {w}", args.scene.display());
     }
-
+    let load_secs = t_job.elapsed().as_secs_f64();
     if let Some(frames) = args.frames {
-        return crate::frames::run(
-            &args,
-            &animated,
-            frames,
-            plan.format,
-            &plan.opts,
-            plan.quality,
-            pool,
-            denoiser.as_ref(),
-        );
+        let out = (plan.format, denoiser.as_ref());
+        return crate::frames::run(&args, &mut session, frames, out, &plan.opts, plan.quality);
     }
-    let hints = aperture_render::SceneHints::new(&animated, &scene);
-    let mut plan = plan;
-    plan.opts.motion = crate::motion_args::frame_motion(
-        &args.motion,
-        &animated,
-        &scene,
-        (before.load.time, args.when.fps),
-        (plan.opts.camera, plan.opts.width, plan.opts.height),
-    )?;
-    let when = (before.load.time, args.when.fps);
-    plan.opts.vector = crate::motion_args::frame_vector(&plan.opts, &animated, &scene, when)?;
-    drop(animated);
-    let (summary, load_secs) = pool.install(|| -> anyhow::Result<_> {
-        // The same structure a sequence builds for this frame, so their images agree bit for bit.
-        let motion = plan.opts.motion.as_deref();
-        let accel = aperture_render::build_motion_accel(&scene, plan.quality, &hints, None, motion);
-        let load_secs = t_load.elapsed().as_secs_f64();
-        let out = Output {
-            format: plan.format,
-            denoiser: denoiser.as_ref(),
-        };
-        let summary = write_image(&args, &scene, &accel, &plan.opts, &out)?;
-        Ok((summary, load_secs))
-    })?;
-
+    let time = before.load.time.map(f64::from);
+    let spec = FrameSpec {
+        time,
+        fps: args.when.fps,
+        quality: plan.quality,
+        motion: crate::motion_args::settings(&args.motion, session.animated(), time),
+        vector: time.is_some() && plan.opts.passes.contains(Pass::Vector),
+        view: (plan.opts.camera, plan.opts.width, plan.opts.height),
+    };
+    session.frame(&spec)?;
+    let bvh_secs = session.frame_times().build_secs;
+    let frame = session.frame(&spec)?;
+    let out = ImageOutput {
+        path: &args.output,
+        format: plan.format,
+        denoiser: denoiser.as_ref(),
+    };
+    let summary = write_image(&args, frame, &plan.opts, &out)?;
     if plan.opts.cancel.is_cancelled() {
         return Err(Interrupted(args.output.display().to_string()).into());
     }
-    print_summary(
-        &args,
-        &plan.opts,
-        &summary,
+    let job = JobTimes {
         load_secs,
-        plan.quality,
-        plan.part,
-    );
+        bvh_secs,
+        total_secs: t_job.elapsed().as_secs_f64(),
+    };
+    print_summary(&args, &plan.opts, &summary, job, plan.quality, plan.part);
     Ok(())
-}
-
-/// How the still image is written.
-struct Output<'a> {
-    format: FrameFormat,
-    denoiser: Option<&'a aperture_denoise::Denoiser>,
 }
 
 /// Renders the still image and writes it, showing progress.
 fn write_image(
     args: &RenderArgs,
-    scene: &aperture_scene::Scene,
-    accel: &aperture_accel::Accel,
+    frame: &Frame,
     opts: &RenderOptions,
-    out: &Output<'_>,
+    out: &ImageOutput<'_>,
 ) -> anyhow::Result<aperture_output::RenderSummary> {
     let progress = Progress::with_mode(args.quiet, args.progress);
     progress.set_samples(
@@ -110,47 +92,28 @@ fn write_image(
         None,
     );
     let report = |done, total| progress.update(done, total);
-    let path = &args.output;
-    let summary = aperture_output::sequence::render_image(
-        scene,
-        accel,
-        opts,
-        path,
-        out.format,
-        out.denoiser,
-        &report,
-    );
+    let summary = aperture_output::write::write_image(frame, opts, out, &report);
     progress.finish();
     let summary = summary.with_context(|| format!("writing {}", args.output.display()))?;
     progress.frame_written(args.when.frame, &args.output, summary.render_secs);
     Ok(summary)
 }
 
-/// The file loaded and posed at the time asked for (a sequence's first frame); a flag's value
-/// the scene refuses (`--focus-object` naming no node, `--scene 9`) is a usage error like any
-/// other bad flag value: exit code 2.
-fn load_posed(
-    args: &RenderArgs,
-    load: &LoadOptions,
-) -> anyhow::Result<(aperture_scene::Animated, aperture_scene::Scene)> {
+/// The file loaded into a session; a flag's value the scene refuses (`--focus-object` naming
+/// no node, `--scene 9`) is a usage error like any other bad flag value: exit code 2.
+fn load_session(args: &RenderArgs, load: &LoadOptions) -> anyhow::Result<Session> {
     use aperture_scene::Error;
-    let posed = aperture_scene::Animated::load(&args.scene, load).and_then(|animated| {
-        let first = args
-            .frames
-            .map(|f| (f.start as f64 / f64::from(args.when.fps)) as f32);
-        let scene = animated.scene_at(first.or(load.time))?;
-        Ok((animated, scene))
-    });
-    match posed {
+    match Session::load(&args.scene, load) {
         Ok(s) => Ok(s),
-        Err(e @ Error::InvalidDof { .. }) if matches!(&e, Error::InvalidDof { key, .. } if key.starts_with("command line")) => {
-            usage_error(format!("{}: {e}", args.scene.display()))
-        }
-        Err(
-            e @ (Error::NoSuchScene { .. }
-            | Error::NoSuchAnimation { .. }
-            | Error::NoSuchVariant { .. }),
-        ) => usage_error(format!("{}: {e}", args.scene.display())),
+        Err(SessionError::Scene(e)) => match e {
+            Error::InvalidDof { ref key, .. } if key.starts_with("command line") => {
+                usage_error(format!("{}: {e}", args.scene.display()))
+            }
+            Error::NoSuchScene { .. } | Error::NoSuchAnimation { .. } | Error::NoSuchVariant { .. } => {
+                usage_error(format!("{}: {e}", args.scene.display()))
+            }
+            e => Err(anyhow::Error::new(e).context(format!("loading {}", args.scene.display()))),
+        },
         Err(e) => Err(anyhow::Error::new(e).context(format!("loading {}", args.scene.display()))),
     }
 }

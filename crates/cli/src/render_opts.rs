@@ -67,7 +67,7 @@ pub(crate) fn before_load(args: &RenderArgs) -> anyhow::Result<BeforeLoad> {
 pub(crate) struct RenderPlan {
     pub opts: RenderOptions,
     /// How the image (or each frame) is written: PNG with its options, or EXR.
-    pub format: aperture_output::sequence::FrameFormat,
+    pub format: aperture_output::write::ImageFormat,
     pub quality: aperture_accel::BvhQuality,
     pub part: Option<crate::split_args::ImagePart>,
 }
@@ -188,14 +188,14 @@ fn frame_format(
     args: &RenderArgs,
     png_out: bool,
     exr: aperture_output::ExrOptions,
-) -> aperture_output::sequence::FrameFormat {
+) -> aperture_output::write::ImageFormat {
     if png_out {
-        aperture_output::sequence::FrameFormat::Png {
+        aperture_output::write::ImageFormat::Png {
             png: png_options(args),
             transparent: args.transparent,
         }
     } else {
-        aperture_output::sequence::FrameFormat::Exr(exr)
+        aperture_output::write::ImageFormat::Exr(exr)
     }
 }
 

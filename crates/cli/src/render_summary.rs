@@ -3,13 +3,22 @@
 use crate::render_args::RenderArgs;
 use aperture_render::RenderOptions;
 
+/// The parts of a job's time that come before the render: loading (file → posed scene) and
+/// building the frame's BVH; and the whole job's wall time.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct JobTimes {
+    pub load_secs: f64,
+    pub bvh_secs: f64,
+    pub total_secs: f64,
+}
+
 /// The warnings a finished render owes, and its one-line summary unless `--quiet` (always when
 /// samples were dropped).
 pub(crate) fn print_summary(
     args: &RenderArgs,
     opts: &RenderOptions,
     summary: &aperture_output::RenderSummary,
-    load_secs: f64,
+    job: JobTimes,
     quality: aperture_accel::BvhQuality,
     part: Option<crate::split_args::ImagePart>,
 ) {
@@ -48,9 +57,15 @@ pub(crate) fn print_summary(
             ),
             None => format!("{}x{}", opts.width, opts.height),
         };
+        // The whole job's wall time, then its parts (the rest is argument checks and set-up).
+        let parts = format!(
+            "load {:.2} s, BVH {quality} {:.2} s, render {render_secs:.2} s, denoise {:.2} s, write {:.2} s",
+            job.load_secs, job.bvh_secs, summary.denoise_secs, summary.write_secs
+        );
         eprintln!(
-            "{}: {size}, {spp}, {render_secs:.2} s ({load_secs:.2} s loading, BVH {quality}), {:.2} Msamples/s, {dropped} dropped samples (NaN/Inf)",
+            "{}: {size}, {spp}, {:.2} s ({parts}), {:.2} Msamples/s, {dropped} dropped samples (NaN/Inf)",
             args.output.display(),
+            job.total_secs,
             summary.samples as f64 / render_secs.max(1e-9) / 1e6,
         );
     }

@@ -2,13 +2,15 @@
 //! handed to `aperture_imageio`, as pbrt's film writes its own image.
 //!
 //! ```
-//! use aperture_output::{render_exr, ExrOptions};
-//! use aperture_render::{build_accel, test_scenes, RenderOptions};
-//! let scene = test_scenes::lit_plane(1.0);
-//! let accel = build_accel(&scene, Default::default());
+//! use aperture_output::write::{write_image, ImageFormat, ImageOutput};
+//! use aperture_output::ExrOptions;
+//! use aperture_render::{Frame, RenderOptions};
+//! use aperture_shading::test_scenes;
+//! let frame = Frame::still(test_scenes::lit_plane(1.0), Default::default());
 //! let opts = RenderOptions { width: 8, height: 8, spp: 2, ..Default::default() };
 //! let path = std::env::temp_dir().join(format!("aperture-doc-{}.exr", std::process::id()));
-//! let summary = render_exr(&scene, &accel, &opts, &path, &ExrOptions::default(), &|_, _| {})?;
+//! let out = ImageOutput { path: &path, format: ImageFormat::Exr(ExrOptions::default()), denoiser: None };
+//! let summary = write_image(&frame, &opts, &out, &|_, _| {})?;
 //! assert_eq!(summary.samples, 8 * 8 * 2);
 //! assert!(aperture_imageio::read_exr(&path).is_ok());
 //! # std::fs::remove_file(&path).ok();
@@ -19,9 +21,9 @@
 //! and written before the next is rendered, so memory holds one band's sums, not the whole
 //! image's (a 4K render with every pass would otherwise need several GB). Bands do not change
 //! a pixel: every sample is a pure function of (pixel, index, dimension, seed), and adaptive
-//! sampling renders the apron its decisions reach (see [`aperture_render::render_window`]). The
-//! renderer drives the writing: [`aperture_render::render_bands`] hands each finished band to
-//! the file's sink; nothing here renders a pixel or knows how.
+//! sampling renders the apron its decisions reach. This crate drives the writing: it takes
+//! each band the renderer yields ([`aperture_render::Bands`]) and writes it; the renderer
+//! knows nothing of files and never calls back here.
 
 pub mod channels;
 pub mod denoised;
@@ -29,21 +31,17 @@ mod footprint;
 pub mod header;
 pub mod merge;
 pub mod sequence;
+pub mod write;
 
 pub use footprint::{check_output, footprint, Footprint, FootprintError, OutputKind};
 
-use aperture_accel::Accel;
-use aperture_denoise::Denoiser;
-use aperture_imageio::{ExrLayout, Image, Layer, MetaValue, Placement, PngOptions};
-use aperture_render::bands::{band_rows, bands};
+use aperture_imageio::{Image, Layer, MetaValue, Placement};
 use aperture_render::film::{AovLayout, Film, Window};
 use aperture_render::passes::{Pass, PassSet};
-use aperture_render::{render_bands, scene_camera, RenderError, RenderOptions};
+use aperture_render::{scene_camera, RenderError, RenderOptions};
 use aperture_scene::Scene;
 use channels::PixelResolver;
 use glam::Mat3;
-use std::path::Path;
-use std::time::Instant;
 
 /// Most bytes the sums of one band may take (the band height follows from it).
 pub const BAND_BYTES: usize = 512 << 20;
@@ -114,11 +112,28 @@ pub struct RenderSummary {
     pub dropped: u64,
     /// Seconds spent rendering (not writing).
     pub render_secs: f64,
+    /// Seconds spent denoising.
+    pub denoise_secs: f64,
+    /// Seconds spent resolving and writing the file (the rest of the job).
+    pub write_secs: f64,
     /// Colour values clamped to the half-float range (`--half`).
     pub half_clamped: u64,
 }
 
 impl RenderSummary {
+    /// Nothing done yet for `window`.
+    pub fn of(window: Window) -> Self {
+        Self {
+            window,
+            samples: 0,
+            dropped: 0,
+            render_secs: 0.0,
+            denoise_secs: 0.0,
+            write_secs: 0.0,
+            half_clamped: 0,
+        }
+    }
+
     /// Mean samples per pixel.
     pub fn mean_spp(&self) -> f64 {
         self.samples as f64 / self.window.pixels().max(1) as f64
@@ -142,165 +157,16 @@ pub fn film_bytes_per_pixel(passes: PassSet, adaptive: bool, channels: usize) ->
     film + rounds + 4 * channels
 }
 
-/// Renders `opts` and writes it to `path` as EXR (SPEC §6): the beauty, the passes of
-/// `opts.passes` (plus the sample count where [`channels::file_passes`] adds it) and the
-/// header of [`header::metadata`], band by band.
-pub fn render_exr(
-    scene: &Scene,
-    accel: &Accel,
-    opts: &RenderOptions,
-    path: &Path,
-    exr: &ExrOptions,
-    progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<RenderSummary, OutputError> {
-    render_exr_with(scene, accel, opts, path, exr, None, progress)
-}
-
-/// [`render_exr`] with the beauty denoised by `denoiser` ([`denoised`]): the Denoising passes
-/// are added to `opts.passes`, the whole image (or region) is held until it is denoised, then
-/// written with the noisy beauty as `Noisy Image`. An interrupted render saved with
-/// [`ExrOptions::save_partial`] is written undenoised, so it can still be merged.
-pub fn render_exr_denoised(
-    scene: &Scene,
-    accel: &Accel,
-    opts: &RenderOptions,
-    path: &Path,
-    exr: &ExrOptions,
-    denoiser: &Denoiser,
-    progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<RenderSummary, OutputError> {
-    let passes = denoised::with_aux(opts.passes);
-    let opts = RenderOptions {
-        passes,
-        ..opts.clone()
-    };
-    render_exr_with(scene, accel, &opts, path, exr, Some(denoiser), progress)
-}
-
-/// The file [`render_exr`] writes: its channels (the `Noisy Image` ones last when
-/// denoising) and header, late values to be filled in.
-fn exr_layout(
-    scene: &Scene,
-    camera: &aperture_render::camera::Camera,
-    opts: &RenderOptions,
-    window: Window,
-    exr: &ExrOptions,
-    denoiser: Option<&Denoiser>,
-) -> ExrLayout {
-    let whole = Window::whole(opts.width, opts.height);
-    let mut layout = ExrLayout {
-        width: window.width,
-        height: window.height,
-        placement: placement(window, whole),
-        metadata: [
-            header::metadata(scene, camera, opts, opts.passes),
-            header::split_metadata(scene, opts, window, exr.tile),
-        ]
-        .concat(),
-        channels: channels::channels(opts.passes, exr.half),
-    };
-    if exr.save_partial {
-        let flag = header::late::INTERRUPTED.to_string();
-        layout.metadata.push((flag, MetaValue::Int(0)));
-    }
-    if let Some(d) = denoiser {
-        layout.channels.extend(denoised::noisy_channels(exr.half));
-        let name = denoised::DENOISER.to_string();
-        layout
-            .metadata
-            .push((name, MetaValue::Text(denoised::describe(d))));
-        let flag = denoised::DENOISED.to_string();
-        layout.metadata.push((flag, MetaValue::Int(0)));
-        let secs = denoised::DENOISE_TIME.to_string();
-        layout.metadata.push((secs, MetaValue::Float(0.0)));
-    }
-    layout
-}
-
-fn render_exr_with(
-    scene: &Scene,
-    accel: &Accel,
-    opts: &RenderOptions,
-    path: &Path,
-    exr: &ExrOptions,
-    denoiser: Option<&Denoiser>,
-    progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<RenderSummary, OutputError> {
-    let camera = scene_camera(scene, opts)?;
-    let window = exr.region.unwrap_or(Window::whole(opts.width, opts.height));
-    let passes = channels::file_passes(opts.passes, needs_sample_count(opts, window));
-    let opts = RenderOptions {
-        passes,
-        ..opts.clone()
-    };
-    let layout = exr_layout(scene, &camera, &opts, window, exr, denoiser);
-    let specs = channels::channels(passes, exr.half);
-    let bpp = film_bytes_per_pixel(passes, opts.adaptive.is_some(), layout.channels.len());
-    let bands = bands(window, band_rows(window, exr.band_bytes, bpp));
-    let world_from_camera = Mat3::from(camera.world_from_camera.matrix3);
-    let world_origin = scene.world_origin.as_vec3();
-    let mut summary = RenderSummary {
-        window,
-        samples: 0,
-        dropped: 0,
-        render_secs: 0.0,
-        half_clamped: 0,
-    };
-    // Denoising needs the whole window: its rows wait here instead of going to the file.
-    let mut held: Vec<f32> = Vec::new();
-    aperture_imageio::write_exr_streamed::<OutputError>(path, &layout, |rows| {
-        let mut sink = |film: Film| -> Result<(), OutputError> {
-            let resolver =
-                PixelResolver::new(&film, passes, exr.half, world_from_camera, world_origin);
-            let (values, clamped) = resolver.rows(specs.len());
-            if denoiser.is_some() {
-                held.extend_from_slice(&values);
-            } else {
-                rows.push_rows(&values)?;
-            }
-            summary.half_clamped += clamped;
-            Ok(())
-        };
-        let totals = render_bands(scene, accel, &camera, &opts, &bands, progress, &mut sink)?;
-        summary.samples = totals.samples;
-        summary.dropped = totals.dropped;
-        summary.render_secs = totals.render_secs;
-        let cancelled = opts.cancel.is_cancelled();
-        if cancelled && !exr.save_partial {
-            return Err(OutputError::Interrupted {
-                samples: summary.samples,
-            });
-        }
-        let mut late = late_values(&summary, &opts);
-        if exr.save_partial {
-            let flag = header::late::INTERRUPTED.to_string();
-            late.push((flag, MetaValue::Int(i32::from(cancelled))));
-        }
-        if let Some(d) = denoiser {
-            let d = (!cancelled).then_some(d);
-            let start = std::time::Instant::now();
-            let values = denoised::denoise_rows(&held, &specs, window.width, window.height, d)?;
-            let secs = start.elapsed().as_secs_f32();
-            rows.push_rows(&values)?;
-            let flag = denoised::DENOISED.to_string();
-            late.push((flag, MetaValue::Int(i32::from(d.is_some()))));
-            late.push((denoised::DENOISE_TIME.to_string(), MetaValue::Float(secs)));
-        }
-        Ok(late)
-    })?;
-    Ok(summary)
-}
-
 /// True when a file of `window` rendered with `opts` must say how many samples each pixel
 /// took (SPEC §6): adaptive, a region of the image, or a batch of samples past the first.
-fn needs_sample_count(opts: &RenderOptions, window: Window) -> bool {
+pub(crate) fn needs_sample_count(opts: &RenderOptions, window: Window) -> bool {
     opts.adaptive.is_some()
         || window != Window::whole(opts.width, opts.height)
         || opts.sample_offset > 0
 }
 
 /// The header values known only after rendering.
-fn late_values(summary: &RenderSummary, opts: &RenderOptions) -> Vec<(String, MetaValue)> {
+pub(crate) fn late_values(summary: &RenderSummary, opts: &RenderOptions) -> Vec<(String, MetaValue)> {
     let mut late = vec![
         (
             header::late::RENDER_TIME.to_string(),
@@ -321,106 +187,12 @@ fn late_values(summary: &RenderSummary, opts: &RenderOptions) -> Vec<(String, Me
 }
 
 /// Where `window` sits in the whole image, `None` when it is the whole image.
-fn placement(window: Window, whole: Window) -> Option<Placement> {
+pub(crate) fn placement(window: Window, whole: Window) -> Option<Placement> {
     (window != whole).then_some(Placement {
         x: window.x0,
         y: window.y0,
         full_width: whole.width,
         full_height: whole.height,
-    })
-}
-
-/// Renders `opts` (beauty only) and writes it to `path` as PNG: exposure and view transform
-/// from `png`; opaque unless `transparent` (RGB is already the radiance over the environment,
-/// associated alpha, so an opaque pixel is the same RGB with A = 1).
-pub fn render_png(
-    scene: &Scene,
-    accel: &Accel,
-    opts: &RenderOptions,
-    path: &Path,
-    png: &PngOptions,
-    transparent: bool,
-    progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<RenderSummary, OutputError> {
-    render_png_with(scene, accel, opts, path, png, transparent, None, progress)
-}
-
-/// [`render_png`] with the beauty denoised by `denoiser` (the Denoising passes are rendered
-/// for it, not written).
-#[allow(clippy::too_many_arguments)]
-pub fn render_png_denoised(
-    scene: &Scene,
-    accel: &Accel,
-    opts: &RenderOptions,
-    path: &Path,
-    png: &PngOptions,
-    transparent: bool,
-    denoiser: &Denoiser,
-    progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<RenderSummary, OutputError> {
-    render_png_with(
-        scene,
-        accel,
-        opts,
-        path,
-        png,
-        transparent,
-        Some(denoiser),
-        progress,
-    )
-}
-
-#[allow(clippy::too_many_arguments)]
-fn render_png_with(
-    scene: &Scene,
-    accel: &Accel,
-    opts: &RenderOptions,
-    path: &Path,
-    png: &PngOptions,
-    transparent: bool,
-    denoiser: Option<&Denoiser>,
-    progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<RenderSummary, OutputError> {
-    let passes = match denoiser {
-        Some(_) => denoised::with_aux(PassSet::NONE),
-        None => PassSet::NONE,
-    };
-    let opts = RenderOptions {
-        passes,
-        ..opts.clone()
-    };
-    let t0 = Instant::now();
-    let film = aperture_render::render(scene, accel, &opts, progress)?;
-    if opts.cancel.is_cancelled() {
-        return Err(OutputError::Interrupted {
-            samples: film.total_samples(),
-        });
-    }
-    let render_secs = t0.elapsed().as_secs_f64();
-    let mut image = match denoiser {
-        Some(d) => {
-            let mut image = film_to_image(&film, scene, &opts, false, render_secs)?;
-            denoised::denoise_image(&mut image, d)?;
-            image
-        }
-        None => {
-            let mut image = Image::new(film.width(), film.height());
-            image.rgba = film.to_rgba();
-            image
-        }
-    };
-    if !transparent {
-        for p in &mut image.rgba {
-            p[3] = 1.0;
-        }
-    }
-    aperture_imageio::write_png(path, &image, png)?;
-    Ok(RenderSummary {
-        window: film.window(),
-        samples: film.total_samples(),
-        dropped: film.dropped_samples(),
-        render_secs,
-        half_clamped: 0,
     })
 }
 
@@ -486,11 +258,11 @@ pub fn film_to_image(
         .metadata
         .extend(header::split_metadata(scene, opts, film.window(), None));
     let summary = RenderSummary {
-        window: film.window(),
         samples: film.total_samples(),
         dropped: film.dropped_samples(),
         render_secs,
         half_clamped: resolver.clamped,
+        ..RenderSummary::of(film.window())
     };
     for (key, value) in late_values(&summary, opts) {
         if let Some(slot) = image.metadata.iter_mut().find(|(k, _)| *k == key) {
@@ -503,6 +275,7 @@ pub fn film_to_image(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use aperture_render::bands::{band_rows, bands};
     use aperture_render::TILE;
 
     #[test]

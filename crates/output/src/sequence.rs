@@ -1,19 +1,17 @@
 //! Frame sequences written to files (SPEC §7, `--frames A..B[:STEP]`): one file a frame, named
 //! from a pattern, whole or not at all, so a restarted job can leave the frames it finished.
-//! Posing each frame and rebuilding only what moved is the renderer's
-//! ([`aperture_render::sequence::for_each_frame`]); each frame's file is the single-frame
-//! render's, bit for bit.
+//! Posing each frame and rebuilding only what moved is the render session's
+//! ([`aperture_render::Session::frame`]); each frame's file is the single-frame render's, bit
+//! for bit.
 
-use crate::{render_exr, render_png, ExrOptions, OutputError, RenderSummary};
-use aperture_accel::{Accel, AccelStats, BvhQuality};
+use crate::write::{write_image, ImageFormat, ImageOutput};
+use crate::{OutputError, RenderSummary};
+use aperture_accel::{AccelStats, BvhQuality};
 use aperture_denoise::Denoiser;
-use aperture_imageio::PngOptions;
-use aperture_render::motion::{pose_frame_motion, pose_neighbours, MotionSettings};
-use aperture_render::sequence::{for_each_frame, FrameRange, PosedFrame};
-use aperture_render::{build_motion_accel, RenderOptions, SceneHints};
-use aperture_scene::{Animated, Scene};
+use aperture_render::motion::MotionSettings;
+use aperture_render::sequence::FrameRange;
+use aperture_render::{FrameSpec, RenderOptions, Session, SessionError};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::time::Instant;
 
 /// The output file of `frame`: each run of `#` in the file name becomes the frame number,
@@ -58,20 +56,6 @@ pub fn frame_path(pattern: &Path, frame: i64) -> PathBuf {
     pattern.with_file_name(renamed)
 }
 
-/// How the frames of a sequence are written.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum FrameFormat {
-    /// EXR with the passes of the render options.
-    Exr(ExrOptions),
-    /// PNG with its view transform, opaque unless `transparent`.
-    Png {
-        /// Exposure and view.
-        png: PngOptions,
-        /// Keep coverage as alpha.
-        transparent: bool,
-    },
-}
-
 /// What happened to one frame of a sequence.
 #[derive(Debug, Clone)]
 pub struct FrameReport {
@@ -100,8 +84,6 @@ pub struct FrameWork {
 
 /// A sequence to render.
 pub struct Sequence<'a> {
-    /// The loaded file.
-    pub animated: &'a Animated,
     /// Which frames.
     pub frames: FrameRange,
     /// Frames per second: frame N is at N / fps seconds (Blender's exporter).
@@ -113,148 +95,72 @@ pub struct Sequence<'a> {
     /// The output name with `#` for the frame number (see [`frame_path`]).
     pub pattern: &'a Path,
     /// The file format.
-    pub format: FrameFormat,
+    pub format: ImageFormat,
     /// Leave frames whose file exists (files are written whole or not at all, so an existing
     /// file is a finished frame): a restarted job goes on where it stopped.
     pub skip_existing: bool,
-    /// Denoise every frame ([`crate::render_exr_denoised`], [`crate::render_png_denoised`]).
+    /// Denoise every frame.
     pub denoiser: Option<&'a Denoiser>,
     /// Motion blur: each frame's shutter interval posed with these settings (`None`, or a
     /// setting without a shutter: every frame an instant).
     pub motion: Option<MotionSettings>,
 }
 
-/// Renders every frame of `seq` in turn: `tile_progress(done, total)` during each frame,
-/// `frame_done(report)` after each. Stops at the first error (a frame that cannot be posed,
-/// rendered or written).
+impl Sequence<'_> {
+    /// The frame spec of frame `frame` (at `frame / fps` seconds).
+    fn spec(&self, frame: i64) -> FrameSpec {
+        let o = self.opts;
+        FrameSpec {
+            time: Some(frame as f64 / f64::from(self.fps)),
+            fps: self.fps,
+            quality: self.quality,
+            motion: self.motion,
+            vector: o.passes.contains(aperture_render::Pass::Vector),
+            view: (o.camera, o.width, o.height),
+        }
+    }
+}
+
+/// Renders every frame of `seq` from `session` in turn: `tile_progress(done, total)` during
+/// each frame, `frame_done(report)` after each. Each frame poses the session anew, which
+/// rebuilds only what moved (the bottom-level BVHs of static meshes are kept). Stops at the
+/// first error (a frame that cannot be posed, rendered or written).
 pub fn render_sequence(
+    session: &mut Session,
     seq: &Sequence<'_>,
     tile_progress: &(dyn Fn(usize, usize) + Sync),
     frame_done: &mut dyn FnMut(&FrameReport),
 ) -> Result<(), SequenceError> {
-    let skip = |frame| seq.skip_existing && frame_path(seq.pattern, frame).is_file();
-    let mut each = |f: PosedFrame<'_>| -> Result<(), SequenceError> {
-        let t0 = Instant::now();
-        let path = frame_path(seq.pattern, f.frame);
+    let total = seq.frames.frames().count();
+    for (index, frame) in seq.frames.frames().enumerate() {
+        let path = frame_path(seq.pattern, frame);
         let mut report = FrameReport {
-            frame: f.frame,
-            path: path.clone(),
-            index: f.index,
+            frame,
+            path,
+            index: (index, total),
             rendered: None,
         };
-        if let Some((scene, accel)) = f.posed {
-            let opts =
-                frame_options(seq, f.frame, scene).map_err(|source| SequenceError::Pose {
-                    frame: f.frame,
-                    source,
-                })?;
-            // Instances moving and meshes deforming within the shutter need a structure
-            // bounding them over it: the frame's is rebuilt with their motion (nothing of it
-            // reused).
-            let moving = opts.motion.as_deref().filter(|m| m.moves_geometry());
-            let rebuilt = moving.map(|m| {
-                let hints = SceneHints::new(seq.animated, scene);
-                build_motion_accel(scene, seq.quality, &hints, None, Some(m))
-            });
-            let accel = rebuilt.as_ref().unwrap_or(accel);
-            let written = write_frame(seq, &opts, scene, accel, &path, tile_progress);
-            let summary = written.map_err(|source| SequenceError::Render {
-                frame: f.frame,
-                source,
-            })?;
+        if !(seq.skip_existing && report.path.is_file()) {
+            let t0 = Instant::now();
+            let posed = session.frame(&seq.spec(frame));
+            let posed = posed.map_err(|source| SequenceError::Pose { frame, source })?;
+            let out = ImageOutput {
+                path: &report.path,
+                format: seq.format,
+                denoiser: seq.denoiser,
+            };
+            let written = write_image(posed, seq.opts, &out, tile_progress);
+            let summary = written.map_err(|source| SequenceError::Render { frame, source })?;
             report.rendered = Some(FrameWork {
                 summary,
-                accel: accel.stats(),
-                pose_secs: f.pose_secs,
-                total_secs: f.setup_secs + t0.elapsed().as_secs_f64(),
+                accel: posed.accel().stats(),
+                pose_secs: session.frame_times().pose_secs,
+                total_secs: t0.elapsed().as_secs_f64(),
             });
         }
         frame_done(&report);
-        Ok(())
-    };
-    let pose_error = |frame, source| SequenceError::Pose { frame, source };
-    for_each_frame(
-        seq.animated,
-        seq.frames,
-        seq.fps,
-        seq.quality,
-        &skip,
-        &mut each,
-        pose_error,
-    )
-}
-
-/// The options of `frame` (posed as `scene`): the sequence's, with the frame's motion.
-fn frame_options(
-    seq: &Sequence<'_>,
-    frame: i64,
-    scene: &Scene,
-) -> Result<RenderOptions, aperture_scene::Error> {
-    let mut opts = seq.opts.clone();
-    let fps = f64::from(seq.fps);
-    let frame_time = frame as f64 / fps;
-    if opts.passes.contains(aperture_render::Pass::Vector) {
-        let at = (opts.camera, opts.width, opts.height);
-        opts.vector = pose_neighbours(seq.animated, (frame_time, fps), scene, at)?.map(Arc::new);
     }
-    if let Some(settings) = &seq.motion {
-        opts.motion = pose_frame_motion(
-            seq.animated,
-            settings,
-            (frame_time, fps),
-            scene,
-            (opts.camera, opts.width, opts.height),
-        )?
-        .map(Arc::new);
-    }
-    Ok(opts)
-}
-
-/// One posed frame of `seq` rendered into its file with `opts`.
-fn write_frame(
-    seq: &Sequence<'_>,
-    opts: &RenderOptions,
-    scene: &Scene,
-    accel: &Accel,
-    path: &Path,
-    tile_progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<RenderSummary, OutputError> {
-    let format = seq.format;
-    render_image(
-        scene,
-        accel,
-        opts,
-        path,
-        format,
-        seq.denoiser,
-        tile_progress,
-    )
-}
-
-/// Renders `opts` and writes it to `path` in `format`, denoised when a `denoiser` is given: the
-/// one way a still image and each frame of a sequence are written.
-pub fn render_image(
-    scene: &Scene,
-    accel: &Accel,
-    opts: &RenderOptions,
-    path: &Path,
-    format: FrameFormat,
-    denoiser: Option<&Denoiser>,
-    progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<RenderSummary, OutputError> {
-    match (format, denoiser) {
-        (FrameFormat::Exr(exr), Some(d)) => {
-            crate::render_exr_denoised(scene, accel, opts, path, &exr, d, progress)
-        }
-        (FrameFormat::Png { png, transparent }, Some(d)) => {
-            let t = transparent;
-            crate::render_png_denoised(scene, accel, opts, path, &png, t, d, progress)
-        }
-        (FrameFormat::Exr(exr), None) => render_exr(scene, accel, opts, path, &exr, progress),
-        (FrameFormat::Png { png, transparent }, None) => {
-            render_png(scene, accel, opts, path, &png, transparent, progress)
-        }
-    }
+    Ok(())
 }
 
 /// Why a sequence stopped.
@@ -266,8 +172,8 @@ pub enum SequenceError {
     Pose {
         /// The frame.
         frame: i64,
-        /// What the loader said.
-        source: aperture_scene::Error,
+        /// What the session said.
+        source: SessionError,
     },
     /// A frame could not be rendered or written.
     #[error("frame {frame}: {source}")]

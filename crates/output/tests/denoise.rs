@@ -4,12 +4,14 @@
 //! `merge_exr_denoised` denoises the merged image once. Tests that need Open Image Denoise
 //! skip with a message without it, except under `CI=true`, where they fail.
 
+mod common;
+
 use aperture_denoise::Denoiser;
 use aperture_imageio::{read_exr, Image, MetaValue, SampleType};
 use aperture_output::denoised::{check_channels, DenoisingError, DENOISED, NOISY_IMAGE};
 use aperture_output::merge::{merge_exr, merge_exr_denoised, MergeError, MergeOptions};
-use aperture_output::{self as output, ExrOptions};
-use aperture_render::{build_accel, test_scenes, AdaptiveOptions, PassSet, RenderOptions, Window};
+use aperture_output::ExrOptions;
+use aperture_render::{test_scenes, AdaptiveOptions, PassSet, RenderOptions, Window};
 use std::path::PathBuf;
 
 fn denoiser() -> Option<Denoiser> {
@@ -44,13 +46,12 @@ fn bits(v: &[f32]) -> Vec<u32> {
 /// Renders `o` with `exr` plain and denoised; returns both files read back.
 fn both(o: &RenderOptions, exr: &ExrOptions, d: &Denoiser, name: &str) -> (Image, Image) {
     let scene = test_scenes::balls();
-    let accel = build_accel(&scene, Default::default());
     let (plain, den) = (
         scratch(&format!("{name}-plain.exr")),
         scratch(&format!("{name}.exr")),
     );
-    output::render_exr(&scene, &accel, o, &plain, exr, &|_, _| {}).unwrap();
-    output::render_exr_denoised(&scene, &accel, o, &den, exr, d, &|_, _| {}).unwrap();
+    common::write_exr(&scene, o, &plain, exr, None, &|_, _| {}).unwrap();
+    common::write_exr(&scene, o, &den, exr, Some(d), &|_, _| {}).unwrap();
     let images = (read_exr(&plain).unwrap(), read_exr(&den).unwrap());
     std::fs::remove_file(plain).ok();
     std::fs::remove_file(den).ok();
@@ -119,15 +120,8 @@ fn passes_none_still_gets_the_denoising_passes() {
         ..opts()
     };
     let scene = test_scenes::balls();
-    let accel = build_accel(&scene, Default::default());
     let path = scratch("none.exr");
-    output::render_exr_denoised(
-        &scene,
-        &accel,
-        &o,
-        &path,
-        &ExrOptions::default(),
-        &d,
+    common::write_exr(&scene, &o, &path, &ExrOptions::default(), Some(&d),
         &|_, _| {},
     )
     .unwrap();
@@ -140,7 +134,6 @@ fn passes_none_still_gets_the_denoising_passes() {
 fn merge_refuses_a_denoised_part_and_merge_denoised_denoises_once() {
     let Some(d) = denoiser() else { return };
     let scene = test_scenes::balls();
-    let accel = build_accel(&scene, Default::default());
     let o = opts();
     let tiles: Vec<PathBuf> = (0..2)
         .map(|k| {
@@ -151,9 +144,9 @@ fn merge_refuses_a_denoised_part_and_merge_denoised_denoises_once() {
                 ..ExrOptions::default()
             };
             if k == 0 {
-                output::render_exr_denoised(&scene, &accel, &o, &path, &exr, &d, &|_, _| {})
+                common::write_exr(&scene, &o, &path, &exr, Some(&d), &|_, _| {})
             } else {
-                output::render_exr(&scene, &accel, &o, &path, &exr, &|_, _| {})
+                common::write_exr(&scene, &o, &path, &exr, None, &|_, _| {})
             }
             .unwrap();
             path
@@ -173,19 +166,14 @@ fn merge_refuses_a_denoised_part_and_merge_denoised_denoises_once() {
         tile: Some((0, 2)),
         ..ExrOptions::default()
     };
-    output::render_exr(&scene, &accel, &o, &tiles[0], &exr, &|_, _| {}).unwrap();
+    common::write_exr(&scene, &o, &tiles[0], &exr, None, &|_, _| {}).unwrap();
     merge_exr_denoised(&tiles, &out, &MergeOptions::default(), &d).unwrap();
     let merged = read_exr(&out).unwrap();
     assert_eq!(merged.meta(DENOISED), Some(&MetaValue::Int(1)));
     assert!(merged.layer(NOISY_IMAGE).is_some());
     // Its parts' noisy beauty, pasted, is the merged file's Noisy Image.
     let whole = scratch("whole.exr");
-    output::render_exr(
-        &scene,
-        &accel,
-        &o,
-        &whole,
-        &ExrOptions::default(),
+    common::write_exr(&scene, &o, &whole, &ExrOptions::default(), None,
         &|_, _| {},
     )
     .unwrap();

@@ -3,11 +3,13 @@
 //! rounding), every averaged pass included; and every refusal names its part and writes
 //! nothing.
 
+mod common;
+
 use aperture_imageio::{read_exr, Image, MetaValue};
 use aperture_output::merge::{merge_exr, MergeError, MergeOptions};
-use aperture_output::{self as output, ExrOptions};
+use aperture_output::ExrOptions;
 use aperture_render::{
-    build_accel, test_scenes, AdaptiveOptions, Environment, PassSet, RenderOptions, Window,
+    test_scenes, AdaptiveOptions, Environment, PassSet, RenderOptions, Window,
 };
 use aperture_scene::Scene;
 use glam::Vec3;
@@ -59,17 +61,15 @@ impl Drop for Scratch {
 
 /// Renders `o` (only `region`, band `tile`) to `path`.
 fn render_part(scene: &Scene, o: &RenderOptions, path: &Path, region: Option<Window>) {
-    let accel = build_accel(scene, Default::default());
     let exr = ExrOptions {
         region,
         ..ExrOptions::default()
     };
-    output::render_exr(scene, &accel, o, path, &exr, &|_, _| {}).unwrap();
+    common::write_exr(scene, o, path, &exr, None, &|_, _| {}).unwrap();
 }
 
 /// Renders band K of N for every K, returning the paths.
 fn render_tiles(scene: &Scene, o: &RenderOptions, dir: &Scratch, n: u32) -> Vec<PathBuf> {
-    let accel = build_accel(scene, Default::default());
     (0..n)
         .map(|k| {
             let path = dir.path(&format!("tile-{k}.exr"));
@@ -78,7 +78,7 @@ fn render_tiles(scene: &Scene, o: &RenderOptions, dir: &Scratch, n: u32) -> Vec<
                 tile: Some((k, n)),
                 ..ExrOptions::default()
             };
-            output::render_exr(scene, &accel, o, &path, &exr, &|_, _| {}).unwrap();
+            common::write_exr(scene, o, &path, &exr, None, &|_, _| {}).unwrap();
             path
         })
         .collect()

@@ -2,6 +2,8 @@
 //! unit normals, depth that is not anti-aliased, Cryptomatte coverage that adds up to alpha,
 //! windows and bands that change no pixel, and the EXR that carries it all.
 
+mod common;
+
 use aperture_imageio::{Image, MetaValue, SampleType};
 use aperture_output::{self as output, ExrOptions};
 use aperture_render::{
@@ -428,7 +430,7 @@ fn streamed_exr_in_bands_equals_the_film() {
             ..ExrOptions::default()
         };
         let calls = std::sync::atomic::AtomicUsize::new(0);
-        let summary = output::render_exr(&scene, &accel, &o, &path, &exr, &|done, total| {
+        let summary = common::write_exr(&scene, &o, &path, &exr, None, &|done, total| {
             assert!(done <= total);
             calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         })
@@ -486,14 +488,13 @@ fn streamed_exr_in_bands_equals_the_film() {
 fn half_clamps_colour_and_keeps_data_float() {
     let mut scene = test_scenes::passes();
     scene.materials[4].emissive_factor = Vec3::splat(1e6);
-    let accel = build_accel(&scene, Default::default());
     let o = opts(PassSet::parse("default,Emission").unwrap());
     let path = std::env::temp_dir().join(format!("aperture-half-{}.exr", std::process::id()));
     let exr = ExrOptions {
         half: true,
         ..ExrOptions::default()
     };
-    let summary = output::render_exr(&scene, &accel, &o, &path, &exr, &|_, _| {}).unwrap();
+    let summary = common::write_exr(&scene, &o, &path, &exr, None, &|_, _| {}).unwrap();
     let back = aperture_imageio::read_exr(&path).unwrap();
     std::fs::remove_file(&path).unwrap();
     assert!(summary.half_clamped > 0);

@@ -1,12 +1,92 @@
 //! An image cut into bands of whole tile rows, rendered one after the other so that memory
-//! holds one band's sums (see [`crate::render_bands`]), and the units of work progress counts.
+//! holds one band's sums ([`Bands`]: how a large image is streamed to a file), and the units
+//! of work progress counts.
 
-use crate::film::Window;
-use crate::options::RenderOptions;
-use crate::render::tiles_of;
-use crate::render::TILE;
+use crate::camera::Camera;
+use crate::film::{Film, Window};
+use crate::frame::Frame;
+use crate::options::{RenderError, RenderOptions};
+use crate::render::{tiles_of, TILE};
+use std::time::Instant;
 
-/// Units of work [`crate::render_window`] reports progress in for `window`: tiles, times rounds for
+/// What a [`Bands`] render took, over the bands rendered so far.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct BandTotals {
+    /// Samples taken, dropped ones included.
+    pub samples: u64,
+    /// Samples dropped as NaN or infinite.
+    pub dropped: u64,
+    /// Seconds spent rendering (not in whoever takes the bands).
+    pub render_secs: f64,
+}
+
+/// The films of `bands` (windows of whole rows, top to bottom; see [`bands`]) of a frame,
+/// each rendered when it is asked for, so that memory holds one band's sums while its taker
+/// writes the one before. A band's pixels are those of a whole render.
+pub struct Bands<'a> {
+    frame: &'a Frame,
+    camera: &'a Camera,
+    opts: &'a RenderOptions,
+    bands: std::vec::IntoIter<Window>,
+    progress: &'a (dyn Fn(usize, usize) + Sync),
+    /// Units of work of the bands before the next one, and of them all.
+    done_units: usize,
+    total_units: usize,
+    totals: BandTotals,
+}
+
+impl<'a> Bands<'a> {
+    /// The bands of `frame` through `camera` with `opts`; `progress(done, total)` counts over
+    /// all of them.
+    pub fn new(
+        frame: &'a Frame,
+        camera: &'a Camera,
+        opts: &'a RenderOptions,
+        bands: Vec<Window>,
+        progress: &'a (dyn Fn(usize, usize) + Sync),
+    ) -> Self {
+        let total_units = bands.iter().map(|b| progress_units(opts, *b)).sum();
+        Self {
+            frame,
+            camera,
+            opts,
+            bands: bands.into_iter(),
+            progress,
+            done_units: 0,
+            total_units,
+            totals: BandTotals::default(),
+        }
+    }
+
+    /// What the bands rendered so far took.
+    pub fn totals(&self) -> BandTotals {
+        self.totals
+    }
+}
+
+impl Iterator for Bands<'_> {
+    type Item = Result<Film, RenderError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let band = self.bands.next()?;
+        let t0 = Instant::now();
+        let (offset, total) = (self.done_units, self.total_units);
+        let progress = self.progress;
+        let report = |done: usize, _: usize| progress(offset + done, total);
+        let film = self
+            .frame
+            .render_window(self.camera, self.opts, band, &report);
+        self.totals.render_secs += t0.elapsed().as_secs_f64();
+        self.done_units += progress_units(self.opts, band);
+        if let Ok(f) = &film {
+            self.totals.samples += f.total_samples();
+            self.totals.dropped += f.dropped_samples();
+        }
+        Some(film)
+    }
+}
+
+/// Units of work a window's render reports progress in for `window`: tiles, times rounds for
 /// adaptive sampling (which may finish early, skipping the rest).
 pub fn progress_units(opts: &RenderOptions, window: Window) -> usize {
     match opts.adaptive {

@@ -2,12 +2,12 @@
 //! films, for the whole image, a window of it, or band by band into a sink.
 //!
 //! ```
-//! use aperture_render::{build_accel, render, test_scenes, RenderOptions};
+//! use aperture_render::{Frame, RenderOptions};
+//! use aperture_shading::test_scenes;
 //! // A white diffuse quad under a point light, seen by a thin-lens camera.
-//! let scene = test_scenes::lit_plane(1.0);
-//! let accel = build_accel(&scene, Default::default());
+//! let frame = Frame::still(test_scenes::lit_plane(1.0), Default::default());
 //! let opts = RenderOptions { width: 8, height: 8, spp: 4, ..Default::default() };
-//! let film = render(&scene, &accel, &opts, &|_, _| {})?;
+//! let film = frame.render(&opts, &|_, _| {})?;
 //! assert_eq!(film.dropped_samples(), 0);
 //! assert!(film.pixel(4, 4)[0] > 0.0);
 //! # Ok::<(), aperture_render::RenderError>(())
@@ -16,8 +16,10 @@
 //! The pieces follow pbrt-v4's split: a [`Camera`] turns numbers ([`CameraSample`]) into rays,
 //! a [`SamplerKind`] produces those numbers as pure functions of (pixel, index, dimension,
 //! seed), the path tracer turns rays into radiance (with what `aperture_shading` says of each
-//! surface and light) and the [`Film`] sums it. Writing a film out is `aperture_output`'s job:
-//! it hands [`render_bands`] a sink; nothing here knows of files.
+//! surface and light) and the [`Film`] sums it. A [`Session`] holds a loaded file, poses it into
+//! [`Frame`]s (built once, rendered from any number of times: whole, by window, as [`Bands`]
+//! or [`Progressive`]ly) and takes edits in place. Writing a film out is `aperture_output`'s
+//! job: it takes the films this crate yields; nothing here knows of files.
 
 pub mod adaptive;
 pub mod aov;
@@ -29,15 +31,19 @@ mod cancel;
 pub mod cryptomatte;
 pub mod film;
 mod filter;
+mod frame;
 mod frame_accel;
+mod frame_lights;
 mod integrator;
 pub mod motion;
 mod options;
 pub mod passes;
 mod primary;
+mod progressive;
 mod render;
 pub mod sampler;
 pub mod sequence;
+mod session;
 mod spares;
 
 pub use adaptive::AdaptiveOptions;
@@ -51,10 +57,14 @@ pub use frame_accel::{
 pub use integrator::Clamp;
 pub use options::{RenderError, RenderOptions, DEFAULT_MAX_BOUNCES};
 pub use passes::{Pass, PassSet};
+pub use bands::{BandTotals, Bands};
+pub use frame::Frame;
+pub use frame_lights::FrameLights;
+pub use progressive::Progressive;
 pub use render::{
-    material_name, render, render_bands, render_window, render_with_camera, scene_camera,
-    BandTotals, DEPTH_BACKGROUND, TILE,
+    material_name, render, render_window, scene_camera, DEPTH_BACKGROUND, TILE,
 };
+pub use session::{FrameSpec, FrameTimes, Session, SessionError};
 pub use sampler::{SampleStream, SamplerKind, MAX_SPP};
 
 // What the options and the public API take from the shading crate, under their old names.
@@ -64,6 +74,6 @@ pub use aperture_shading::{
     Environment, MaterialOverride, ParseTransmissionError, TransmissionMode, TransmissionModel,
 };
 pub use aperture_shading::{
-    Albedos, Bsdf, BsdfSample, CoatLayer, Compensation, DeltaSample, Dielectric, Frame, Interface,
+    Albedos, Bsdf, BsdfSample, CoatLayer, Compensation, DeltaSample, Dielectric, Interface,
     Lobe, LobeSplit, MetalRough, Principled, SheenLayer, ThinFilm,
 };

@@ -2,10 +2,12 @@
 //! function of (pixel, index, dimension, seed) and every pixel is owned by one tile, so the
 //! image is bit-identical for any thread count and any run, whatever order the tiles finish in.
 //!
-//! Here: the entry points, band by band into a sink ([`render_bands`]) or a window at once,
-//! and what every render shares (the Cryptomatte IDs, the Depth and Position passes' centre
-//! rays). The pixels come from one of two tile loops, `tiles` (every pixel at `spp` samples)
-//! or `rounds` (adaptive sampling), both tracing their samples through a `job::Job`.
+//! Here: a window rendered from a posed scene, its BVH and its lights ([`render_in`], what a
+//! [`crate::Frame`] renders with), the same for a scene built by hand ([`render`],
+//! [`render_window`]), and what every render shares (the Cryptomatte IDs, the Depth and
+//! Position passes' centre rays). The pixels come from one of two tile loops, `tiles` (every
+//! pixel at `spp` samples, onto what a film holds) or `rounds` (adaptive sampling), both
+//! tracing their samples through a `job::Job`.
 
 mod job;
 mod rounds;
@@ -13,26 +15,26 @@ mod rounds;
 mod tests;
 mod tiles;
 
-use crate::bands::progress_units;
 use crate::camera::Camera;
 use crate::cryptomatte;
 use crate::film::{AovLayout, CryptoIds, Film, Window};
 use crate::filter::Filter;
+use crate::frame_lights::FrameLights;
 use crate::options::{check, RenderError, RenderOptions};
 use crate::passes::{Pass, PassSet};
 use crate::spares::Spares;
 use aperture_accel::Accel;
 use aperture_scene::Scene;
 use glam::{Vec2, Vec3};
+pub(crate) use job::geometry;
 use job::{integrator, Job};
 use rayon::prelude::*;
 use rounds::render_adaptive;
-use std::time::Instant;
-use tiles::render_uniform;
 pub(crate) use tiles::tiles_of;
 pub use tiles::TILE;
 
-/// Renders with the scene camera `opts.camera`. `progress(done, total)` is called after each
+/// Renders a scene built by hand with its camera `opts.camera` (its lights gathered for this
+/// render alone; a [`crate::Frame`] keeps them). `progress(done, total)` is called after each
 /// tile (from worker threads).
 pub fn render(
     scene: &Scene,
@@ -41,7 +43,8 @@ pub fn render(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Film, RenderError> {
     let camera = scene_camera(scene, opts)?;
-    render_with_camera(scene, accel, &camera, opts, progress)
+    let whole = Window::whole(opts.width, opts.height);
+    render_window(scene, accel, &camera, opts, whole, progress)
 }
 
 /// The camera `opts.camera` of the scene, for the options' image size.
@@ -56,22 +59,7 @@ pub fn scene_camera(scene: &Scene, opts: &RenderOptions) -> Result<Camera, Rende
     Ok(Camera::new(cam, opts.width, opts.height))
 }
 
-/// Renders through an explicit camera (its width and height must match the options').
-pub fn render_with_camera(
-    scene: &Scene,
-    accel: &Accel,
-    camera: &Camera,
-    opts: &RenderOptions,
-    progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<Film, RenderError> {
-    let whole = Window::whole(opts.width, opts.height);
-    render_window(scene, accel, camera, opts, whole, progress)
-}
-
-/// Renders the pixels of `window` only. Each is bit-identical to the same pixel of a whole
-/// render: every sample is a pure function of (pixel, index, dimension, seed), and adaptive
-/// sampling, whose stopping rule looks at neighbours, renders the apron of pixels around the
-/// window that its decisions can reach and then drops it.
+/// [`render`] of the pixels of `window` only, through `camera`.
 pub fn render_window(
     scene: &Scene,
     accel: &Accel,
@@ -80,7 +68,38 @@ pub fn render_window(
     window: Window,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Film, RenderError> {
+    let lights = FrameLights::build(&geometry(scene, opts), None);
+    let mut film = Film::for_window(window, opts.width, opts.height, opts.passes);
+    let posed = Posed {
+        scene,
+        accel,
+        lights: &lights,
+    };
+    render_in(&posed, camera, opts, &mut film, progress)?;
+    Ok(film)
+}
+
+/// What a render draws from: a posed scene, its BVH and its lights.
+pub(crate) struct Posed<'a> {
+    pub scene: &'a Scene,
+    pub accel: &'a Accel,
+    pub lights: &'a FrameLights,
+}
+
+/// Renders the job's samples of every pixel of `film`'s window onto what it holds. Each pixel
+/// is bit-identical to the same pixel of a whole render: every sample is a pure function of
+/// (pixel, index, dimension, seed), and adaptive sampling, whose stopping rule looks at
+/// neighbours, renders the apron of pixels around the window that its decisions can reach and
+/// then drops it. The Depth, Position and Vector passes are traced when the film has none yet.
+pub(crate) fn render_in(
+    posed: &Posed<'_>,
+    camera: &Camera,
+    opts: &RenderOptions,
+    film: &mut Film,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(), RenderError> {
     check(opts)?;
+    let window = film.window();
     if !window.fits(opts.width, opts.height) {
         return Err(RenderError::InvalidOption {
             name: "region",
@@ -91,7 +110,8 @@ pub fn render_window(
             why: "must hold a pixel and lie inside the image",
         });
     }
-    let integrator = integrator(scene, accel, opts);
+    let scene = posed.scene;
+    let integrator = integrator(geometry(scene, opts), posed.accel, posed.lights, opts);
     let filter = Filter::new(opts.filter);
     let job = Job {
         integrator: &integrator,
@@ -104,20 +124,23 @@ pub fn render_window(
         // A moving camera sees other pixels' background at other times: no backdrop then.
         backdrop: match opts.motion.as_deref().and_then(|m| m.camera.as_ref()) {
             Some(_) => None,
-            None => crate::background::backdrop(&integrator, accel, camera, &filter, &opts.env),
+            None => {
+                crate::background::backdrop(&integrator, posed.accel, camera, &filter, &opts.env)
+            }
         },
     };
-    let mut film = match opts.adaptive {
-        Some(a) => render_adaptive(&job, &a, window, progress),
-        None => render_uniform(&job, window, progress),
-    };
+    let first = film.total_samples() == 0 && film.dropped_samples() == 0;
+    match opts.adaptive {
+        Some(a) => *film = render_adaptive(&job, &a, window, progress),
+        None => tiles::accumulate(&job, film, progress),
+    }
     let wanted = [Pass::Depth, Pass::Position, Pass::Vector]
         .iter()
         .any(|&p| opts.passes.contains(p));
-    if wanted && !opts.cancel.is_cancelled() {
-        centre_rays(&job, &mut film);
+    if first && wanted && !opts.cancel.is_cancelled() {
+        centre_rays(&job, film);
     }
-    Ok(film)
+    Ok(())
 }
 
 /// Cryptomatte IDs of every instance's node and every material, when the passes need them.
@@ -204,44 +227,3 @@ fn centre_rays(job: &Job<'_>, film: &mut Film) {
 /// Depth where the centre ray meets nothing: Cycles' value.
 pub const DEPTH_BACKGROUND: f32 = 1e10;
 
-/// What [`render_bands`] took, over all its bands.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct BandTotals {
-    /// Samples taken, dropped ones included.
-    pub samples: u64,
-    /// Samples dropped as NaN or infinite.
-    pub dropped: u64,
-    /// Seconds spent rendering (not in the sink).
-    pub render_secs: f64,
-}
-
-/// Renders `bands` (windows of whole rows, top to bottom; see [`crate::bands::bands`]) one
-/// after the other through `camera`, handing each finished film to `sink` before the next is
-/// rendered, so memory holds one band's sums: how a large image is streamed to a file. A band's
-/// pixels are those of a whole render (see [`render_window`]). `progress(done, total)` counts
-/// over all bands.
-pub fn render_bands<E: From<RenderError>>(
-    scene: &Scene,
-    accel: &Accel,
-    camera: &Camera,
-    opts: &RenderOptions,
-    bands: &[Window],
-    progress: &(dyn Fn(usize, usize) + Sync),
-    sink: &mut dyn FnMut(Film) -> Result<(), E>,
-) -> Result<BandTotals, E> {
-    let units: Vec<usize> = bands.iter().map(|b| progress_units(opts, *b)).collect();
-    let total_units: usize = units.iter().sum();
-    let mut totals = BandTotals::default();
-    let mut offset = 0;
-    for (band, n) in bands.iter().zip(&units) {
-        let t0 = Instant::now();
-        let report = |done: usize, _: usize| progress(offset + done, total_units);
-        let film = render_window(scene, accel, camera, opts, *band, &report)?;
-        totals.render_secs += t0.elapsed().as_secs_f64();
-        offset += n;
-        totals.samples += film.total_samples();
-        totals.dropped += film.dropped_samples();
-        sink(film)?;
-    }
-    Ok(totals)
-}

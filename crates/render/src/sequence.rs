@@ -1,14 +1,8 @@
-//! Frame sequences (SPEC §7, `--frames A..B[:STEP]`): the file is loaded and decoded once, and
-//! each frame re-poses it and rebuilds only what moved: the top-level BVH always, the
-//! bottom-level BVHs of deforming meshes; the BVHs of static meshes and the world-space BVH of
-//! still instances are kept from the frame before. Each frame's image is the single-frame
-//! render of that frame, bit for bit: both build with the same [`SceneHints`]. What becomes of
-//! a posed frame (a file, usually) is the caller's.
-
-use crate::frame_accel::{build_frame_accel, SceneHints};
-use aperture_accel::{Accel, BvhQuality};
-use aperture_scene::{Animated, Scene};
-use std::time::Instant;
+//! Frame ranges (SPEC §7, `--frames A..B[:STEP]`). A [`crate::Session`] poses each frame of a
+//! shot and rebuilds only what moved: the top-level BVH always, the bottom-level BVHs of
+//! deforming meshes; the BVHs of static meshes and the world-space BVH of still instances are
+//! kept from the frame before. Each frame's image is the single-frame render of that frame,
+//! bit for bit: both build with the same [`crate::SceneHints`].
 
 /// Frames `start`, `start + step`, … up to `end` inclusive (Blender's frame range and step).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -45,66 +39,6 @@ impl FrameRange {
         }
         Ok(Self { start, end, step })
     }
-}
-
-/// One frame of a sequence, posed and with its BVH, handed to [`for_each_frame`]'s caller.
-pub struct PosedFrame<'a> {
-    /// The frame number.
-    pub frame: i64,
-    /// Its position in the sequence (0-based) and the sequence's length.
-    pub index: (usize, usize),
-    /// The scene posed at the frame; `None` when `skip` left the frame.
-    pub posed: Option<(&'a Scene, &'a Accel)>,
-    /// Seconds posing the scene.
-    pub pose_secs: f64,
-    /// Seconds posing the scene and building its BVH.
-    pub setup_secs: f64,
-}
-
-/// Poses `animated` at every frame of `frames` in turn (frame N at N / `fps` seconds, as
-/// Blender's exporter writes it), builds each frame's BVH from the one before, and hands the
-/// frame to `each`. Frames for which `skip(frame)` is true are handed over unposed. Stops at
-/// the first error, a pose's or `each`'s.
-pub fn for_each_frame<E>(
-    animated: &Animated,
-    frames: FrameRange,
-    fps: f32,
-    quality: BvhQuality,
-    skip: &dyn Fn(i64) -> bool,
-    each: &mut dyn FnMut(PosedFrame<'_>) -> Result<(), E>,
-    pose_error: impl Fn(i64, aperture_scene::Error) -> E,
-) -> Result<(), E> {
-    let total = frames.frames().count();
-    let mut previous: Option<Accel> = None;
-    for (index, frame) in frames.frames().enumerate() {
-        let mut posed = PosedFrame {
-            frame,
-            index: (index, total),
-            posed: None,
-            pose_secs: 0.0,
-            setup_secs: 0.0,
-        };
-        if skip(frame) {
-            each(posed)?;
-            continue;
-        }
-        let t0 = Instant::now();
-        let time = (frame as f64 / f64::from(fps)) as f32;
-        let scene = animated
-            .scene_at(Some(time))
-            .map_err(|source| pose_error(frame, source))?;
-        posed.pose_secs = t0.elapsed().as_secs_f64();
-        // The hints of this frame's instances (keyed visibility changes which there are): the
-        // single-frame render's, so the image is the same. Bottom-level BVHs are taken over
-        // by mesh, the world-space one by its placements, whatever instances came or went.
-        let hints = SceneHints::new(animated, &scene);
-        let accel = build_frame_accel(&scene, quality, &hints, previous.take());
-        posed.setup_secs = t0.elapsed().as_secs_f64();
-        posed.posed = Some((&scene, &accel));
-        each(posed)?;
-        previous = Some(accel);
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@
 //! once, at load, and come first in every posed [`Scene::meshes`], identical at every time; the
 //! meshes deformed per pose follow them.
 
+mod edit;
 mod pose;
 mod variants;
 mod visibility;
@@ -21,6 +22,7 @@ use glam::{DAffine3, DQuat, DVec3, Vec3};
 use crate::animation::{self, AnimationInfo, Animations, NodeProperty, Target};
 use crate::buffers::load_buffers;
 use crate::camera::{self, CameraData};
+use crate::edit::{apply_graph_edits, Edit};
 use crate::material::Materials;
 use crate::mesh::LoadedMesh;
 use crate::nodes::{node_graph, NodeGraph};
@@ -123,6 +125,11 @@ struct Pose {
 impl Animated {
     /// Loads and decodes a `.gltf` or `.glb` file once.
     pub fn load(path: &Path, options: &LoadOptions) -> Result<Self, Error> {
+        Self::load_path(path, options, &[])
+    }
+
+    /// [`Animated::load`] with node edits applied to the graph before anything is decoded.
+    fn load_path(path: &Path, options: &LoadOptions, graph_edits: &[Edit]) -> Result<Self, Error> {
         let bytes = std::fs::read(path).map_err(|source| Error::Io {
             path: path.to_path_buf(),
             source,
@@ -138,21 +145,35 @@ impl Animated {
             // A .glb without the magic is a damaged container, not JSON: say so.
             glb::parse(&bytes)?;
         }
-        Self::load_bytes(&bytes, base_dir, options)
+        Self::guarded(&bytes, base_dir, options, graph_edits)
     }
 
     /// Loads from the bytes of a `.gltf` or `.glb` file; external URIs resolve inside `base_dir`.
     pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Result<Self, Error> {
+        Self::guarded(bytes, base_dir, options, &[])
+    }
+
+    fn guarded(
+        bytes: &[u8],
+        base_dir: &Path,
+        options: &LoadOptions,
+        graph_edits: &[Edit],
+    ) -> Result<Self, Error> {
         // The parsing crates keep overflow checks in release builds (Cargo.toml): a size from
         // a hostile header that wraps, or any other panic of the loader, is an error here.
-        let load = || Self::unguarded(bytes, base_dir, options);
+        let load = || Self::unguarded(bytes, base_dir, options, graph_edits);
         std::panic::catch_unwind(std::panic::AssertUnwindSafe(load)).unwrap_or_else(|panic| {
             let message = crate::error::panic_message(&*panic);
             Err(Error::Panicked { message })
         })
     }
 
-    fn unguarded(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Result<Self, Error> {
+    fn unguarded(
+        bytes: &[u8],
+        base_dir: &Path,
+        options: &LoadOptions,
+        graph_edits: &[Edit],
+    ) -> Result<Self, Error> {
         let (json, bin) = if glb::is_glb(bytes) {
             let g = glb::parse(bytes)?;
             (g.json, g.bin)
@@ -165,7 +186,8 @@ impl Animated {
             first_stats(prepared.skipped, prepared.extensions, &doc, &root, options)?;
         let mut buffers = load_buffers(&doc, &root, bin, base_dir, &options.memory)?;
         crate::meshopt::decode_views(&root, &mut buffers)?;
-        let graph = node_graph(&doc, &buffers)?;
+        let mut graph = node_graph(&doc, &buffers)?;
+        apply_graph_edits(&mut graph, graph_edits)?;
         let order = drawn_order(&doc, options, &graph, &mut stats)?;
         stats.nodes = order.len();
 

@@ -42,6 +42,7 @@ mod camera;
 mod camera_select;
 mod dof;
 mod draco;
+mod edit;
 mod error;
 mod glb;
 mod hash;
@@ -67,6 +68,7 @@ mod types;
 mod uri;
 
 pub use animated::Animated;
+pub use edit::{Edit, Touched};
 pub use animation::{AnimationInfo, AnimationSelection};
 pub use dof::{lens_from_yfov, DEFAULT_ASPECT};
 pub use error::Error;

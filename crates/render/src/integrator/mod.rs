@@ -41,7 +41,7 @@ use glam::Vec3;
 pub(crate) struct Integrator<'a> {
     pub geom: Geometry<'a>,
     pub accel: &'a Accel,
-    pub emissive: Option<EmissiveLights>,
+    pub emissive: Option<&'a EmissiveLights>,
     /// The light tree, for scenes with many lights (else the exhaustive choice).
     pub light_tree: Option<std::sync::Arc<LightTree>>,
     pub env: EnvLight,

@@ -12,13 +12,8 @@ use crate::primary::{PrimarySamples, Start};
 use crate::spares::Spares;
 use aperture_accel::Accel;
 use aperture_scene::Scene;
+use crate::frame_lights::FrameLights;
 use aperture_shading::environment::EnvLight;
-use aperture_shading::light_tree::TreeMemo;
-
-/// The process's last light tree: a frame's bands and a sequence's frames in which no light
-/// or emitter moved use it again instead of building the same tree (see [`TreeMemo`]).
-static LIGHT_TREE: TreeMemo = TreeMemo::new();
-use aperture_shading::lights::EmissiveLights;
 use aperture_shading::surface::Geometry;
 use glam::Vec3;
 use std::any::Any;
@@ -126,22 +121,25 @@ impl Job<'_> {
     }
 }
 
-/// The path tracer of one render.
-pub(super) fn integrator<'a>(
-    scene: &'a Scene,
-    accel: &'a Accel,
-    opts: &'a RenderOptions,
-) -> Integrator<'a> {
+/// How a surface is shaded under `opts` (material override, transmission, single-sided faces).
+pub(crate) fn geometry<'a>(scene: &'a Scene, opts: &RenderOptions) -> Geometry<'a> {
     let (model, _) = opts.transmission.resolve(scene);
     let (sides, _) = opts.single_sided.resolve(scene);
-    let geom = Geometry::with_transmission(scene, opts.material_override, model).with_sides(sides);
-    let emissive = EmissiveLights::build(&geom);
-    let light_tree = LIGHT_TREE.for_scene(&geom, emissive.as_ref());
+    Geometry::with_transmission(scene, opts.material_override, model).with_sides(sides)
+}
+
+/// The path tracer of one render of `geom`, lit by the frame's `lights`.
+pub(crate) fn integrator<'a>(
+    geom: Geometry<'a>,
+    accel: &'a Accel,
+    lights: &'a FrameLights,
+    opts: &'a RenderOptions,
+) -> Integrator<'a> {
     let mut integrator = Integrator {
         geom,
         accel,
-        emissive,
-        light_tree,
+        emissive: lights.emissive.as_ref(),
+        light_tree: lights.tree.clone(),
         env: EnvLight::new(&opts.env),
         max_bounces: opts.max_bounces,
         clamp: opts.clamp,

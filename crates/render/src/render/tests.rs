@@ -19,6 +19,11 @@ use glam::Affine3A;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// A plane under a point light, an emissive ball, depth of field: every code path.
+/// The lights of `scene` shaded as `opts` says, gathered for one test.
+fn lights(scene: &Scene, opts: &RenderOptions) -> FrameLights {
+    FrameLights::build(&geometry(scene, opts), None)
+}
+
 fn busy_scene() -> Scene {
     let mut s = test_scenes::lit_plane(3.0);
     s.cameras[0].dof.enabled = true;
@@ -107,7 +112,8 @@ fn wavefront_gives_each_sample_as_alone() {
             env,
             ..RenderOptions::default()
         };
-        let mut integrator = integrator(&scene, &accel, &opts);
+        let lit = lights(&scene, &opts);
+        let mut integrator = integrator(geometry(&scene, &opts), &accel, &lit, &opts);
         integrator.light_passes = true;
         check_wavefront::<false>(&scene, &integrator, &opts);
         check_wavefront::<true>(&scene, &integrator, &opts);
@@ -137,7 +143,8 @@ fn one_light_per_vertex_converges_to_every_light() {
         ..RenderOptions::default()
     };
     let mean = |pick: bool, seed: u32| {
-        let mut integrator = integrator(&scene, &accel, &opts);
+        let lit = lights(&scene, &opts);
+        let mut integrator = integrator(geometry(&scene, &opts), &accel, &lit, &opts);
         assert!(integrator.pick_light);
         integrator.pick_light = pick;
         image_mean(
@@ -183,11 +190,12 @@ fn light_tree_converges_to_the_exhaustive_choice() {
         ..RenderOptions::default()
     };
     let mean = |tree: bool, seed: u32| {
-        let mut integrator = integrator(&scene, &accel, &opts);
+        let lit = lights(&scene, &opts);
+        let mut integrator = integrator(geometry(&scene, &opts), &accel, &lit, &opts);
         // Fewer lights than the threshold: the tree is built here.
         assert!(integrator.light_tree.is_none() && integrator.pick_light);
         if tree {
-            let em = integrator.emissive.as_ref();
+            let em = integrator.emissive;
             integrator.light_tree = LightTree::build(&integrator.geom, em).map(Into::into);
         }
         image_mean(
@@ -220,7 +228,8 @@ fn many_point_lights_and_emitters_share_the_tree() {
     }
     let accel = build_accel(&scene, Default::default());
     let opts = RenderOptions::default();
-    let integrator = integrator(&scene, &accel, &opts);
+    let lit = lights(&scene, &opts);
+    let integrator = integrator(geometry(&scene, &opts), &accel, &lit, &opts);
     let tree = integrator
         .light_tree
         .as_ref()

@@ -23,13 +23,18 @@ pub(crate) fn tiles_of(w: Window) -> Vec<(u32, u32, u32, u32)> {
         .collect()
 }
 
-/// Every pixel of `window` at `spp` samples.
-pub(super) fn render_uniform(
+/// Every pixel of `film`'s window at the job's samples (`sample_offset .. sample_offset + spp`
+/// of each pixel's sequence), summed onto what the film holds: a progressive render's pass
+/// continues each pixel's sums where the last pass left them, so that its passes together
+/// equal one render of all their samples bit for bit.
+pub(super) fn accumulate(
     job: &Job<'_>,
-    window: Window,
+    film: &mut Film,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Film {
-    let opts = job.opts;
+) {
+    let window = film.window();
+    // A fresh film holds zeros: its tiles start from empty sums without reading it.
+    let resume = film.total_samples() > 0 || film.dropped_samples() > 0;
     let tiles = tiles_of(window);
     let total = tiles.len();
     let done = AtomicUsize::new(0);
@@ -39,18 +44,17 @@ pub(super) fn render_uniform(
     // Each tile goes into the film as it finishes (tiles own disjoint pixels, so the order
     // does not matter), and its buffers serve the next tile: a tile's own fresh accumulators
     // cost page faults, and copying all of them after the last tile ran on one thread.
-    let film = Mutex::new(Film::for_window(
-        window,
-        opts.width,
-        opts.height,
-        opts.passes,
-    ));
+    let film = Mutex::new(film);
     let spare = Spares::<TileSums>::default();
     tiles
         .par_iter()
         .with_max_len(1)
         .for_each(|&(x0, y0, tw, th)| {
             let mut t = spare.take().unwrap_or_default();
+            t.reset((tw * th) as usize, job.layout);
+            if resume {
+                t.load(&lock(&film), (x0, y0, tw, th));
+            }
             let (x, y) = (window.x0 + x0, window.y0 + y0);
             let dropped = if job.layout.records() {
                 job.render_tile::<true>(x, y, tw, th, &mut t)
@@ -62,8 +66,6 @@ pub(super) fn render_uniform(
             spare.give(t);
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
         });
-    film.into_inner()
-        .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 /// The samples of a tile as `(pixel k in the tile, x, y, sample i)`, row by row, a pixel's
@@ -129,11 +131,25 @@ impl TileSums {
         self.taken.clear();
         self.taken.resize(n, 0);
     }
+
+    /// The sums and counts `film` holds for the `tw × th` tile at `(x0, y0)` (relative to its
+    /// window), into these reset ones.
+    fn load(&mut self, film: &Film, (x0, y0, tw, th): (u32, u32, u32, u32)) {
+        let width = film.window().width as usize;
+        let counts = film.samples_per_pixel();
+        for ty in 0..th as usize {
+            let from = (y0 as usize + ty) * width + x0 as usize;
+            let to = ty * tw as usize;
+            self.acc.copy_pixels(to, &film.accum, from, tw as usize);
+            self.taken[to..to + tw as usize].copy_from_slice(&counts[from..from + tw as usize]);
+        }
+    }
 }
 
 impl Job<'_> {
-    /// Every pixel of a tile at `spp` samples into `t` (its sums and the samples each pixel
-    /// took: `spp`, unless the render was cancelled); returns the dropped-sample count.
+    /// Every pixel of a tile at `spp` more samples into `t` (its sums and the samples each
+    /// pixel took: `spp` more, unless the render was cancelled); returns the dropped-sample
+    /// count.
     fn render_tile<const AOV: bool>(
         &self,
         x0: u32,
@@ -142,7 +158,6 @@ impl Job<'_> {
         th: u32,
         t: &mut TileSums,
     ) -> u64 {
-        t.reset((tw * th) as usize, self.layout);
         let (acc, taken) = (&mut t.acc, &mut t.taken);
         let mut dropped = 0u64;
         let items = TileItems::new(x0, y0, tw, th, self.opts.spp);

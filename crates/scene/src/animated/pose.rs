@@ -9,8 +9,8 @@ use crate::dof::NodeInfo;
 use crate::mesh::LoadedMesh;
 use crate::nodes::{finite_world, to_f32, NodeData};
 use crate::origin::world_origin;
-use crate::pointer::{self, CameraProperty, LightProperty, Pointer};
-use crate::{Error, Instance, Light, LightKind, Material, Mesh, Projection, Scene, Texture};
+use crate::pointer::{self, CameraProperty, Pointer};
+use crate::{Error, Instance, Light, Material, Mesh, Projection, Scene, Texture};
 
 impl Animated {
     /// [`Animated::scene_at`] without textures (none is decoded or copied): what a motion step
@@ -40,33 +40,17 @@ impl Animated {
             ..Scene::default()
         };
         let mut placed: Vec<(u32, DAffine3, u32)> = Vec::new();
-        let mut light_positions: Vec<(usize, DVec3)> = Vec::new();
-        let mut light_data = self.lights.clone();
-        let mut camera_data = self.cameras.clone();
-        let mut materials = self.materials.clone();
-        self.apply_pointers(&pose, &mut light_data, &mut camera_data, &mut materials)?;
+        let (light_data, camera_data, materials) = self.pointed(&pose)?;
         let hidden = self.hidden_at(&pose);
         stats.hidden_nodes = self.order.iter().filter(|&&ni| hidden[ni]).count();
         for &ni in self.order.iter().filter(|&&ni| !hidden[ni]) {
-            let node = &self.graph.nodes[ni];
-            let world = pose.world[ni];
-            if let Some(mi) = node.mesh {
-                if !self.place_mesh(ni, mi, &pose, &mut out.meshes, &mut placed)? {
-                    continue;
-                }
-            }
-            if let Some(li) = node.light {
-                let Some(light) = light_data.get(li) else {
-                    continue;
-                };
-                light_positions.push((ni, world.translation));
-                out.lights.push(punctual_light(li, light, world)?);
+            if let Some(mi) = self.graph.nodes[ni].mesh {
+                self.place_mesh(ni, mi, &pose, &mut out.meshes, &mut placed)?;
             }
         }
 
         let origin = world_origin(&out.meshes, &placed, &mut stats);
         out.world_origin = origin;
-        let relative = |m: DAffine3| relative_to(m, origin);
         out.instances = instances(&placed, origin)?;
         for inst in &mut out.instances {
             inst.materials = self
@@ -77,20 +61,15 @@ impl Animated {
         }
         out.material_sets = self.material_sets.clone();
         out.environment = self.environment.clone();
-        place_lights(&mut out.lights, &light_positions, origin)?;
-        // Every node's origin (a focus object may be any node); whole transforms only for the
-        // camera nodes that need them (48 bytes a node less for large scenes).
-        let world_from_node = |ni: usize| to_f32(relative(pose.world[ni]));
-        let origins: Vec<Vec3> = (0..pose.world.len())
-            .map(|ni| Vec3::from(world_from_node(ni).translation))
-            .collect();
-        let info = NodeInfo {
-            names: &self.graph.names,
-            origins: &origins,
-        };
-        out.cameras = self.cameras_at(&camera_data, &world_from_node, &info)?;
+        out.lights = self.posed_lights(&pose, &hidden, &light_data, origin)?;
+        out.cameras = self.posed_cameras(&pose, &camera_data, origin)?;
         out.materials = materials;
         if out.cameras.is_empty() {
+            let origins = self.node_origins(&pose, origin);
+            let info = NodeInfo {
+                names: &self.graph.names,
+                origins: &origins,
+            };
             out.cameras
                 .push(camera::automatic_camera(&out, &info, &self.options)?);
         }
@@ -165,13 +144,66 @@ impl Animated {
         Ok(true)
     }
 
-    /// The cameras of the drawn nodes, in drawing order.
-    fn cameras_at(
+    /// Every node's origin at this pose, relative to `origin` (a focus object may be any node).
+    fn node_origins(&self, pose: &Pose, origin: DVec3) -> Vec<Vec3> {
+        (0..pose.world.len())
+            .map(|ni| Vec3::from(to_f32(relative_to(pose.world[ni], origin)).translation))
+            .collect()
+    }
+
+    /// The stored lights, cameras and materials with what this pose's pointer channels set.
+    pub(super) fn pointed(
         &self,
+        pose: &Pose,
+    ) -> Result<(Vec<LightData>, Vec<CameraData>, Vec<Material>), Error> {
+        let mut lights = self.lights.clone();
+        let mut cameras = self.cameras.clone();
+        let mut materials = self.materials.clone();
+        self.apply_pointers(pose, &mut lights, &mut cameras, &mut materials)?;
+        Ok((lights, cameras, materials))
+    }
+
+    /// The punctual lights of the shown nodes at this pose, relative to `origin`. A node whose
+    /// mesh draws nothing is skipped whole, its light too.
+    pub(super) fn posed_lights(
+        &self,
+        pose: &Pose,
+        hidden: &[bool],
+        data: &[LightData],
+        origin: DVec3,
+    ) -> Result<Vec<Light>, Error> {
+        let mut lights = Vec::new();
+        let mut positions: Vec<(usize, DVec3)> = Vec::new();
+        for &ni in self.order.iter().filter(|&&ni| !hidden[ni]) {
+            let node = &self.graph.nodes[ni];
+            if node.mesh.is_some() && !self.shapes.contains_key(&ni) {
+                continue;
+            }
+            let Some((li, light)) = node.light.and_then(|li| Some((li, data.get(li)?))) else {
+                continue;
+            };
+            let world = pose.world[ni];
+            positions.push((ni, world.translation));
+            lights.push(punctual_light(li, light, world)?);
+        }
+        place_lights(&mut lights, &positions, origin)?;
+        Ok(lights)
+    }
+
+    /// The cameras of the drawn nodes at this pose, in drawing order, relative to `origin`;
+    /// whole transforms only for the camera nodes (48 bytes a node less for large scenes).
+    pub(super) fn posed_cameras(
+        &self,
+        pose: &Pose,
         camera_data: &[CameraData],
-        world_from_node: &dyn Fn(usize) -> Affine3A,
-        info: &NodeInfo,
+        origin: DVec3,
     ) -> Result<Vec<crate::Camera>, Error> {
+        let world_from_node = |ni: usize| to_f32(relative_to(pose.world[ni], origin));
+        let origins = self.node_origins(pose, origin);
+        let info = NodeInfo {
+            names: &self.graph.names,
+            origins: &origins,
+        };
         let mut cameras = Vec::new();
         for &ni in &self.order {
             let node = &self.graph.nodes[ni];
@@ -186,7 +218,7 @@ impl Animated {
                 name: self.graph.names[ni].as_deref(),
                 extras: node.extras.as_ref(),
             };
-            cameras.push(camera::camera(data, &at, world, info, &self.options)?);
+            cameras.push(camera::camera(data, &at, world, &info, &self.options)?);
         }
         Ok(cameras)
     }
@@ -229,26 +261,8 @@ impl Animated {
                     }
                 }
                 Pointer::Light(i, prop) => {
-                    let Some(l) = lights.get_mut(*i) else {
-                        continue;
-                    };
-                    match prop {
-                        LightProperty::Color => l.color = Vec3::new(f(0), f(1), f(2)),
-                        LightProperty::Intensity => l.intensity = f(0),
-                        LightProperty::InnerCone | LightProperty::OuterCone => {
-                            if let LightKind::Spot {
-                                inner_cone,
-                                outer_cone,
-                            } = &mut l.kind
-                            {
-                                if *prop == LightProperty::InnerCone {
-                                    *inner_cone = f(0);
-                                } else {
-                                    *outer_cone = f(0);
-                                }
-                            }
-                        }
-                        LightProperty::Range => {}
+                    if let Some(l) = lights.get_mut(*i) {
+                        super::edit::set_light(l, *prop, v);
                     }
                 }
                 Pointer::Material(i, prop) => {

@@ -1,0 +1,255 @@
+//! [`Edit`]s applied to a loaded document in place, and a posed scene's cameras, lights or
+//! materials recomputed after one ([`Animated::refresh`]), exactly as posing would.
+
+use glam::Vec3;
+use serde_json::Value;
+
+use super::{Animated, LightData};
+use crate::camera;
+use crate::edit::{graph_edit, trs_of, Edit, Touched};
+use crate::nodes::{inherited, LocalTransform};
+use crate::pointer::{self, CameraProperty, LightProperty, NodeProperty, Pointer};
+use crate::{Error, LightKind, Projection, Scene};
+
+impl Animated {
+    /// Loads `path` as if it stored the values `edits` set (in order): what a session that
+    /// made those edits reloads.
+    pub fn load_edited(
+        path: &std::path::Path,
+        options: &crate::LoadOptions,
+        edits: &[Edit],
+    ) -> Result<Self, Error> {
+        let graph: Vec<Edit> = edits.iter().filter(|e| graph_edit(e)).cloned().collect();
+        let mut animated = Self::load_path(path, options, &graph)?;
+        for e in edits.iter().filter(|e| !graph_edit(e)) {
+            animated.edit(e)?;
+        }
+        Ok(animated)
+    }
+
+    /// Applies `edit` to the stored document and says what it touched. An edit this document
+    /// cannot take in place ([`Touched::Reload`]) changes nothing here: load the file again
+    /// with [`Animated::load_edited`].
+    pub fn edit(&mut self, edit: &Edit) -> Result<Touched, Error> {
+        match edit {
+            Edit::NodeMatrix { node, matrix } => {
+                self.check_node(*node)?;
+                check_finite(&format!("nodes[{node}].matrix"), matrix.as_flattened())?;
+                self.set_local(*node, LocalTransform::Matrix(*matrix))
+            }
+            Edit::NodeVisible { node, .. } => {
+                self.check_node(*node)?;
+                Ok(Touched::Reload)
+            }
+            Edit::Pointer { path, value } => self.edit_pointer(path, value),
+            Edit::CameraKey { camera, key, value } => {
+                let count = self.cameras.len();
+                let data = self.cameras.get_mut(*camera).ok_or_else(|| Error::Invalid {
+                    at: format!("cameras[{camera}]"),
+                    reason: format!("no such camera (the file has {count})"),
+                })?;
+                set_extra(&mut data.extras, key, value.clone());
+                self.clear_node_key(*camera, key);
+                Ok(Touched::Cameras)
+            }
+        }
+    }
+
+    /// Recomputes `what` of `scene` (posed from this document at `scene.stats.time`) after an
+    /// edit: the cameras, lights or materials, exactly as [`Animated::scene_at`] would pose
+    /// them. Anything else needs a new pose.
+    pub fn refresh(&self, scene: &mut Scene, what: Touched) -> Result<(), Error> {
+        let pose = self.pose(scene.stats.time);
+        let (lights, cameras, materials) = self.pointed(&pose)?;
+        match what {
+            Touched::Cameras => {
+                let cameras = self.posed_cameras(&pose, &cameras, scene.world_origin)?;
+                // A file without cameras keeps its automatic one (no key to edit).
+                if !cameras.is_empty() {
+                    scene.cameras = cameras;
+                }
+            }
+            Touched::Lights => {
+                let hidden = self.hidden_at(&pose);
+                scene.lights = self.posed_lights(&pose, &hidden, &lights, scene.world_origin)?;
+            }
+            Touched::Materials => scene.materials = materials,
+            Touched::Placements | Touched::Reload => {
+                return Err(Error::Invalid {
+                    at: "refresh".into(),
+                    reason: format!("{what:?} needs a new pose, not a refresh"),
+                })
+            }
+        }
+        Ok(())
+    }
+
+    fn check_node(&self, node: usize) -> Result<(), Error> {
+        match node < self.graph.nodes.len() {
+            true => Ok(()),
+            false => Err(Error::Invalid {
+                at: format!("nodes[{node}]"),
+                reason: format!("no such node (the file has {})", self.graph.nodes.len()),
+            }),
+        }
+    }
+
+    /// Sets a node's stored local transform; what it touches depends on what hangs below it.
+    fn set_local(&mut self, node: usize, t: LocalTransform) -> Result<Touched, Error> {
+        let below = self.subtree(node);
+        let joint = self.skins.iter().flat_map(|s| &s.joints).any(|j| below[*j]);
+        if joint {
+            return Ok(Touched::Reload);
+        }
+        self.graph.nodes[node].transform = t;
+        let g = &self.graph;
+        let draws = (0..g.nodes.len()).any(|i| below[i] && g.nodes[i].mesh.is_some());
+        let lights = (0..g.nodes.len()).any(|i| below[i] && g.nodes[i].light.is_some());
+        Ok(if draws || lights {
+            Touched::Placements
+        } else {
+            Touched::Cameras
+        })
+    }
+
+    /// Per node: it is `node` or below it.
+    fn subtree(&self, node: usize) -> Vec<bool> {
+        let g = &self.graph;
+        inherited(&g.topological, &g.parent, |i| i == node)
+    }
+
+    fn edit_pointer(&mut self, path: &str, v: &[f64]) -> Result<Touched, Error> {
+        let bad = |reason: String| Error::Invalid {
+            at: path.to_owned(),
+            reason,
+        };
+        let p = pointer::parse(path, &self.counts()).ok_or_else(|| {
+            bad("not a pointer aperture edits, or an index the file does not have".into())
+        })?;
+        if let Some(n) = p.width() {
+            if v.len() != n {
+                return Err(bad(format!("takes {n} numbers, got {}", v.len())));
+            }
+        }
+        if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+            return Err(bad(format!("non-finite value {x}")));
+        }
+        let f = |k: usize| v[k] as f32;
+        match p {
+            Pointer::Node(_, NodeProperty::Weights) | Pointer::MeshWeights(_) => {
+                Ok(Touched::Reload)
+            }
+            Pointer::Node(i, prop) => {
+                let (s, r, t) = trs_of(self.graph.nodes[i].transform);
+                let (s, r, t) = match prop {
+                    NodeProperty::Translation => (s, r, [f(0), f(1), f(2)]),
+                    NodeProperty::Rotation => (s, [f(0), f(1), f(2), f(3)], t),
+                    _ => ([f(0), f(1), f(2)], r, t),
+                };
+                if r.iter().all(|&x| x == 0.0) {
+                    return Err(bad("a rotation of zero length".into()));
+                }
+                self.set_local(i, LocalTransform::Trs(t, r, s))
+            }
+            Pointer::NodeVisible(_) => Ok(Touched::Reload),
+            Pointer::Camera(i, prop) => {
+                let c = &mut self.cameras[i];
+                match (prop, &mut c.projection) {
+                    (CameraProperty::Yfov, Projection::Perspective { yfov, .. }) => {
+                        camera::check_yfov(f(0), path)?;
+                        *yfov = f(0);
+                    }
+                    (CameraProperty::Xmag, Projection::Orthographic { xmag, .. }) => *xmag = f(0),
+                    (CameraProperty::Ymag, Projection::Orthographic { ymag, .. }) => *ymag = f(0),
+                    _ => {}
+                }
+                Ok(Touched::Cameras)
+            }
+            Pointer::CameraExtra(i, key) => {
+                pointer::apply_camera_extra(&mut self.cameras[i].extras, key, v[0]);
+                self.clear_node_key(i, key);
+                Ok(Touched::Cameras)
+            }
+            Pointer::Light(i, prop) => {
+                set_light(&mut self.lights[i], prop, v);
+                Ok(Touched::Lights)
+            }
+            Pointer::Material(i, prop) => {
+                if let Some(&ours) = self.material_index.get(&i) {
+                    pointer::apply_material(&mut self.materials[ours as usize], prop, v);
+                }
+                Ok(Touched::Materials)
+            }
+        }
+    }
+
+    /// A document with as many of each thing as this one, for parsing pointers.
+    fn counts(&self) -> Value {
+        let n = |k: usize| Value::Array(vec![Value::Null; k]);
+        let materials = self.material_index.keys().max().map_or(0, |m| m + 1);
+        serde_json::json!({
+            "nodes": n(self.graph.nodes.len()),
+            "cameras": n(self.cameras.len()),
+            "materials": n(materials),
+            "meshes": n(0),
+            "extensions": {"KHR_lights_punctual": {"lights": n(self.lights.len())}},
+        })
+    }
+
+    /// Removes `key` from the extras of the nodes carrying camera `camera` (they take
+    /// precedence over the camera's own, SPEC §3).
+    fn clear_node_key(&mut self, camera: usize, key: &str) {
+        for node in &mut self.graph.nodes {
+            if node.camera == Some(camera) {
+                if let Some(Value::Object(map)) = &mut node.extras {
+                    map.remove(key);
+                }
+            }
+        }
+    }
+}
+
+fn check_finite(at: &str, values: &[f32]) -> Result<(), Error> {
+    match values.iter().find(|v| !v.is_finite()) {
+        Some(v) => Err(Error::NonFinite {
+            at: at.to_owned(),
+            value: v.to_string(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Sets `key` of a JSON object (creating it), or removes it when `value` is `Null`.
+fn set_extra(extras: &mut Option<Value>, key: &str, value: Value) {
+    if !matches!(extras, Some(Value::Object(_))) {
+        *extras = Some(Value::Object(serde_json::Map::new()));
+    }
+    if let Some(Value::Object(map)) = extras {
+        match value {
+            Value::Null => map.remove(key),
+            v => map.insert(key.to_owned(), v),
+        };
+    }
+}
+
+/// Sets a stored light's value, as an animation sample would.
+pub(super) fn set_light(l: &mut LightData, prop: LightProperty, v: &[f64]) {
+    let f = |k: usize| v.get(k).copied().unwrap_or(0.0) as f32;
+    match prop {
+        LightProperty::Color => l.color = Vec3::new(f(0), f(1), f(2)),
+        LightProperty::Intensity => l.intensity = f(0),
+        LightProperty::InnerCone | LightProperty::OuterCone => {
+            if let LightKind::Spot {
+                inner_cone,
+                outer_cone,
+            } = &mut l.kind
+            {
+                match prop {
+                    LightProperty::InnerCone => *inner_cone = f(0),
+                    _ => *outer_cone = f(0),
+                }
+            }
+        }
+        LightProperty::Range => {}
+    }
+}

@@ -1,0 +1,146 @@
+//! Edits of a loaded document (SPEC §9): a value changed as if the file had stored it, so that
+//! posing the edited document gives what a cold load of the edited file gives, bit for bit.
+//! Here: what an edit is and what it touches, and the node edits a reload applies to the graph
+//! before anything is decoded; [`crate::Animated::edit`] applies the others in place.
+
+use serde_json::Value;
+
+use crate::nodes::{inherited, LocalTransform, NodeGraph};
+use crate::pointer::{self, NodeProperty, Pointer};
+use crate::Error;
+/// A change to a loaded document: a value as the file could have stored it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Edit {
+    /// `nodes[node].matrix`, column-major: replaces the node's stored TRS or matrix.
+    NodeMatrix {
+        /// The node index.
+        node: usize,
+        /// Its new local transform.
+        matrix: [[f32; 4]; 4],
+    },
+    /// `nodes[node].extensions.KHR_node_visibility.visible`.
+    NodeVisible {
+        /// The node index.
+        node: usize,
+        /// The stored flag.
+        visible: bool,
+    },
+    /// The value at a `KHR_animation_pointer` path, as an animation could key it: node
+    /// `translation`/`rotation`/`scale`, material factors and texture transforms, light
+    /// `color`/`intensity`/cone angles, camera `yfov`/`xmag`/`ymag` and the numeric
+    /// depth-of-field keys at `/cameras/{i}/extras/<key>` (SPEC §3, §7).
+    Pointer {
+        /// The JSON pointer, e.g. `/materials/0/pbrMetallicRoughness/baseColorFactor`.
+        path: String,
+        /// Its value: as many numbers as the property has.
+        value: Vec<f64>,
+    },
+    /// A depth-of-field key of SPEC §3 in `cameras[camera].extras`, any JSON value (`Null`
+    /// removes it). The key is also removed from the extras of the nodes carrying the camera,
+    /// which would otherwise take precedence over it.
+    CameraKey {
+        /// The glTF camera index.
+        camera: usize,
+        /// The key, e.g. `aperture_fstop` or `focus_object`.
+        key: String,
+        /// Its value.
+        value: Value,
+    },
+}
+
+/// What an edit changed in the posed scene, so a renderer redoes only what depends on it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Touched {
+    /// Cameras only (their keys, or transforms of nodes that carry nothing drawn or lit).
+    Cameras,
+    /// Punctual lights only.
+    Lights,
+    /// Material values only (no geometry).
+    Materials,
+    /// Where things are: the scene must be posed again (meshes keep their bottom-level BVHs).
+    Placements,
+    /// What the loader decoded: the file must be loaded again with every edit so far
+    /// ([`Animated::load_edited`]): visibility (hidden nodes' meshes are never decoded),
+    /// morph weights, and transforms of skin joints (static skins are posed at load).
+    Reload,
+}
+
+/// Edits the loader applies to the node graph before deciding what to decode.
+pub(crate) fn graph_edit(e: &Edit) -> bool {
+    match e {
+        Edit::NodeMatrix { .. } | Edit::NodeVisible { .. } => true,
+        Edit::Pointer { path, .. } => path.starts_with("/nodes/"),
+        Edit::CameraKey { .. } => false,
+    }
+}
+
+/// Applies the node edits of `edits` (matrices, TRS, visibility) to a freshly read graph.
+pub(crate) fn apply_graph_edits(
+    graph: &mut NodeGraph,
+    edits: &[Edit],
+) -> Result<(), Error> {
+    for e in edits {
+        let count = graph.nodes.len();
+        let node_of = |node: usize| {
+            (node < count)
+                .then_some(node)
+                .ok_or_else(|| Error::Invalid {
+                    at: format!("nodes[{node}]"),
+                    reason: "no such node".into(),
+                })
+        };
+        match e {
+            Edit::NodeMatrix { node, matrix } => {
+                graph.nodes[node_of(*node)?].transform = LocalTransform::Matrix(*matrix);
+            }
+            Edit::NodeVisible { node, visible } => graph.own_hidden[node_of(*node)?] = !visible,
+            Edit::Pointer { path, value } => apply_node_pointer(graph, path, value)?,
+            Edit::CameraKey { .. } => {}
+        }
+    }
+    let own = graph.own_hidden.clone();
+    graph.hidden = inherited(&graph.topological, &graph.parent, |i| own[i]);
+    Ok(())
+}
+
+/// A `/nodes/...` pointer edit applied to the graph (TRS replaced component by component,
+/// visibility set; weights are read from the edited document elsewhere).
+fn apply_node_pointer(
+    graph: &mut NodeGraph,
+    path: &str,
+    v: &[f64],
+) -> Result<(), Error> {
+    let root = serde_json::json!({ "nodes": vec![Value::Null; graph.nodes.len()] });
+    let f = |k: usize| v.get(k).copied().unwrap_or(0.0) as f32;
+    match pointer::parse(path, &root) {
+        Some(Pointer::NodeVisible(i)) => graph.own_hidden[i] = v.first() == Some(&0.0),
+        Some(Pointer::Node(i, prop)) if prop != NodeProperty::Weights => {
+            let (s, r, t) = trs_of(graph.nodes[i].transform);
+            graph.nodes[i].transform = match prop {
+                NodeProperty::Translation => LocalTransform::Trs([f(0), f(1), f(2)], r, s),
+                NodeProperty::Rotation => LocalTransform::Trs(t, [f(0), f(1), f(2), f(3)], s),
+                _ => LocalTransform::Trs(t, r, [f(0), f(1), f(2)]),
+            };
+        }
+        _ => {
+            return Err(Error::Invalid {
+                at: path.to_owned(),
+                reason: "not a node pointer aperture edits".into(),
+            })
+        }
+    }
+    Ok(())
+}
+
+
+/// A node's stored transform as scale, rotation, translation in f32 (a matrix decomposed),
+/// for replacing one component as an animation channel or a pointer edit would.
+pub(crate) fn trs_of(t: LocalTransform) -> ([f32; 3], [f32; 4], [f32; 3]) {
+    match t {
+        LocalTransform::Trs(t, r, s) => (s, r, t),
+        m @ LocalTransform::Matrix(_) => {
+            let (s, r, t) = m.trs();
+            (s.as_vec3().to_array(), r.as_quat().to_array(), t.as_vec3().to_array())
+        }
+    }
+}
