@@ -22,6 +22,7 @@ use crate::render_args::TracingArgs;
 use anyhow::{bail, Context as _};
 use aperture_imageio::{metrics, Image};
 use aperture_render::{AdaptiveOptions, RenderOptions, SamplerKind};
+use aperture_render::{Frame, FrameSpec};
 use aperture_scene::LoadOptions;
 use clap::ValueEnum;
 use std::path::PathBuf;
@@ -152,8 +153,9 @@ fn positive_f64(s: &str) -> Result<f64, String> {
 
 /// Runs `aperture bench`.
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
-    let scene = aperture_scene::load(&args.scene, &LoadOptions::default())
+    let mut session = aperture_render::Session::load(&args.scene, &LoadOptions::default())
         .with_context(|| format!("loading {}", args.scene.display()))?;
+    let scene = session.pose(None)?;
     let Some(cam) = scene.cameras.first() else {
         bail!("{} has no camera", args.scene.display());
     };
@@ -195,10 +197,10 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         ..RenderOptions::default()
     };
     let rows = pool.install(|| -> anyhow::Result<Vec<Row>> {
-        let accel = aperture_render::build_accel(&scene, aperture_accel::BvhQuality::default());
+        let frame = session.frame(&FrameSpec::default())?;
         let reference = match reference {
             Some(r) => r,
-            None => render_reference(&args, &scene, &accel, &base)?,
+            None => render_reference(&args, frame, &base)?,
         };
         let mut rows = Vec::new();
         for &config in &args.configs {
@@ -206,8 +208,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                 let opts = config_options(&base, config, spp, args.adaptive_scale);
                 let denoise = denoiser.as_ref().filter(|_| config == Config::Denoised);
                 let job = Job {
-                    scene: &scene,
-                    accel: &accel,
+                    frame,
                     opts: &opts,
                     config,
                     denoiser: denoise,
@@ -248,8 +249,7 @@ fn image_size(
 /// `DIR/reference.exr`.
 fn render_reference(
     args: &BenchArgs,
-    scene: &aperture_scene::Scene,
-    accel: &aperture_accel::Accel,
+    frame: &Frame,
     base: &RenderOptions,
 ) -> anyhow::Result<Image> {
     let opts = RenderOptions {
@@ -262,9 +262,9 @@ fn render_reference(
         opts.spp, opts.width, opts.height
     );
     let t0 = Instant::now();
-    let film = aperture_render::render(scene, accel, &opts, &|_, _| {})?;
+    let film = frame.render(&opts, &|_, _| {})?;
     let secs = t0.elapsed().as_secs_f64();
-    let image = aperture_output::film_to_image(&film, scene, &opts, false, secs)?;
+    let image = aperture_output::film_to_image(&film, frame.scene(), &opts, false, secs)?;
     let path = args.output.join("reference.exr");
     aperture_imageio::write_image(&path, &image, &Default::default())
         .with_context(|| format!("writing {}", path.display()))?;
@@ -307,8 +307,7 @@ fn config_options(
 /// the reference.
 /// One measured configuration at one budget.
 struct Job<'a> {
-    scene: &'a aperture_scene::Scene,
-    accel: &'a aperture_accel::Accel,
+    frame: &'a Frame,
     opts: &'a RenderOptions,
     config: Config,
     /// Denoise each render (its time included).
@@ -317,10 +316,11 @@ struct Job<'a> {
 
 /// The job's image: rendered, and denoised when the job says so.
 fn job_image(job: &Job<'_>) -> anyhow::Result<(Image, u64)> {
-    let film = aperture_render::render(job.scene, job.accel, job.opts, &|_, _| {})?;
+    let film = job.frame.render(job.opts, &|_, _| {})?;
     let mut image = Image::new(job.opts.width, job.opts.height);
     if let Some(d) = job.denoiser {
-        let mut full = aperture_output::film_to_image(&film, job.scene, job.opts, false, 0.0)?;
+        let scene = job.frame.scene();
+        let mut full = aperture_output::film_to_image(&film, scene, job.opts, false, 0.0)?;
         aperture_output::denoised::denoise_image(&mut full, d)?;
         image.rgba = full.rgba;
     } else {

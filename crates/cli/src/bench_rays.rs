@@ -6,6 +6,7 @@
 
 use crate::number_args::{non_negative_f32, positive_f32};
 use crate::plot::{draw_legend, load_font, write_png, PALETTE};
+use aperture_render::{Frame, FrameSpec, Session};
 use anyhow::{bail, Context as _};
 use aperture_accel::BvhQuality;
 use aperture_raybench::{
@@ -84,12 +85,18 @@ pub fn run(args: BenchRaysArgs) -> anyhow::Result<()> {
         },
         ..LoadOptions::default()
     };
-    let scene = aperture_scene::load(&args.scene, &load)
+    let mut session = Session::load(&args.scene, &load)
         .with_context(|| format!("loading {}", args.scene.display()))?;
     let mut sets = Vec::new();
     if !args.no_generated {
-        sets = generated_sets(&args, &scene)?;
+        // One structure finds the first hits; every preset then times the same rays.
+        let spec = FrameSpec {
+            quality: BvhQuality::Medium,
+            ..FrameSpec::default()
+        };
+        sets = generated_sets(&args, session.frame(&spec)?)?;
     }
+    let scene = session.pose(None)?;
     for path in &args.rays {
         check_ray_file_fits(path)?;
         sets.push(load_set(path)?);
@@ -110,7 +117,7 @@ pub fn run(args: BenchRaysArgs) -> anyhow::Result<()> {
         thread_counts,
         repeats: args.repeats,
     };
-    let runs = time_sets(&scene, &sets, &opts, &mut |q, t| {
+    let runs = time_sets(scene, &sets, &opts, &mut |q, t| {
         eprintln!(
             "{q} {} {} {} {}t: {:.3} Mrays/s",
             t.set,
@@ -148,8 +155,9 @@ fn check_ray_file_fits(path: &Path) -> anyhow::Result<()> {
 /// The four generated sets for the arguments' camera and image, saved when asked.
 fn generated_sets(
     args: &BenchRaysArgs,
-    scene: &aperture_scene::Scene,
+    frame: &Frame,
 ) -> anyhow::Result<Vec<RaySet>> {
+    let scene = frame.scene();
     let index = match &args.camera {
         Some(c) => crate::render_opts::find_camera(c, scene).map_err(anyhow::Error::msg)?,
         None => 0,
@@ -168,8 +176,6 @@ fn generated_sets(
             cam.name
         );
     }
-    // One structure finds the first hits; every preset then times the same rays.
-    let accel = aperture_render::build_accel(scene, BvhQuality::Medium);
     let opts = RaySetOptions {
         lens_samples: args.lens_samples,
         seed: args.seed,
@@ -182,7 +188,7 @@ fn generated_sets(
         estimated_bytes(&camera, &opts),
         "; lower --width, --height or --lens-samples",
     )?;
-    let sets = generate_sets(scene, &accel, &camera, &opts);
+    let sets = generate_sets(scene, frame.accel(), &camera, &opts);
     eprintln!(
         "{}x{height}, {} lens samples: {}",
         args.width,

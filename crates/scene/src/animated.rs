@@ -174,20 +174,14 @@ impl Animated {
         options: &LoadOptions,
         graph_edits: &[Edit],
     ) -> Result<Self, Error> {
-        let (json, bin) = if glb::is_glb(bytes) {
-            let g = glb::parse(bytes)?;
-            (g.json, g.bin)
-        } else {
-            (bytes, None)
-        };
+        let (json, bin) = container(bytes)?;
         let prepared = prepass::prepare(json)?;
         let (doc, root) = (prepared.document, prepared.root);
         let (mut stats, variant) =
             first_stats(prepared.skipped, prepared.extensions, &doc, &root, options)?;
         let mut buffers = load_buffers(&doc, &root, bin, base_dir, &options.memory)?;
         crate::meshopt::decode_views(&root, &mut buffers)?;
-        let mut graph = node_graph(&doc, &buffers)?;
-        apply_graph_edits(&mut graph, graph_edits)?;
+        let graph = apply_graph_edits(node_graph(&doc, &buffers)?, graph_edits)?;
         let order = drawn_order(&doc, options, &graph, &mut stats)?;
         stats.nodes = order.len();
 
@@ -500,6 +494,16 @@ fn first_stats(
 }
 
 /// The drawn nodes of the selected scene, depth first.
+/// The JSON and binary chunk of a GLB container, or the bytes as JSON.
+fn container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), Error> {
+    if glb::is_glb(bytes) {
+        let g = glb::parse(bytes)?;
+        Ok((g.json, g.bin))
+    } else {
+        Ok((bytes, None))
+    }
+}
+
 fn drawn_order(
     doc: &gltf::Document,
     options: &LoadOptions,

@@ -75,10 +75,7 @@ pub(crate) fn graph_edit(e: &Edit) -> bool {
 }
 
 /// Applies the node edits of `edits` (matrices, TRS, visibility) to a freshly read graph.
-pub(crate) fn apply_graph_edits(
-    graph: &mut NodeGraph,
-    edits: &[Edit],
-) -> Result<(), Error> {
+pub(crate) fn apply_graph_edits(mut graph: NodeGraph, edits: &[Edit]) -> Result<NodeGraph, Error> {
     for e in edits {
         let count = graph.nodes.len();
         let node_of = |node: usize| {
@@ -94,13 +91,13 @@ pub(crate) fn apply_graph_edits(
                 graph.nodes[node_of(*node)?].transform = LocalTransform::Matrix(*matrix);
             }
             Edit::NodeVisible { node, visible } => graph.own_hidden[node_of(*node)?] = !visible,
-            Edit::Pointer { path, value } => apply_node_pointer(graph, path, value)?,
+            Edit::Pointer { path, value } => apply_node_pointer(&mut graph, path, value)?,
             Edit::CameraKey { .. } => {}
         }
     }
     let own = graph.own_hidden.clone();
     graph.hidden = inherited(&graph.topological, &graph.parent, |i| own[i]);
-    Ok(())
+    Ok(graph)
 }
 
 /// A `/nodes/...` pointer edit applied to the graph (TRS replaced component by component,
@@ -114,6 +111,9 @@ fn apply_node_pointer(
     let f = |k: usize| v.get(k).copied().unwrap_or(0.0) as f32;
     match pointer::parse(path, &root) {
         Some(Pointer::NodeVisible(i)) => graph.own_hidden[i] = v.first() == Some(&0.0),
+        Some(Pointer::Node(i, NodeProperty::Weights)) => {
+            graph.nodes[i].weights = Some(v.iter().map(|&w| w as f32).collect());
+        }
         Some(Pointer::Node(i, prop)) if prop != NodeProperty::Weights => {
             let (s, r, t) = trs_of(graph.nodes[i].transform);
             graph.nodes[i].transform = match prop {

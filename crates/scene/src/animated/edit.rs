@@ -136,9 +136,11 @@ impl Animated {
         }
         let f = |k: usize| v[k] as f32;
         match p {
-            Pointer::Node(_, NodeProperty::Weights) | Pointer::MeshWeights(_) => {
-                Ok(Touched::Reload)
-            }
+            Pointer::Node(_, NodeProperty::Weights) => Ok(Touched::Reload),
+            Pointer::MeshWeights(_) => Err(bad(
+                "a mesh's default weights are not edited; set the weights of the nodes that draw it"
+                    .into(),
+            )),
             Pointer::Node(i, prop) => {
                 let (s, r, t) = trs_of(self.graph.nodes[i].transform);
                 let (s, r, t) = match prop {
