@@ -3,7 +3,8 @@
 //!
 //! ```
 //! use aperture_output::{render_exr, ExrOptions};
-//! use aperture_render::{build_accel, test_scenes, RenderOptions};
+//! use aperture_render::{build_accel, RenderOptions};
+//! use aperture_shading::test_scenes;
 //! let scene = test_scenes::lit_plane(1.0);
 //! let accel = build_accel(&scene, Default::default());
 //! let opts = RenderOptions { width: 8, height: 8, spp: 2, ..Default::default() };

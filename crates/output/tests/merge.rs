@@ -6,10 +6,9 @@
 use aperture_imageio::{read_exr, Image, MetaValue};
 use aperture_output::merge::{merge_exr, MergeError, MergeOptions};
 use aperture_output::{self as output, ExrOptions};
-use aperture_render::{
-    build_accel, test_scenes, AdaptiveOptions, Environment, PassSet, RenderOptions, Window,
-};
+use aperture_render::{build_accel, AdaptiveOptions, PassSet, RenderOptions, Window};
 use aperture_scene::Scene;
+use aperture_shading::{test_scenes, Environment};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
