@@ -2,7 +2,8 @@
 //! films, for the whole image, a window of it, or band by band into a sink.
 //!
 //! ```
-//! use aperture_render::{build_accel, render, test_scenes, RenderOptions};
+//! use aperture_render::{build_accel, render, RenderOptions};
+//! use aperture_shading::test_scenes;
 //! // A white diffuse quad under a point light, seen by a thin-lens camera.
 //! let scene = test_scenes::lit_plane(1.0);
 //! let accel = build_accel(&scene, Default::default());
@@ -56,14 +57,3 @@ pub use render::{
     BandTotals, DEPTH_BACKGROUND, TILE,
 };
 pub use sampler::{SampleStream, SamplerKind, MAX_SPP};
-
-// What the options and the public API take from the shading crate, under their old names.
-pub use aperture_shading::{single_sided_materials, ParseSidesError, SidesMode, SidesModel};
-pub use aperture_shading::{
-    srgb_to_linear, test_scenes, transform_uv, transmissive_meshes, EnvImage, EnvSampling,
-    Environment, MaterialOverride, ParseTransmissionError, TransmissionMode, TransmissionModel,
-};
-pub use aperture_shading::{
-    Albedos, Bsdf, BsdfSample, CoatLayer, Compensation, DeltaSample, Dielectric, Frame, Interface,
-    Lobe, LobeSplit, MetalRough, Principled, SheenLayer, ThinFilm,
-};
