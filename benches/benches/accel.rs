@@ -52,7 +52,7 @@ fn terrain(nx: u32, ny: u32, size: f32, origin: Vec3) -> (Vec<Vec3>, Vec<[u32; 3
 
 /// A unit icosphere with `20 * 4^sub` triangles (vertices shared).
 fn icosphere(sub: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let m = aperture_render::test_scenes::icosphere(sub, 0);
+    let m = aperture_shading::test_scenes::icosphere(sub, 0);
     (m.positions, m.indices)
 }
 

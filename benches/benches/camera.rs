@@ -6,8 +6,9 @@
 use std::hint::black_box;
 use std::time::Duration;
 
-use aperture_render::{test_scenes, Camera, CameraSample};
+use aperture_render::{Camera, CameraSample};
 use aperture_scene::Dof;
+use aperture_shading::test_scenes;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::{Vec2, Vec3};
 

@@ -7,8 +7,9 @@
 use std::time::Duration;
 
 use aperture_accel::BvhQuality;
-use aperture_render::{build_accel, render, test_scenes, AdaptiveOptions, RenderOptions};
+use aperture_render::{build_accel, render, AdaptiveOptions, RenderOptions};
 use aperture_scene::Scene;
+use aperture_shading::test_scenes;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::{Affine3A, Vec3};
 

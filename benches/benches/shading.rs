@@ -7,7 +7,7 @@
 use std::hint::black_box;
 use std::time::Duration;
 
-use aperture_render::Bsdf;
+use aperture_shading::Bsdf;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::Vec3;
 

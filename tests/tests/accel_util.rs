@@ -51,7 +51,7 @@ impl Rng {
 
 /// A closed unit icosphere: 20 * 4^subdivisions triangles sharing their vertices (indexed).
 pub fn icosphere(subdivisions: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let m = aperture_render::test_scenes::icosphere(subdivisions, 0);
+    let m = aperture_shading::test_scenes::icosphere(subdivisions, 0);
     (m.positions, m.indices)
 }
 

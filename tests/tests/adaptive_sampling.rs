@@ -1,10 +1,9 @@
 //! Adaptive sampling (issue 7): in-focus flat regions stop early, bokeh keeps sampling; every
 //! pixel holds a prefix of its own sample sequence; the image does not depend on threads.
 
-use aperture_render::{
-    build_accel, render, test_scenes, AdaptiveOptions, Film, RenderOptions, SamplerKind,
-};
+use aperture_render::{build_accel, render, AdaptiveOptions, Film, RenderOptions, SamplerKind};
 use aperture_scene::Scene;
+use aperture_shading::test_scenes;
 use glam::{Affine3A, Vec3};
 
 /// A lit plane in focus and a small emitter out of focus near the camera, on the optical axis:

@@ -12,11 +12,9 @@
 //! real files, every pass.
 
 use aperture_output as output;
-use aperture_render::{
-    build_accel, render, test_scenes, EnvImage, EnvSampling, Environment, Pass, PassSet,
-    RenderOptions,
-};
+use aperture_render::{build_accel, render, Pass, PassSet, RenderOptions};
 use aperture_scene::{LoadOptions, Scene};
+use aperture_shading::{test_scenes, EnvImage, EnvSampling, Environment};
 use glam::Vec3;
 use std::sync::Arc;
 

@@ -13,7 +13,7 @@ fn tiny() -> RenderOptions {
         height: 36,
         spp: 4,
         max_bounces: 2,
-        env: aperture_render::Environment::Constant(Vec3::splat(0.8)),
+        env: aperture_shading::Environment::Constant(Vec3::splat(0.8)),
         ..RenderOptions::default()
     }
 }

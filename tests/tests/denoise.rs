@@ -6,8 +6,9 @@
 
 use aperture_denoise::Denoiser;
 use aperture_imageio::Image;
-use aperture_render::{test_scenes, FilterKind, Pass, PassSet, RenderOptions};
+use aperture_render::{FilterKind, Pass, PassSet, RenderOptions};
 use aperture_scene::{Dof, Scene};
+use aperture_shading::test_scenes;
 use aperture_tests::{demo, render_checked};
 
 fn denoiser() -> Option<Denoiser> {

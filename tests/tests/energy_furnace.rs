@@ -4,8 +4,9 @@
 //! any roughness; without it single scattering loses up to what the output reports (rough
 //! metals most) and glTF's layering gains at grazing views.
 
-use aperture_render::{test_scenes, Camera, Environment, FilterKind, RenderOptions};
+use aperture_render::{Camera, FilterKind, RenderOptions};
 use aperture_scene::{Anisotropy, Clearcoat, Dof, Material, Scene, Sheen, Transmission, Volume};
+use aperture_shading::{test_scenes, Environment};
 use aperture_tests::render_checked;
 use glam::{Affine3A, Vec3, Vec4};
 

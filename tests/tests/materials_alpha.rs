@@ -1,11 +1,12 @@
 //! Alpha on shadow rays: a masked leaf casts a leaf-shaped shadow, a blended one a partial
 //! shadow in proportion to its coverage.
 
-use aperture_render::{test_scenes, FilterKind, MaterialOverride, RenderOptions};
+use aperture_render::{FilterKind, RenderOptions};
 use aperture_scene::{
     AlphaMode, Camera, ColorSpace, Dof, Filter, Light, LightKind, Material, Projection, Sampler,
     Scene, Texels, Texture, TextureRef, Wrap,
 };
+use aperture_shading::{test_scenes, MaterialOverride};
 use glam::{Affine3A, Vec3};
 
 /// A white ground at y = 0 and, above it at y = 1, a 1 × 1 occluder whose texture's alpha is

@@ -2,10 +2,8 @@
 //! constant `--env` colour, and importance sampling by luminance beats uniform sphere sampling
 //! on a high-dynamic-range map (a small sun over a dim sky), at equal samples per pixel.
 
-use aperture_render::{
-    test_scenes, EnvImage, EnvSampling, Environment, Film, FilterKind, MaterialOverride,
-    RenderOptions,
-};
+use aperture_render::{Film, FilterKind, RenderOptions};
+use aperture_shading::{test_scenes, EnvImage, EnvSampling, Environment, MaterialOverride};
 use glam::Vec3;
 use std::sync::Arc;
 

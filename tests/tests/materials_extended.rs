@@ -7,8 +7,9 @@
 
 use aperture_imageio::Image;
 use aperture_output as output;
-use aperture_render::{build_accel, render, Camera, Environment, PassSet, RenderOptions};
+use aperture_render::{build_accel, render, Camera, PassSet, RenderOptions};
 use aperture_scene::{LoadOptions, Scene};
+use aperture_shading::Environment;
 use aperture_tests::probe::{node, node_names, sample, Probe};
 use glam::{Vec2, Vec3};
 use std::path::Path;

@@ -2,11 +2,12 @@
 //! convention (+X of the map along +u, +Y up the image), and a mapped normal facing away from the
 //! viewer never gives black or NaN pixels.
 
-use aperture_render::{build_accel, render, test_scenes, FilterKind, RenderOptions};
+use aperture_render::{build_accel, render, FilterKind, RenderOptions};
 use aperture_scene::{
     Camera, ColorSpace, Dof, Filter, Light, LightKind, Material, Projection, Sampler, Scene,
     Texels, Texture, TextureRef, Wrap,
 };
+use aperture_shading::test_scenes;
 use glam::{Affine3A, Vec3};
 
 /// A constant normal map: one texel holding `n` (tangent space) encoded as glTF stores it.
@@ -159,7 +160,7 @@ fn normals_facing_away_from_the_viewer_are_never_black_or_nan() {
         height: 16,
         spp: 8,
         max_bounces: 2,
-        env: aperture_render::Environment::Constant(Vec3::ONE),
+        env: aperture_shading::Environment::Constant(Vec3::ONE),
         ..RenderOptions::default()
     };
     let accel = build_accel(&scene, Default::default());

@@ -1,11 +1,12 @@
 //! `KHR_materials_ior` and `KHR_materials_specular` end to end, textures included: they change
 //! only the dielectric Fresnel layer.
 
-use aperture_render::{test_scenes, Environment, FilterKind, RenderOptions};
+use aperture_render::{FilterKind, RenderOptions};
 use aperture_scene::{
     Camera, ColorSpace, Dof, Filter, Material, Projection, Sampler, Scene, Texels, Texture,
     TextureRef, Wrap,
 };
+use aperture_shading::{test_scenes, Environment};
 use glam::{Affine3A, Vec3, Vec4};
 
 fn one_texel(rgba: [u8; 4], color_space: ColorSpace) -> Texture {

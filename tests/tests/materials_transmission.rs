@@ -7,12 +7,12 @@
 //!   interfaces (Fresnel of each *relative* IOR, Beer–Lambert inside) predicts: a liquid
 //!   overlapping its glass counts one glass–liquid interface, not two air gaps.
 
-use aperture_render::{
-    build_accel, render, test_scenes, transmissive_meshes, Environment, FilterKind, RenderOptions,
-    TransmissionMode, TransmissionModel,
-};
+use aperture_render::{build_accel, render, FilterKind, RenderOptions};
 use aperture_scene::{
     Camera, Dof, Light, LightKind, LoadOptions, Material, Projection, Scene, Transmission, Volume,
+};
+use aperture_shading::{
+    test_scenes, transmissive_meshes, Environment, TransmissionMode, TransmissionModel,
 };
 use aperture_tests::gltf_writer::GltfWriter;
 use aperture_tests::render_checked;

@@ -33,8 +33,9 @@
 //!   here; the block check catches it: block ratios 1.7–2.5.)
 
 use aperture_imageio::{metrics, read_exr, Image};
-use aperture_render::{build_accel, render, FilterKind, MaterialOverride, RenderOptions};
+use aperture_render::{build_accel, render, FilterKind, RenderOptions};
 use aperture_scene::LoadOptions;
+use aperture_shading::MaterialOverride;
 use glam::Vec3;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -207,7 +208,7 @@ fn render_options(name: &str, entry: &Value) -> Vec<RenderOptions> {
             seed,
             max_bounces: as_u32(entry, "max_bounces"),
             filter: FilterKind::Box,
-            env: aperture_render::Environment::Constant(env),
+            env: aperture_shading::Environment::Constant(env),
             material_override,
             energy_compensation,
             ..RenderOptions::default()

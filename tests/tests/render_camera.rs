@@ -1,8 +1,9 @@
 //! Thin-lens acceptance: bokeh size and shape against SPEC §2, the pinhole limit, and Sobol's
 //! advantage over independent samples on a depth-of-field scene.
 
-use aperture_render::{test_scenes, Camera, Film, FilterKind, RenderOptions, SamplerKind};
+use aperture_render::{Camera, Film, FilterKind, RenderOptions, SamplerKind};
 use aperture_scene::{Dof, Scene};
+use aperture_shading::test_scenes;
 
 const SIZE: u32 = 64;
 /// tan(yfov/2) = 0.5.

@@ -2,10 +2,10 @@
 //! emissive triangles, Russian roulette), and a plane under a point light against E = I cos θ / r².
 
 use aperture_render::{
-    build_accel, render, test_scenes, Camera, CameraSample, Clamp, FilterKind, MaterialOverride,
-    RenderOptions,
+    build_accel, render, Camera, CameraSample, Clamp, FilterKind, RenderOptions,
 };
 use aperture_scene::{Dof, Light, LightKind, Scene};
+use aperture_shading::{test_scenes, MaterialOverride};
 use glam::{Affine3A, Vec2, Vec3};
 
 fn opts(size: u32, spp: u32) -> RenderOptions {
@@ -25,7 +25,7 @@ fn white_furnace_renders_one() {
     let scene = test_scenes::furnace();
     let accel = build_accel(&scene, Default::default());
     let o = RenderOptions {
-        env: aperture_render::Environment::Constant(Vec3::ONE),
+        env: aperture_shading::Environment::Constant(Vec3::ONE),
         max_bounces: 64,
         material_override: MaterialOverride::Diffuse,
         ..opts(32, 16)

@@ -2,13 +2,12 @@
 //! orientation (uv (0,0) is the image's top-left), unlit, the diffuse override, the orthographic
 //! camera, and alpha masks.
 
-use aperture_render::{
-    build_accel, render, srgb_to_linear, test_scenes, FilterKind, MaterialOverride, RenderOptions,
-};
+use aperture_render::{build_accel, render, FilterKind, RenderOptions};
 use aperture_scene::{
     AlphaMode, Camera, ColorSpace, Dof, Filter, Light, LightKind, Material, Projection, Sampler,
     Scene, Texels, Texture, TextureRef, Wrap,
 };
+use aperture_shading::{srgb_to_linear, test_scenes, MaterialOverride};
 use glam::{Affine3A, Vec3, Vec4};
 
 /// A 2 × 2 texture: red, green / blue, white (rows top to bottom), nearest, clamped.

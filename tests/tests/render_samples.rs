@@ -36,7 +36,7 @@ fn samples_render_finite_non_constant_images() {
         spp: 4,
         max_bounces: 2,
         // Most samples have no lights: a grey sky lights them.
-        env: aperture_render::Environment::Constant(Vec3::splat(0.8)),
+        env: aperture_shading::Environment::Constant(Vec3::splat(0.8)),
         ..RenderOptions::default()
     };
     for rel in SAMPLES {

@@ -8,8 +8,8 @@
 mod util;
 
 use aperture_imageio::Image;
-use aperture_render::test_scenes::icosphere;
 use aperture_scene::Scene;
+use aperture_shading::test_scenes::icosphere;
 use glam::{Quat, Vec2, Vec3};
 use serde_json::json;
 use util::{mean, quat, render_checked, Gltf};

@@ -5,8 +5,8 @@
 #[path = "stress_util.rs"]
 mod util;
 
-use aperture_render::test_scenes::icosphere;
 use aperture_scene::{Dof, Scene};
+use aperture_shading::test_scenes::icosphere;
 use glam::Vec3;
 use serde_json::json;
 use util::{mean, quat, render_checked, rmse, Gltf};

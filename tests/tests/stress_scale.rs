@@ -14,9 +14,9 @@
 #[path = "stress_util.rs"]
 mod util;
 
-use aperture_render::test_scenes::icosphere;
 use aperture_render::Film;
 use aperture_scene::Scene;
+use aperture_shading::test_scenes::icosphere;
 use glam::{Affine3A, Vec3};
 use serde_json::json;
 use util::{mean, quat, render_checked, rmse, Gltf};

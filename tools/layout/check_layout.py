@@ -6,11 +6,13 @@ round a longer circle), none between crates, no file over 600 lines, no function
     python3 tools/layout/check_layout.py --graph    # also print every file's imports
 
 A file *imports* another when it names an item of it: `use crate::a::b`, `super::x`, a path
-`crate::a::X` in code, or a path through another workspace crate (`aperture_scene::X`), with
-`pub use` re-exports followed to the file that defines the item. `mod x;` declares a child; it is
-not an import. Comments and string literals are ignored. Functions are measured from the line of
-`fn` to the line of their closing brace. A file may list functions whose length is their speed
-(SIMD kernels) in a comment `// layout: long-fn NAME (why)`; those are reported, not failed.
+`crate::a::X` in code, or a path through another workspace crate (`aperture_scene::X`). A
+`pub use` re-export counts as an import of the file that makes it: a path through it imports the
+re-exporting file, and that file's `pub use` imports the defining one (so a re-export cannot hide
+a circle). `mod x;` declares a child; it is not an import. Comments and string literals are
+ignored. Functions are measured from the line of `fn` to the line of their closing brace. A file
+may list functions whose length is their speed (SIMD kernels) in a comment
+`// layout: long-fn NAME (why)`; those are reported, not failed.
 """
 
 import os
@@ -79,7 +81,6 @@ class Crate:
         self.modules = {}  # module path tuple -> file
         self.files = {}  # file -> module path tuple
         self.inline = defaultdict(set)  # file -> inline `mod x {` names (same file)
-        self.reexports = defaultdict(dict)  # file -> {name: path tuple (absolute)}
 
 
 def crate_name_of(cargo_toml):
@@ -173,18 +174,6 @@ def expand_use(tree):
     return out
 
 
-def load_reexports(crates):
-    for c in crates:
-        for file, mpath in c.files.items():
-            with open(file) as f:
-                text = strip_comments_and_strings(f.read())
-            for m in re.finditer(r"\bpub(?:\([^)]*\))?\s+use\s+([^;]+);", text):
-                for p in expand_use(m.group(1)):
-                    if not p or p[-1] == "*":
-                        continue
-                    c.reexports[file][p[-1]] = absolute(c, mpath, p)
-
-
 def absolute(crate, mpath, parts):
     """A path as written in module `mpath` -> (crate label or None, absolute module path)."""
     if parts[0] == "crate":
@@ -206,9 +195,10 @@ def absolute(crate, mpath, parts):
     return None
 
 
-def resolve(by_name, target, seen=0):
-    """An absolute path -> the file that defines its item."""
-    if target is None or seen > 8:
+def resolve(by_name, target):
+    """An absolute path -> the file of its deepest module: the file that defines the item, or
+    the one that re-exports it (a re-export is not followed; that file imports the item)."""
+    if target is None:
         return None
     cname, parts = target
     crate = by_name.get(cname)
@@ -219,11 +209,7 @@ def resolve(by_name, target, seen=0):
         if tuple(parts[:i]) in crate.modules:
             best = tuple(parts[:i])
             break
-    file = crate.modules[best]
-    rest = parts[len(best):]
-    if rest and rest[0] in crate.reexports[file]:
-        return resolve(by_name, crate.reexports[file][rest[0]], seen + 1)
-    return file
+    return crate.modules[best]
 
 
 def imports_of(crates, by_name):
@@ -236,9 +222,7 @@ def imports_of(crates, by_name):
             depth_at = lambda o: sum(1 for a, b in spans if a <= o < b)
             paths = []
             for m in USE_RE.finditer(text):
-                if re.search(r"\bpub(?:\([^)]*\))?\s+$", text[max(0, m.start() - 12):m.start()]):
-                    # A re-export is followed where it is used, not counted as an import.
-                    continue
+                # A `pub use` too: the file that re-exports an item imports it.
                 d = depth_at(m.start())
                 paths.extend(lift(p, d) for p in expand_use(m.group(1)))
             body = USE_RE.sub(lambda m: " " * len(m.group(0)), text)
@@ -373,7 +357,6 @@ def main():
     show_graph = "--graph" in sys.argv
     crates = find_crates()
     by_name = {c.name: c for c in crates}
-    load_reexports(crates)
     graph = imports_of(crates, by_name)
     rel = lambda f: os.path.relpath(f, ROOT)
     failed = False

@@ -2,8 +2,8 @@
 //! of light, or empty for want of geometry. The render still runs; the warning says why the
 //! image looks as it will and what to add.
 
-use aperture_render::Environment;
 use aperture_scene::Scene;
+use aperture_shading::Environment;
 
 /// The warnings for rendering `scene` under `env` (one line each, no `warning:` prefix).
 pub(crate) fn scene_warnings(scene: &Scene, env: &Environment) -> Vec<String> {
@@ -47,7 +47,7 @@ pub(crate) fn scene_warnings(scene: &Scene, env: &Environment) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use aperture_render::test_scenes;
+    use aperture_shading::test_scenes;
     use glam::Vec3;
 
     #[test]

@@ -1,8 +1,8 @@
 //! `aperture info`'s material interpretation: which meaning of transmission and of
 //! single-sided faces applies to the file (and why), and its material variants.
 
-use aperture_render::{SidesMode, TransmissionMode};
 use aperture_scene::Scene;
+use aperture_shading::{SidesMode, TransmissionMode};
 use serde_json::{json, Value};
 
 /// A JSON count (0 when missing).
@@ -13,7 +13,7 @@ fn count(v: &Value) -> u64 {
 /// Which meaning of transmission applies, why, and what it makes of the file's meshes.
 pub(crate) fn transmission_json(s: &Scene, mode: TransmissionMode) -> Value {
     let (model, why) = mode.resolve(s);
-    let (refractive, thin) = aperture_render::transmissive_meshes(s, model);
+    let (refractive, thin) = aperture_shading::transmissive_meshes(s, model);
     json!({
         "applies": model.to_string(),
         "why": why,
@@ -29,7 +29,7 @@ pub(crate) fn sides_json(s: &Scene, mode: SidesMode) -> Value {
     json!({
         "applies": model.to_string(),
         "why": why,
-        "materials": aperture_render::single_sided_materials(s),
+        "materials": aperture_shading::single_sided_materials(s),
     })
 }
 

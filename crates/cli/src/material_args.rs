@@ -1,7 +1,7 @@
 //! `--transmission`, `--single-sided`, `--variant` and `--no-energy-compensation` (SPEC §5),
 //! shared by `render` and `info`.
 
-use aperture_render::{SidesMode, TransmissionMode};
+use aperture_shading::{SidesMode, TransmissionMode};
 
 /// How materials are interpreted.
 #[derive(clap::Args, Debug, Clone, Default)]
@@ -30,12 +30,12 @@ pub struct MaterialArgs {
 
 fn parse_transmission(s: &str) -> Result<TransmissionMode, String> {
     s.parse()
-        .map_err(|e: aperture_render::ParseTransmissionError| e.to_string())
+        .map_err(|e: aperture_shading::ParseTransmissionError| e.to_string())
 }
 
 fn parse_sides(s: &str) -> Result<SidesMode, String> {
     s.parse()
-        .map_err(|e: aperture_render::ParseSidesError| e.to_string())
+        .map_err(|e: aperture_shading::ParseSidesError| e.to_string())
 }
 
 #[cfg(test)]

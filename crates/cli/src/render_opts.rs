@@ -3,10 +3,9 @@
 
 use crate::render_args::{BvhQualityArg, EnvArg, OverrideArg, RenderArgs, SamplerArg, ViewArg};
 use anyhow::Context as _;
-use aperture_render::{
-    EnvImage, EnvSampling, Environment, MaterialOverride, Pass, RenderOptions, SamplerKind,
-};
+use aperture_render::{Pass, RenderOptions, SamplerKind};
 use aperture_scene::{DofOverrides, LoadOptions};
+use aperture_shading::{EnvImage, EnvSampling, Environment, MaterialOverride};
 use clap::error::ErrorKind;
 use clap::CommandFactory as _;
 use glam::Vec3;

@@ -11,7 +11,8 @@ use aperture_imageio::{read_exr, Image, MetaValue, SampleType};
 use aperture_output::denoised::{check_channels, DenoisingError, DENOISED, NOISY_IMAGE};
 use aperture_output::merge::{merge_exr, merge_exr_denoised, MergeError, MergeOptions};
 use aperture_output::ExrOptions;
-use aperture_render::{test_scenes, AdaptiveOptions, PassSet, RenderOptions, Window};
+use aperture_render::{AdaptiveOptions, PassSet, RenderOptions, Window};
+use aperture_shading::test_scenes;
 use std::path::PathBuf;
 
 fn denoiser() -> Option<Denoiser> {

@@ -8,10 +8,9 @@ mod common;
 use aperture_imageio::{read_exr, Image, MetaValue};
 use aperture_output::merge::{merge_exr, MergeError, MergeOptions};
 use aperture_output::ExrOptions;
-use aperture_render::{
-    test_scenes, AdaptiveOptions, Environment, PassSet, RenderOptions, Window,
-};
+use aperture_render::{AdaptiveOptions, PassSet, RenderOptions, Window};
 use aperture_scene::Scene;
+use aperture_shading::{test_scenes, Environment};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 

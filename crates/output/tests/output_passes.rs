@@ -7,10 +7,11 @@ mod common;
 use aperture_imageio::{Image, MetaValue, SampleType};
 use aperture_output::{self as output, ExrOptions};
 use aperture_render::{
-    build_accel, render, render_window, scene_camera, test_scenes, AdaptiveOptions, Environment,
-    Pass, PassSet, RenderOptions, Window,
+    build_accel, render, render_window, scene_camera, AdaptiveOptions, Pass, PassSet,
+    RenderOptions, Window,
 };
 use aperture_scene::{Material, Scene};
+use aperture_shading::{test_scenes, Environment};
 use glam::{Affine3A, Vec3};
 
 /// The glass scene's materials: a refractive glass with a volume, a thin-walled pane and a

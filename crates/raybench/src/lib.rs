@@ -17,7 +17,8 @@
 //!
 //! ```
 //! use aperture_raybench::{closest_hits, generate_sets, Mode, RaySetOptions};
-//! use aperture_render::{build_accel, test_scenes, Camera};
+//! use aperture_render::{build_accel, Camera};
+//! use aperture_shading::test_scenes;
 //! let scene = test_scenes::lit_plane(1.0);
 //! let accel = build_accel(&scene, Default::default());
 //! let camera = Camera::new(&scene.cameras[0], 16, 16);

@@ -8,7 +8,8 @@ use aperture_raybench::{
     closest_hits, generate_sets, occlusions, primary_ray, primary_samples, shadow_target,
     time_sets, Mode, Query, RaySet, RaySetOptions, TimingOptions, BENCH_TILE, SET_NAMES,
 };
-use aperture_render::{build_accel, test_scenes, Camera};
+use aperture_render::{build_accel, Camera};
+use aperture_shading::test_scenes;
 use glam::Vec3;
 
 const W: u32 = 24;

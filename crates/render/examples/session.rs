@@ -11,6 +11,19 @@ use aperture_scene::{Edit, LoadOptions};
 use glam::{Affine3A, Mat4, Vec3};
 use std::time::Instant;
 
+/// A camera's world transform at `eye` looking at `target` (+Y up; the camera looks down −Z).
+fn looking_at(eye: Vec3, target: Vec3) -> Mat4 {
+    let forward = (target - eye).normalize();
+    let right = forward.cross(Vec3::Y).normalize();
+    let up = right.cross(forward);
+    Mat4::from_cols(
+        right.extend(0.0),
+        up.extend(0.0),
+        (-forward).extend(0.0),
+        eye.extend(1.0),
+    )
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let demo = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/demo.glb");
@@ -48,8 +61,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let angle = (position as f32 - 3.5) * 0.06;
         let offset = eye - target;
         let orbit = Affine3A::from_rotation_y(angle).transform_vector3(offset);
-        let world = Mat4::look_at_rh(target + orbit, target, Vec3::Y).inverse();
-        let matrix = world.to_cols_array_2d();
+        let matrix = looking_at(target + orbit, target).to_cols_array_2d();
         for fstop in [1.4f64, 2.8, 5.6, 11.0] {
             let t = Instant::now();
             if fstop == 1.4 {

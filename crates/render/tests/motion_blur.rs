@@ -5,11 +5,11 @@ use aperture_accel::MotionTransform;
 use aperture_render::motion::{
     raster_of, CameraPath, FrameMotion, FrameNeighbours, MovingInstance, Shutter,
 };
-use aperture_render::test_scenes::{emitter, look_at_camera, scene};
 use aperture_render::{build_accel, build_motion_accel, render_window, SceneHints};
 use aperture_render::{Pass, RenderOptions, Window};
 use aperture_render::{SampleStream, SamplerKind};
 use aperture_scene::{Dof, Scene};
+use aperture_shading::test_scenes::{emitter, look_at_camera, scene};
 use glam::{Affine3A, Quat, Vec3};
 use std::sync::Arc;
 
@@ -214,7 +214,7 @@ fn moving_sphere(shift: f32) -> (Scene, FrameMotion) {
             Vec3::new(x, 0.0, -DIST),
         )
     };
-    let sphere = aperture_render::test_scenes::icosphere(4, 0);
+    let sphere = aperture_shading::test_scenes::icosphere(4, 0);
     let scene = scene(vec![(sphere, at(0.0))], vec![emitter(Vec3::ONE)], cam);
     let keys = MotionTransform::new(&[at(-0.5 * shift), at(0.5 * shift)]).unwrap();
     let moving = MovingInstance {

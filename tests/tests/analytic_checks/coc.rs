@@ -1,8 +1,9 @@
 //! The circle of confusion over a grid of focus, depth, radius, blades and squeeze, solved
 //! exactly through the `Camera` API (no rendering).
 
-use aperture_render::{test_scenes, Aperture, Camera, CameraModel, CameraSample};
+use aperture_render::{Aperture, Camera, CameraModel, CameraSample};
 use aperture_scene::Dof;
+use aperture_shading::test_scenes;
 use glam::{Affine3A, DVec2, DVec3, Vec2, Vec3};
 use std::f64::consts::PI;
 

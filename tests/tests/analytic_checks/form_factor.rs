@@ -1,7 +1,8 @@
 //! An emissive rectangle over a diffuse plane against the closed-form form factor.
 
-use aperture_render::{test_scenes, Camera, MaterialOverride, RenderOptions};
+use aperture_render::{Camera, RenderOptions};
 use aperture_scene::{Dof, Scene};
+use aperture_shading::{test_scenes, MaterialOverride};
 use glam::{Affine3A, Vec3};
 use std::f64::consts::PI;
 

@@ -1,8 +1,9 @@
 //! GGX white furnace: a sphere in a uniform environment, binned by view cosine, against the
 //! directional albedo E(μo) integrated numerically.
 
-use aperture_render::{test_scenes, Camera, Environment, MaterialOverride, RenderOptions};
+use aperture_render::{Camera, RenderOptions};
 use aperture_scene::{Dof, Material, Scene};
+use aperture_shading::{test_scenes, Environment, MaterialOverride};
 use glam::{Affine3A, DVec3, Vec3, Vec4};
 use std::f64::consts::PI;
 

@@ -1,8 +1,9 @@
 //! A spot light's cone falloff (KHR_lights_punctual) over the whole cone, and a directional
 //! light at oblique incidence.
 
-use aperture_render::{test_scenes, Camera, MaterialOverride, RenderOptions};
+use aperture_render::{Camera, RenderOptions};
 use aperture_scene::{Dof, Light, LightKind, Scene};
+use aperture_shading::{test_scenes, MaterialOverride};
 use glam::{DVec3, Vec3};
 use std::f64::consts::PI;
 

@@ -15,7 +15,7 @@ fn unlit_test_objects_are_flat_colours() {
     };
     let scene = load(&path);
     let probe = Probe::new(&scene, &white_sky(96, 64, 4));
-    let half = aperture_render::srgb_to_linear(127.0 / 255.0);
+    let half = aperture_shading::srgb_to_linear(127.0 / 255.0);
     for (name, want) in [
         ("Orange", Vec3::new(1.0, half, 0.0)),
         ("Blue", Vec3::new(0.0, half, 1.0)),

@@ -5,8 +5,9 @@
 //! that object (so edges and antialiasing are left out). Expected colours come from the
 //! samples' READMEs and reference screenshots, never from the renderer's own texture code.
 
-use aperture_render::{Environment, FilterKind, RenderOptions};
+use aperture_render::{FilterKind, RenderOptions};
 use aperture_scene::{LoadOptions, Scene};
+use aperture_shading::Environment;
 use aperture_tests::probe::Probe;
 use glam::Vec3;
 use std::collections::HashMap;
@@ -36,7 +37,7 @@ fn load(path: &Path) -> Scene {
 
 /// An equirectangular sky with a sharp horizon: bright above, dark below.
 fn horizon_sky() -> Environment {
-    Environment::Image(std::sync::Arc::new(aperture_render::EnvImage {
+    Environment::Image(std::sync::Arc::new(aperture_shading::EnvImage {
         width: 64,
         height: 32,
         texels: (0..64 * 32)
@@ -50,7 +51,7 @@ fn horizon_sky() -> Environment {
             .collect(),
         rotation: 0.0,
         strength: 1.0,
-        sampling: aperture_render::EnvSampling::Importance,
+        sampling: aperture_shading::EnvSampling::Importance,
     }))
 }
 

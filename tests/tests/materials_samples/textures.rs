@@ -2,10 +2,9 @@
 //! lands where the sample's README says.
 
 use aperture_accel::Ray;
-use aperture_render::{
-    build_accel, render, Camera, CameraSample, Environment, FilterKind, RenderOptions,
-};
+use aperture_render::{build_accel, render, Camera, CameraSample, FilterKind, RenderOptions};
 use aperture_scene::Scene;
+use aperture_shading::Environment;
 use aperture_tests::probe::{gltf_json, node, node_names, sample, Probe};
 use glam::{Vec2, Vec3};
 

@@ -4,9 +4,9 @@
 #![allow(dead_code)]
 
 use aperture_render::motion::FrameMotion;
-use aperture_render::test_scenes::{emitter, look_at_camera, quad, scene};
 use aperture_render::{Camera, FilterKind, RenderOptions};
 use aperture_scene::{Dof, Scene};
+use aperture_shading::test_scenes::{emitter, look_at_camera, quad, scene};
 use glam::{Affine3A, Quat, Vec3};
 use std::sync::Arc;
 
