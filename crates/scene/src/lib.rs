@@ -36,6 +36,7 @@
 mod accessor;
 mod animated;
 mod animation;
+mod auto_camera;
 mod basis;
 mod buffers;
 mod camera;

@@ -92,7 +92,7 @@ impl Animated {
         out.materials = materials;
         if out.cameras.is_empty() {
             out.cameras
-                .push(camera::automatic_camera(&out, &info, &self.options)?);
+                .push(self.automatic_camera(&out, origin, &info)?);
         }
         if self.draws_nothing && out.instances.is_empty() {
             stats
