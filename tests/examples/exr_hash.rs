@@ -13,11 +13,18 @@ fn main() {
     let mut failed = false;
     for path in std::env::args().skip(1) {
         let image = if path.ends_with(".png") {
-            std::fs::read(&path).map(|b| vec![b]).map_err(|e| e.to_string())
+            std::fs::read(&path)
+                .map(|b| vec![b])
+                .map_err(|e| e.to_string())
         } else {
             aperture_imageio::read_exr(path.as_ref())
                 .map(|im| {
-                    let mut parts = vec![im.rgba.iter().flatten().flat_map(|v| v.to_le_bytes()).collect()];
+                    let mut parts = vec![im
+                        .rgba
+                        .iter()
+                        .flatten()
+                        .flat_map(|v| v.to_le_bytes())
+                        .collect()];
                     for l in &im.layers {
                         let mut bytes = l.name.as_bytes().to_vec();
                         bytes.extend(l.data.iter().flat_map(|v| v.to_le_bytes()));

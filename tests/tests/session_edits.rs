@@ -7,9 +7,7 @@
 
 use aperture_output::film_to_image;
 use aperture_render::film::Window;
-use aperture_render::{
-    Film, FrameSpec, PassSet, Progressive, RenderOptions, Session, TILE,
-};
+use aperture_render::{Film, FrameSpec, PassSet, Progressive, RenderOptions, Session, TILE};
 use aperture_scene::{Edit, LoadOptions, Touched};
 use aperture_tests::demo;
 use proptest::prelude::*;
@@ -280,11 +278,18 @@ fn progressive_passes_equal_the_one_shot_render() {
     let path = write_glb(&doc, &bin, "progressive.glb");
     let mut session = load(&path);
     let o = RenderOptions { spp: 8, ..opts() };
-    let window = Window { x0: 5, y0: 3, width: TILE + 3, height: 17 };
+    let window = Window {
+        x0: 5,
+        y0: 3,
+        width: TILE + 3,
+        height: 17,
+    };
     for w in [Window::whole(o.width, o.height), window] {
         let frame = session.frame(&FrameSpec::default()).expect("frame");
         let camera = frame.camera(&o).expect("camera");
-        let once = frame.render_window(&camera, &o, w, &|_, _| {}).expect("render");
+        let once = frame
+            .render_window(&camera, &o, w, &|_, _| {})
+            .expect("render");
         let mut p = Progressive::new(frame, &o, w).expect("progressive");
         let mut totals = Vec::new();
         while let Some(n) = p.next_pass(&|_, _| {}).expect("pass") {
@@ -292,7 +297,11 @@ fn progressive_passes_equal_the_one_shot_render() {
         }
         assert_eq!(totals, [1, 2, 4, 8]);
         let film = p.into_film();
-        assert_eq!(bits(&film, &mut session, &o), bits(&once, &mut session, &o), "{w:?}");
+        assert_eq!(
+            bits(&film, &mut session, &o),
+            bits(&once, &mut session, &o),
+            "{w:?}"
+        );
     }
     std::fs::remove_file(&path).ok();
 }
@@ -314,7 +323,11 @@ fn a_camera_edit_builds_nothing() {
     };
     assert_eq!(session.edit(fstop).expect("edit"), Touched::Cameras);
     let after = render(&mut session, &o);
-    assert_eq!(session.frame_times(), built, "the frame was not built again");
+    assert_eq!(
+        session.frame_times(),
+        built,
+        "the frame was not built again"
+    );
     assert_ne!(before, after, "f/8 renders another image than f/1.4");
     std::fs::remove_file(&path).ok();
 }
@@ -326,12 +339,31 @@ fn bad_edits_are_refused() {
     let path = write_glb(&doc, &bin, "bad.glb");
     let mut session = load(&path);
     let bad = [
-        Edit::NodeMatrix { node: 9999, matrix: matrix([0.0; 3], 1.0) },
-        Edit::NodeMatrix { node: 0, matrix: matrix([f32::NAN, 0.0, 0.0], 1.0) },
-        Edit::Pointer { path: "/materials/0/pbrMetallicRoughness/baseColorFactor".into(), value: vec![1.0] },
-        Edit::Pointer { path: "/materials/0/nonsense".into(), value: vec![1.0] },
-        Edit::Pointer { path: "/extensions/KHR_lights_punctual/lights/0/intensity".into(), value: vec![f64::NAN] },
-        Edit::CameraKey { camera: 7, key: "aperture_fstop".into(), value: json!(2.0) },
+        Edit::NodeMatrix {
+            node: 9999,
+            matrix: matrix([0.0; 3], 1.0),
+        },
+        Edit::NodeMatrix {
+            node: 0,
+            matrix: matrix([f32::NAN, 0.0, 0.0], 1.0),
+        },
+        Edit::Pointer {
+            path: "/materials/0/pbrMetallicRoughness/baseColorFactor".into(),
+            value: vec![1.0],
+        },
+        Edit::Pointer {
+            path: "/materials/0/nonsense".into(),
+            value: vec![1.0],
+        },
+        Edit::Pointer {
+            path: "/extensions/KHR_lights_punctual/lights/0/intensity".into(),
+            value: vec![f64::NAN],
+        },
+        Edit::CameraKey {
+            camera: 7,
+            key: "aperture_fstop".into(),
+            value: json!(2.0),
+        },
     ];
     for e in bad {
         let err = session.edit(e.clone()).expect_err("refused");

@@ -6,7 +6,6 @@
 
 use crate::number_args::{non_negative_f32, positive_f32};
 use crate::plot::{draw_legend, load_font, write_png, PALETTE};
-use aperture_render::{Frame, FrameSpec, Session};
 use anyhow::{bail, Context as _};
 use aperture_accel::BvhQuality;
 use aperture_raybench::{
@@ -14,6 +13,7 @@ use aperture_raybench::{
     RaySetOptions, Timing, TimingOptions,
 };
 use aperture_render::Camera;
+use aperture_render::{Frame, FrameSpec, Session};
 use aperture_scene::{DofOverrides, LoadOptions};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -153,10 +153,7 @@ fn check_ray_file_fits(path: &Path) -> anyhow::Result<()> {
 }
 
 /// The four generated sets for the arguments' camera and image, saved when asked.
-fn generated_sets(
-    args: &BenchRaysArgs,
-    frame: &Frame,
-) -> anyhow::Result<Vec<RaySet>> {
+fn generated_sets(args: &BenchRaysArgs, frame: &Frame) -> anyhow::Result<Vec<RaySet>> {
     let scene = frame.scene();
     let index = match &args.camera {
         Some(c) => crate::render_opts::find_camera(c, scene).map_err(anyhow::Error::msg)?,

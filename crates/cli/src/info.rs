@@ -113,6 +113,8 @@ fn camera_json(s: &Scene, i: usize) -> Value {
         "aspect_ratio": aspect.map(f),
         "xmag": xmag.map(f),
         "ymag": ymag.map(f),
+        // The automatic camera is framed once, on the stored pose (SPEC §3), whatever the time.
+        "framed_on": c.node.is_none().then_some("stored pose"),
         "position": file_point(origin, c.world_from_camera.translation.into()),
         "direction": v3((-c.world_from_camera.matrix3.z_axis).into()),
         "dof": {
@@ -365,7 +367,10 @@ fn print_cameras(r: &Value) {
                 "--camera {}: cameras[{n}] on node {j}",
                 c["select"].as_str().unwrap_or_default()
             ),
-            _ => "automatic".into(),
+            _ => format!(
+                "automatic, framed on the {}",
+                c["framed_on"].as_str().unwrap_or("stored pose")
+            ),
         };
         let proj = match c["projection"].as_str() {
             Some("perspective") => format!(
@@ -507,6 +512,7 @@ mod tests {
         assert_eq!(c["projection"], "perspective");
         assert_eq!(c["yfov"], 0.7);
         assert_eq!(c["aspect_ratio"], 1.5);
+        assert_eq!(c["framed_on"], Value::Null, "a file's camera is not framed");
         let d = &c["dof"];
         assert_eq!(d["enabled"], true);
         assert_eq!(d["aperture_radius"], 0.25);
@@ -554,6 +560,16 @@ mod tests {
             report(&scene(), &Default::default())["world_origin"],
             json!([0.0, 0.0, 0.0])
         );
+    }
+
+    /// The automatic camera says it is framed on the stored pose (issue 58), in JSON and text.
+    #[test]
+    fn the_automatic_camera_says_what_it_is_framed_on() {
+        let mut s = scene();
+        s.cameras[0].node = None;
+        s.cameras[0].index = None;
+        let r = report(&s, &Default::default());
+        assert_eq!(r["cameras"][0]["framed_on"], "stored pose");
     }
 
     #[test]

@@ -109,9 +109,9 @@ fn load_session(args: &RenderArgs, load: &LoadOptions) -> anyhow::Result<Session
             Error::InvalidDof { ref key, .. } if key.starts_with("command line") => {
                 usage_error(format!("{}: {e}", args.scene.display()))
             }
-            Error::NoSuchScene { .. } | Error::NoSuchAnimation { .. } | Error::NoSuchVariant { .. } => {
-                usage_error(format!("{}: {e}", args.scene.display()))
-            }
+            Error::NoSuchScene { .. }
+            | Error::NoSuchAnimation { .. }
+            | Error::NoSuchVariant { .. } => usage_error(format!("{}: {e}", args.scene.display())),
             e => Err(anyhow::Error::new(e).context(format!("loading {}", args.scene.display()))),
         },
         Err(e) => Err(anyhow::Error::new(e).context(format!("loading {}", args.scene.display()))),

@@ -166,7 +166,10 @@ pub(crate) fn needs_sample_count(opts: &RenderOptions, window: Window) -> bool {
 }
 
 /// The header values known only after rendering.
-pub(crate) fn late_values(summary: &RenderSummary, opts: &RenderOptions) -> Vec<(String, MetaValue)> {
+pub(crate) fn late_values(
+    summary: &RenderSummary,
+    opts: &RenderOptions,
+) -> Vec<(String, MetaValue)> {
     let mut late = vec![
         (
             header::late::RENDER_TIME.to_string(),

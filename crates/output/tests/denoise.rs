@@ -122,7 +122,12 @@ fn passes_none_still_gets_the_denoising_passes() {
     };
     let scene = test_scenes::balls();
     let path = scratch("none.exr");
-    common::write_exr(&scene, &o, &path, &ExrOptions::default(), Some(&d),
+    common::write_exr(
+        &scene,
+        &o,
+        &path,
+        &ExrOptions::default(),
+        Some(&d),
         &|_, _| {},
     )
     .unwrap();
@@ -174,10 +179,7 @@ fn merge_refuses_a_denoised_part_and_merge_denoised_denoises_once() {
     assert!(merged.layer(NOISY_IMAGE).is_some());
     // Its parts' noisy beauty, pasted, is the merged file's Noisy Image.
     let whole = scratch("whole.exr");
-    common::write_exr(&scene, &o, &whole, &ExrOptions::default(), None,
-        &|_, _| {},
-    )
-    .unwrap();
+    common::write_exr(&scene, &o, &whole, &ExrOptions::default(), None, &|_, _| {}).unwrap();
     let whole_img = read_exr(&whole).unwrap();
     let noisy = merged.layer(NOISY_IMAGE).unwrap();
     assert_eq!(bits(&noisy.data), bits(whole_img.rgba.as_flattened()));

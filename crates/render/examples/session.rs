@@ -65,10 +65,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for fstop in [1.4f64, 2.8, 5.6, 11.0] {
             let t = Instant::now();
             if fstop == 1.4 {
-                session.edit(Edit::NodeMatrix { node: node as usize, matrix })?;
+                session.edit(Edit::NodeMatrix {
+                    node: node as usize,
+                    matrix,
+                })?;
             }
             let key = "aperture_fstop".to_owned();
-            session.edit(Edit::CameraKey { camera: camera as usize, key, value: fstop.into() })?;
+            session.edit(Edit::CameraKey {
+                camera: camera as usize,
+                key,
+                value: fstop.into(),
+            })?;
             let frame = session.frame(&spec)?;
             let preview = RenderOptions {
                 width: opts.width / 8,

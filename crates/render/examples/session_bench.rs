@@ -18,7 +18,9 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
-    let path = args.next().ok_or("usage: session_bench SCENE.glb [REPEATS]")?;
+    let path = args
+        .next()
+        .ok_or("usage: session_bench SCENE.glb [REPEATS]")?;
     let repeats: usize = args.next().map_or(Ok(9), |s| s.parse())?;
     let preview = RenderOptions {
         width: 120,
@@ -39,7 +41,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .sum();
     let camera = scene.cameras[0].index.map(|c| c as usize);
     let node = scene.instances.first().map(|i| i.node as usize);
-    let place = scene.instances.first().map(|i| i.world_from_object.translation);
+    let place = scene
+        .instances
+        .first()
+        .map(|i| i.world_from_object.translation);
     let time = |session: &mut Session, edit: Edit| -> Result<f64, Box<dyn std::error::Error>> {
         let t = Instant::now();
         session.edit(edit)?;
@@ -52,7 +57,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if let Some(camera) = camera {
             let fstop = if k % 2 == 0 { 2.8 } else { 5.6 };
             let key = "aperture_fstop".to_owned();
-            let edit = Edit::CameraKey { camera, key, value: fstop.into() };
+            let edit = Edit::CameraKey {
+                camera,
+                key,
+                value: fstop.into(),
+            };
             camera_ms.push(time(&mut session, edit)? * 1e3);
         }
         if let (Some(node), Some(t)) = (node, place) {

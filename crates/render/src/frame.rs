@@ -154,7 +154,10 @@ impl Frame {
 
     /// Drops the lights built so far (after an edit of materials or lights).
     pub(crate) fn forget_lights(&mut self) {
-        self.lights.get_mut().unwrap_or_else(|e| e.into_inner()).clear();
+        self.lights
+            .get_mut()
+            .unwrap_or_else(|e| e.into_inner())
+            .clear();
     }
 
     /// The scene, for an edit to change in place (its BVH stays: only cameras, lights and

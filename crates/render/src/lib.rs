@@ -47,22 +47,20 @@ mod session;
 mod spares;
 
 pub use adaptive::AdaptiveOptions;
+pub use bands::{BandTotals, Bands};
 pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, CameraSample};
 pub use cancel::Cancel;
 pub use film::{Film, PixelSum, Window};
 pub use filter::{Filter, FilterKind};
+pub use frame::Frame;
 pub use frame_accel::{
     auto_bvh_quality, build_accel, build_frame_accel, build_motion_accel, SceneHints,
 };
+pub use frame_lights::FrameLights;
 pub use integrator::Clamp;
 pub use options::{RenderError, RenderOptions, DEFAULT_MAX_BOUNCES};
 pub use passes::{Pass, PassSet};
-pub use bands::{BandTotals, Bands};
-pub use frame::Frame;
-pub use frame_lights::FrameLights;
 pub use progressive::Progressive;
-pub use render::{
-    material_name, render, render_window, scene_camera, DEPTH_BACKGROUND, TILE,
-};
-pub use session::{FrameSpec, FrameTimes, Session, SessionError};
+pub use render::{material_name, render, render_window, scene_camera, DEPTH_BACKGROUND, TILE};
 pub use sampler::{SampleStream, SamplerKind, MAX_SPP};
+pub use session::{FrameSpec, FrameTimes, Session, SessionError};

@@ -226,4 +226,3 @@ fn centre_rays(job: &Job<'_>, film: &mut Film) {
 
 /// Depth where the centre ray meets nothing: Cycles' value.
 pub const DEPTH_BACKGROUND: f32 = 1e10;
-

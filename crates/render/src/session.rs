@@ -163,7 +163,9 @@ impl Session {
 
     /// What posing and building the current frame took.
     pub fn frame_times(&self) -> FrameTimes {
-        self.current.as_ref().map_or_else(FrameTimes::default, |c| c.2)
+        self.current
+            .as_ref()
+            .map_or_else(FrameTimes::default, |c| c.2)
     }
 
     fn build_frame(&mut self, spec: &FrameSpec) -> Result<(), SessionError> {
@@ -188,13 +190,7 @@ impl Session {
         let moving = motion.as_deref().filter(|m| m.moves_geometry());
         let previous = previous.filter(|(_, q)| moving.is_none() && *q == spec.quality);
         let hints = SceneHints::new(animated, &scene);
-        let accel = build_motion_accel(
-            &scene,
-            spec.quality,
-            &hints,
-            previous.map(|p| p.0),
-            moving,
-        );
+        let accel = build_motion_accel(&scene, spec.quality, &hints, previous.map(|p| p.0), moving);
         let frame = Frame::posed(scene, accel, motion, vector, Arc::clone(&self.memo));
         let times = FrameTimes {
             pose_secs,

@@ -8,6 +8,7 @@
 //! meshes deformed per pose follow them.
 
 mod edit;
+mod framing;
 mod pose;
 mod variants;
 mod visibility;
@@ -106,6 +107,9 @@ pub struct Animated {
     options: LoadOptions,
     stats: SceneStats,
     draws_nothing: bool,
+    /// The automatic camera's framing on the stored pose, for an animated file without a
+    /// camera; `None` when every pose frames itself alike (nothing animates, or cameras exist).
+    framing: Option<crate::auto_camera::Framing>,
     /// `content_hash` of the file's bytes.
     source_hash: u64,
 }
@@ -217,7 +221,7 @@ impl Animated {
         let cameras = camera::read_cameras(&doc)?;
         let lights = read_lights(&doc)?;
 
-        let mut animated = Animated {
+        let animated = Animated {
             moves: vec![false; graph.nodes.len()],
             toggles,
             graph,
@@ -239,14 +243,22 @@ impl Animated {
             options: options.clone(),
             stats,
             draws_nothing: doc.meshes().len() > 0,
+            framing: None,
             source_hash: crate::hash::content_hash(bytes),
         };
         // The typed document and the kept JSON are done with: freed before posing, which
         // holds every node's world transform (for two million nodes, 0.5 GB less at the peak).
         drop(doc);
         drop(root);
-        animated.classify()?;
-        Ok(animated)
+        animated.prepare()
+    }
+
+    /// What loading does once the document is read: classifies the meshes (building the
+    /// static ones), then frames the automatic camera on the stored pose.
+    fn prepare(mut self) -> Result<Self, Error> {
+        self.classify()?;
+        self.frame_stored_pose()?;
+        Ok(self)
     }
 
     /// The file's animations (every one, with whether this load evaluates it).

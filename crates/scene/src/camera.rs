@@ -1,11 +1,11 @@
 //! Cameras: glTF cameras placed by their nodes (scale removed, SPEC §1) with depth of field
-//! resolved (SPEC §3), and the automatic camera of a scene without one.
+//! resolved (SPEC §3); the automatic camera of a scene without one is `crate::auto_camera`.
 
 use glam::{Affine3A, Mat3, Vec3};
 use serde_json::Value;
 
 use crate::dof::{self, CameraInput, NodeInfo};
-use crate::{Camera, Error, LoadOptions, Projection, Scene};
+use crate::{Camera, Error, LoadOptions, Projection};
 
 /// Rotation and translation of a world transform: scale and shear removed (SPEC §1), keeping the
 /// view axis (−Z) exact and +Y as close to the node's as possible.
@@ -134,65 +134,6 @@ pub(crate) fn camera(
         index: Some(at.camera as u32),
         world_from_camera,
         projection: data.projection,
-        dof,
-    })
-}
-
-/// Vertical field of view of the automatic camera.
-const AUTO_YFOV_DEGREES: f32 = 40.0;
-
-/// A camera that frames the scene's bounding sphere from the +Z side, slightly above; pinhole
-/// unless the command line asks for depth of field.
-pub(crate) fn automatic_camera(
-    scene: &Scene,
-    info: &NodeInfo<'_>,
-    options: &LoadOptions,
-) -> Result<Camera, Error> {
-    let b = scene.bounds();
-    let (center, radius) = if b.is_empty() {
-        (Vec3::ZERO, 1.0)
-    } else {
-        (b.center(), (0.5 * b.diagonal()).max(1e-3))
-    };
-    let yfov = AUTO_YFOV_DEGREES.to_radians();
-    // The sphere touches the top and bottom of the frame; wider frames have room to spare.
-    let distance = radius / (0.5 * yfov).sin();
-    let back = Vec3::new(0.0, 0.3, 1.0).normalize();
-    let eye = center + back * distance;
-    // Camera +Z points back at the eye from the centre; +X right, +Y up.
-    let z = back;
-    let x = Vec3::Y.cross(z).normalize();
-    let y = z.cross(x);
-    let world_from_camera = Affine3A::from_mat3_translation(Mat3::from_cols(x, y, z), eye);
-    let projection = Projection::Perspective {
-        yfov,
-        aspect_ratio: None,
-    };
-    let name = "automatic camera".to_owned();
-    let mut dof = dof::resolve(
-        &CameraInput {
-            name: &name,
-            projection,
-            world_from_camera,
-            physical: None,
-            camera_extras: None,
-            node_extras: None,
-        },
-        &options.dof_overrides,
-        info,
-    )?;
-    if options.dof_overrides.focus_distance.is_none()
-        && options.dof_overrides.focus_object.is_none()
-    {
-        // Focus on the scene's centre rather than Blender's 10 m.
-        dof.focus_distance = distance;
-    }
-    Ok(Camera {
-        name,
-        node: None,
-        index: None,
-        world_from_camera,
-        projection,
         dof,
     })
 }

@@ -102,11 +102,7 @@ pub(crate) fn apply_graph_edits(mut graph: NodeGraph, edits: &[Edit]) -> Result<
 
 /// A `/nodes/...` pointer edit applied to the graph (TRS replaced component by component,
 /// visibility set; weights are read from the edited document elsewhere).
-fn apply_node_pointer(
-    graph: &mut NodeGraph,
-    path: &str,
-    v: &[f64],
-) -> Result<(), Error> {
+fn apply_node_pointer(graph: &mut NodeGraph, path: &str, v: &[f64]) -> Result<(), Error> {
     let root = serde_json::json!({ "nodes": vec![Value::Null; graph.nodes.len()] });
     let f = |k: usize| v.get(k).copied().unwrap_or(0.0) as f32;
     match pointer::parse(path, &root) {
@@ -132,7 +128,6 @@ fn apply_node_pointer(
     Ok(())
 }
 
-
 /// A node's stored transform as scale, rotation, translation in f32 (a matrix decomposed),
 /// for replacing one component as an animation channel or a pointer edit would.
 pub(crate) fn trs_of(t: LocalTransform) -> ([f32; 3], [f32; 4], [f32; 3]) {
@@ -140,7 +135,11 @@ pub(crate) fn trs_of(t: LocalTransform) -> ([f32; 3], [f32; 4], [f32; 3]) {
         LocalTransform::Trs(t, r, s) => (s, r, t),
         m @ LocalTransform::Matrix(_) => {
             let (s, r, t) = m.trs();
-            (s.as_vec3().to_array(), r.as_quat().to_array(), t.as_vec3().to_array())
+            (
+                s.as_vec3().to_array(),
+                r.as_quat().to_array(),
+                t.as_vec3().to_array(),
+            )
         }
     }
 }

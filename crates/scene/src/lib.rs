@@ -36,6 +36,7 @@
 mod accessor;
 mod animated;
 mod animation;
+mod auto_camera;
 mod basis;
 mod buffers;
 mod camera;
@@ -68,9 +69,9 @@ mod types;
 mod uri;
 
 pub use animated::Animated;
-pub use edit::{Edit, Touched};
 pub use animation::{AnimationInfo, AnimationSelection};
 pub use dof::{lens_from_yfov, DEFAULT_ASPECT};
+pub use edit::{Edit, Touched};
 pub use error::Error;
 pub use hash::content_hash;
 pub use load::{load, load_bytes};

@@ -26,7 +26,7 @@ pub struct Scene {
     /// Punctual lights in world space.
     pub lights: Vec<Light>,
     /// Cameras with resolved depth of field. Never empty after loading: a scene without a camera
-    /// gets an automatic one that frames its bounds.
+    /// gets an automatic one that frames the bounds of its stored pose (the same at every time).
     pub cameras: Vec<Camera>,
     /// What the loader saw, skipped and warned about (for `aperture info`).
     pub stats: SceneStats,

@@ -27,11 +27,7 @@ pub(crate) fn tiles_of(w: Window) -> Vec<(u32, u32, u32, u32)> {
 /// of each pixel's sequence), summed onto what the film holds: a progressive render's pass
 /// continues each pixel's sums where the last pass left them, so that its passes together
 /// equal one render of all their samples bit for bit.
-pub(super) fn accumulate(
-    job: &Job<'_>,
-    film: &mut Film,
-    progress: &(dyn Fn(usize, usize) + Sync),
-) {
+pub(super) fn accumulate(job: &Job<'_>, film: &mut Film, progress: &(dyn Fn(usize, usize) + Sync)) {
     let window = film.window();
     // A fresh film holds zeros: its tiles start from empty sums without reading it.
     let resume = film.total_samples() > 0 || film.dropped_samples() > 0;

@@ -44,10 +44,13 @@ impl Animated {
             Edit::Pointer { path, value } => self.edit_pointer(path, value),
             Edit::CameraKey { camera, key, value } => {
                 let count = self.cameras.len();
-                let data = self.cameras.get_mut(*camera).ok_or_else(|| Error::Invalid {
-                    at: format!("cameras[{camera}]"),
-                    reason: format!("no such camera (the file has {count})"),
-                })?;
+                let data = self
+                    .cameras
+                    .get_mut(*camera)
+                    .ok_or_else(|| Error::Invalid {
+                        at: format!("cameras[{camera}]"),
+                        reason: format!("no such camera (the file has {count})"),
+                    })?;
                 set_extra(&mut data.extras, key, value.clone());
                 self.clear_node_key(*camera, key);
                 Ok(Touched::Cameras)
@@ -102,6 +105,11 @@ impl Animated {
             return Ok(Touched::Reload);
         }
         self.graph.nodes[node].transform = t;
+        if self.framing.is_some() {
+            // The automatic camera is framed on the stored pose, which just changed.
+            self.framing = None;
+            self.frame_stored_pose()?;
+        }
         let g = &self.graph;
         let draws = (0..g.nodes.len()).any(|i| below[i] && g.nodes[i].mesh.is_some());
         let lights = (0..g.nodes.len()).any(|i| below[i] && g.nodes[i].light.is_some());

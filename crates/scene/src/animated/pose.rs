@@ -71,7 +71,7 @@ impl Animated {
                 origins: &origins,
             };
             out.cameras
-                .push(camera::automatic_camera(&out, &info, &self.options)?);
+                .push(self.automatic_camera(&out, origin, &info)?);
         }
         if self.draws_nothing && out.instances.is_empty() {
             stats
