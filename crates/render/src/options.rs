@@ -65,7 +65,7 @@ pub struct RenderOptions {
     pub vector: Option<std::sync::Arc<crate::motion::FrameNeighbours>>,
     /// Stops the render early when cancelled (never, by default): the film then holds the
     /// samples taken so far, each pixel's count saying how many.
-    pub cancel: crate::Cancel,
+    pub cancel: crate::cancel::Cancel,
 }
 
 impl Default for RenderOptions {
@@ -90,7 +90,7 @@ impl Default for RenderOptions {
             energy_compensation: true,
             motion: None,
             vector: None,
-            cancel: crate::Cancel::default(),
+            cancel: crate::cancel::Cancel::default(),
         }
     }
 }

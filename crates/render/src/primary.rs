@@ -10,7 +10,8 @@ use crate::camera::{Camera, CameraRay, CameraSample};
 use crate::camera_lanes::{LensLanes, LANES};
 use crate::filter::Filter;
 use crate::motion::FrameMotion;
-use crate::sampler::{pixel_seed_in_row, row_seed, PixelRun, SampleStream, SamplerKind};
+use crate::sampler::pixel_run::PixelRun;
+use crate::sampler::{pixel_seed_in_row, row_seed, SampleStream, SamplerKind};
 use glam::{Vec2, Vec3};
 
 /// Makes the primary samples of a render, pixel by pixel; cheapest when a pixel's samples come

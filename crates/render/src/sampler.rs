@@ -6,9 +6,8 @@
 //! 4-D dimension sets. Pixels are decorrelated by hashing (pixel, seed) into the sequence's seed,
 //! so neighbouring pixels show noise rather than structure.
 
-mod pixel_run;
+pub(crate) mod pixel_run;
 
-pub(crate) use pixel_run::PixelRun;
 use sobol_burley::parts::Int4;
 
 /// Which sequence generates sample values (`--sampler`).

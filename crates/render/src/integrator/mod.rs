@@ -16,13 +16,14 @@
 //! Inside a refractive body the path is absorbed by Beer–Lambert (its [`MediumStack`]).
 
 mod direct;
+mod in_flight;
 mod path;
 mod trace;
-mod wavefront;
+pub(crate) mod wavefront;
 
+pub(crate) use in_flight::PathInFlight;
 pub use path::Clamp;
 use path::{Arrival, PathState, Walk};
-pub(crate) use wavefront::{PathInFlight, Wavefront};
 
 use crate::aov::{Features, SampleAov, Seen};
 use crate::sampler::{BounceSample, SampleStream};
@@ -66,7 +67,7 @@ pub(crate) struct Integrator<'a> {
 impl Integrator<'_> {
     /// Radiance along a primary ray (unit direction), whether it hit geometry, and the sample's
     /// pass values (recorded with `AOV`), traced one ray at a time: the reference of the render
-    /// loop's [`Wavefront`].
+    /// loop's [`wavefront::Wavefront`].
     #[cfg(test)]
     pub(crate) fn li_alone<const AOV: bool>(
         &self,

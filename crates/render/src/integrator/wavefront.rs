@@ -10,7 +10,7 @@
 //! meets nothing takes no path at all when no pass values are recorded: its radiance is what
 //! the path's one step would add ([`Integrator::background`]).
 
-use super::path::{PathState, Walk};
+use super::in_flight::PathInFlight;
 use super::Integrator;
 use crate::aov::SampleAov;
 use crate::sampler::SampleStream;
@@ -19,50 +19,6 @@ use glam::Vec3;
 
 /// Paths between asking for a hit's vertex data and shading it.
 const AHEAD: usize = 4;
-
-/// A path between vertices: its walk and running sums.
-pub(crate) struct PathInFlight<const AOV: bool> {
-    pub(super) path: PathState<AOV>,
-    pub(super) w: Walk,
-    pub(super) covered: bool,
-    pub(super) live: bool,
-}
-
-impl<const AOV: bool> PathInFlight<AOV> {
-    /// The ray whose closest hit the next [`Integrator::advance`] needs; `None` once the path
-    /// has ended.
-    #[inline]
-    pub fn ray(&self) -> Option<Ray> {
-        self.live.then_some(self.w.ray)
-    }
-
-    /// The shadow rays of the light samples waiting since the last vertex.
-    #[inline]
-    pub fn shadow_rays(&self) -> impl Iterator<Item = Ray> + '_ {
-        self.path.pending.iter().map(|p| p.ray)
-    }
-
-    /// Adds the waiting light samples, given whether each one's shadow ray is `blocked` (in
-    /// the order of [`PathInFlight::shadow_rays`]). The arithmetic of an immediate light
-    /// sample: the clamped contribution times zero or the medium's transmittance.
-    #[inline]
-    pub fn resolve(&mut self, blocked: &[bool]) {
-        // Taken out and put back (emptied) so that its capacity serves the next vertex.
-        let mut pending = std::mem::take(&mut self.path.pending);
-        for (p, &b) in pending.iter().zip(blocked) {
-            let lit = p.clamped * if b { Vec3::ZERO } else { p.absorbed };
-            self.path.add_lit(lit, p.scatterings, &p.split);
-        }
-        pending.clear();
-        self.path.pending = pending;
-    }
-
-    /// The path's radiance, whether its camera ray hit geometry, and its pass values.
-    #[cfg(test)]
-    pub fn finish(self) -> (Vec3, bool, SampleAov) {
-        (self.path.l, self.covered, self.path.aov)
-    }
-}
 
 /// The buffers of a wavefront, kept from one run to the next.
 #[derive(Default)]

@@ -1,7 +1,10 @@
 //! A frame's motion, posed: the scene at each motion step over the shutter interval, and what
 //! of it moves (the camera, rigid instances, deforming meshes).
 
-use super::{CameraPath, FrameMotion, MotionSettings, MovingInstance};
+use super::camera_path::CameraPath;
+use super::frame_motion::FrameMotion;
+use super::instances::MovingInstance;
+use super::settings::MotionSettings;
 use crate::camera::Camera;
 use aperture_accel::{MotionTransform, VertexMotion};
 use aperture_scene::{Animated, Error, Scene};
