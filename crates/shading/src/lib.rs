@@ -27,6 +27,7 @@ pub mod bsdf;
 pub mod color;
 pub mod environment;
 pub mod hit_prefetch;
+pub mod light_bounds;
 pub mod light_choice;
 pub mod light_tree;
 pub mod lights;
