@@ -58,10 +58,10 @@ pub use render::{
 pub use sampler::{SampleStream, SamplerKind, MAX_SPP};
 
 // What the options and the public API take from the shading crate, under their old names.
-pub use aperture_shading::{single_sided_materials, ParseSidesError, SidesMode, SidesModel};
+pub use aperture_shading::{single_sided_materials, Convention, ConventionModel, SidesModel};
 pub use aperture_shading::{
     srgb_to_linear, test_scenes, transform_uv, transmissive_meshes, EnvImage, EnvSampling,
-    Environment, MaterialOverride, ParseTransmissionError, TransmissionMode, TransmissionModel,
+    Environment, MaterialOverride, TransmissionModel,
 };
 pub use aperture_shading::{
     Albedos, Bsdf, BsdfSample, CoatLayer, Compensation, DeltaSample, Dielectric, Frame, Interface,
