@@ -46,7 +46,8 @@ pub use cancel::Cancel;
 pub use film::{Film, PixelSum, Window};
 pub use filter::{Filter, FilterKind};
 pub use frame_accel::{
-    auto_bvh_quality, build_accel, build_frame_accel, build_motion_accel, SceneHints,
+    auto_bvh_quality, build_accel, build_frame_accel, build_motion_accel, BvhQualityChoice,
+    SceneHints,
 };
 pub use integrator::Clamp;
 pub use options::{RenderError, RenderOptions, DEFAULT_MAX_BOUNCES};
