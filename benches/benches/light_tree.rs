@@ -8,8 +8,9 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use aperture_scene::{Instance, Light, LightKind};
+use aperture_shading::light_bounds::LightBounds;
 use aperture_shading::light_choice::Candidates;
-use aperture_shading::light_tree::{Leaf, LightBounds, LightTree};
+use aperture_shading::light_tree::{Leaf, LightTree};
 use aperture_shading::lights::EmissiveLights;
 use aperture_shading::{test_scenes, Geometry, MaterialOverride, TransmissionModel};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};

@@ -12,7 +12,7 @@ use aperture_scene::{
     Camera, Dof, Light, LightKind, LoadOptions, Material, Projection, Scene, Transmission, Volume,
 };
 use aperture_shading::{
-    test_scenes, transmissive_meshes, Environment, TransmissionMode, TransmissionModel,
+    test_scenes, transmissive_meshes, Convention, Environment, TransmissionModel,
 };
 use aperture_tests::gltf_writer::GltfWriter;
 use aperture_tests::render_checked;
@@ -102,7 +102,7 @@ fn thin_pane_transmits_the_gltf_formula_to_camera_rays() {
         let theta = theta_deg.to_radians();
         let scene = load(&pane_file(theta, glass(base), "a tool that is not Blender"));
         assert_eq!(
-            TransmissionMode::Auto.resolve(&scene).0,
+            Convention::Auto.resolve::<TransmissionModel>(&scene).0,
             TransmissionModel::Gltf
         );
         let got = mean(&scene, &opts(256));
@@ -196,11 +196,11 @@ fn auto_mode_makes_blender_glass_refract() {
     let blender = load(&sphere_file("Khronos glTF Blender I/O v4.2.70"));
     let other = load(&sphere_file("three.js GLTFExporter"));
     assert_eq!(
-        transmissive_meshes(&blender, TransmissionMode::Auto.resolve(&blender).0),
+        transmissive_meshes(&blender, Convention::Auto.resolve(&blender).0),
         (1, 0)
     );
     assert_eq!(
-        transmissive_meshes(&other, TransmissionMode::Auto.resolve(&other).0),
+        transmissive_meshes(&other, Convention::Auto.resolve(&other).0),
         (0, 1)
     );
     let o = |mode| RenderOptions {
@@ -214,9 +214,9 @@ fn auto_mode_makes_blender_glass_refract() {
             .expect("renders")
             .to_rgba()
     };
-    let auto = img(TransmissionMode::Auto);
-    assert_eq!(auto, img(TransmissionMode::Blender), "auto is blender here");
-    assert_ne!(auto, img(TransmissionMode::Gltf), "and that refracts");
+    let auto = img(Convention::Auto);
+    assert_eq!(auto, img(Convention::Blender), "auto is blender here");
+    assert_ne!(auto, img(Convention::Gltf), "and that refracts");
 }
 
 /// A stack of interfaces and layers at normal incidence, combined by the incoherent adding

@@ -64,15 +64,23 @@ pub struct InstanceInput {
     pub world_from_object: Affine3A,
 }
 
-/// Build-time/quality trade-off of the BVH (`--bvh-quality`).
+/// Build-time/quality trade-off of the BVH (`--bvh-quality`; the first paragraph of each
+/// value's comment is its help there).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum BvhQuality {
-    /// Fastest build, slower traversal: previews.
+    /// Fastest build.
+    ///
+    /// Slower traversal: previews.
     Fast,
-    /// The default balance.
+    /// Balanced.
+    ///
+    /// The default.
     #[default]
     Medium,
-    /// Slowest build, fastest traversal: long renders.
+    /// Fastest traversal.
+    ///
+    /// Slowest build: long renders.
     High,
 }
 

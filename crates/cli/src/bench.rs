@@ -192,7 +192,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         height,
         seed: args.seed,
         max_bounces: args.tracing.max_bounces,
-        filter: args.tracing.filter.into(),
+        filter: args.tracing.filter,
         clamp,
         ..RenderOptions::default()
     };

@@ -16,34 +16,12 @@ pub struct DenoiseOptions {
     /// (with the accurate prefilter about half high's time; otherwise the same), fast (a
     /// small network for the image, for previews).
     #[arg(long, value_enum, value_name = "QUALITY")]
-    pub denoise_quality: Option<QualityArg>,
+    pub denoise_quality: Option<Quality>,
     /// How the albedo and normal guide it, as Cycles' Denoising "Prefilter": accurate (the
     /// default: each denoised first, three filters in all), fast (taken as noisy, one filter),
     /// none (taken as noise-free, one filter; for converged albedo and normal).
     #[arg(long, value_enum, value_name = "PREFILTER")]
-    pub denoise_prefilter: Option<PrefilterArg>,
-}
-
-/// `--denoise-quality`.
-#[derive(clap::ValueEnum, Debug, Clone, Copy)]
-pub enum QualityArg {
-    /// The final-frame network.
-    High,
-    /// OIDN's earlier network (half high's time with the accurate prefilter).
-    Balanced,
-    /// A small network for the image, for previews.
-    Fast,
-}
-
-/// `--denoise-prefilter`.
-#[derive(clap::ValueEnum, Debug, Clone, Copy)]
-pub enum PrefilterArg {
-    /// Albedo and normal denoised first.
-    Accurate,
-    /// Albedo and normal cleaned with the beauty.
-    Fast,
-    /// Albedo and normal taken as noise-free.
-    None,
+    pub denoise_prefilter: Option<Prefilter>,
 }
 
 impl DenoiseOptions {
@@ -54,17 +32,10 @@ impl DenoiseOptions {
 
     /// The settings asked for, Cycles' defaults for the rest.
     pub fn settings(&self) -> Settings {
-        let quality = match self.denoise_quality {
-            Some(QualityArg::Fast) => Quality::Fast,
-            Some(QualityArg::Balanced) => Quality::Balanced,
-            Some(QualityArg::High) | None => Quality::High,
-        };
-        let prefilter = match self.denoise_prefilter {
-            Some(PrefilterArg::None) => Prefilter::None,
-            Some(PrefilterArg::Fast) => Prefilter::Fast,
-            Some(PrefilterArg::Accurate) | None => Prefilter::Accurate,
-        };
-        Settings { quality, prefilter }
+        Settings {
+            quality: self.denoise_quality.unwrap_or_default(),
+            prefilter: self.denoise_prefilter.unwrap_or_default(),
+        }
     }
 
     /// The denoiser when `wanted`; without it, an error if any option was given anyway.

@@ -2,7 +2,7 @@
 //! single-sided faces applies to the file (and why), and its material variants.
 
 use aperture_scene::Scene;
-use aperture_shading::{SidesMode, TransmissionMode};
+use aperture_shading::{Convention, SidesModel, TransmissionModel};
 use serde_json::{json, Value};
 
 /// A JSON count (0 when missing).
@@ -11,8 +11,8 @@ fn count(v: &Value) -> u64 {
 }
 
 /// Which meaning of transmission applies, why, and what it makes of the file's meshes.
-pub(crate) fn transmission_json(s: &Scene, mode: TransmissionMode) -> Value {
-    let (model, why) = mode.resolve(s);
+pub(crate) fn transmission_json(s: &Scene, convention: Convention) -> Value {
+    let (model, why) = convention.resolve::<TransmissionModel>(s);
     let (refractive, thin) = aperture_shading::transmissive_meshes(s, model);
     json!({
         "applies": model.to_string(),
@@ -24,8 +24,8 @@ pub(crate) fn transmission_json(s: &Scene, mode: TransmissionMode) -> Value {
 
 /// Which meaning of single-sided faces applies (`gltf`: their backs are invisible; `blender`:
 /// both sides are seen), why, and how many materials are single-sided.
-pub(crate) fn sides_json(s: &Scene, mode: SidesMode) -> Value {
-    let (model, why) = mode.resolve(s);
+pub(crate) fn sides_json(s: &Scene, convention: Convention) -> Value {
+    let (model, why) = convention.resolve::<SidesModel>(s);
     json!({
         "applies": model.to_string(),
         "why": why,

@@ -5,17 +5,6 @@ use crate::number_args::positive_f32;
 use aperture_render::motion::{MotionOverrides, MotionSettings, ShutterPosition, MAX_MOTION_STEPS};
 use aperture_scene::Animated;
 
-/// Blender's `motion_blur_position`.
-#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PositionArg {
-    /// The shutter opens at the frame.
-    Start,
-    /// Centred on the frame.
-    Center,
-    /// The shutter closes at the frame.
-    End,
-}
-
 /// Motion blur flags; each overrides the file's `scenes[i].extras` key.
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct MotionArgs {
@@ -31,7 +20,7 @@ pub struct MotionArgs {
     pub shutter: Option<f32>,
     /// Where the shutter sits around the frame [default: the file's, else center].
     #[arg(long, value_enum)]
-    pub shutter_position: Option<PositionArg>,
+    pub shutter_position: Option<ShutterPosition>,
     /// Poses over the shutter for what moves, interpolated per ray [default: 3].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=MAX_MOTION_STEPS as i64))]
     pub motion_steps: Option<u32>,
@@ -47,11 +36,7 @@ impl MotionArgs {
                 _ => None,
             },
             shutter: self.shutter,
-            position: self.shutter_position.map(|p| match p {
-                PositionArg::Start => ShutterPosition::Start,
-                PositionArg::Center => ShutterPosition::Center,
-                PositionArg::End => ShutterPosition::End,
-            }),
+            position: self.shutter_position,
             steps: self.motion_steps,
         }
     }

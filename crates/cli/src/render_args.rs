@@ -2,71 +2,11 @@
 //! their types, value parsers and help texts.
 
 use crate::number_args::{finite_f32, non_negative_f32, positive_f32};
-use aperture_render::PassSet;
-use clap::ValueEnum;
+use aperture_imageio::ViewTransform;
+use aperture_render::{BvhQualityChoice, FilterKind, PassSet, SamplerKind};
+use aperture_shading::MaterialOverride;
 use glam::Vec3;
 use std::path::PathBuf;
-
-/// `--filter`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum FilterArg {
-    /// The 1-pixel box.
-    Box,
-    /// Gaussian, 1.5 px wide (as Cycles).
-    Gaussian,
-    /// Blackman-Harris, 1.5 px wide (Cycles' default).
-    BlackmanHarris,
-}
-
-impl From<FilterArg> for aperture_render::FilterKind {
-    fn from(f: FilterArg) -> Self {
-        use aperture_render::FilterKind;
-        match f {
-            FilterArg::Box => FilterKind::Box,
-            FilterArg::Gaussian => FilterKind::Gaussian,
-            FilterArg::BlackmanHarris => FilterKind::BlackmanHarris,
-        }
-    }
-}
-
-/// `--sampler`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum SamplerArg {
-    /// Owen-scrambled Sobol.
-    Sobol,
-    /// Independent uniform numbers, for comparison.
-    Random,
-}
-
-/// `--override-material`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum OverrideArg {
-    /// Two-sided Lambertian of the base colour, emission kept (a "clay" render).
-    Diffuse,
-}
-
-/// `--view`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ViewArg {
-    /// Clip to [0, 1], then the sRGB transfer function.
-    Standard,
-    /// Blender's AgX base view (SPEC §6).
-    Agx,
-}
-
-/// `--bvh-quality`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum BvhQualityArg {
-    /// Chosen from the job: `fast` when the render takes fewer samples than half the scene's
-    /// triangles (a preview of a big scene), else `medium`.
-    Auto,
-    /// Fastest build.
-    Fast,
-    /// Balanced.
-    Medium,
-    /// Fastest traversal.
-    High,
-}
 
 fn parse_rgb(s: &str) -> Result<Vec3, String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
@@ -124,8 +64,8 @@ pub struct TracingArgs {
     #[arg(long, default_value_t = 0.0, value_parser = non_negative_f32)]
     pub clamp_indirect: f32,
     /// Pixel filter.
-    #[arg(long, value_enum, default_value_t = FilterArg::BlackmanHarris)]
-    pub filter: FilterArg,
+    #[arg(long, value_enum, default_value_t = FilterKind::BlackmanHarris)]
+    pub filter: FilterKind,
 }
 
 impl TracingArgs {
@@ -199,8 +139,8 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub materials: crate::material_args::MaterialArgs,
     /// Sample sequence.
-    #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
-    pub sampler: SamplerArg,
+    #[arg(long, value_enum, default_value_t = SamplerKind::Sobol)]
+    pub sampler: SamplerKind,
     /// Environment: uniform radiance as linear R,G,B, or an equirectangular .hdr or .exr image
     /// (importance-sampled by luminance) [default: the file's EXT_lights_image_based light,
     /// else black].
@@ -218,13 +158,13 @@ pub struct RenderArgs {
     pub exposure: f32,
     /// Render every surface with an override material.
     #[arg(long, value_enum)]
-    pub override_material: Option<OverrideArg>,
+    pub override_material: Option<MaterialOverride>,
     /// BVH build quality.
-    #[arg(long, value_enum, default_value_t = BvhQualityArg::Auto)]
-    pub bvh_quality: BvhQualityArg,
+    #[arg(long, value_enum, default_value_t = BvhQualityChoice::Auto)]
+    pub bvh_quality: BvhQualityChoice,
     /// View transform of PNG output.
-    #[arg(long, value_enum, default_value_t = ViewArg::Standard)]
-    pub view: ViewArg,
+    #[arg(long, value_enum, default_value_t = ViewTransform::Standard)]
+    pub view: ViewTransform,
     /// Keep coverage as alpha in PNG output too (as Cycles' Film > Transparent). Without it a
     /// PNG is opaque: the environment (black by default) shows where nothing was hit, and dim
     /// partial coverage (bokeh against the sky) stays visible. EXR always stores coverage.
@@ -335,8 +275,10 @@ pub(crate) mod tests {
     fn defaults_follow_the_issue() {
         let a = parse(&[]).unwrap();
         assert_eq!(a.tracing.max_bounces, 12);
-        assert_eq!(a.tracing.filter, FilterArg::BlackmanHarris);
-        assert_eq!(a.sampler, SamplerArg::Sobol);
+        assert_eq!(a.tracing.filter, FilterKind::BlackmanHarris);
+        assert_eq!(a.sampler, SamplerKind::Sobol);
+        assert_eq!(a.bvh_quality, BvhQualityChoice::Auto);
+        assert_eq!(a.view, ViewTransform::Standard);
         assert_eq!(a.env, None);
         assert_eq!(a.width, None);
     }
@@ -408,8 +350,8 @@ pub(crate) mod tests {
         assert_eq!(b.env, Some(EnvArg::File("sky.HDR".into())));
         assert_eq!((b.env_rotation, b.env_strength), (-90.0, 2.5));
         assert_eq!(a.exposure, -1.5);
-        assert_eq!(a.override_material, Some(OverrideArg::Diffuse));
-        assert_eq!(a.view, ViewArg::Agx);
+        assert_eq!(a.override_material, Some(MaterialOverride::Diffuse));
+        assert_eq!(a.view, ViewTransform::AgX);
         assert_eq!(a.scene_index, Some(1));
         assert_eq!(a.aperture_radius, Some(0.0));
         assert_eq!(a.tracing.clamp(), aperture_render::Clamp::OFF);

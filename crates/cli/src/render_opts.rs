@@ -1,9 +1,9 @@
 //! What `aperture render`'s arguments ask for, as the options the loader, the renderer and the
 //! PNG writer take; a flag value that cannot work is a usage error (exit code 2).
 
-use crate::render_args::{BvhQualityArg, EnvArg, OverrideArg, RenderArgs, SamplerArg, ViewArg};
+use crate::render_args::{EnvArg, RenderArgs};
 use anyhow::Context as _;
-use aperture_render::{Pass, RenderOptions, SamplerKind};
+use aperture_render::{Pass, RenderOptions};
 use aperture_scene::{DofOverrides, LoadOptions};
 use aperture_shading::{EnvImage, EnvSampling, Environment, MaterialOverride};
 use clap::error::ErrorKind;
@@ -254,15 +254,10 @@ fn bvh_quality(
     width: u32,
     height: u32,
 ) -> aperture_accel::BvhQuality {
-    match args.bvh_quality {
-        BvhQualityArg::Auto => aperture_render::auto_bvh_quality(
-            scene.unique_triangle_count(),
-            u64::from(width) * u64::from(height) * u64::from(args.spp),
-        ),
-        BvhQualityArg::Fast => aperture_accel::BvhQuality::Fast,
-        BvhQualityArg::Medium => aperture_accel::BvhQuality::Medium,
-        BvhQualityArg::High => aperture_accel::BvhQuality::High,
-    }
+    args.bvh_quality.resolve(
+        scene.unique_triangle_count(),
+        u64::from(width) * u64::from(height) * u64::from(args.spp),
+    )
 }
 
 /// Combinations of sample counts and splitting flags that cannot work: usage errors.
@@ -305,18 +300,12 @@ fn render_options(args: &RenderArgs) -> RenderOptions {
         seed: args.seed,
         max_bounces: args.tracing.max_bounces,
         clamp: args.tracing.clamp(),
-        filter: args.tracing.filter.into(),
+        filter: args.tracing.filter,
         transmission: args.materials.transmission,
         single_sided: args.materials.single_sided,
         energy_compensation: !args.materials.no_energy_compensation,
-        sampler: match args.sampler {
-            SamplerArg::Sobol => SamplerKind::Sobol,
-            SamplerArg::Random => SamplerKind::Random,
-        },
-        material_override: match args.override_material {
-            Some(OverrideArg::Diffuse) => MaterialOverride::Diffuse,
-            None => MaterialOverride::None,
-        },
+        sampler: args.sampler,
+        material_override: args.override_material.unwrap_or(MaterialOverride::None),
         ..RenderOptions::default()
     }
 }
@@ -360,10 +349,7 @@ fn environment(
 fn png_options(args: &RenderArgs) -> aperture_imageio::PngOptions {
     aperture_imageio::PngOptions {
         exposure: args.exposure,
-        view: match args.view {
-            ViewArg::Standard => aperture_imageio::ViewTransform::Standard,
-            ViewArg::Agx => aperture_imageio::ViewTransform::AgX,
-        },
+        view: args.view,
         ..Default::default()
     }
 }

@@ -4,17 +4,25 @@
 /// OIDN's `quality`: the network's size, hence its time (Cycles' "Quality"). In OIDN 2.5 on
 /// the CPU, `high` differs from `balanced` only where it runs a larger network, about twice
 /// as slow: the beauty with clean albedo and normal (`cleanAux`) and the prefilters; `fast` has
-/// a small network for the beauty only (the prefilters run `balanced`).
+/// a small network for the beauty only (the prefilters run `balanced`). On the command line
+/// (`--denoise-quality`) the first paragraph of each value's comment is its help, in this
+/// order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Quality {
-    /// `OIDN_QUALITY_FAST`: the beauty's small network, for previews (about a third of
-    /// balanced's time).
-    Fast,
-    /// `OIDN_QUALITY_BALANCED`: OIDN's earlier network.
-    Balanced,
-    /// `OIDN_QUALITY_HIGH`: the final-frame network (the default, as Cycles').
+    /// The final-frame network.
+    ///
+    /// `OIDN_QUALITY_HIGH`; the default, as Cycles'.
     #[default]
     High,
+    /// OIDN's earlier network (half high's time with the accurate prefilter).
+    ///
+    /// `OIDN_QUALITY_BALANCED`.
+    Balanced,
+    /// A small network for the image, for previews.
+    ///
+    /// `OIDN_QUALITY_FAST`: the beauty's small network, about a third of balanced's time.
+    Fast,
 }
 
 impl Quality {
@@ -38,17 +46,25 @@ impl Quality {
 }
 
 /// How the albedo and normal guide the beauty's filter (Cycles' "Prefilter", with its meaning:
-/// `intern/cycles/integrator/denoiser_oidn.cpp`).
+/// `intern/cycles/integrator/denoiser_oidn.cpp`). On the command line (`--denoise-prefilter`)
+/// the first paragraph of each value's comment is its help, in this order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Prefilter {
-    /// Albedo and normal taken as noise-free (`cleanAux`): one filter, for converged guides.
-    None,
-    /// Albedo and normal taken as noisy, cleaned by the beauty's own filter: one filter.
-    Fast,
-    /// Albedo and normal each denoised by a filter of their own first, then taken as clean:
-    /// three filters, the best image (the default, as Cycles' and OIDN's recommendation).
+    /// Albedo and normal denoised first.
+    ///
+    /// Each by a filter of its own, then taken as clean: three filters, the best image (the
+    /// default, as Cycles' and OIDN's recommendation).
     #[default]
     Accurate,
+    /// Albedo and normal cleaned with the beauty.
+    ///
+    /// Taken as noisy, cleaned by the beauty's own filter: one filter.
+    Fast,
+    /// Albedo and normal taken as noise-free.
+    ///
+    /// `cleanAux`: one filter, for converged guides.
+    None,
 }
 
 impl Prefilter {

@@ -313,13 +313,18 @@ pub enum MetaValue {
     Chromaticities([f32; 8]),
 }
 
-/// The display transform applied before quantising to PNG.
+/// The display transform applied before quantising to PNG (`--view`; the first paragraph of
+/// each value's comment is its help there).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum ViewTransform {
-    /// Clip to [0, 1] and apply the sRGB transfer function.
+    /// Clip to [0, 1], then the sRGB transfer function.
     #[default]
     Standard,
-    /// Blender's AgX base view (no look), approximated; see [`view::agx`].
+    /// Blender's AgX base view (SPEC §6).
+    ///
+    /// No look, approximated; see [`view::agx`].
+    #[cfg_attr(feature = "clap", value(name = "agx"))]
     AgX,
 }
 

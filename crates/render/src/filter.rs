@@ -12,14 +12,17 @@ const TABLE: usize = 256;
 /// edges) instead of a binary search of nine.
 const GUIDE: usize = 256;
 
-/// Which filter (`--filter`).
+/// Which filter (`--filter`; the first paragraph of each value's comment is its help there).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum FilterKind {
     /// The 1-pixel box.
     Box,
-    /// Gaussian of width 1.5 px, as Cycles defines it.
+    /// Gaussian, 1.5 px wide (as Cycles).
+    ///
+    /// The width as Cycles defines it: the profile over ±0.75 px.
     Gaussian,
-    /// Blackman-Harris of width 1.5 px (Cycles' default).
+    /// Blackman-Harris, 1.5 px wide (Cycles' default).
     #[default]
     BlackmanHarris,
 }

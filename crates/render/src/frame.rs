@@ -14,13 +14,12 @@ use crate::render::{render_in, scene_camera, Posed};
 use aperture_accel::{Accel, BvhQuality};
 use aperture_scene::Scene;
 use aperture_shading::light_tree::TreeMemo;
-use aperture_shading::sides::SidesMode;
 use aperture_shading::surface::MaterialOverride;
-use aperture_shading::transmission::TransmissionMode;
+use aperture_shading::Convention;
 use std::sync::{Arc, Mutex};
 
 /// The options that change what a surface is, and so which emitters a frame has.
-type ShadingKey = (MaterialOverride, TransmissionMode, SidesMode);
+type ShadingKey = (MaterialOverride, Convention, Convention);
 
 /// A posed scene ready to render: built once, rendered from any number of times (any camera,
 /// size, window, sample range or options), from any number of threads.

@@ -30,6 +30,49 @@ pub fn auto_bvh_quality(triangles: usize, samples: u64) -> BvhQuality {
     }
 }
 
+/// The BVH preset a job asks for (`--bvh-quality`): `auto`, or one [`BvhQuality`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BvhQualityChoice {
+    /// Chosen from the job by [`auto_bvh_quality`].
+    #[default]
+    Auto,
+    /// This preset.
+    Preset(BvhQuality),
+}
+
+impl BvhQualityChoice {
+    /// The preset for a job of `samples` camera samples over `triangles` stored triangles.
+    pub fn resolve(self, triangles: usize, samples: u64) -> BvhQuality {
+        match self {
+            Self::Auto => auto_bvh_quality(triangles, samples),
+            Self::Preset(q) => q,
+        }
+    }
+}
+
+/// `auto`, then [`BvhQuality`]'s own values (their spellings and help are its `ValueEnum`'s).
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for BvhQualityChoice {
+    fn value_variants<'a>() -> &'a [Self] {
+        &[
+            Self::Auto,
+            Self::Preset(BvhQuality::Fast),
+            Self::Preset(BvhQuality::Medium),
+            Self::Preset(BvhQuality::High),
+        ]
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        match self {
+            Self::Auto => Some(clap::builder::PossibleValue::new("auto").help(
+                "Chosen from the job: `fast` when the render takes fewer samples than half the \
+                 scene's triangles (a preview of a big scene), else `medium`",
+            )),
+            Self::Preset(q) => q.to_possible_value(),
+        }
+    }
+}
+
 /// What of a posed scene may change between frames, for [`Accel::build_frame`].
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SceneHints {
@@ -129,5 +172,15 @@ mod tests {
         assert_eq!(auto_bvh_quality(1_000_001, 500_000), BvhQuality::Fast);
         assert_eq!(auto_bvh_quality(1_000_000, 500_000), BvhQuality::Medium);
         assert_eq!(auto_bvh_quality(usize::MAX, u64::MAX), BvhQuality::Medium);
+    }
+
+    #[test]
+    fn a_chosen_preset_is_kept_and_auto_decides_from_the_job() {
+        let preview = (7_700_000, 518_400);
+        let high = BvhQualityChoice::Preset(BvhQuality::High);
+        assert_eq!(high.resolve(preview.0, preview.1), BvhQuality::High);
+        let auto = BvhQualityChoice::default();
+        assert_eq!(auto.resolve(preview.0, preview.1), BvhQuality::Fast);
+        assert_eq!(auto.resolve(18_000, 33_177_600), BvhQuality::Medium);
     }
 }

@@ -54,7 +54,8 @@ pub use film::{Film, PixelSum, Window};
 pub use filter::{Filter, FilterKind};
 pub use frame::Frame;
 pub use frame_accel::{
-    auto_bvh_quality, build_accel, build_frame_accel, build_motion_accel, SceneHints,
+    auto_bvh_quality, build_accel, build_frame_accel, build_motion_accel, BvhQualityChoice,
+    SceneHints,
 };
 pub use frame_lights::FrameLights;
 pub use integrator::Clamp;

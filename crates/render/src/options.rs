@@ -6,10 +6,9 @@ use crate::filter::FilterKind;
 use crate::integrator::Clamp;
 use crate::passes::PassSet;
 use crate::sampler::{SamplerKind, MAX_SPP};
+use aperture_shading::convention::Convention;
 use aperture_shading::environment::Environment;
-use aperture_shading::sides::SidesMode;
 use aperture_shading::surface::MaterialOverride;
-use aperture_shading::transmission::TransmissionMode;
 
 /// Cycles' default `max_bounces`.
 pub const DEFAULT_MAX_BOUNCES: u32 = 12;
@@ -51,10 +50,10 @@ pub struct RenderOptions {
     /// [`PassSet::compositing`]).
     pub passes: PassSet,
     /// What transmissive surfaces are (`--transmission`): thin-walled or refractive.
-    pub transmission: TransmissionMode,
+    pub transmission: Convention,
     /// What the back of a single-sided face is (`--single-sided`). `Blender` by default here
     /// (both sides, what scenes built by hand expect); the command line's default is `Auto`.
-    pub single_sided: SidesMode,
+    pub single_sided: Convention,
     /// Give microfacet lobes back the energy single scattering loses, and layer materials by
     /// albedo scaling (on by default; off renders glTF Appendix B's formulas literally).
     pub energy_compensation: bool,
@@ -85,8 +84,8 @@ impl Default for RenderOptions {
             adaptive: None,
             clamp: Clamp::OFF,
             passes: PassSet::NONE,
-            transmission: TransmissionMode::Auto,
-            single_sided: SidesMode::Blender,
+            transmission: Convention::Auto,
+            single_sided: Convention::Blender,
             energy_compensation: true,
             motion: None,
             vector: None,

@@ -10,13 +10,19 @@ pub(crate) mod pixel_run;
 
 use sobol_burley::parts::Int4;
 
-/// Which sequence generates sample values (`--sampler`).
+/// Which sequence generates sample values (`--sampler`; the first paragraph of each value's
+/// comment is its help there).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum SamplerKind {
-    /// Owen-scrambled Sobol (Burley 2020), stratified in every 4-D dimension set.
+    /// Owen-scrambled Sobol.
+    ///
+    /// Burley 2020; stratified in every 4-D dimension set.
     #[default]
     Sobol,
-    /// Independent uniform values from a counter-based hash, for comparison.
+    /// Independent uniform numbers, for comparison.
+    ///
+    /// From a counter-based hash.
     Random,
 }
 

@@ -5,15 +5,19 @@ use serde_json::Value;
 
 use crate::Error;
 
-/// Where the shutter interval sits around the frame (Blender's `motion_blur_position`).
+/// Where the shutter interval sits around the frame (Blender's `motion_blur_position`;
+/// `--shutter-position`, where the first paragraph of each value's comment is its help).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum ShutterPosition {
-    /// Opens at the frame.
+    /// The shutter opens at the frame.
     Start,
-    /// Centred on the frame (Blender's default).
+    /// Centred on the frame.
+    ///
+    /// Blender's default.
     #[default]
     Center,
-    /// Closes at the frame.
+    /// The shutter closes at the frame.
     End,
 }
 

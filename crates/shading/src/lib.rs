@@ -25,8 +25,10 @@
 
 pub mod bsdf;
 pub mod color;
+pub mod convention;
 pub mod environment;
 pub mod hit_prefetch;
+pub mod light_bounds;
 pub mod light_choice;
 pub mod light_tree;
 pub mod lights;
@@ -46,10 +48,9 @@ pub use bsdf::{
     Lobe, LobeSplit, MetalRough, Principled, SheenLayer, ThinFilm,
 };
 pub use color::srgb_to_linear;
+pub use convention::{Convention, ConventionModel};
 pub use environment::{EnvImage, EnvSampling, Environment};
-pub use sides::{single_sided_materials, ParseSidesError, SidesMode, SidesModel};
+pub use sides::{single_sided_materials, SidesModel};
 pub use surface::{Geometry, MaterialOverride};
 pub use texture::transform_uv;
-pub use transmission::{
-    transmissive_meshes, ParseTransmissionError, TransmissionMode, TransmissionModel,
-};
+pub use transmission::{transmissive_meshes, TransmissionModel};

@@ -5,7 +5,7 @@
 //! at the vertex, and one is picked in proportion to it:
 //! - a punctual light, its unoccluded irradiance on the side the vertex receives light from,
 //!   exactly (zero only where it lights nothing);
-//! - the emitters, a bound from their box, normal cone and power (pbrt-v4's
+//! - the emitters, a bound from their box, normal cone and power ([`LightBounds`], pbrt-v4's
 //!   `LightBounds::Importance`): zero only where no emitter can light the vertex.
 //!
 //! A light of zero importance contributes nothing there, so the pick is unbiased; a light of
@@ -13,121 +13,10 @@
 //! Scenes with a single candidate never pick (see [`Candidates::choose`]).
 
 use crate::color::luminance;
+use crate::light_bounds::LightBounds;
 use crate::punctual::punctual_incident;
 use aperture_scene::Light;
 use glam::Vec3;
-
-/// A bound on what a set of emissive triangles can send to a point: their box, the cone of
-/// their normals and their power (two-sided emitters, as the integrator's).
-#[derive(Debug, Clone, Copy)]
-pub struct EmitterBounds {
-    /// Centre and squared radius of a sphere around their box.
-    centre: Vec3,
-    radius2: f32,
-    /// Axis, cosine and sine of the half-angle of a cone holding every triangle's normal.
-    axis: Vec3,
-    cos_o: f32,
-    sin_o: f32,
-    /// Total power, in the units of the punctual importance (radiance × area).
-    phi: f32,
-}
-
-impl EmitterBounds {
-    /// The bound of triangles given as `(vertices, power)`; `None` without any.
-    pub fn new(triangles: impl IntoIterator<Item = ([Vec3; 3], f32)>) -> Option<Self> {
-        let mut lo = Vec3::splat(f32::INFINITY);
-        let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        let mut phi = 0.0f64;
-        let mut normals = Vec::new();
-        for (p, power) in triangles {
-            for v in p {
-                lo = lo.min(v);
-                hi = hi.max(v);
-            }
-            phi += f64::from(power);
-            // Area-weighted: the cone's axis leans to the triangles that carry the area.
-            normals.push((p[1] - p[0]).cross(p[2] - p[0]));
-        }
-        if normals.is_empty() || !(lo.is_finite() && hi.is_finite()) {
-            return None;
-        }
-        let sum: Vec3 = normals.iter().sum();
-        let axis = sum.normalize_or_zero();
-        // Each normal's angle to the axis, rounded outwards; a degenerate sum (normals that
-        // cancel) leaves the whole sphere.
-        let cos_o = if axis == Vec3::ZERO {
-            -1.0
-        } else {
-            normals
-                .iter()
-                .filter_map(|n| n.try_normalize())
-                .map(|n| n.dot(axis) - 1e-4)
-                .fold(1.0f32, f32::min)
-                .max(-1.0)
-        };
-        Some(Self {
-            centre: (lo + hi) * 0.5,
-            radius2: (hi - lo).length_squared() * 0.25,
-            axis,
-            cos_o,
-            sin_o: (1.0 - cos_o * cos_o).max(0.0).sqrt(),
-            phi: phi as f32,
-        })
-    }
-
-    /// An upper bound, up to a constant factor, of the light these emitters send to a point
-    /// `p` with normal `n` (facing the side light is received from), or from both sides of
-    /// it when `two_sided`. Zero only where no emitter in the bound can light the point.
-    pub fn importance(&self, p: Vec3, n: Vec3, two_sided: bool) -> f32 {
-        let (centre, radius2) = (self.centre, self.radius2);
-        let d2 = p.distance_squared(centre);
-        // Directions from `p` into the bounding sphere: a cone of half-angle θ_b around the
-        // centre's direction (every direction when `p` is inside).
-        let (sin_b, cos_b) = if d2 <= radius2 {
-            (0.0, -1.0)
-        } else {
-            let sin2 = radius2 / d2;
-            (sin2.sqrt(), (1.0 - sin2).max(0.0).sqrt())
-        };
-        let to_p = (p - centre).normalize_or_zero();
-        // The emitters' side: the angle between `to_p` and the normal cone, less θ_b (two-
-        // sided emitters light both ways).
-        let cos_w = self.axis.dot(to_p).abs();
-        let sin_w = (1.0 - cos_w * cos_w).max(0.0).sqrt();
-        let (sin_x, cos_x) = angle_less(sin_w, cos_w, self.sin_o, self.cos_o);
-        let (_, cos_emit) = angle_less(sin_x, cos_x, sin_b, cos_b);
-        // Area emitters light their whole hemisphere: nothing beyond 90° of every normal.
-        if cos_emit <= 0.0 && d2 > radius2 {
-            return 0.0;
-        }
-        // The receiver's side: the angle between its normal and the light's direction, less θ_b.
-        let cos_i = if two_sided {
-            n.dot(to_p).abs()
-        } else {
-            -n.dot(to_p)
-        };
-        let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
-        let (_, cos_recv) = angle_less(sin_i, cos_i, sin_b, cos_b);
-        let importance = self.phi * cos_emit.max(0.0) * cos_recv.max(0.0) / d2.max(radius2);
-        // NaN (a NaN point) lights nothing; an overflow stays the largest weight.
-        if importance > 0.0 {
-            importance.min(f32::MAX)
-        } else {
-            0.0
-        }
-    }
-}
-
-/// `(sin, cos)` of `max(θ_a − θ_b, 0)` from those of `θ_a` and `θ_b` (pbrt-v4's
-/// `cosSubClamped` and `sinSubClamped`).
-#[inline]
-pub(crate) fn angle_less(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> (f32, f32) {
-    if cos_a > cos_b {
-        (0.0, 1.0)
-    } else {
-        (sin_a * cos_b - cos_a * sin_b, cos_a * cos_b + sin_a * sin_b)
-    }
-}
 
 /// The importance of a punctual light at a point `p` with normal `n` facing the side light is
 /// received from (both sides when `two_sided`): its unoccluded irradiance there, exactly.
@@ -176,8 +65,8 @@ pub struct Choice {
 pub struct Candidates<'a> {
     /// The scene's punctual lights.
     pub lights: &'a [Light],
-    /// The bound of the emissive triangles, if any.
-    pub emitters: Option<&'a EmitterBounds>,
+    /// The bound of the emissive triangles, if any ([`LightBounds::emitters`]).
+    pub emitters: Option<&'a LightBounds>,
 }
 
 impl Candidates<'_> {

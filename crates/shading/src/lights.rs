@@ -5,7 +5,7 @@
 //! triangles.
 
 use crate::color::luminance;
-use crate::light_choice::EmitterBounds;
+use crate::light_bounds::LightBounds;
 use crate::surface::Geometry;
 use crate::warp::AliasTable;
 #[cfg(test)]
@@ -33,7 +33,7 @@ pub struct EmissiveLights {
     /// emissive); `None` for instances without emissive triangles.
     index: Vec<Option<Box<[u32]>>>,
     /// What they can send to a point, for the choice between them and punctual lights.
-    pub bounds: EmitterBounds,
+    pub bounds: LightBounds,
 }
 
 impl EmissiveLights {
@@ -75,7 +75,7 @@ impl EmissiveLights {
             [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]
                 .map(|(b1, b2)| geom.emitter_surface(t.instance, t.triangle, b1, b2).p)
         };
-        let bounds = EmitterBounds::new(
+        let bounds = LightBounds::emitters(
             triangles
                 .iter()
                 .zip(&weights)

@@ -1,5 +1,5 @@
-//! What the back of a single-sided face is (`--single-sided auto|gltf|blender`), decided as
-//! transmission's meaning is (`crate::transmission`).
+//! What the back of a single-sided face is (`--single-sided auto|gltf|blender`, a
+//! [`Convention`](crate::convention::Convention) resolved as transmission's meaning is).
 //!
 //! glTF asks for back-face culling where a material is not `doubleSided`: the back of such a
 //! face is seen by no ray (camera, shadow or bounce), as if it were not there. Cycles, after
@@ -10,26 +10,14 @@
 //! - `auto` (the command line's default): `blender` when `asset.generator` names Blender's
 //!   glTF exporter, else `gltf`.
 
+use crate::convention::ConventionModel;
 use crate::surface::{Geometry, Surface};
-use crate::transmission::blender_export;
 use aperture_scene::Scene;
 use glam::Vec3;
 use std::fmt;
-use std::str::FromStr;
 
-/// The `--single-sided` choice.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum SidesMode {
-    /// Decide from the file's `asset.generator`.
-    #[default]
-    Auto,
-    /// glTF's meaning: the back of a single-sided face is invisible.
-    Gltf,
-    /// Cycles' meaning: both sides are seen.
-    Blender,
-}
-
-/// A resolved [`SidesMode`].
+/// What the back of a single-sided face is: a resolved `--single-sided`
+/// [`Convention`](crate::convention::Convention).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum SidesModel {
     /// Backs of single-sided faces are seen by no ray.
@@ -39,23 +27,12 @@ pub enum SidesModel {
     Both,
 }
 
-impl SidesMode {
-    /// The model that applies to a file written by `generator`, and why.
-    pub fn resolve_for(self, generator: Option<&str>) -> (SidesModel, String) {
-        match self {
-            Self::Gltf => (SidesModel::Gltf, "--single-sided gltf".into()),
-            Self::Blender => (SidesModel::Both, "--single-sided blender".into()),
-            Self::Auto => match blender_export(generator) {
-                (true, why) => (SidesModel::Both, why),
-                (false, why) => (SidesModel::Gltf, why),
-            },
-        }
-    }
-
-    /// [`SidesMode::resolve_for`] the scene's file.
-    pub fn resolve(self, scene: &Scene) -> (SidesModel, String) {
-        self.resolve_for(scene.stats.generator.as_deref())
-    }
+impl ConventionModel for SidesModel {
+    const FLAG: &'static str = "--single-sided";
+    /// glTF's meaning: the back of a single-sided face is invisible.
+    const GLTF: Self = Self::Gltf;
+    /// Cycles' meaning: both sides are seen.
+    const BLENDER: Self = Self::Both;
 }
 
 impl Geometry<'_> {
@@ -96,40 +73,28 @@ impl fmt::Display for SidesModel {
     }
 }
 
-/// A `--single-sided` value that is not `auto`, `gltf` or `blender`.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown single-sided mode {0:?} (expected auto, gltf or blender)")]
-pub struct ParseSidesError(pub String);
-
-impl FromStr for SidesMode {
-    type Err = ParseSidesError;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s {
-            "auto" => Ok(Self::Auto),
-            "gltf" => Ok(Self::Gltf),
-            "blender" => Ok(Self::Blender),
-            _ => Err(ParseSidesError(s.to_owned())),
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::convention::Convention;
 
     #[test]
     fn auto_follows_the_generator() {
         let blender = Some("Khronos glTF Blender I/O v4.2.70");
-        assert_eq!(SidesMode::Auto.resolve_for(blender).0, SidesModel::Both);
+        let sides = |c: Convention, g| c.resolve_for::<SidesModel>(g);
+        assert_eq!(sides(Convention::Auto, blender).0, SidesModel::Both);
         assert_eq!(
-            SidesMode::Auto.resolve_for(Some("Khronos Sample")).0,
+            sides(Convention::Auto, Some("Khronos Sample")).0,
             SidesModel::Gltf
         );
-        assert_eq!(SidesMode::Auto.resolve_for(None).0, SidesModel::Gltf);
-        assert_eq!(SidesMode::Gltf.resolve_for(blender).0, SidesModel::Gltf);
-        assert_eq!(SidesMode::Blender.resolve_for(None).0, SidesModel::Both);
-        assert_eq!("gltf".parse(), Ok(SidesMode::Gltf));
-        assert!("front".parse::<SidesMode>().is_err());
+        assert_eq!(sides(Convention::Auto, None).0, SidesModel::Gltf);
+        assert_eq!(
+            sides(Convention::Gltf, blender),
+            (SidesModel::Gltf, "--single-sided gltf".into())
+        );
+        assert_eq!(
+            sides(Convention::Blender, None),
+            (SidesModel::Both, "--single-sided blender".into())
+        );
     }
 }

@@ -14,14 +14,18 @@ use crate::transmission::TransmissionModel;
 use aperture_scene::{AlphaMode, Material, Scene, TextureRef};
 use glam::{Mat3, Vec2, Vec3, Vec4, Vec4Swizzles};
 
-/// How every surface is shaded, whatever its material says (`--override-material`).
+/// How every surface is shaded, whatever its material says (`--override-material`, whose
+/// absence is `None`; the first paragraph of each value's comment is its help there).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum MaterialOverride {
     /// Use the scene's materials.
     #[default]
+    #[cfg_attr(feature = "clap", value(skip))]
     None,
-    /// Two-sided Lambertian of the base colour (factor × vertex colour × texture), emission kept:
-    /// the "clay" render.
+    /// Two-sided Lambertian of the base colour, emission kept (a "clay" render).
+    ///
+    /// The base colour: factor × vertex colour × texture.
     Diffuse,
 }
 

@@ -11,23 +11,12 @@
 //! - `auto` (the default): `blender` when `asset.generator` names Blender's glTF exporter,
 //!   else `gltf`.
 
+use crate::convention::ConventionModel;
 use aperture_scene::Scene;
 use std::fmt;
-use std::str::FromStr;
 
-/// The `--transmission` choice.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum TransmissionMode {
-    /// Decide from the file's `asset.generator`.
-    #[default]
-    Auto,
-    /// The Khronos meaning: refractive only with a volume.
-    Gltf,
-    /// Cycles' meaning: every transmissive closed mesh refracts.
-    Blender,
-}
-
-/// A resolved [`TransmissionMode`].
+/// What a transmissive surface is: a resolved `--transmission`
+/// [`Convention`](crate::convention::Convention).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum TransmissionModel {
     /// Refractive where `KHR_materials_volume` gives a thickness, thin-walled elsewhere.
@@ -37,43 +26,12 @@ pub enum TransmissionModel {
     Blender,
 }
 
-/// Substring of `asset.generator` that Blender's glTF exporter writes
-/// ("Khronos glTF Blender I/O vX.Y.Z").
-const BLENDER_EXPORTER: &str = "glTF Blender I/O";
-
-/// Whether `generator` (`asset.generator`) is Blender's glTF exporter, and why in words: what
-/// the `auto` choices (`--transmission`, `--single-sided`) decide by.
-pub fn blender_export(generator: Option<&str>) -> (bool, String) {
-    match generator {
-        Some(g) if g.contains(BLENDER_EXPORTER) => (
-            true,
-            format!("asset.generator \"{g}\" is Blender's glTF exporter"),
-        ),
-        Some(g) => (
-            false,
-            format!("asset.generator \"{g}\" is not Blender's glTF exporter"),
-        ),
-        None => (false, "the file names no asset.generator".into()),
-    }
-}
-
-impl TransmissionMode {
-    /// The model that applies to a file written by `generator`, and why.
-    pub fn resolve_for(self, generator: Option<&str>) -> (TransmissionModel, String) {
-        match self {
-            Self::Gltf => (TransmissionModel::Gltf, "--transmission gltf".into()),
-            Self::Blender => (TransmissionModel::Blender, "--transmission blender".into()),
-            Self::Auto => match blender_export(generator) {
-                (true, why) => (TransmissionModel::Blender, why),
-                (false, why) => (TransmissionModel::Gltf, why),
-            },
-        }
-    }
-
-    /// [`TransmissionMode::resolve_for`] the scene's file.
-    pub fn resolve(self, scene: &Scene) -> (TransmissionModel, String) {
-        self.resolve_for(scene.stats.generator.as_deref())
-    }
+impl ConventionModel for TransmissionModel {
+    const FLAG: &'static str = "--transmission";
+    /// The Khronos meaning: refractive only with a volume.
+    const GLTF: Self = Self::Gltf;
+    /// Cycles' meaning: every transmissive closed mesh refracts.
+    const BLENDER: Self = Self::Blender;
 }
 
 /// How many meshes of `scene` have transmissive triangles, and of those how many are
@@ -113,59 +71,29 @@ impl fmt::Display for TransmissionModel {
     }
 }
 
-/// A `--transmission` value that is not `auto`, `gltf` or `blender`.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown transmission mode {0:?} (expected auto, gltf or blender)")]
-pub struct ParseTransmissionError(pub String);
-
-impl FromStr for TransmissionMode {
-    type Err = ParseTransmissionError;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s {
-            "auto" => Ok(Self::Auto),
-            "gltf" => Ok(Self::Gltf),
-            "blender" => Ok(Self::Blender),
-            _ => Err(ParseTransmissionError(s.to_owned())),
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::convention::Convention;
 
     #[test]
     fn auto_follows_the_generator() {
         let blender = Some("Khronos glTF Blender I/O v4.2.70");
+        let model = |c: Convention, g| c.resolve_for::<TransmissionModel>(g);
         assert_eq!(
-            TransmissionMode::Auto.resolve_for(blender).0,
+            model(Convention::Auto, blender).0,
             TransmissionModel::Blender
         );
-        // Naming Blender is not enough: the exporter writes the file.
-        let other = Some("glTF-Transform v3.0.4, and Blender 3.3, and VSCode glTF-Tools");
+        assert_eq!(model(Convention::Auto, None).0, TransmissionModel::Gltf);
+        // Explicit modes win, and say so.
         assert_eq!(
-            TransmissionMode::Auto.resolve_for(other).0,
-            TransmissionModel::Gltf
+            model(Convention::Gltf, blender),
+            (TransmissionModel::Gltf, "--transmission gltf".into())
         );
         assert_eq!(
-            TransmissionMode::Auto.resolve_for(None).0,
-            TransmissionModel::Gltf
+            model(Convention::Blender, None),
+            (TransmissionModel::Blender, "--transmission blender".into())
         );
-        // Explicit modes win.
-        assert_eq!(
-            TransmissionMode::Gltf.resolve_for(blender).0,
-            TransmissionModel::Gltf
-        );
-        assert_eq!(
-            TransmissionMode::Blender.resolve_for(None).0,
-            TransmissionModel::Blender
-        );
-        assert!(TransmissionMode::Auto
-            .resolve_for(blender)
-            .1
-            .contains("Blender I/O"));
-        assert_eq!("blender".parse(), Ok(TransmissionMode::Blender));
-        assert!("glass".parse::<TransmissionMode>().is_err());
+        assert!(model(Convention::Auto, blender).1.contains("Blender I/O"));
     }
 }

@@ -3,8 +3,9 @@
 //! estimates against the exhaustive sum, and a tree that does not depend on the input order.
 
 use aperture_scene::{Instance, Light, LightKind};
+use aperture_shading::light_bounds::LightBounds;
 use aperture_shading::light_choice::{punctual_importance, Pick};
-use aperture_shading::light_tree::{Leaf, LightBounds, LightTree, TreeMemo};
+use aperture_shading::light_tree::{Leaf, LightTree, TreeMemo};
 use aperture_shading::lights::EmissiveLights;
 use aperture_shading::{test_scenes, Geometry, MaterialOverride, TransmissionModel};
 use glam::{Affine3A, Vec3};

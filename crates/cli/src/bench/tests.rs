@@ -1,7 +1,7 @@
 use super::*;
 use crate::bench_results::{parse_series_csv, Series, CSV_HEADER};
 use crate::plot::{load_font, tick_label};
-use crate::render_args::FilterArg;
+use aperture_render::FilterKind;
 use clap::Parser as _;
 use std::path::Path;
 
@@ -74,7 +74,7 @@ fn series_arguments_parse() {
     assert_eq!(a.target_rel_mse, vec![1e-2, 3e-3]);
     assert_eq!(
         (a.tracing.max_bounces, a.tracing.filter, a.repeats),
-        (3, FilterArg::Box, 3)
+        (3, FilterKind::Box, 3)
     );
     assert_eq!(parse(&["--repeats", "0"]).unwrap_err().exit_code(), 2);
 }

@@ -1,4 +1,5 @@
 use super::*;
+use crate::light_bounds::LightBounds;
 use aperture_scene::LightKind;
 
 /// A small deterministic generator (the tests need many arbitrary configurations).
@@ -79,7 +80,7 @@ fn emitter_importance_is_zero_only_where_no_emitter_can_light() {
                 t
             })
             .collect();
-        let Some(b) = EmitterBounds::new(tris.iter().map(|t| (*t, 1.0))) else {
+        let Some(b) = LightBounds::emitters(tris.iter().map(|t| (*t, 1.0))) else {
             panic!("case {case}: no bounds");
         };
         for _ in 0..20 {
@@ -113,7 +114,7 @@ fn emitter_importance_falls_with_distance_and_angle() {
         Vec3::new(0.5, 3.0, 0.5),
         Vec3::new(-0.5, 3.0, 0.5),
     ];
-    let b = EmitterBounds::new([([q[0], q[2], q[1]], 1.0), ([q[0], q[3], q[2]], 1.0)]).unwrap();
+    let b = LightBounds::emitters([([q[0], q[2], q[1]], 1.0), ([q[0], q[3], q[2]], 1.0)]).unwrap();
     let up = Vec3::Y;
     let near = b.importance(Vec3::new(0.0, 2.0, 0.0), up, false);
     let far = b.importance(Vec3::new(0.0, -7.0, 0.0), up, false);
@@ -162,7 +163,7 @@ fn picks_follow_the_importances() {
         Vec3::new(1.0, 3.0, -1.0),
         Vec3::new(0.0, 3.0, 1.0),
     ];
-    let bounds = EmitterBounds::new([(panel, 4.0)]).unwrap();
+    let bounds = LightBounds::emitters([(panel, 4.0)]).unwrap();
     let cands = Candidates {
         lights: &lights,
         emitters: Some(&bounds),
@@ -222,7 +223,7 @@ fn one_candidate_is_no_choice() {
         emitters: None,
     };
     assert!(!none.choose());
-    let bounds = EmitterBounds::new([([Vec3::ZERO, Vec3::X, Vec3::Z], 1.0)]).unwrap();
+    let bounds = LightBounds::emitters([([Vec3::ZERO, Vec3::X, Vec3::Z], 1.0)]).unwrap();
     let emitters_alone = Candidates {
         lights: &[],
         emitters: Some(&bounds),
@@ -233,4 +234,44 @@ fn one_candidate_is_no_choice() {
         emitters: Some(&bounds),
     }
     .choose());
+}
+
+/// The emitters' bound gives, bit for bit, what it gave before it became the light tree's
+/// [`LightBounds`] (issue 58; the exhaustive choice's images are pinned by `bit_identity`):
+/// outside and inside its sphere, one- and two-sided, and nothing for a NaN normal.
+#[test]
+fn emitter_importance_is_as_before_the_one_bound_type() {
+    let tris = [
+        (
+            [
+                Vec3::new(-0.5, 3.0, -0.5),
+                Vec3::new(0.5, 3.0, 0.5),
+                Vec3::new(0.5, 3.0, -0.5),
+            ],
+            2.0,
+        ),
+        (
+            [
+                Vec3::new(-0.5, 3.0, -0.5),
+                Vec3::new(-0.5, 3.1, 0.5),
+                Vec3::new(0.5, 3.0, 0.5),
+            ],
+            1.5,
+        ),
+    ];
+    let b = LightBounds::emitters(tris).unwrap();
+    let n = Vec3::new(0.3, 0.9, -0.2).normalize();
+    let far = Vec3::new(2.0, 1.0, -1.0);
+    let near = Vec3::new(0.1, 3.02, 0.2);
+    for (p, n, two_sided, bits) in [
+        (Vec3::ZERO, Vec3::Y, false, 0x3ec0a2eb),
+        (far, n, false, 0x3e36b7a1),
+        (far, -n, true, 0x3e36b7a1),
+        (near, n, false, 0x40dee2b5),
+        (Vec3::new(0.0, 3.05, 0.0), Vec3::NAN, false, 0),
+        (Vec3::new(9.0, 3.0, 0.0), Vec3::X, true, 0x3c094dbf),
+    ] {
+        let got = b.importance(p, n, two_sided);
+        assert_eq!(got.to_bits(), bits, "{p} {n} {two_sided}: {got}");
+    }
 }

@@ -2,10 +2,10 @@
 //! splits where [`super::split`] says (large subtrees in parallel, the result the same for any
 //! thread count), collapsed into the 4-wide tree the descent reads ([`super::collapse`]).
 
-use super::bounds::Reach;
 use super::split::{self, Item, Split};
-use super::{Leaf, LightBounds, LightTree};
+use super::{Leaf, LightTree};
 use crate::color::luminance;
+use crate::light_bounds::LightBounds;
 use crate::lights::EmissiveLights;
 use crate::surface::Geometry;
 use aperture_scene::{Light, LightKind};
@@ -104,7 +104,7 @@ impl LightTree {
 /// child; a leaf's `second` is its index in [`Binary::leaves`].
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Node {
-    pub bounds: Reach,
+    pub bounds: LightBounds,
     pub second: u32,
     pub leaf: bool,
 }
@@ -144,7 +144,7 @@ impl Binary {
         let at = self.nodes.len();
         if let [(bounds, leaf, _)] = items {
             self.nodes.push(Node {
-                bounds: Reach::new(bounds),
+                bounds: *bounds,
                 second: self.leaves.len() as u32,
                 leaf: true,
             });
@@ -152,7 +152,7 @@ impl Binary {
             return *bounds;
         }
         self.nodes.push(Node {
-            bounds: Reach::new(&items[0].0),
+            bounds: items[0].0,
             second: 0,
             leaf: false,
         });
@@ -181,7 +181,7 @@ impl Binary {
         };
         let bounds = a.union(&b);
         self.nodes[at] = Node {
-            bounds: Reach::new(&bounds),
+            bounds,
             second,
             leaf: false,
         };

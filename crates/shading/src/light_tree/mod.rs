@@ -17,7 +17,6 @@
 //! unit of time than the descent; its images stay as they were. From it on, the tree holds
 //! every point and spot light and every emissive triangle, each its own leaf.
 
-pub mod bounds;
 mod build;
 mod collapse;
 pub mod pick;
@@ -26,9 +25,9 @@ mod sample;
 mod split;
 mod wide;
 
-pub use bounds::LightBounds;
 pub use reuse::TreeMemo;
 
+use crate::light_bounds::LightBounds;
 use crate::lights::EmissiveLights;
 use crate::surface::Geometry;
 use aperture_scene::Light;
@@ -56,7 +55,7 @@ pub enum Leaf {
 #[derive(Debug)]
 pub struct LightTree {
     /// The whole tree's bound: its importance beside the directional lights.
-    root: bounds::Reach,
+    root: LightBounds,
     /// The wide nodes, the root first.
     nodes: Vec<wide::Wide>,
     /// Each node's parent and its lane there (the root's parent: `u32::MAX`).

@@ -4,7 +4,7 @@
 //! levels and reads one node's consecutive cache lines per level instead of two scattered
 //! nodes (1,000 lights + 2,000 panels: the descent was 46 % of the render time).
 
-use super::bounds::Reach;
+use crate::light_bounds::LightBounds;
 use crate::light_choice::{remap, walk};
 use glam::{BVec4A, Vec3, Vec4};
 
@@ -14,7 +14,8 @@ pub(super) const LEAF_BIT: u32 = 1 << 31;
 /// An unused lane's child.
 pub(super) const EMPTY: u32 = u32::MAX;
 
-/// Up to four children's bounds, lane by lane ([`Reach`]'s fields), and who they are.
+/// Up to four children's bounds, lane by lane (a [`LightBounds`] as its importance reads it:
+/// sphere, cone with its sine, spread, power, sides), and who they are.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Wide {
     cx: Vec4,
@@ -37,12 +38,12 @@ pub(super) struct Wide {
 }
 
 impl Wide {
-    /// A node of up to four children (more are ignored): their reaches and child codes.
-    pub(super) fn new(lanes: &[(Reach, u32)], spots: u8) -> Self {
+    /// A node of up to four children (more are ignored): their bounds and child codes.
+    pub(super) fn new(lanes: &[(LightBounds, u32)], spots: u8) -> Self {
         let mut f = [[0.0f32; 4]; 12];
         let mut children = [EMPTY; 4];
-        for (k, (r, child)) in lanes.iter().take(4).enumerate() {
-            let v = r.lanes();
+        for (k, (b, child)) in lanes.iter().take(4).enumerate() {
+            let v = lanes_of(b);
             for (field, x) in f.iter_mut().zip(v) {
                 field[k] = x;
             }
@@ -67,7 +68,7 @@ impl Wide {
         }
     }
 
-    /// Each lane's [`Reach::importance`] at `p` with normal `n` (both sides when
+    /// Each lane's [`LightBounds::importance`] at `p` with normal `n` (both sides when
     /// `two_sided`): the same bound, four at a time; 0 in unused lanes.
     #[inline]
     pub(super) fn importance(&self, p: Vec3, n: Vec3, two_sided: bool) -> Vec4 {
@@ -98,17 +99,41 @@ impl Wide {
         // NaN fails both tests, as it ends the scalar bound at zero.
         let lit: BVec4A = cos_recv.cmpgt(zero) & cos_emit.cmpgt(self.cos_e);
         let outside = Vec4::select(lit, self.phi * cos_emit.max(zero) * cos_recv / d2, zero);
-        let v = Vec4::select(inside, self.phi / self.radius2, outside);
+        // Inside, the receiver's cosine less θ_b = π: 1, or −cos θ_i where rounding took
+        // cos θ_i to −1 or below (a point at the centre, whose direction is NaN here and zero
+        // in the scalar bound, takes 1 as there).
+        let recv_inside = Vec4::select(cos_i.cmple(-one), -cos_i, one);
+        let v = Vec4::select(inside, self.phi * recv_inside / self.radius2, outside);
         // NaN and negatives are zero, an overflow the largest weight.
         Vec4::select(v.cmpgt(zero), v.min(Vec4::splat(f32::MAX)), zero)
     }
 }
 
-/// `cos(max(a − b, 0))` from the sines and cosines of `a` and `b` (lane by lane
-/// [`crate::light_choice::angle_less`]).
+/// `cos(max(a − b, 0))` from the sines and cosines of `a` and `b` (lane by lane, as the
+/// scalar bound's, pbrt-v4's `cosSubClamped`).
 #[inline]
 fn less_cos(sin_a: Vec4, cos_a: Vec4, sin_b: Vec4, cos_b: Vec4) -> Vec4 {
     Vec4::select(cos_a.cmpgt(cos_b), Vec4::ONE, cos_a * cos_b + sin_a * sin_b)
+}
+
+/// What [`Wide`] stores of `b` in its lanes: centre, squared radius, axis, `cos θ_o`,
+/// `sin θ_o`, `cos θ_e`, power, two-sided (1 or 0).
+fn lanes_of(b: &LightBounds) -> [f32; 12] {
+    let (c, a) = (b.centre(), b.axis);
+    [
+        c.x,
+        c.y,
+        c.z,
+        b.radius2(),
+        a.x,
+        a.y,
+        a.z,
+        b.cos_o,
+        b.sin_o(),
+        b.cos_e,
+        b.phi,
+        if b.two_sided { 1.0 } else { 0.0 },
+    ]
 }
 
 /// Square roots of four lanes in one instruction (glam's `Vec4::sqrt` takes them one by one).
@@ -158,7 +183,6 @@ fn sum(w: [f32; 4]) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::light_tree::LightBounds;
 
     /// The 4-wide bound is the scalar one, lane by lane, at points inside and outside the
     /// bounds, on both sides, one- and two-sided.
@@ -190,7 +214,7 @@ mod tests {
             ..spot
         };
         let bounds = [spot, panel, point];
-        let lanes: Vec<(Reach, u32)> = bounds.iter().map(|b| (Reach::new(b), 0)).collect();
+        let lanes: Vec<(LightBounds, u32)> = bounds.iter().map(|b| (*b, 0)).collect();
         let wide = Wide::new(&lanes, 0);
         let points = [
             Vec3::ZERO,

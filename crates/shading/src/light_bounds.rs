@@ -1,9 +1,10 @@
 //! What a set of lights can send to a point: a box, a cone of emission directions and a power
-//! (pbrt-v4's `LightBounds`), for the light tree's leaves and inner nodes. The importance is
-//! the one [`crate::light_choice::EmitterBounds`] gives the emitters as one candidate, with
-//! pbrt's spread angle `θ_e` so that spot lights bound their cone.
+//! (pbrt-v4's `LightBounds`), and the importance that bounds it at a receiving point. One type
+//! for both choices of a light: the exhaustive choice ([`crate::light_choice`]) bounds all of a
+//! scene's emissive triangles as one candidate ([`LightBounds::emitters`]), the light tree
+//! ([`crate::light_tree`]) each light and each node's subtree, with pbrt's spread angle `θ_e`
+//! so that spot lights bound their cone.
 
-use crate::light_choice::angle_less;
 use aperture_scene::{Light, LightKind};
 use glam::{Quat, Vec3};
 
@@ -90,6 +91,52 @@ impl LightBounds {
         })
     }
 
+    /// The bound of emissive triangles given as `(vertices, power)`, taken together as one
+    /// light (the exhaustive choice's candidate): their box, a cone around their area-weighted
+    /// mean normal holding every triangle's, their total power; two-sided, as the integrator's
+    /// emitters. `None` without any, or with a non-finite box.
+    pub fn emitters(triangles: impl IntoIterator<Item = ([Vec3; 3], f32)>) -> Option<Self> {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        let mut phi = 0.0f64;
+        let mut normals = Vec::new();
+        for (p, power) in triangles {
+            for v in p {
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+            phi += f64::from(power);
+            // Area-weighted: the cone's axis leans to the triangles that carry the area.
+            normals.push((p[1] - p[0]).cross(p[2] - p[0]));
+        }
+        if normals.is_empty() || !(lo.is_finite() && hi.is_finite()) {
+            return None;
+        }
+        let sum: Vec3 = normals.iter().sum();
+        let axis = sum.normalize_or_zero();
+        // Each normal's angle to the axis, rounded outwards; a degenerate sum (normals that
+        // cancel) leaves the whole sphere.
+        let cos_o = if axis == Vec3::ZERO {
+            -1.0
+        } else {
+            normals
+                .iter()
+                .filter_map(|n| n.try_normalize())
+                .map(|n| n.dot(axis) - CONE_SLACK)
+                .fold(1.0f32, f32::min)
+                .max(-1.0)
+        };
+        Some(Self {
+            lo,
+            hi,
+            phi: phi as f32,
+            axis,
+            cos_o,
+            cos_e: 0.0,
+            two_sided: true,
+        })
+    }
+
     /// The bound of both `self` and `other`.
     pub fn union(&self, other: &Self) -> Self {
         let two_sided = self.two_sided || other.two_sided;
@@ -116,96 +163,68 @@ impl LightBounds {
         (self.lo + self.hi) * 0.5
     }
 
+    /// Squared radius of the sphere around the box.
+    pub(crate) fn radius2(&self) -> f32 {
+        (self.hi - self.lo).length_squared() * 0.25
+    }
+
+    /// Sine of the cone's half-angle `θ_o`.
+    pub(crate) fn sin_o(&self) -> f32 {
+        sin_of(self.cos_o)
+    }
+
     /// An upper bound, up to a constant factor, of the light these lights send to a point `p`
     /// with normal `n` (facing the side light is received from), or from both sides of it
-    /// when `two_sided`. Zero only where none of the lights can light the point.
-    pub fn importance(&self, p: Vec3, n: Vec3, two_sided: bool) -> f32 {
-        Reach::new(self).importance(p, n, two_sided)
-    }
-}
-
-/// What the descent reads of a [`LightBounds`], precomputed: its bounding sphere and the sine
-/// of its cone (a tree node holds this; 44 bytes against 52, and no square root per visit).
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Reach {
-    centre: Vec3,
-    radius2: f32,
-    axis: Vec3,
-    cos_o: f32,
-    sin_o: f32,
-    cos_e: f32,
-    phi: f32,
-    two_sided: bool,
-}
-
-impl Reach {
-    /// The reach of `b`.
-    pub(super) fn new(b: &LightBounds) -> Self {
-        Self {
-            centre: b.centre(),
-            radius2: (b.hi - b.lo).length_squared() * 0.25,
-            axis: b.axis,
-            cos_o: b.cos_o,
-            sin_o: (1.0 - b.cos_o * b.cos_o).max(0.0).sqrt(),
-            cos_e: b.cos_e,
-            phi: b.phi,
-            two_sided: b.two_sided,
-        }
-    }
-
-    /// The fields as [`super::wide::Wide`] stores them in its lanes: centre, squared radius,
-    /// axis, `cos θ_o`, `sin θ_o`, `cos θ_e`, power, two-sided (1 or 0).
-    pub(super) fn lanes(&self) -> [f32; 12] {
-        let (c, a) = (self.centre, self.axis);
-        [
-            c.x,
-            c.y,
-            c.z,
-            self.radius2,
-            a.x,
-            a.y,
-            a.z,
-            self.cos_o,
-            self.sin_o,
-            self.cos_e,
-            self.phi,
-            if self.two_sided { 1.0 } else { 0.0 },
-        ]
-    }
-
-    /// [`LightBounds::importance`] (pbrt-v4's `LightBounds::Importance`): the same arithmetic,
-    /// with the cases that end at zero or need no angle taken first.
+    /// when `two_sided`. Zero only where none of the lights can light the point (pbrt-v4's
+    /// `LightBounds::Importance`, with the cases that end at zero taken first);
+    /// [`crate::light_tree`]'s 4-wide nodes compute the same, lane by lane.
     #[inline]
-    pub(super) fn importance(&self, p: Vec3, n: Vec3, two_sided: bool) -> f32 {
-        let d = p - self.centre;
+    pub fn importance(&self, p: Vec3, n: Vec3, two_sided: bool) -> f32 {
+        let (centre, radius2) = (self.centre(), self.radius2());
+        let d = p - centre;
         let d2 = d.length_squared();
-        if d2 <= self.radius2 {
-            // Inside the bounding sphere every direction is possible: no cone excludes the
-            // point and there is no falloff.
-            return clamp_importance(self.phi / self.radius2);
-        }
-        // Directions from `p` into the bounding sphere: a cone of half-angle θ_b.
-        let to_p = d * d2.sqrt().recip();
-        let sin2_b = self.radius2 / d2;
-        let (sin_b, cos_b) = (sin2_b.sqrt(), (1.0 - sin2_b).max(0.0).sqrt());
-        // The receiver's side first: a surface facing away ends most visits here.
+        let to_p = d.normalize_or_zero();
+        // The receiver's side: the angle between its normal and the light's direction.
         let cos_i = if two_sided {
             n.dot(to_p).abs()
         } else {
             -n.dot(to_p)
         };
+        if d2 <= radius2 {
+            // Inside the bounding sphere every direction is possible (θ_b = π): no cone
+            // excludes the point and there is no falloff; a NaN normal lights nothing.
+            let (_, cos_recv) = angle_less(sin_of(cos_i), cos_i, 0.0, -1.0);
+            return clamp_importance(self.phi * cos_recv.max(0.0) / radius2);
+        }
+        // Directions from `p` into the bounding sphere: a cone of half-angle θ_b.
+        let sin2_b = radius2 / d2;
+        let (sin_b, cos_b) = (sin2_b.sqrt(), (1.0 - sin2_b).max(0.0).sqrt());
+        // The receiver's side first, less θ_b: a surface facing away ends most visits here.
         let (_, cos_recv) = angle_less(sin_of(cos_i), cos_i, sin_b, cos_b);
         if cos_recv.is_nan() || cos_recv <= 0.0 {
             return 0.0;
         }
+        // The lights' side: the angle between `to_p` and the normal cone, less θ_b (two-
+        // sided emitters light both ways).
         let cos_w = self.axis.dot(to_p);
         let cos_w = if self.two_sided { cos_w.abs() } else { cos_w };
-        let (sin_x, cos_x) = angle_less(sin_of(cos_w), cos_w, self.sin_o, self.cos_o);
+        let (sin_x, cos_x) = angle_less(sin_of(cos_w), cos_w, self.sin_o(), self.cos_o);
         let (_, cos_emit) = angle_less(sin_x, cos_x, sin_b, cos_b);
         if cos_emit <= self.cos_e {
             return 0.0;
         }
         clamp_importance(self.phi * cos_emit.max(0.0) * cos_recv / d2)
+    }
+}
+
+/// `(sin, cos)` of `max(θ_a − θ_b, 0)` from those of `θ_a` and `θ_b` (pbrt-v4's
+/// `cosSubClamped` and `sinSubClamped`).
+#[inline]
+fn angle_less(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> (f32, f32) {
+    if cos_a > cos_b {
+        (0.0, 1.0)
+    } else {
+        (sin_a * cos_b - cos_a * sin_b, cos_a * cos_b + sin_a * sin_b)
     }
 }
 
@@ -215,7 +234,7 @@ fn sin_of(cos: f32) -> f32 {
     (1.0 - cos * cos).max(0.0).sqrt()
 }
 
-/// An importance as the descent takes it: NaN and negatives are zero, an overflow the largest
+/// An importance as the choices take it: NaN and negatives are zero, an overflow the largest
 /// weight.
 #[inline]
 fn clamp_importance(importance: f32) -> f32 {
