@@ -46,8 +46,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         spp,
         ..RenderOptions::default()
     };
+    let name = std::path::Path::new(&path).file_name().map(|n| n.to_string_lossy());
     println!(
-        "{path}: loaded, posed and built once in {:.1} ms; {}x{} to {spp} spp in passes 1, 2, 4, …",
+        "{}: loaded, posed and built once in {:.1} ms; {}x{} to {spp} spp in passes 1, 2, 4, …",
+        name.unwrap_or_default(),
         cold * 1e3,
         opts.width,
         opts.height
