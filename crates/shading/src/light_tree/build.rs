@@ -2,9 +2,10 @@
 //! splits where [`super::split`] says (large subtrees in parallel, the result the same for any
 //! thread count), collapsed into the 4-wide tree the descent reads ([`super::collapse`]).
 
+use super::bounds::LightBounds;
 use super::bounds::Reach;
 use super::split::{self, Item, Split};
-use super::{Leaf, LightBounds, LightTree};
+use super::tree::{Leaf, LightTree};
 use crate::color::luminance;
 use crate::lights::EmissiveLights;
 use crate::surface::Geometry;

@@ -5,7 +5,8 @@
 //! lights), so a kept tree is the tree a build would give and images do not depend on what
 //! was rendered before.
 
-use super::{Leaf, LightBounds, LightTree};
+use super::bounds::LightBounds;
+use super::tree::{Leaf, LightTree};
 use crate::lights::EmissiveLights;
 use crate::surface::Geometry;
 use aperture_scene::{Light, LightKind};

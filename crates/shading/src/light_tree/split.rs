@@ -3,7 +3,8 @@
 //! area; the median of the longest axis when buckets cannot separate the lights or when the
 //! tree would grow too deep (a leaf's probability gathers at most 64 levels).
 
-use super::{Leaf, LightBounds};
+use super::bounds::LightBounds;
+use super::tree::Leaf;
 use glam::Vec3;
 use std::f32::consts::PI;
 

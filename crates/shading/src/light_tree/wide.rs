@@ -158,7 +158,7 @@ fn sum(w: [f32; 4]) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::light_tree::LightBounds;
+    use crate::light_tree::bounds::LightBounds;
 
     /// The 4-wide bound is the scalar one, lane by lane, at points inside and outside the
     /// bounds, on both sides, one- and two-sided.
