@@ -7,12 +7,13 @@ mod placement;
 mod tree;
 
 use crate::deform::Deform;
+use crate::deform::VertexMotion;
+use crate::motion::MotionTransform;
 use crate::node::Node;
+use crate::structure::{Accel, Blas, Entry, FLATTENED, NO_MOTION};
+use crate::triangle::Tri;
+use crate::types::{AccelStats, BvhQuality, InstanceInput, MeshInput};
 use crate::walk::detect_avx2;
-use crate::{
-    Accel, AccelStats, Blas, BvhQuality, Entry, InstanceInput, MeshInput, MotionTransform, Tri,
-    VertexMotion, FLATTENED, NO_MOTION,
-};
 use check::{check_mesh, flatten, Checked};
 use glam::{Affine3A, Vec3};
 use obvhs::aabb::Aabb;

@@ -3,7 +3,8 @@
 //! ground plane, an interior) or is mostly empty space between objects; its children's boxes,
 //! and theirs, say where geometry is.
 
-use crate::{Accel, Node};
+use crate::node::Node;
+use crate::structure::Accel;
 use glam::Vec3;
 
 /// What may replace a box of the cut with finer ones.

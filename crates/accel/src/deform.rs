@@ -7,8 +7,7 @@
 //! vertex moves on the segment joining its two positions, which lies in the box of those two
 //! positions; [`lerp_point`] clamps its result into that box, so rounding cannot step out.
 
-use crate::walk::{BlasLeaf, Leaf};
-use crate::Tri;
+use crate::triangle::Tri;
 use glam::Vec3;
 
 /// One mesh's vertex positions (object space) keyed at `n ≥ 2` evenly spaced times over
@@ -203,7 +202,7 @@ impl<'a, L, const AVX: bool> Deformed<'a, L, AVX> {
 
     /// Triangle `i` at the ray's time.
     #[inline(always)]
-    fn triangle(&self, i: usize) -> Option<Tri> {
+    pub(crate) fn triangle(&self, i: usize) -> Option<Tri> {
         triangle_at(self.keys, self.steps, i, self.at)
     }
 }
@@ -217,21 +216,6 @@ fn triangle_at(keys: &[[Vec3; 3]], steps: usize, i: usize, (k, f): (usize, f32))
         p: [0, 1, 2].map(|c| lerp_point(a[c], b[c], f)),
         prim: i as u32,
     })
-}
-
-impl<'s, L: BlasLeaf<'s>, const AVX: bool> Leaf for Deformed<'_, &mut L, AVX> {
-    const CLOSEST: bool = L::CLOSEST;
-    #[inline(always)]
-    fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
-        let Some(tri) = self.triangle(primitive as usize) else {
-            return false;
-        };
-        let (_, ray, tmin) = self.inner.triangles();
-        match crate::triangle::intersect::<AVX>(ray, &tri, tmin, *tmax) {
-            Some(h) => self.inner.record(primitive, h, tmax),
-            None => false,
-        }
-    }
 }
 
 #[cfg(test)]

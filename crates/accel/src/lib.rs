@@ -55,6 +55,7 @@ mod packet;
 mod query;
 pub mod rayfile;
 mod spawn;
+mod structure;
 #[cfg(test)]
 mod test_util;
 mod triangle;
@@ -67,90 +68,7 @@ pub use motion::MotionTransform;
 pub use packet::{PACKET_CONE_COS, PACKET_LANES};
 pub use rayfile::{read_rays, write_rays, RayFileError};
 pub use spawn::{offset_ray_origin, SpawnPoint};
+pub use structure::Accel;
 pub use triangle::intersect_triangle;
 pub use types::{AccelStats, BvhQuality, Hit, InstanceInput, MeshInput, ParseBvhQualityError, Ray};
 pub use walk::BATCH_LANES;
-
-use crate::node::Node;
-use glam::{Affine3A, Vec3};
-
-/// A triangle in BVH order: its vertices exactly as given (shared vertices stay bitwise equal,
-/// which the watertight test relies on) and its index in the mesh's original `indices`.
-#[derive(Debug, Clone, Copy)]
-#[repr(C)]
-struct Tri {
-    p: [Vec3; 3],
-    prim: u32,
-}
-
-/// A bottom-level BVH over one mesh (object space) or over all flattened meshes (world space).
-#[derive(Debug, Clone, Default)]
-struct Blas {
-    nodes: Vec<Node>,
-    tris: Vec<Tri>,
-    /// For the flattened BVH only: the instance of each triangle (BVH order). Empty otherwise.
-    tri_instance: Vec<u32>,
-    depth: usize,
-    bounds: Option<(Vec3, Vec3)>,
-    /// `bounds`, or a zero box for an empty tree (sizes the box test's rounding slack).
-    box_bounds: (Vec3, Vec3),
-    /// For a mesh deforming within the shutter: its triangles keyed over it (the nodes then
-    /// bound the swept triangles, and `tris` holds the frame's, for lookups only).
-    deform: Option<Box<deform::Deform>>,
-}
-
-/// One leaf of the top-level BVH: a BVH placed in the world.
-#[derive(Debug, Clone, Copy)]
-struct Entry {
-    blas: u32,
-    /// The instance, or `FLATTENED` when the triangles carry their own.
-    instance: u32,
-    object_from_world: Affine3A,
-    /// The flattened BVH is already in world space: skip the ray transform.
-    identity: bool,
-    /// Index into [`Accel::motions`] of a moving instance, or [`NO_MOTION`].
-    motion: u32,
-}
-
-/// [`Entry::motion`] of an entry that stays put.
-const NO_MOTION: u32 = u32::MAX;
-
-const FLATTENED: u32 = u32::MAX;
-
-/// The acceleration structure: answers ray queries from many threads at once.
-///
-/// Layout: a top-level obvhs CWBVH over instance bounds whose leaves point at bottom-level CWBVHs
-/// (one per mesh drawn more than once, stored once however many instances draw it), plus one
-/// world-space CWBVH holding every mesh that is drawn exactly once. Rays are moved into object
-/// space per instance with `object_from_world` without renormalising the direction, so `t` stays
-/// in world units.
-#[derive(Debug, Clone)]
-pub struct Accel {
-    blases: Vec<Blas>,
-    /// In top-level BVH order.
-    entries: Vec<Entry>,
-    tlas: Vec<Node>,
-    tlas_depth: usize,
-    /// Bounds of all instance bounds.
-    tlas_bounds: (Vec3, Vec3),
-    max_blas_depth: usize,
-    /// Per input instance: a bound on the magnitudes met when moving its points between object
-    /// and world space (`|T| + |M| max|p_obj|`), for [`Accel::spawn_point`].
-    instance_magnitude: Vec<f32>,
-    /// Node tests take the 8-wide AVX2 path (detected at build time; the x86_64 baseline is SSE2,
-    /// 4 wide). Both compute the same operations: the same node masks, the same hits.
-    avx2: bool,
-    stats: AccelStats,
-    /// Per input mesh: its bottom-level BVH in `blases`, or `u32::MAX` (flattened, or not drawn).
-    blas_of_mesh: Vec<u32>,
-    /// The world-space BVH's key and its instances (ascending), when there is one (`blases[0]`).
-    flat: Option<(u64, Vec<u32>)>,
-    /// Triangles that only became degenerate in world space when flattened.
-    flat_degenerate: usize,
-    /// Bottom-level BVHs of unchanged meshes this frame does not use (by mesh), kept for the
-    /// next frame's [`Accel::build_frame`]: a mesh keyed hidden for a while is not rebuilt
-    /// when shown again. Never walked.
-    spare: Vec<(u32, Blas)>,
-    /// The transforms of moving entries ([`Entry::motion`]).
-    motions: Vec<MotionTransform>,
-}

@@ -29,12 +29,13 @@
 //! answer): a packet it blocks whole needs no walk.
 
 use crate::node::Node;
+use crate::structure::Accel;
 #[cfg(target_arch = "x86_64")]
 use crate::triangle::lanes::{intersect_lanes, transpose, TriLanes};
 #[cfg(target_arch = "x86_64")]
 use crate::triangle::TriRay;
+use crate::types::{Hit, Ray};
 use crate::walk::{stack_for, take_child, BlasLeaf, Group, InlineStack, Leaf, INLINE_STACK};
-use crate::{Accel, Hit, Ray};
 #[cfg(target_arch = "x86_64")]
 use glam::Vec3A;
 #[cfg(target_arch = "x86_64")]

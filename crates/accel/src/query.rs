@@ -3,9 +3,10 @@
 
 use crate::deform::Deformed;
 use crate::node::BoxRay;
+use crate::structure::{Accel, Blas, Entry, FLATTENED, NO_MOTION};
 use crate::triangle::TriRay;
+use crate::types::{AccelStats, Hit, Ray};
 use crate::walk::*;
-use crate::{Accel, AccelStats, Blas, Entry, Hit, Ray, FLATTENED, NO_MOTION};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::mem::MaybeUninit;

@@ -8,7 +8,7 @@
 //! ours alone (Embree's script neither writes nor reads it), and [`read_rays`] applies it when it
 //! is there.
 
-use crate::Ray;
+use crate::types::Ray;
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 

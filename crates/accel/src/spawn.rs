@@ -1,6 +1,7 @@
 //! Where secondary rays start: hit points with error bounds, and offsets off the surface.
 
-use crate::{Accel, Hit, Ray};
+use crate::structure::Accel;
+use crate::types::{Hit, Ray};
 use glam::Vec3;
 
 /// A hit's position in world space with a bound on its rounding error: where secondary rays

@@ -7,13 +7,21 @@
 //! on both sides: a ray cannot slip through. Edge values of exactly zero are recomputed in `f64`,
 //! where the products of two `f32` are exact, so the sign of the edge function is never lost.
 
-use crate::Tri;
 #[cfg(test)]
 use glam::Mat3A;
 use glam::{Vec3, Vec3A};
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod lanes;
+
+/// A triangle in BVH order: its vertices exactly as given (shared vertices stay bitwise equal,
+/// which the watertight test relies on) and its index in the mesh's original `indices`.
+#[derive(Debug, Clone, Copy)]
+#[repr(C)]
+pub(crate) struct Tri {
+    pub(crate) p: [Vec3; 3],
+    pub(crate) prim: u32,
+}
 
 /// Per-ray values of the watertight test, computed once per ray (and per instance, for rays
 /// moved into object space).
@@ -312,7 +320,7 @@ fn t_in_front_f64(r: &TriRay, p: &[Vec3; 3]) -> Option<f32> {
 ///
 /// This is the exact test the BVH runs on every triangle; it is public so that callers (and tests)
 /// can compare against brute force with identical arithmetic.
-pub fn intersect_triangle(ray: &crate::Ray, p: [Vec3; 3]) -> Option<(f32, f32, f32)> {
+pub fn intersect_triangle(ray: &crate::types::Ray, p: [Vec3; 3]) -> Option<(f32, f32, f32)> {
     let r = TriRay::new(ray.origin, ray.dir);
     intersect::<false>(&r, &Tri { p, prim: 0 }, ray.tmin, ray.tmax)
 }
@@ -320,7 +328,7 @@ pub fn intersect_triangle(ray: &crate::Ray, p: [Vec3; 3]) -> Option<(f32, f32, f
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Ray;
+    use crate::types::Ray;
 
     #[test]
     fn shear_is_the_documented_matrix() {

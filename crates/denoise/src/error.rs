@@ -22,7 +22,7 @@ pub enum DenoiseError {
         /// The path given.
         path: PathBuf,
         /// `--oidn` or `APERTURE_OIDN`.
-        origin: crate::Origin,
+        origin: crate::locate::Origin,
         /// `dlopen`'s message, a missing symbol or a version that is not 2.x.
         reason: String,
     },

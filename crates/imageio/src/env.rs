@@ -10,7 +10,8 @@ use std::path::Path;
 
 use image::ImageDecoder as _;
 
-use crate::{Error, Image};
+use crate::error::Error;
+use crate::model::Image;
 
 /// The environment image formats, told apart by their first bytes (not the file name).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -57,7 +58,7 @@ pub fn decode_env_image(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Ima
             if let Some((w, h)) = head {
                 check_size(path, w, h, max_bytes)?;
             }
-            let mut image = crate::decode_exr_within(bytes, path, max_bytes)?;
+            let mut image = crate::exr::decode_exr_within(bytes, path, max_bytes)?;
             image.layers.clear();
             image.metadata.clear();
             image
@@ -154,7 +155,7 @@ mod tests {
         assert!((im.rgba[5][2] - 2.0).abs() < 0.02, "{:?}", im.rgba[5]);
         let mut e = Image::new(4, 2);
         e.rgba = vec![[0.25, 0.5, 4.0, 1.0]; 8];
-        let exr = crate::encode_exr(&e, Path::new("e.exr")).unwrap();
+        let exr = crate::exr::encode_exr(&e, Path::new("e.exr")).unwrap();
         let im = decode_env_image(&exr, Path::new("sky.hdr"), 1 << 20).unwrap();
         assert_eq!(im.rgba, e.rgba);
     }

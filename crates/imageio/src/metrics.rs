@@ -3,7 +3,8 @@
 //! Sums run in f64 in pixel order, so results are deterministic. A NaN in either image makes
 //! the result NaN, which no threshold passes: tests comparing images fail loudly.
 
-use crate::{Error, Image};
+use crate::error::Error;
+use crate::model::Image;
 
 /// The ε in [`relative_mse`]'s denominator, as in common practice (e.g. Rousselle et al.):
 /// keeps near-black reference pixels from dominating.

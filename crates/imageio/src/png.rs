@@ -13,8 +13,10 @@ use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ExtendedColorType, ImageEncoder};
 
 use crate::atomic::write_atomically;
+use crate::error::Error;
+use crate::model::Image;
+use crate::options::PngOptions;
 use crate::view::{self, sanitize};
-use crate::{Error, Image, PngOptions};
 
 /// One pixel to display values in [0, 1]: RGB display-encoded, A linear coverage.
 /// `scale` is `2^exposure`.
@@ -96,8 +98,8 @@ pub fn write_png(path: &Path, image: &Image, options: &PngOptions) -> Result<(),
 mod tests {
     use super::*;
     use crate::atomic::tests::{entries, scratch_dir};
+    use crate::options::ViewTransform;
     use crate::view::srgb_oetf;
-    use crate::ViewTransform;
 
     fn decode8(bytes: &[u8]) -> image::RgbaImage {
         image::load_from_memory(bytes).unwrap().to_rgba8()
@@ -268,7 +270,7 @@ mod tests {
         let path = dir.join("a.png");
         let mut image = Image::new(1, 2);
         image.rgba = vec![[1.0, 1.0, 1.0, 1.0], [0.0, 0.0, 0.0, 1.0]];
-        crate::write_image(&path, &image, &Default::default()).unwrap();
+        write_png(&path, &image, &Default::default()).unwrap();
         assert_eq!(entries(&dir), vec!["a.png".to_string()]);
         let png = image::open(&path).unwrap().to_rgba8();
         assert_eq!(png.get_pixel(0, 0).0, [255; 4]);

@@ -3,7 +3,7 @@
 //! Every function here is total: NaN becomes 0 and infinities are clipped, so whatever the
 //! renderer produced, the result is a valid display value.
 
-use crate::ViewTransform;
+use crate::options::ViewTransform;
 
 /// Below this linear value the sRGB curve is a straight line (IEC 61966-2-1).
 pub const SRGB_LINEAR_CUTOFF: f32 = 0.003_130_8;

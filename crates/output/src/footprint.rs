@@ -7,7 +7,10 @@ use std::path::Path;
 
 use aperture_budget::{human_bytes, MemoryBudget, OverBudget};
 
-use crate::{channels, film_bytes_per_pixel, ExrOptions};
+use crate::channels;
+use crate::exr_options::{ExrOptions, BAND_BYTES};
+use aperture_render::film::AovLayout;
+use aperture_render::passes::Pass;
 use aperture_render::{PassSet, RenderOptions, Window};
 
 /// The kinds of output file, which need memory differently.
@@ -147,7 +150,7 @@ pub fn check_output(
                 "a {}x{} EXR render ({} bands of rows)",
                 opts.width,
                 opts.height,
-                if exr.band_bytes == crate::BAND_BYTES {
+                if exr.band_bytes == BAND_BYTES {
                     "default"
                 } else {
                     "smaller"
@@ -186,6 +189,23 @@ pub fn check_output(
         }
     }
     Ok(warnings)
+}
+
+/// Bytes the sums of one pixel take while rendering with `passes`, and while writing it
+/// (`channels` values of its row): what decides a band's height.
+pub fn film_bytes_per_pixel(passes: PassSet, adaptive: bool, channels: usize) -> usize {
+    let layout = AovLayout::new(passes);
+    let crypto = usize::from(layout.crypto_object) + usize::from(layout.crypto_material);
+    let accum =
+        std::mem::size_of::<aperture_render::film::PixelSum>() + 8 * layout.stride + 128 * crypto;
+    let film = accum
+        + 4
+        + 4 * usize::from(passes.contains(Pass::Depth))
+        + 12 * usize::from(passes.contains(Pass::Position))
+        + 16 * usize::from(passes.contains(Pass::Vector));
+    // Adaptive rounds keep their own state (sums, squares, counts, flags) beside the film.
+    let rounds = if adaptive { accum + 24 + 8 + 4 + 3 } else { 0 };
+    film + rounds + 4 * channels
 }
 
 #[cfg(test)]

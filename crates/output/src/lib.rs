@@ -27,24 +27,24 @@
 
 pub mod channels;
 pub mod denoised;
+mod exr_options;
 mod footprint;
 pub mod header;
 pub mod merge;
 pub mod sequence;
 pub mod write;
 
-pub use footprint::{check_output, footprint, Footprint, FootprintError, OutputKind};
+pub use exr_options::{ExrOptions, BAND_BYTES};
+pub use footprint::{
+    check_output, film_bytes_per_pixel, footprint, Footprint, FootprintError, OutputKind,
+};
 
 use aperture_imageio::{Image, Layer, MetaValue, Placement};
-use aperture_render::film::{AovLayout, Film, Window};
-use aperture_render::passes::{Pass, PassSet};
+use aperture_render::film::{Film, Window};
 use aperture_render::{scene_camera, RenderError, RenderOptions};
 use aperture_scene::Scene;
 use channels::PixelResolver;
 use glam::Mat3;
-
-/// Most bytes the sums of one band may take (the band height follows from it).
-pub const BAND_BYTES: usize = 512 << 20;
 
 /// Why a render could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -66,39 +66,6 @@ pub enum OutputError {
         /// Samples taken before the render stopped.
         samples: u64,
     },
-}
-
-/// How an EXR render is written.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ExrOptions {
-    /// Colour passes (the beauty, light passes, denoising albedo) as half floats, clamped to
-    /// ±65504; data passes stay float32.
-    pub half: bool,
-    /// Render only this part of the image (a tile); the file's data window is the part and its
-    /// display window the whole image.
-    pub region: Option<Window>,
-    /// `(K, N)` when `region` is band K of N (`--tile K/N`, see [`Window::band`]): recorded
-    /// in the header so `aperture merge` can name a missing tile.
-    pub tile: Option<(u32, u32)>,
-    /// Most bytes the sums of one band of rows may take ([`BAND_BYTES`] by default): lower
-    /// it to render in more, smaller bands with less memory. The pixels do not change.
-    pub band_bytes: usize,
-    /// When the render is cancelled, write the samples taken so far (each pixel's count in
-    /// `Debug Sample Count`, `aperture:interrupted` = 1 in the header) instead of nothing.
-    /// Ask for [`Pass::SampleCount`] in the options' passes, so the file has the counts.
-    pub save_partial: bool,
-}
-
-impl Default for ExrOptions {
-    fn default() -> Self {
-        Self {
-            half: false,
-            region: None,
-            tile: None,
-            band_bytes: BAND_BYTES,
-            save_partial: false,
-        }
-    }
 }
 
 /// What a written render took.
@@ -138,23 +105,6 @@ impl RenderSummary {
     pub fn mean_spp(&self) -> f64 {
         self.samples as f64 / self.window.pixels().max(1) as f64
     }
-}
-
-/// Bytes the sums of one pixel take while rendering with `passes`, and while writing it
-/// (`channels` values of its row): what decides a band's height.
-pub fn film_bytes_per_pixel(passes: PassSet, adaptive: bool, channels: usize) -> usize {
-    let layout = AovLayout::new(passes);
-    let crypto = usize::from(layout.crypto_object) + usize::from(layout.crypto_material);
-    let accum =
-        std::mem::size_of::<aperture_render::film::PixelSum>() + 8 * layout.stride + 128 * crypto;
-    let film = accum
-        + 4
-        + 4 * usize::from(passes.contains(Pass::Depth))
-        + 12 * usize::from(passes.contains(Pass::Position))
-        + 16 * usize::from(passes.contains(Pass::Vector));
-    // Adaptive rounds keep their own state (sums, squares, counts, flags) beside the film.
-    let rounds = if adaptive { accum + 24 + 8 + 4 + 3 } else { 0 };
-    film + rounds + 4 * channels
 }
 
 /// True when a file of `window` rendered with `opts` must say how many samples each pixel
@@ -279,6 +229,7 @@ pub fn film_to_image(
 mod tests {
     use super::*;
     use aperture_render::bands::{band_rows, bands};
+    use aperture_render::passes::PassSet;
     use aperture_render::TILE;
 
     #[test]

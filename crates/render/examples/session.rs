@@ -6,7 +6,7 @@
 //! cargo run --release -p aperture-render --example session [-- SCENE.glb [SPP]]
 //! ```
 
-use aperture_render::{FrameSpec, Progressive, RenderOptions, Session, Window};
+use aperture_render::{Frame, FrameSpec, Progressive, RenderOptions, Session, Window};
 use aperture_scene::{Edit, LoadOptions};
 use glam::{Affine3A, Mat4, Vec3};
 use std::time::Instant;
@@ -22,6 +22,29 @@ fn looking_at(eye: Vec3, target: Vec3) -> Mat4 {
         (-forward).extend(0.0),
         eye.extend(1.0),
     )
+}
+
+/// Seconds since `t` to a 1-sample preview of `frame` at 1/8 size, then to the first and the
+/// last pass of a progressive render of `opts`.
+fn refine(
+    frame: &Frame,
+    opts: &RenderOptions,
+    t: Instant,
+) -> Result<(f64, f64, f64), Box<dyn std::error::Error>> {
+    let preview = RenderOptions {
+        width: opts.width / 8,
+        height: opts.height / 8,
+        spp: 1,
+        ..opts.clone()
+    };
+    frame.render(&preview, &|_, _| {})?;
+    let to_preview = t.elapsed().as_secs_f64();
+    let whole = Window::whole(opts.width, opts.height);
+    let mut render = Progressive::new(frame, opts, whole)?;
+    render.next_pass(&|_, _| {})?;
+    let to_first = t.elapsed().as_secs_f64();
+    while render.next_pass(&|_, _| {})?.is_some() {}
+    Ok((to_preview, to_first, t.elapsed().as_secs_f64()))
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -46,7 +69,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         spp,
         ..RenderOptions::default()
     };
-    let name = std::path::Path::new(&path).file_name().map(|n| n.to_string_lossy());
+    let name = std::path::Path::new(&path)
+        .file_name()
+        .map(|n| n.to_string_lossy());
     println!(
         "{}: loaded, posed and built once in {:.1} ms; {}x{} to {spp} spp in passes 1, 2, 4, …",
         name.unwrap_or_default(),
@@ -78,21 +103,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 key,
                 value: fstop.into(),
             })?;
-            let frame = session.frame(&spec)?;
-            let preview = RenderOptions {
-                width: opts.width / 8,
-                height: opts.height / 8,
-                spp: 1,
-                ..opts.clone()
-            };
-            frame.render(&preview, &|_, _| {})?;
-            let to_preview = t.elapsed().as_secs_f64();
-            let whole = Window::whole(opts.width, opts.height);
-            let mut render = Progressive::new(frame, &opts, whole)?;
-            render.next_pass(&|_, _| {})?;
-            let to_first = t.elapsed().as_secs_f64();
-            while render.next_pass(&|_, _| {})?.is_some() {}
-            let to_last = t.elapsed().as_secs_f64();
+            let (to_preview, to_first, to_last) = refine(session.frame(&spec)?, &opts, t)?;
             println!(
                 "{position:>8}  f/{fstop:<4}  {:>28.1} ms  {:>12.1} ms  {:>13.1} ms",
                 to_preview * 1e3,

@@ -9,7 +9,7 @@ use std::collections::HashMap;
 
 use gltf::accessor::{DataType, Dimensions};
 
-use crate::Error;
+use crate::error::Error;
 
 /// Bytes of every buffer, each cut to its `byteLength`.
 pub(crate) struct Buffers {

@@ -24,16 +24,15 @@ use crate::animation::{self, AnimationInfo, Animations, NodeProperty, Target};
 use crate::buffers::load_buffers;
 use crate::camera::{self, CameraData};
 use crate::edit::{apply_graph_edits, Edit};
+use crate::error::Error;
 use crate::material::Materials;
 use crate::mesh::LoadedMesh;
 use crate::nodes::{node_graph, NodeGraph};
 use crate::origin::recentre;
 use crate::pointer::Pointer;
 use crate::skin::Skin;
-use crate::{
-    glb, morph, prepass, skin, Error, LightKind, LoadOptions, Material, Mesh, Scene, SceneStats,
-    Texture,
-};
+use crate::types::{LightKind, LoadOptions, Material, Mesh, Scene, SceneStats, Texture};
+use crate::{glb, morph, prepass, skin};
 use variants::{resolve_variant, variant_names};
 
 /// Watts per lumen at 555 nm: Blender's importer divides candela and lux by it (SPEC §4).
@@ -90,7 +89,7 @@ pub struct Animated {
     /// By node: its instances' `Instance::materials` when not 0.
     node_materials: HashMap<usize, u32>,
     /// `EXT_lights_image_based`, the same at every pose.
-    environment: Option<std::sync::Arc<crate::ImageEnvironment>>,
+    environment: Option<std::sync::Arc<crate::types::ImageEnvironment>>,
     skins: Vec<Skin>,
     cameras: Vec<CameraData>,
     lights: Vec<LightData>,
@@ -178,7 +177,7 @@ impl Animated {
         options: &LoadOptions,
         graph_edits: &[Edit],
     ) -> Result<Self, Error> {
-        let (json, bin) = container(bytes)?;
+        let (json, bin) = glb::split(bytes)?;
         let prepared = prepass::prepare(json)?;
         let (doc, root) = (prepared.document, prepared.root);
         let (mut stats, variant) =
@@ -487,7 +486,7 @@ impl Animated {
 /// warnings for those ignored, the generator, the variants and the one chosen.
 fn first_stats(
     skipped: Vec<String>,
-    extensions: Vec<(String, crate::ExtensionStatus)>,
+    extensions: Vec<(String, crate::types::ExtensionStatus)>,
     doc: &gltf::Document,
     root: &Value,
     options: &LoadOptions,
@@ -506,16 +505,6 @@ fn first_stats(
 }
 
 /// The drawn nodes of the selected scene, depth first.
-/// The JSON and binary chunk of a GLB container, or the bytes as JSON.
-fn container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), Error> {
-    if glb::is_glb(bytes) {
-        let g = glb::parse(bytes)?;
-        Ok((g.json, g.bin))
-    } else {
-        Ok((bytes, None))
-    }
-}
-
 fn drawn_order(
     doc: &gltf::Document,
     options: &LoadOptions,
@@ -531,7 +520,7 @@ fn drawn_order(
     };
     if let Some(s) = &scene {
         let extras = crate::camera::raw(s.extras());
-        stats.motion = crate::MotionExtras::parse(s.index(), extras.as_ref())?;
+        stats.motion = crate::shutter_extras::MotionExtras::parse(s.index(), extras.as_ref())?;
     }
     let mut order = Vec::new();
     match &scene {

@@ -11,8 +11,8 @@ use glam::{DQuat, DVec3};
 use serde_json::Value;
 
 use crate::accessor::{read_f32, Buffers};
+use crate::error::Error;
 use crate::pointer::{self, Pointer};
-use crate::Error;
 
 pub(crate) use crate::pointer::NodeProperty;
 

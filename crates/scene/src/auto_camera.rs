@@ -4,7 +4,8 @@
 use glam::{Affine3A, DVec3, Mat3, Vec3};
 
 use crate::dof::{self, CameraInput, NodeInfo};
-use crate::{Bounds, Camera, Error, LoadOptions, Projection};
+use crate::error::Error;
+use crate::types::{Bounds, Camera, LoadOptions, Projection};
 
 /// Vertical field of view of the automatic camera.
 const AUTO_YFOV_DEGREES: f32 = 40.0;

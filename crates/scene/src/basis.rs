@@ -6,7 +6,7 @@
 //! of KTX2 images. The file's size is read from its header before anything is transcoded, so
 //! the texture budget sees it like any other image's.
 
-use crate::Error;
+use crate::error::Error;
 
 /// The 12 bytes every KTX2 file starts with.
 const KTX2_IDENTIFIER: [u8; 12] = [

@@ -7,7 +7,8 @@ use std::path::Path;
 use serde_json::Value;
 
 use crate::accessor::Buffers;
-use crate::{uri, Error};
+use crate::error::Error;
+use crate::uri;
 
 /// Reads every buffer: the GLB BIN chunk, `data:` URIs or files beside the scene.
 pub(crate) fn load_buffers(

@@ -5,7 +5,8 @@ use glam::{Affine3A, Mat3, Vec3};
 use serde_json::Value;
 
 use crate::dof::{self, CameraInput, NodeInfo};
-use crate::{Camera, Error, LoadOptions, Projection};
+use crate::error::Error;
+use crate::types::{Camera, LoadOptions, Projection};
 
 /// Rotation and translation of a world transform: scale and shear removed (SPEC §1), keeping the
 /// view axis (−Z) exact and +Y as close to the node's as possible.

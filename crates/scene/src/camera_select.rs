@@ -2,7 +2,8 @@
 //! (`cameras[N]`, what other tools number cameras by, and the `N` of the generated name
 //! `camera N`); `node:J` picks the camera node `J`, for a glTF camera drawn by two nodes.
 
-use crate::{Camera, Error, Scene};
+use crate::error::Error;
+use crate::types::{Camera, Scene};
 
 impl Scene {
     /// The index into [`Scene::cameras`] of the camera `wanted` names: its name first, then
@@ -57,7 +58,7 @@ impl Scene {
 
 #[cfg(test)]
 mod tests {
-    use crate::{Camera, Dof, Projection, Scene};
+    use crate::types::{Camera, Dof, Projection, Scene};
 
     fn cam(name: &str, node: Option<u32>, index: Option<u32>) -> Camera {
         Camera {

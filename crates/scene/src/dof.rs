@@ -18,7 +18,8 @@ mod layer;
 use glam::{Affine3A, Vec3};
 use serde_json::Value;
 
-use crate::{Dof, DofOverrides, Error, Projection, SensorFit};
+use crate::error::Error;
+use crate::types::{Dof, DofOverrides, Projection, SensorFit};
 use layer::{parse_extras, parse_overrides, parse_physical, Ctx, FocusTarget, Layer};
 
 /// Blender's default image aspect (36 × 24 mm sensor) when a camera has no `aspectRatio`.

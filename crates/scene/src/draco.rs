@@ -12,7 +12,7 @@ use draco_core::{DataType, DecodeLimits, DecoderBuffer, FaceIndex, MeshDecoder};
 use serde_json::Value;
 
 use crate::accessor::{view_bytes, Buffers};
-use crate::Error;
+use crate::error::Error;
 
 /// A decoded primitive: triangle indices and the compressed attributes, by glTF semantic name.
 pub(crate) struct Decoded {

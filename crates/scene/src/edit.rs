@@ -5,9 +5,9 @@
 
 use serde_json::Value;
 
+use crate::error::Error;
 use crate::nodes::{inherited, LocalTransform, NodeGraph};
 use crate::pointer::{self, NodeProperty, Pointer};
-use crate::Error;
 /// A change to a loaded document: a value as the file could have stored it.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Edit {

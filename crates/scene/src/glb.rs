@@ -1,7 +1,7 @@
 //! The binary glTF container (glTF 2.0 §4.4): a 12-byte header, a JSON chunk, an optional BIN chunk.
 //! Every length is checked against the bytes actually present, so a truncated file is an error.
 
-use crate::Error;
+use crate::error::Error;
 
 const MAGIC: &[u8; 4] = b"glTF";
 const CHUNK_JSON: u32 = 0x4E4F_534A;
@@ -91,6 +91,16 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Glb<'_>, Error> {
     }
     let json = json.ok_or_else(|| bad("no JSON chunk"))?;
     Ok(Glb { json, bin })
+}
+
+/// The JSON and binary chunk of a GLB container, or the bytes as JSON.
+pub(crate) fn split(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), Error> {
+    if is_glb(bytes) {
+        let g = parse(bytes)?;
+        Ok((g.json, g.bin))
+    } else {
+        Ok((bytes, None))
+    }
 }
 
 #[cfg(test)]

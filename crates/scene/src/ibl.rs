@@ -15,14 +15,15 @@ use glam::{Quat, Vec3};
 use serde_json::Value;
 
 use crate::accessor::Buffers;
-use crate::{Error, ImageEnvironment, Texels};
+use crate::error::Error;
+use crate::types::{ImageEnvironment, Texels};
 
 /// The image-based light of the scene `options` select (the file's default scene, else the
 /// first), shared between poses; none when textures are skipped (`info`).
 pub(crate) fn scene_environment(
     doc: &gltf::Document,
     root: &Value,
-    options: &crate::LoadOptions,
+    options: &crate::types::LoadOptions,
     buffers: &Buffers,
     base_dir: &Path,
 ) -> Result<Option<std::sync::Arc<ImageEnvironment>>, Error> {

@@ -3,7 +3,9 @@
 
 use std::path::Path;
 
-use crate::{Animated, Error, LoadOptions, Scene};
+use crate::animated::Animated;
+use crate::error::Error;
+use crate::types::{LoadOptions, Scene};
 
 /// Loads a `.gltf` or `.glb` file into a render-ready [`Scene`], posed at
 /// [`LoadOptions::time`] (the stored pose without one).

@@ -9,8 +9,9 @@ use glam::{Vec2, Vec3, Vec4};
 use serde_json::Value;
 
 use crate::accessor::Buffers;
-use crate::{
-    AlphaMode, ColorSpace, Error, Filter, Material, Sampler, Texels, Texture, TextureRef,
+use crate::error::Error;
+use crate::types::{
+    AlphaMode, ColorSpace, Filter, Material, Sampler, Texels, Texture, TextureRef,
     TextureTransform, Wrap,
 };
 

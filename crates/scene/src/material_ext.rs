@@ -8,10 +8,11 @@ use glam::{Vec3, Vec4};
 use serde_json::Value;
 
 use crate::material::Materials;
-use crate::{
-    Anisotropy, Clearcoat, DiffuseTransmission, Iridescence, Material, Sheen, SpecularGlossiness,
-    TextureRef, Transmission, Volume,
+use crate::pbr::{
+    Anisotropy, Clearcoat, DiffuseTransmission, Iridescence, Sheen, SpecularGlossiness,
+    Transmission, Volume,
 };
+use crate::types::{Material, TextureRef};
 
 /// A finite number at `key`, else `default`.
 fn num(v: &Value, key: &str, default: f32) -> f32 {

@@ -6,9 +6,10 @@ use glam::{Vec2, Vec3, Vec4};
 use gltf::mesh::Mode;
 
 use crate::accessor::Buffers;
+use crate::error::Error;
 use crate::morph::MorphTarget;
 use crate::skin::{self, Influences};
-use crate::{Error, Mesh, SceneStats};
+use crate::types::{Mesh, SceneStats};
 use part::{read_part, Part, SkinSet};
 
 /// A merged glTF mesh with what deforms it: morph targets and joint influences, aligned with

@@ -15,7 +15,7 @@
 use serde_json::Value;
 
 use crate::accessor::Buffers;
-use crate::Error;
+use crate::error::Error;
 
 /// Largest accepted ratio of decoded to compressed bytes. meshoptimizer's codecs reach about 10×
 /// on real geometry and ~50× on constant streams; 256× leaves room without letting a kilobyte

@@ -3,7 +3,7 @@
 
 use glam::{Vec3, Vec4};
 
-use crate::Mesh;
+use crate::types::Mesh;
 
 /// One morph target of a merged mesh: displacements per vertex (an empty list = the attribute is
 /// not displaced by this target).

@@ -5,7 +5,7 @@ use glam::{Affine3A, DAffine3, DMat4, DQuat, DVec3};
 use serde_json::Value;
 
 use crate::accessor::{read_vec, Buffers};
-use crate::Error;
+use crate::error::Error;
 
 /// A node's local transform as the file stores it (checked finite, with a non-zero rotation),
 /// widened to f64 when used: 68 bytes a node rather than the 176 of the f64 matrix and its

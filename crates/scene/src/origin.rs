@@ -3,7 +3,7 @@
 
 use glam::{DAffine3, DVec3};
 
-use crate::SceneStats;
+use crate::types::SceneStats;
 
 /// Moves a mesh whose vertices sit far from its own origin (farther than its size) to be centred
 /// on its bounds, and returns the offset to add back in front of every instance transform.
@@ -12,7 +12,7 @@ use crate::SceneStats;
 /// object space inherits that error. The subtraction is done in f64 and the stored f32 values
 /// are exact multiples of their spacing, so the recentred vertices lose nothing that the file
 /// held.
-pub(crate) fn recentre(mesh: &mut crate::Mesh) -> DVec3 {
+pub(crate) fn recentre(mesh: &mut crate::types::Mesh) -> DVec3 {
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for p in &mesh.positions {
         lo = lo.min(p.as_dvec3());
@@ -39,7 +39,7 @@ pub(crate) fn recentre(mesh: &mut crate::Mesh) -> DVec3 {
 /// The geometry's centre, rather than a camera's position, because a file has any number of
 /// cameras (or none) and the bounds are what every camera looks at.
 pub(crate) fn world_origin(
-    meshes: &[crate::Mesh],
+    meshes: &[crate::types::Mesh],
     placed: &[(u32, DAffine3, u32)],
     stats: &mut SceneStats,
 ) -> DVec3 {
@@ -129,7 +129,7 @@ const MIN_EXTENT: f64 = 1e-8;
 const MIN_STEPS_PER_EDGE: f64 = 16.0;
 
 /// The shortest non-zero edge of a mesh's triangles, in object space (infinity if none).
-fn shortest_edge(mesh: &crate::Mesh) -> f64 {
+fn shortest_edge(mesh: &crate::types::Mesh) -> f64 {
     let p = |i: u32| mesh.positions.get(i as usize).map(|v| v.as_dvec3());
     mesh.indices
         .iter()

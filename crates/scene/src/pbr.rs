@@ -5,7 +5,7 @@
 
 use glam::{Vec3, Vec4};
 
-use crate::TextureRef;
+use crate::types::texture_ref::TextureRef;
 
 /// `KHR_materials_transmission`: specular transmission through the dielectric base.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -7,7 +7,8 @@
 use glam::{Vec2, Vec3, Vec4};
 use serde_json::Value;
 
-use crate::{Material, TextureRef, TextureTransform};
+use crate::types::material::{AlphaMode, Material};
+use crate::types::texture_ref::{TextureRef, TextureTransform};
 
 /// A parsed pointer.
 #[derive(Debug, Clone, PartialEq)]
@@ -263,7 +264,7 @@ pub(crate) fn apply_material(m: &mut Material, property: MaterialProperty, v: &[
         M::RoughnessFactor => m.roughness_factor = f(0),
         M::EmissiveFactor => m.emissive_factor = Vec3::new(f(0), f(1), f(2)),
         M::AlphaCutoff => {
-            if let crate::AlphaMode::Mask { cutoff } = &mut m.alpha_mode {
+            if let AlphaMode::Mask { cutoff } = &mut m.alpha_mode {
                 *cutoff = f(0);
             }
         }

@@ -9,7 +9,7 @@
 
 use serde_json::Value;
 
-use crate::Error;
+use crate::error::Error;
 
 /// Extensions we implement, so a file may require them.
 pub const SUPPORTED_EXTENSIONS: &[&str] = &[
@@ -41,6 +41,15 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_texture_basisu",
 ];
 
+/// What aperture does with an extension a file uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ExtensionStatus {
+    /// Implemented (in [`SUPPORTED_EXTENSIONS`]).
+    Supported,
+    /// Not implemented and optional (not in `extensionsRequired`): the file renders without it.
+    Ignored,
+}
+
 /// The validated document plus what the pre-pass removed.
 pub(crate) struct Prepared {
     pub document: gltf::Document,
@@ -49,25 +58,25 @@ pub(crate) struct Prepared {
     pub root: Value,
     pub skipped: Vec<String>,
     /// Every extension of `extensionsUsed`, with its status.
-    pub extensions: Vec<(String, crate::ExtensionStatus)>,
+    pub extensions: Vec<(String, ExtensionStatus)>,
 }
 
 /// Every extension of `extensionsUsed` with its status.
-fn extension_statuses(root: &Value) -> Vec<(String, crate::ExtensionStatus)> {
+fn extension_statuses(root: &Value) -> Vec<(String, ExtensionStatus)> {
     let used = root.get("extensionsUsed").and_then(Value::as_array);
     let names = used.into_iter().flatten().filter_map(Value::as_str);
     names
         .map(|e| match SUPPORTED_EXTENSIONS.contains(&e) {
-            true => (e.to_owned(), crate::ExtensionStatus::Supported),
-            false => (e.to_owned(), crate::ExtensionStatus::Ignored),
+            true => (e.to_owned(), ExtensionStatus::Supported),
+            false => (e.to_owned(), ExtensionStatus::Ignored),
         })
         .collect()
 }
 
 /// The names of the extensions `extensions` marks ignored (optional, not implemented).
-pub(crate) fn ignored(extensions: &[(String, crate::ExtensionStatus)]) -> Vec<&str> {
+pub(crate) fn ignored(extensions: &[(String, ExtensionStatus)]) -> Vec<&str> {
     (extensions.iter())
-        .filter(|(_, s)| *s == crate::ExtensionStatus::Ignored)
+        .filter(|(_, s)| *s == ExtensionStatus::Ignored)
         .map(|(e, _)| e.as_str())
         .collect()
 }

@@ -6,9 +6,10 @@
 use std::collections::HashMap;
 
 use crate::accessor::Buffers;
+use crate::error::Error;
 use crate::material::Materials;
 use crate::mesh::{self, LoadedMesh};
-use crate::{Error, Material, Scene, SceneStats};
+use crate::types::{Material, Scene, SceneStats};
 use gltf::mesh::Mode;
 
 /// What a primitive's geometry is read from: its mode, indices accessor and attribute

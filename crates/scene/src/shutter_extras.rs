@@ -3,7 +3,7 @@
 
 use serde_json::Value;
 
-use crate::Error;
+use crate::error::Error;
 
 /// Where the shutter interval sits around the frame (Blender's `motion_blur_position`;
 /// `--shutter-position`, where the first paragraph of each value's comment is its help).

@@ -8,7 +8,8 @@
 use glam::{DAffine3, DMat3, DVec3, Vec3, Vec4};
 
 use crate::accessor::Buffers;
-use crate::{Error, Mesh};
+use crate::error::Error;
+use crate::types::Mesh;
 
 /// Joint influences of a merged mesh's vertices: `per_vertex` (joint, weight) pairs each,
 /// weights renormalised (all zero for a vertex no joint moves).

@@ -5,7 +5,7 @@
 //! may disagree (UV seams, mirrored UVs). Such a vertex is split: the corner gets a copy of the
 //! vertex with its own tangent, so the shared vertex never averages two frames.
 
-use crate::{Mesh, Scene};
+use crate::types::{Mesh, Scene};
 use glam::{Vec2, Vec4};
 
 /// The triangles of one mesh that need generated tangents, as MikkTSpace sees them.
@@ -57,7 +57,7 @@ impl mikktspace::Geometry for Faces<'_> {
 /// The UV set whose directions the material's tangent frame follows, if it needs one: its
 /// normal map's, else its clear coat normal map's, else (`KHR_materials_anisotropy`, whose
 /// direction is given in tangent space) its anisotropy texture's, or set 0.
-pub(crate) fn tangent_uv_set(m: &crate::Material) -> Option<u32> {
+pub(crate) fn tangent_uv_set(m: &crate::types::Material) -> Option<u32> {
     if let Some(t) = m.normal_texture {
         return Some(t.tex_coord);
     }
@@ -167,7 +167,7 @@ fn split_vertex(mesh: &mut Mesh, v: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Material, TextureRef};
+    use crate::types::{Material, TextureRef};
     use glam::Vec3;
 
     fn normal_mapped() -> Material {

@@ -13,7 +13,8 @@ use image::ImageDecoder as _;
 use rayon::prelude::*;
 
 use crate::accessor::Buffers;
-use crate::{Error, Texels};
+use crate::error::Error;
+use crate::types::Texels;
 
 /// What an image's header says: its size and the bytes a texel takes decoded by the image
 /// crate and as stored in a [`Texels`].

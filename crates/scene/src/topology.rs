@@ -3,7 +3,7 @@
 
 use std::collections::HashMap;
 
-use crate::Mesh;
+use crate::types::Mesh;
 
 impl Mesh {
     /// True when the triangles form a closed surface: after welding vertices at equal

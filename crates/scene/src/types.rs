@@ -1,11 +1,14 @@
 //! The render-ready scene model. Everything here is plain data: the loader fills it, the renderer
 //! reads it, and tests may build it by hand.
 
-mod material;
+pub(crate) mod material;
+pub(crate) mod texture_ref;
 
 use glam::{Affine3A, DVec3, Vec2, Vec3, Vec4};
 
+pub use crate::prepass::ExtensionStatus;
 pub use material::*;
+pub use texture_ref::*;
 
 /// A scene ready to render: unique meshes, the instances that draw them, and what shades them.
 #[derive(Debug, Clone, Default)]
@@ -315,22 +318,13 @@ pub struct LoadOptions {
     /// the stored pose, no animation evaluated (SPEC §7).
     pub time: Option<f32>,
     /// Which animations a time evaluates (`--animation`); default all together.
-    pub animation: crate::AnimationSelection,
+    pub animation: crate::animation::AnimationSelection,
     /// `KHR_materials_variants`: the variant whose materials to draw (`--variant`), by name
     /// or index written as digits; `None` draws the default materials.
     pub variant: Option<String>,
     /// The most memory decoded textures and geometry may take, checked before they are
     /// allocated: the machine's memory by default, `--max-memory` on the command line.
     pub memory: aperture_budget::MemoryBudget,
-}
-
-/// What aperture does with an extension a file uses.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ExtensionStatus {
-    /// Implemented (in [`crate::SUPPORTED_EXTENSIONS`]).
-    Supported,
-    /// Not implemented and optional (not in `extensionsRequired`): the file renders without it.
-    Ignored,
 }
 
 /// An axis-aligned box.
@@ -403,11 +397,11 @@ pub struct SceneStats {
     /// Warnings for the user (one line each).
     pub warnings: Vec<String>,
     /// The file's animations (name, key range, whether the load evaluates it).
-    pub animations: Vec<crate::AnimationInfo>,
+    pub animations: Vec<crate::animation::AnimationInfo>,
     /// The time the scene is posed at (`None`: the stored pose).
     pub time: Option<f32>,
     /// The selected scene's motion-blur keys (`scenes[i].extras`, SPEC §7).
-    pub motion: crate::MotionExtras,
+    pub motion: crate::shutter_extras::MotionExtras,
     /// `asset.generator`: the tool that wrote the file (decides `--transmission auto`).
     pub generator: Option<String>,
     /// `KHR_materials_variants` names, in the file's order.

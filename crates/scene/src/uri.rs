@@ -6,7 +6,7 @@ use std::path::{Component, Path, PathBuf};
 use base64::Engine;
 use percent_encoding::percent_decode_str;
 
-use crate::Error;
+use crate::error::Error;
 
 fn refuse(at: &str, uri: &str, reason: &str) -> Error {
     Error::ForbiddenUri {

@@ -1,6 +1,7 @@
 //! Which triangles are kept: indices in range, three finite points not on one line.
 
-use crate::{InstanceInput, MeshInput, Tri};
+use crate::triangle::Tri;
+use crate::types::{InstanceInput, MeshInput};
 use glam::Vec3;
 
 /// Why a triangle is left out.

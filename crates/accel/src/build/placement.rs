@@ -1,7 +1,9 @@
 //! Where each instance goes: into the world-space BVH, or over a bottom-level BVH of its mesh
 //! (and what an animation frame tells about that).
 
-use crate::{InstanceInput, MeshInput};
+use crate::deform::VertexMotion;
+use crate::motion::MotionTransform;
+use crate::types::{InstanceInput, MeshInput};
 use glam::Affine3A;
 
 /// `object_from_world` for a usable instance transform, computed in f64 for accuracy.
@@ -41,12 +43,12 @@ pub struct FrameHints<'a> {
     /// Per instance: how it moves within the shutter (`None`: it stays at
     /// `world_from_object`); empty: nothing moves. A moving instance is walked at each ray's
     /// [`Ray::time`](crate::Ray::time) and bounded over its whole interval.
-    pub motion: &'a [Option<crate::MotionTransform>],
+    pub motion: &'a [Option<MotionTransform>],
     /// Per mesh: its vertices keyed over the shutter when it deforms within it (`None`, or a
     /// vertex count other than the mesh's: it stays as given); empty: nothing deforms. Such a
     /// mesh gets a bottom-level BVH of its own over its swept triangles, walked at each ray's
     /// [`Ray::time`](crate::Ray::time); the mesh's `positions` are the frame's (for lookups).
-    pub deforming: &'a [Option<crate::VertexMotion>],
+    pub deforming: &'a [Option<VertexMotion>],
 }
 
 /// The default of [`FrameHints::flatten_shared_up_to`]: 2^20 drawn triangles, so flattening
@@ -70,7 +72,7 @@ pub(super) fn deform_of<'h>(
     meshes: &[MeshInput<'_>],
     hints: &FrameHints<'h>,
     m: usize,
-) -> Option<&'h crate::VertexMotion> {
+) -> Option<&'h VertexMotion> {
     let keys = hints.deforming.get(m)?.as_ref()?;
     (keys.vertex_count() == meshes.get(m)?.positions.len()).then_some(keys)
 }

@@ -3,7 +3,9 @@
 
 use crate::deform::Deform;
 use crate::node::{layout::nodes_from_cwbvh, Node};
-use crate::{Blas, BvhQuality, Tri};
+use crate::structure::Blas;
+use crate::triangle::Tri;
+use crate::types::BvhQuality;
 use glam::Vec3;
 use obvhs::{
     aabb::Aabb, bvh2::reinsertion::ReinsertionOptimizer, cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh,

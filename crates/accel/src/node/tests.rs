@@ -330,7 +330,7 @@ fn slack_covers_what_the_triangle_test_accepts() {
         let m = f64::from(reach(o.into(), (lo.as_vec3(), hi.as_vec3())) / SLACK);
         for f in [64.0, 16.0, 4.0, 1.0, 0.5] {
             let dir = (q0 + out * (f * eps * m) - od).normalize().as_vec3();
-            let ray = crate::Ray {
+            let ray = crate::types::Ray {
                 origin: o,
                 dir,
                 tmin: 0.0,

@@ -2,7 +2,7 @@
 //! every direction within [`PACKET_CONE_COS`] of the first.
 
 use super::shape::PACKET_CONE_COS;
-use crate::Ray;
+use crate::types::Ray;
 use std::arch::x86_64::*;
 
 /// Whether `rays` share a direction octant and lie within [`PACKET_CONE_COS`] of the first, in

@@ -3,8 +3,9 @@
 //! instructions a ray (most rays of a product shot miss it).
 
 use super::shape::PACKET_LANES;
+use crate::structure::Accel;
 use crate::triangle::lanes::transpose;
-use crate::{Accel, Ray};
+use crate::types::Ray;
 use glam::Vec3A;
 use std::arch::x86_64::*;
 
@@ -63,8 +64,9 @@ impl Accel {
 mod tests {
     use super::super::rays::dir_lanes;
     use super::PACKET_LANES;
+    use crate::structure::Accel;
     use crate::test_util::{awkward, mix};
-    use crate::{Accel, BvhQuality, InstanceInput, MeshInput, Ray};
+    use crate::types::{BvhQuality, InstanceInput, MeshInput, Ray};
     use glam::{Affine3A, Vec3};
 
     /// A coordinate in [-4, 4), now and then zero, tiny or not finite.

@@ -67,7 +67,7 @@ pub(super) struct BoxLanes {
 /// # Safety
 /// The CPU must support AVX, and the caller must be compiled for it.
 #[inline(always)]
-pub(super) unsafe fn dir_lanes(run: &[crate::Ray; PACKET_LANES]) -> [__m256; 3] {
+pub(super) unsafe fn dir_lanes(run: &[crate::types::Ray; PACKET_LANES]) -> [__m256; 3] {
     // SAFETY: AVX is guaranteed by the caller; register-only operations.
     let [dx, dy, dz, _] = unsafe {
         crate::triangle::lanes::transpose(run.each_ref().map(|r| glam::Vec3A::from(r.dir).into()))

@@ -368,7 +368,7 @@ mod tests {
     use super::*;
     use crate::test_util::mix;
     use crate::triangle::intersect;
-    use crate::Tri;
+    use crate::triangle::Tri;
 
     /// The scalar test's AVX path ([`intersect`] with `AVX`), compiled for AVX as the queries
     /// that inline it.

@@ -3,8 +3,10 @@
 //! bottom level (triangles).
 
 use super::stack::Group;
-use crate::triangle::TriRay;
-use crate::{Accel, Blas, Entry, Hit, Ray, Tri};
+use crate::deform::Deformed;
+use crate::structure::{Accel, Blas, Entry};
+use crate::triangle::{Tri, TriRay};
+use crate::types::{Hit, Ray};
 use std::mem::MaybeUninit;
 
 /// What [`traverse`](super::traverse) does with each primitive of a hit leaf. A trait with `#[inline(always)]`
@@ -244,5 +246,22 @@ impl<'a, const AVX: bool> BlasLeaf<'a> for AnyLeaf<'a, AVX> {
     fn record(&mut self, primitive: u32, _: (f32, f32, f32), _: &mut f32) -> bool {
         self.blocker = primitive;
         true
+    }
+}
+
+/// A deforming BVH's leaf ([`Deformed`]): the triangle interpolated at the ray's time, tested
+/// and recorded as the still leaf `inner` does.
+impl<'s, L: BlasLeaf<'s>, const AVX: bool> Leaf for Deformed<'_, &mut L, AVX> {
+    const CLOSEST: bool = L::CLOSEST;
+    #[inline(always)]
+    fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
+        let Some(tri) = self.triangle(primitive as usize) else {
+            return false;
+        };
+        let (_, ray, tmin) = self.inner.triangles();
+        match crate::triangle::intersect::<AVX>(ray, &tri, tmin, *tmax) {
+            Some(h) => self.inner.record(primitive, h, tmax),
+            None => false,
+        }
     }
 }

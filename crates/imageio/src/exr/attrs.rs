@@ -5,7 +5,8 @@ use ::exr::meta::attribute::{AttributeValue, Chromaticities, Matrix4x4, Text};
 use ::exr::meta::header::{standard_names, ImageAttributes, LayerAttributes};
 
 use super::guard;
-use crate::{Error, MetaValue, NameKind};
+use crate::error::{Error, NameKind};
+use crate::model::MetaValue;
 
 /// EXR text holds bytes; storing UTF-8 keeps any Rust string exact. `Text::from(&str)` would
 /// panic on characters above U+00FF.

@@ -11,7 +11,8 @@ use ::exr::prelude::traits::{ReadChannels, ReadLayers};
 use super::attrs::{chromaticities, get_attributes, meta_value, string};
 use super::guard;
 use super::write::ChannelSpec;
-use crate::{Error, Image, Layer, Placement, SampleType};
+use crate::error::Error;
+use crate::model::{Image, Layer, Placement, SampleType};
 
 /// What an EXR file's header says, without its pixels: what a tool needs to decide whether
 /// to read the file (`aperture merge` checks every part before reading any).
@@ -26,12 +27,12 @@ pub struct ExrHeader {
     /// Every channel by full name (`R`, `Depth.Z`), sorted by name, of every part.
     pub channels: Vec<ChannelSpec>,
     /// The metadata [`read_exr`] would return.
-    pub metadata: Vec<(String, crate::MetaValue)>,
+    pub metadata: Vec<(String, crate::model::MetaValue)>,
 }
 
 impl ExrHeader {
     /// The metadata value under `key`, if any.
-    pub fn meta(&self, key: &str) -> Option<&crate::MetaValue> {
+    pub fn meta(&self, key: &str) -> Option<&crate::model::MetaValue> {
         self.metadata.iter().find(|(k, _)| k == key).map(|(_, v)| v)
     }
 }
@@ -275,7 +276,7 @@ fn decode_exr_inner(bytes: &[u8], path: &Path, max_bytes: u64) -> Result<Image, 
 }
 
 /// The beauty part's attributes and the file's shared ones, sorted by name.
-fn metadata(image: &FlatImage, beauty_part: usize) -> Vec<(String, crate::MetaValue)> {
+fn metadata(image: &FlatImage, beauty_part: usize) -> Vec<(String, crate::model::MetaValue)> {
     let mut metadata = get_attributes(&image.layer_data[beauty_part].attributes);
     for (name, value) in &image.attributes.other {
         if let Some(value) = meta_value(value) {

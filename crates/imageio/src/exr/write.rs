@@ -19,7 +19,8 @@ use rayon::prelude::*;
 
 use super::attrs::{patch_attribute, set_attribute, sort_header_attributes, text};
 use crate::atomic::write_atomically_with;
-use crate::{Error, Image, MetaValue, NameKind, Placement, SampleType};
+use crate::error::{Error, NameKind};
+use crate::model::{Image, MetaValue, Placement, SampleType};
 
 /// Rows per ZIP block (the codec's own block height).
 const BLOCK_ROWS: usize = 16;
@@ -83,7 +84,7 @@ impl ExrLayout {
             }
             names.push(&c.name);
         }
-        crate::validate_metadata(&self.metadata)?;
+        crate::model::validate_metadata(&self.metadata)?;
         if let Some(p) = &self.placement {
             let fits = u64::from(p.x) + u64::from(self.width) <= u64::from(p.full_width)
                 && u64::from(p.y) + u64::from(self.height) <= u64::from(p.full_height);

@@ -7,16 +7,17 @@ use serde_json::Value;
 use super::{Animated, LightData};
 use crate::camera;
 use crate::edit::{graph_edit, trs_of, Edit, Touched};
+use crate::error::Error;
 use crate::nodes::{inherited, LocalTransform};
 use crate::pointer::{self, CameraProperty, LightProperty, NodeProperty, Pointer};
-use crate::{Error, LightKind, Projection, Scene};
+use crate::types::{LightKind, Projection, Scene};
 
 impl Animated {
     /// Loads `path` as if it stored the values `edits` set (in order): what a session that
     /// made those edits reloads.
     pub fn load_edited(
         path: &std::path::Path,
-        options: &crate::LoadOptions,
+        options: &crate::types::LoadOptions,
         edits: &[Edit],
     ) -> Result<Self, Error> {
         let graph: Vec<Edit> = edits.iter().filter(|e| graph_edit(e)).cloned().collect();

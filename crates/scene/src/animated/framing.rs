@@ -6,7 +6,8 @@ use glam::DVec3;
 use super::Animated;
 use crate::auto_camera::Framing;
 use crate::dof::NodeInfo;
-use crate::{Camera, Error, Scene};
+use crate::error::Error;
+use crate::types::{Camera, Scene};
 
 impl Animated {
     /// Frames the automatic camera on the stored pose, when posing needs one and a time could

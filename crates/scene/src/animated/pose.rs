@@ -6,11 +6,16 @@ use glam::{Affine3A, DAffine3, DVec3, Vec3};
 use super::{Animated, LightData, Pose, Shape, LUMENS_PER_WATT};
 use crate::camera::{self, CameraData};
 use crate::dof::NodeInfo;
+use crate::error::Error;
 use crate::mesh::LoadedMesh;
 use crate::nodes::{finite_world, to_f32, NodeData};
 use crate::origin::world_origin;
 use crate::pointer::{self, CameraProperty, Pointer};
-use crate::{Error, Instance, Light, Material, Mesh, Projection, Scene, Texture};
+use crate::types::{Instance, Light, Material, Mesh, Projection, Scene, Texture};
+
+/// The stored lights, cameras and materials with a pose's pointer channels applied
+/// ([`Animated::pointed`]).
+type Pointed = (Vec<LightData>, Vec<CameraData>, Vec<Material>);
 
 impl Animated {
     /// [`Animated::scene_at`] without textures (none is decoded or copied): what a motion step
@@ -20,7 +25,7 @@ impl Animated {
     }
 
     /// The selected scene's motion-blur keys (`scenes[i].extras`, SPEC §7).
-    pub fn motion_extras(&self) -> crate::MotionExtras {
+    pub fn motion_extras(&self) -> crate::shutter_extras::MotionExtras {
         self.stats.motion
     }
 
@@ -152,10 +157,7 @@ impl Animated {
     }
 
     /// The stored lights, cameras and materials with what this pose's pointer channels set.
-    pub(super) fn pointed(
-        &self,
-        pose: &Pose,
-    ) -> Result<(Vec<LightData>, Vec<CameraData>, Vec<Material>), Error> {
+    pub(super) fn pointed(&self, pose: &Pose) -> Result<Pointed, Error> {
         let mut lights = self.lights.clone();
         let mut cameras = self.cameras.clone();
         let mut materials = self.materials.clone();
@@ -197,7 +199,7 @@ impl Animated {
         pose: &Pose,
         camera_data: &[CameraData],
         origin: DVec3,
-    ) -> Result<Vec<crate::Camera>, Error> {
+    ) -> Result<Vec<crate::types::Camera>, Error> {
         let world_from_node = |ni: usize| to_f32(relative_to(pose.world[ni], origin));
         let origins = self.node_origins(pose, origin);
         let info = NodeInfo {

@@ -1,6 +1,6 @@
 //! Which `KHR_materials_variants` variant a load selects (`--variant`).
 
-use crate::Error;
+use crate::error::Error;
 use serde_json::Value;
 
 /// The names of the file's `KHR_materials_variants` (`variants[i]` when unnamed).

@@ -9,7 +9,7 @@ use super::{Animated, Pose};
 use crate::animation::{Channel, Target};
 use crate::nodes::{inherited, NodeGraph};
 use crate::pointer::Pointer;
-use crate::SceneStats;
+use crate::types::SceneStats;
 
 /// What loading needs of the keyed flags: per node, whether its visibility may change with
 /// time, and whether it is hidden at every time (its mesh is then not read). Counts the

@@ -4,7 +4,8 @@
 
 use serde_json::Value;
 
-use crate::{DofOverrides, Error, SensorFit};
+use crate::error::Error;
+use crate::types::{DofOverrides, SensorFit};
 
 /// The node a `focus_object` names.
 #[derive(Debug, Clone, PartialEq)]

@@ -5,7 +5,8 @@ use glam::{DVec3, Vec3};
 use serde_json::{json, Value};
 
 use super::load_bytes;
-use crate::{Error, LightKind, LoadOptions, Scene};
+use crate::error::Error;
+use crate::types::{LightKind, LoadOptions, Scene};
 
 /// One triangle (no normals) plus, from byte 44, instancing translations for 3 instances.
 fn bin() -> Vec<u8> {
@@ -84,7 +85,7 @@ fn shared_mesh_is_stored_once_with_hierarchy_transforms() {
     assert_eq!(s.meshes[0].positions.len(), 3);
     assert!(s.meshes[0].normals.iter().all(|n| *n == Vec3::Z));
     // No material: the glTF default one.
-    assert_eq!(s.materials, vec![crate::Material::default()]);
+    assert_eq!(s.materials, vec![crate::types::Material::default()]);
 }
 
 #[test]
@@ -277,7 +278,7 @@ fn dof_sources_reach_the_camera() {
     assert_eq!(d.blades, 6);
     // The command line wins over every file source.
     let opts = LoadOptions {
-        dof_overrides: crate::DofOverrides {
+        dof_overrides: crate::types::DofOverrides {
             aperture_radius: Some(0.5),
             focus_distance: Some(1.5),
             ..Default::default()

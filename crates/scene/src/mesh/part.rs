@@ -6,8 +6,8 @@ use gltf::mesh::{Mode, Semantic};
 
 use crate::accessor::{read_f32, read_indices, read_vec, Buffers};
 use crate::draco::Decoded;
+use crate::error::Error;
 use crate::morph::MorphTarget;
-use crate::Error;
 
 /// One `JOINTS_n`/`WEIGHTS_n` pair: 4 joints and 4 weights per vertex.
 pub(crate) type SkinSet = (Vec<f32>, Vec<f32>);

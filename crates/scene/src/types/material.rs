@@ -1,6 +1,7 @@
 //! Materials and the textures they sample: the shading half of the scene model, plain data.
 
-use glam::{Vec2, Vec3, Vec4};
+use super::texture_ref::TextureRef;
+use glam::{Vec3, Vec4};
 
 /// How a material treats alpha.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -15,38 +16,6 @@ pub enum AlphaMode {
     },
     /// Alpha is coverage (rendered stochastically).
     Blend,
-}
-
-/// `KHR_texture_transform` of one texture reference: `uv' = offset + rotate(rotation) * (scale * uv)`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TextureTransform {
-    /// UV offset.
-    pub offset: Vec2,
-    /// Rotation in radians (counter-clockwise in UV space, as the extension defines).
-    pub rotation: f32,
-    /// UV scale.
-    pub scale: Vec2,
-}
-
-impl Default for TextureTransform {
-    fn default() -> Self {
-        Self {
-            offset: Vec2::ZERO,
-            rotation: 0.0,
-            scale: Vec2::ONE,
-        }
-    }
-}
-
-/// A material's reference to a texture.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TextureRef {
-    /// Index into `Scene::textures`.
-    pub texture: u32,
-    /// Which UV set (`TEXCOORD_n`), after `KHR_texture_transform`'s own `texCoord` override.
-    pub tex_coord: u32,
-    /// `KHR_texture_transform`, if present.
-    pub transform: Option<TextureTransform>,
 }
 
 /// glTF metallic-roughness material (SPEC §5) with the extensions we read.
@@ -96,24 +65,24 @@ pub struct Material {
     /// `KHR_materials_specular` colour texture (sRGB-encoded): multiplies the colour factor.
     pub specular_color_texture: Option<TextureRef>,
     /// `KHR_materials_transmission`.
-    pub transmission: Option<crate::Transmission>,
+    pub transmission: Option<crate::pbr::Transmission>,
     /// `KHR_materials_volume`.
-    pub volume: Option<crate::Volume>,
+    pub volume: Option<crate::pbr::Volume>,
     /// `KHR_materials_clearcoat`.
-    pub clearcoat: Option<crate::Clearcoat>,
+    pub clearcoat: Option<crate::pbr::Clearcoat>,
     /// `KHR_materials_sheen`.
-    pub sheen: Option<crate::Sheen>,
+    pub sheen: Option<crate::pbr::Sheen>,
     /// `KHR_materials_anisotropy`.
-    pub anisotropy: Option<crate::Anisotropy>,
+    pub anisotropy: Option<crate::pbr::Anisotropy>,
     /// `KHR_materials_iridescence`.
-    pub iridescence: Option<crate::Iridescence>,
+    pub iridescence: Option<crate::pbr::Iridescence>,
     /// `KHR_materials_dispersion`: `20 / V` for Abbe number `V` (0 when absent: no dispersion).
     pub dispersion: f32,
     /// `KHR_materials_diffuse_transmission`.
-    pub diffuse_transmission: Option<crate::DiffuseTransmission>,
+    pub diffuse_transmission: Option<crate::pbr::DiffuseTransmission>,
     /// `KHR_materials_pbrSpecularGlossiness`: when present it replaces the metallic-roughness
     /// parameters.
-    pub specular_glossiness: Option<crate::SpecularGlossiness>,
+    pub specular_glossiness: Option<crate::pbr::SpecularGlossiness>,
 }
 
 impl Default for Material {

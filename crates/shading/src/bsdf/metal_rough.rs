@@ -11,10 +11,11 @@
 //! layering reflects more than it receives at grazing views (7 % at μ = 0.2), which no white
 //! furnace may show. Without it the lobe is Appendix B's, bit for bit.
 
+use super::common::{env_brdf, Albedos, LobeSplit};
 use super::energy::{ggx_albedo, multiple_scattering, schlick_average};
 use super::fresnel::schlick_weight;
 use super::ggx::{ggx_d, sample_vndf, smith_g1, smith_v};
-use super::{cosine_hemisphere, env_brdf, Albedos, LobeSplit};
+use crate::warp::cosine_hemisphere;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 

@@ -3,7 +3,7 @@
 //! thread count), collapsed into the 4-wide tree the descent reads ([`super::collapse`]).
 
 use super::split::{self, Item, Split};
-use super::{Leaf, LightTree};
+use super::tree::{Leaf, LightTree};
 use crate::color::luminance;
 use crate::light_bounds::LightBounds;
 use crate::lights::EmissiveLights;

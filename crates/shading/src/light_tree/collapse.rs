@@ -3,8 +3,8 @@
 //! has half the levels and its nodes bound what the binary nodes bounded.
 
 use super::build::Binary;
+use super::tree::{Leaf, LightTree};
 use super::wide::{Wide, LEAF_BIT};
-use super::{Leaf, LightTree};
 use aperture_scene::{Light, LightKind};
 
 impl LightTree {

@@ -3,7 +3,7 @@
 //! and the probability of that choice for a given light, for MIS.
 
 use super::sample::Receiver;
-use super::{Leaf, LightTree};
+use super::tree::{Leaf, LightTree};
 use crate::light_choice::{punctual_importance, remap, walk, Choice, Pick};
 use aperture_scene::Light;
 use glam::Vec3;

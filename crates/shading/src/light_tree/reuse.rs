@@ -5,7 +5,7 @@
 //! lights), so a kept tree is the tree a build would give and images do not depend on what
 //! was rendered before.
 
-use super::{Leaf, LightTree};
+use super::tree::{Leaf, LightTree};
 use crate::light_bounds::LightBounds;
 use crate::lights::EmissiveLights;
 use crate::surface::Geometry;

@@ -1,8 +1,8 @@
 //! The descent: from the root, a child in proportion to its importance at the vertex, down to
 //! one leaf; and the same choices' probabilities gathered again from a leaf's ancestors.
 
+use super::tree::{Leaf, LightTree};
 use super::wide::{self, Wide, LEAF_BIT};
-use super::{Leaf, LightTree};
 use crate::light_choice::punctual_importance;
 use aperture_scene::Light;
 use glam::Vec3;

@@ -3,7 +3,7 @@
 //! area; the median of the longest axis when buckets cannot separate the lights or when the
 //! tree would grow too deep (a leaf's probability gathers at most 64 levels).
 
-use super::Leaf;
+use super::tree::Leaf;
 use crate::light_bounds::LightBounds;
 use glam::Vec3;
 use std::f32::consts::PI;

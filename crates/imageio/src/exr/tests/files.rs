@@ -55,7 +55,7 @@ fn streamed_bands_equal_the_whole_image() {
         channels: ["R", "G", "B", "A", "Depth.Z"]
             .map(|name| ChannelSpec {
                 name: name.into(),
-                sample_type: crate::SampleType::F32,
+                sample_type: crate::model::SampleType::F32,
             })
             .into(),
         metadata: image.metadata.clone(),
@@ -90,7 +90,7 @@ fn failed_or_short_streams_leave_nothing() {
         height: 40,
         channels: vec![ChannelSpec {
             name: "Y".into(),
-            sample_type: crate::SampleType::F32,
+            sample_type: crate::model::SampleType::F32,
         }],
         ..ExrLayout::default()
     };
@@ -142,7 +142,7 @@ fn late_values_are_patched_into_the_header() {
         height: 2,
         channels: vec![ChannelSpec {
             name: "Y".into(),
-            sample_type: crate::SampleType::F32,
+            sample_type: crate::model::SampleType::F32,
         }],
         ..ExrLayout::default()
     };
@@ -193,14 +193,14 @@ fn header_alone_matches_the_whole_read() {
     let dir = scratch_dir("header-only");
     let path = dir.join("part.exr");
     let mut image = sample_image();
-    image.placement = Some(crate::Placement {
+    image.placement = Some(crate::model::Placement {
         x: 2,
         y: 4,
         full_width: 9,
         full_height: 8,
     });
-    image.layers[0].sample_type = crate::SampleType::F16;
-    crate::write_exr(&path, &image).unwrap();
+    image.layers[0].sample_type = crate::model::SampleType::F16;
+    crate::exr::write_exr(&path, &image).unwrap();
     let whole = read_exr(&path).unwrap();
     let header = read_exr_header(&path).unwrap();
     assert_eq!((header.width, header.height), (whole.width, whole.height));
@@ -215,7 +215,7 @@ fn header_alone_matches_the_whole_read() {
         .iter()
         .find(|c| c.name == "depth.Z")
         .unwrap();
-    assert_eq!(depth.sample_type, crate::SampleType::F16);
+    assert_eq!(depth.sample_type, crate::model::SampleType::F16);
 
     let bytes = std::fs::read(&path).unwrap();
     let cut = dir.join("cut.exr");

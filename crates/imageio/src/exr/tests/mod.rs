@@ -12,7 +12,8 @@ use ::exr::prelude::{Compression, LineOrder, SmallVec};
 
 use super::*;
 use crate::atomic::tests::{entries, scratch_dir};
-use crate::{Error, Image, Layer, MetaValue, NameKind};
+use crate::error::{Error, NameKind};
+use crate::model::{Image, Layer, MetaValue};
 
 mod damaged;
 mod files;

@@ -22,7 +22,7 @@ fn round_trip_through_a_file() {
     let dir = scratch_dir("exr-file");
     let path = dir.join("out.EXR");
     let image = sample_image();
-    crate::write_image(&path, &image, &Default::default()).unwrap();
+    crate::format::write_image(&path, &image, &Default::default()).unwrap();
     assert_eq!(read_exr(&path).unwrap(), image);
     assert_eq!(entries(&dir), vec!["out.EXR".to_string()]);
 }
@@ -174,17 +174,17 @@ fn random_images_round_trip_bit_exactly() {
 #[test]
 fn half_layers_placement_and_typed_attributes_round_trip() {
     let mut image = Image::new(3, 2);
-    image.beauty_type = crate::SampleType::F16;
+    image.beauty_type = crate::model::SampleType::F16;
     for (p, px) in image.rgba.iter_mut().enumerate() {
         *px = [0.1 * p as f32, 1.0 / 3.0, 70000.0, 1.0];
     }
     let mut light = Layer::new("Emission", &["R", "G", "B"], vec![1.0 / 3.0; 18]);
-    light.sample_type = crate::SampleType::F16;
+    light.sample_type = crate::model::SampleType::F16;
     image.layers.push(light);
     image
         .layers
         .push(Layer::new("Depth", &["Z"], vec![1.0 / 3.0; 6]));
-    image.placement = Some(crate::Placement {
+    image.placement = Some(crate::model::Placement {
         x: 5,
         y: 7,
         full_width: 10,
@@ -206,11 +206,11 @@ fn half_layers_placement_and_typed_attributes_round_trip() {
     let back = decode_exr(&encode_exr(&image, "t".as_ref()).unwrap(), "t".as_ref()).unwrap();
     assert_eq!(back.placement, image.placement);
     assert_eq!(back.metadata, image.metadata);
-    assert_eq!(back.beauty_type, crate::SampleType::F16);
+    assert_eq!(back.beauty_type, crate::model::SampleType::F16);
     assert_eq!(back.layers[0].name, "Depth");
-    assert_eq!(back.layers[0].sample_type, crate::SampleType::F32);
+    assert_eq!(back.layers[0].sample_type, crate::model::SampleType::F32);
     assert_eq!(back.layers[0].data[0], 1.0 / 3.0);
-    assert_eq!(back.layers[1].sample_type, crate::SampleType::F16);
+    assert_eq!(back.layers[1].sample_type, crate::model::SampleType::F16);
     let third = back.layers[1].data[0];
     assert!(
         third != 1.0 / 3.0 && (third - 1.0 / 3.0).abs() < 1e-3,
@@ -219,7 +219,7 @@ fn half_layers_placement_and_typed_attributes_round_trip() {
     // Above half's range: infinity (callers clamp first, see the renderer's --half).
     assert!(back.rgba[0][2].is_infinite());
     // A placement that does not fit is refused.
-    image.placement = Some(crate::Placement {
+    image.placement = Some(crate::model::Placement {
         x: 8,
         y: 0,
         full_width: 10,

@@ -15,13 +15,13 @@
 //! reflection or transmission by their weights at that normal. Lobes sharper than
 //! [`MIN_ALPHA`] are ideal (delta) lobes: light sampling cannot find them.
 
+use super::common::{Albedos, Frame, LobeSplit};
 use super::energy::{
     fresnel_average, ggx_albedo, ggx_albedo_aniso, glass_albedo, ms_factor, multiple_scattering,
     schlick_average, sheen_albedo,
 };
 use super::fresnel::{dielectric, f0_from_eta, iridescence, schlick};
 use super::ggx::{Ggx, MIN_ALPHA};
-use super::{Albedos, Frame, LobeSplit};
 use glam::{Vec2, Vec3};
 
 mod eval;
@@ -280,7 +280,7 @@ impl Principled {
         let energy = self.view.energy;
         let mut coat_below = 1.0;
         self.view.coat = self.coat.filter(|c| c.weight > 0.0).map(|c| {
-            let n = super::bend_towards(c.normal, wo);
+            let n = super::common::bend_towards(c.normal, wo);
             let frame = Frame::from_normal(n);
             let wo_c = frame.to_local(wo);
             let a = (c.roughness.clamp(0.0, 1.0)).powi(2);
@@ -476,9 +476,9 @@ impl Principled {
                 let r = g.alpha_mean().sqrt();
                 let refl = match v.interface {
                     Interface::Refractive { .. } => Vec3::splat(v.e_r),
-                    _ => super::env_brdf(v.f0t, r, mu),
+                    _ => super::common::env_brdf(v.f0t, r, mu),
                 };
-                (super::env_brdf(self.base, r, mu), refl)
+                (super::common::env_brdf(self.base, r, mu), refl)
             }
         };
         let transmission = match v.interface {
@@ -501,7 +501,7 @@ impl Principled {
     pub fn glossy_is_rough(&self) -> bool {
         self.view
             .ggx
-            .is_some_and(|g| g.alpha_mean() > super::ROUGH_ALPHA)
+            .is_some_and(|g| g.alpha_mean() > super::common::ROUGH_ALPHA)
     }
 }
 
