@@ -315,7 +315,7 @@ fn a_camera_edit_builds_nothing() {
     let mut session = load(&path);
     let o = opts();
     let before = render(&mut session, &o);
-    let built = session.frame_times();
+    let built = session.frame(&FrameSpec::default()).expect("frame").times();
     let fstop = Edit::CameraKey {
         camera: 0,
         key: "aperture_fstop".into(),
@@ -324,7 +324,7 @@ fn a_camera_edit_builds_nothing() {
     assert_eq!(session.edit(fstop).expect("edit"), Touched::Cameras);
     let after = render(&mut session, &o);
     assert_eq!(
-        session.frame_times(),
+        session.frame(&FrameSpec::default()).expect("frame").times(),
         built,
         "the frame was not built again"
     );

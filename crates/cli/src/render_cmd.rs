@@ -58,9 +58,8 @@ fn run_on(args: RenderArgs) -> anyhow::Result<()> {
         vector: time.is_some() && plan.opts.passes.contains(Pass::Vector),
         view: (plan.opts.camera, plan.opts.width, plan.opts.height),
     };
-    session.frame(&spec)?;
-    let bvh_secs = session.frame_times().build_secs;
     let frame = session.frame(&spec)?;
+    let bvh_secs = frame.times().build_secs;
     let out = ImageOutput {
         path: &args.output,
         format: plan.format,

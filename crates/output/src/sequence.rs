@@ -154,7 +154,7 @@ pub fn render_sequence(
             report.rendered = Some(FrameWork {
                 summary,
                 accel: posed.accel().stats(),
-                pose_secs: session.frame_times().pose_secs,
+                pose_secs: posed.times().pose_secs,
                 total_secs: t0.elapsed().as_secs_f64(),
             });
         }

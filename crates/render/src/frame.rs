@@ -18,6 +18,15 @@ use aperture_shading::surface::MaterialOverride;
 use aperture_shading::Convention;
 use std::sync::{Arc, Mutex};
 
+/// What posing a frame took.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FrameTimes {
+    /// Seconds posing the scene (zero when the pose was kept).
+    pub pose_secs: f64,
+    /// Seconds building what the frame's renders share (its BVH, motion, neighbours).
+    pub build_secs: f64,
+}
+
 /// The options that change what a surface is, and so which emitters a frame has.
 type ShadingKey = (MaterialOverride, Convention, Convention);
 
@@ -30,12 +39,19 @@ pub struct Frame {
     vector: Option<Arc<FrameNeighbours>>,
     memo: Arc<TreeMemo>,
     lights: Mutex<Vec<(ShadingKey, Arc<FrameLights>)>>,
+    times: FrameTimes,
 }
 
 impl Frame {
     /// A frame of `scene` as it is (no motion), with `accel` built for it.
     pub fn new(scene: Scene, accel: Accel) -> Self {
-        Self::posed(scene, accel, None, None, Arc::default())
+        Self::posed(
+            scene,
+            accel,
+            (None, None),
+            Arc::default(),
+            FrameTimes::default(),
+        )
     }
 
     /// A frame of a scene built by hand, its BVH built here.
@@ -44,14 +60,14 @@ impl Frame {
         Self::new(scene, accel)
     }
 
-    /// A frame with what moves within its shutter (`accel` built with that motion), its
-    /// neighbouring poses, and the memo its light trees come from.
+    /// A frame with what moves within its shutter (`accel` built with that motion) and its
+    /// neighbouring poses, the memo its light trees come from, and what building it took.
     pub(crate) fn posed(
         scene: Scene,
         accel: Accel,
-        motion: Option<Arc<FrameMotion>>,
-        vector: Option<Arc<FrameNeighbours>>,
+        (motion, vector): (Option<Arc<FrameMotion>>, Option<Arc<FrameNeighbours>>),
         memo: Arc<TreeMemo>,
+        times: FrameTimes,
     ) -> Self {
         Self {
             scene,
@@ -60,7 +76,13 @@ impl Frame {
             vector,
             memo,
             lights: Mutex::new(Vec::new()),
+            times,
         }
+    }
+
+    /// What posing and building the frame took.
+    pub fn times(&self) -> FrameTimes {
+        self.times
     }
 
     /// The posed scene.

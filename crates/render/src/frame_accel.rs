@@ -8,7 +8,7 @@ use aperture_scene::{Animated, Scene};
 /// Builds the ray-query structure for a scene.
 pub fn build_accel(scene: &Scene, quality: aperture_accel::BvhQuality) -> Accel {
     let still = SceneHints::still();
-    build_frame_accel(scene, quality, &still, None)
+    build_motion_accel(scene, quality, &still, None, None)
 }
 
 /// The BVH preset for a job of `samples` camera samples over `triangles` stored triangles, so a
@@ -107,21 +107,12 @@ impl SceneHints {
 }
 
 /// The ray-query structure of one frame of `scene` (see [`Accel::build_frame`]); `previous`
-/// is the frame before's, whose unchanged parts are taken over. A render of a single frame of
-/// an animated file builds with the same hints and no `previous`, so its image is the
-/// sequence's frame bit for bit.
-pub fn build_frame_accel(
-    scene: &Scene,
-    quality: BvhQuality,
-    hints: &SceneHints,
-    previous: Option<Accel>,
-) -> Accel {
-    build_motion_accel(scene, quality, hints, previous, None)
-}
-
-/// [`build_frame_accel`] with the instances that move within the frame's shutter (`motion`)
-/// bounded over it and walked at each ray's time, and the meshes that deform within it built
-/// over their swept triangles and intersected as interpolated at each ray's time.
+/// is the frame before's, whose unchanged parts are taken over (the result does not depend on
+/// it). The instances that move within the frame's shutter (`motion`) are bounded over it and
+/// walked at each ray's time, and the meshes that deform within it are built over their swept
+/// triangles and intersected as interpolated at each ray's time. A render of a single frame of
+/// an animated file builds with the same hints as a sequence, so its image is the sequence's
+/// frame bit for bit.
 pub fn build_motion_accel(
     scene: &Scene,
     quality: BvhQuality,

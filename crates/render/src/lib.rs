@@ -52,10 +52,9 @@ pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, Camer
 pub use cancel::Cancel;
 pub use film::{Film, PixelSum, Window};
 pub use filter::{Filter, FilterKind};
-pub use frame::Frame;
+pub use frame::{Frame, FrameTimes};
 pub use frame_accel::{
-    auto_bvh_quality, build_accel, build_frame_accel, build_motion_accel, BvhQualityChoice,
-    SceneHints,
+    auto_bvh_quality, build_accel, build_motion_accel, BvhQualityChoice, SceneHints,
 };
 pub use frame_lights::FrameLights;
 pub use integrator::Clamp;
@@ -64,4 +63,4 @@ pub use passes::{Pass, PassSet};
 pub use progressive::Progressive;
 pub use render::{material_name, render, render_window, scene_camera, DEPTH_BACKGROUND, TILE};
 pub use sampler::{SampleStream, SamplerKind, MAX_SPP};
-pub use session::{FrameSpec, FrameTimes, Session, SessionError};
+pub use session::{FrameSpec, Session, SessionError};

@@ -132,7 +132,7 @@ pub(crate) fn render_in(
     let first = film.total_samples() == 0 && film.dropped_samples() == 0;
     match opts.adaptive {
         Some(a) => *film = render_adaptive(&job, &a, window, progress),
-        None => tiles::accumulate(&job, film, progress),
+        None => tiles::accumulate(&job, film, !first, progress),
     }
     let wanted = [Pass::Depth, Pass::Position, Pass::Vector]
         .iter()

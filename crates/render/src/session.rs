@@ -23,7 +23,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use crate::frame::Frame;
+use crate::frame::{Frame, FrameTimes};
 use crate::frame_accel::{build_motion_accel, SceneHints};
 use crate::motion::{pose_frame_motion, pose_neighbours, MotionSettings};
 use aperture_accel::{Accel, BvhQuality};
@@ -65,15 +65,6 @@ impl Default for FrameSpec {
     }
 }
 
-/// What posing a frame took.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct FrameTimes {
-    /// Seconds posing the scene (zero when the pose was kept).
-    pub pose_secs: f64,
-    /// Seconds building what the frame's renders share (its BVH, motion, neighbours).
-    pub build_secs: f64,
-}
-
 /// Why a session could not load, pose or edit.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -96,7 +87,7 @@ pub struct Session {
     memo: Arc<TreeMemo>,
     /// A scene posed ahead of its frame ([`Session::pose`]), with its time.
     pending: Option<(Option<f64>, Scene)>,
-    current: Option<(FrameSpec, Frame, FrameTimes)>,
+    current: Option<(FrameSpec, Frame)>,
     /// The last frame's BVH and its preset, for the next frame to take unchanged meshes from.
     spare: Option<(Accel, BvhQuality)>,
 }
@@ -136,7 +127,7 @@ impl Session {
     /// The scene posed at `time`, without building anything for rendering it (to choose a
     /// camera or image size from it): kept for [`Session::frame`] at the same time.
     pub fn pose(&mut self, time: Option<f64>) -> Result<&Scene, SessionError> {
-        if let Some((spec, frame, _)) = &self.current {
+        if let Some((spec, frame)) = &self.current {
             if spec.time == time {
                 return Ok(frame.scene());
             }
@@ -153,19 +144,12 @@ impl Session {
     /// document stay the same. A new time poses the scene again and rebuilds only what moved
     /// (the bottom-level BVHs of unchanged meshes are taken from the frame before).
     pub fn frame(&mut self, spec: &FrameSpec) -> Result<&Frame, SessionError> {
-        let kept = matches!(&self.current, Some((s, _, _)) if s == spec);
+        let kept = matches!(&self.current, Some((s, _)) if s == spec);
         if !kept {
             self.build_frame(spec)?;
         }
-        let (_, frame, _) = self.current.as_ref().expect("built above");
+        let (_, frame) = self.current.as_ref().expect("built above");
         Ok(frame)
-    }
-
-    /// What posing and building the current frame took.
-    pub fn frame_times(&self) -> FrameTimes {
-        self.current
-            .as_ref()
-            .map_or_else(FrameTimes::default, |c| c.2)
     }
 
     fn build_frame(&mut self, spec: &FrameSpec) -> Result<(), SessionError> {
@@ -191,12 +175,18 @@ impl Session {
         let previous = previous.filter(|(_, q)| moving.is_none() && *q == spec.quality);
         let hints = SceneHints::new(animated, &scene);
         let accel = build_motion_accel(&scene, spec.quality, &hints, previous.map(|p| p.0), moving);
-        let frame = Frame::posed(scene, accel, motion, vector, Arc::clone(&self.memo));
         let times = FrameTimes {
             pose_secs,
             build_secs: t0.elapsed().as_secs_f64() - pose_secs,
         };
-        self.current = Some((spec.clone(), frame, times));
+        let frame = Frame::posed(
+            scene,
+            accel,
+            (motion, vector),
+            Arc::clone(&self.memo),
+            times,
+        );
+        self.current = Some((spec.clone(), frame));
         Ok(())
     }
 
@@ -206,23 +196,10 @@ impl Session {
         &mut self,
         spec: &FrameSpec,
     ) -> Result<(Scene, Option<(Accel, BvhQuality)>), SessionError> {
-        let mut kept = None;
-        if let Some((old, frame, _)) = self.current.take() {
-            let (scene, accel) = frame.into_parts();
-            self.spare = Some((accel, old.quality));
-            if old.time == spec.time {
-                kept = Some(scene);
-            }
-        }
-        if kept.is_none() {
-            if let Some((t, scene)) = self.pending.take() {
-                if t == spec.time {
-                    kept = Some(scene);
-                }
-            }
-        }
+        let at_time = |posed: Option<(Option<f64>, Scene)>| posed.filter(|p| p.0 == spec.time);
+        let kept = at_time(self.retire()).or_else(|| at_time(self.pending.take()));
         let scene = match kept {
-            Some(s) => s,
+            Some((_, scene)) => scene,
             None => self.animated.scene_at(spec.time.map(|t| t as f32))?,
         };
         Ok((scene, self.spare.take()))
@@ -248,7 +225,7 @@ impl Session {
                 self.current = None;
                 self.spare = None;
             }
-            Touched::Placements => self.drop_frame(),
+            Touched::Placements => drop(self.retire()),
             Touched::Cameras | Touched::Lights | Touched::Materials => self.refresh(touched)?,
         }
         self.edits.push(edit);
@@ -258,12 +235,12 @@ impl Session {
     /// The current frame's cameras, lights or materials posed again in place; a frame whose
     /// motion or neighbouring poses follow its cameras is posed again whole instead.
     fn refresh(&mut self, touched: Touched) -> Result<(), SessionError> {
-        let Some((spec, frame, _)) = &mut self.current else {
+        let Some((spec, frame)) = &mut self.current else {
             return Ok(());
         };
         let follows_cameras = frame.motion().is_some() || spec.vector;
         if touched == Touched::Cameras && follows_cameras {
-            self.drop_frame();
+            self.retire();
             return Ok(());
         }
         self.animated.refresh(frame.scene_mut(), touched)?;
@@ -273,10 +250,12 @@ impl Session {
         Ok(())
     }
 
-    /// Forgets the current frame, keeping its BVH for the next one.
-    fn drop_frame(&mut self) {
-        if let Some((spec, frame, _)) = self.current.take() {
-            self.spare = Some((frame.into_parts().1, spec.quality));
-        }
+    /// Forgets the current frame, keeping its BVH for the next one; returns its time and
+    /// scene.
+    fn retire(&mut self) -> Option<(Option<f64>, Scene)> {
+        let (spec, frame) = self.current.take()?;
+        let (scene, accel) = frame.into_parts();
+        self.spare = Some((accel, spec.quality));
+        Some((spec.time, scene))
     }
 }

@@ -104,19 +104,13 @@ pub(crate) fn apply_graph_edits(mut graph: NodeGraph, edits: &[Edit]) -> Result<
 /// visibility set; weights are read from the edited document elsewhere).
 fn apply_node_pointer(graph: &mut NodeGraph, path: &str, v: &[f64]) -> Result<(), Error> {
     let root = serde_json::json!({ "nodes": vec![Value::Null; graph.nodes.len()] });
-    let f = |k: usize| v.get(k).copied().unwrap_or(0.0) as f32;
     match pointer::parse(path, &root) {
         Some(Pointer::NodeVisible(i)) => graph.own_hidden[i] = v.first() == Some(&0.0),
         Some(Pointer::Node(i, NodeProperty::Weights)) => {
             graph.nodes[i].weights = Some(v.iter().map(|&w| w as f32).collect());
         }
-        Some(Pointer::Node(i, prop)) if prop != NodeProperty::Weights => {
-            let (s, r, t) = trs_of(graph.nodes[i].transform);
-            graph.nodes[i].transform = match prop {
-                NodeProperty::Translation => LocalTransform::Trs([f(0), f(1), f(2)], r, s),
-                NodeProperty::Rotation => LocalTransform::Trs(t, [f(0), f(1), f(2), f(3)], s),
-                _ => LocalTransform::Trs(t, r, [f(0), f(1), f(2)]),
-            };
+        Some(Pointer::Node(i, prop)) => {
+            graph.nodes[i].transform = with_component(graph.nodes[i].transform, prop, v);
         }
         _ => {
             return Err(Error::Invalid {
@@ -128,18 +122,22 @@ fn apply_node_pointer(graph: &mut NodeGraph, path: &str, v: &[f64]) -> Result<()
     Ok(())
 }
 
-/// A node's stored transform as scale, rotation, translation in f32 (a matrix decomposed),
-/// for replacing one component as an animation channel or a pointer edit would.
-pub(crate) fn trs_of(t: LocalTransform) -> ([f32; 3], [f32; 4], [f32; 3]) {
-    match t {
+/// `t` with the component `prop` (translation, rotation or scale) replaced by `v`, as an
+/// animation channel or a pointer edit replaces it: a stored matrix is decomposed first.
+pub(crate) fn with_component(t: LocalTransform, prop: NodeProperty, v: &[f64]) -> LocalTransform {
+    let (mut s, mut r, mut tr) = match t {
         LocalTransform::Trs(t, r, s) => (s, r, t),
         m @ LocalTransform::Matrix(_) => {
             let (s, r, t) = m.trs();
-            (
-                s.as_vec3().to_array(),
-                r.as_quat().to_array(),
-                t.as_vec3().to_array(),
-            )
+            let (s, r, t) = (s.as_vec3(), r.as_quat(), t.as_vec3());
+            (s.to_array(), r.to_array(), t.to_array())
         }
+    };
+    let f = |k: usize| v.get(k).copied().unwrap_or(0.0) as f32;
+    match prop {
+        NodeProperty::Translation => tr = [f(0), f(1), f(2)],
+        NodeProperty::Rotation => r = [f(0), f(1), f(2), f(3)],
+        _ => s = [f(0), f(1), f(2)],
     }
+    LocalTransform::Trs(tr, r, s)
 }

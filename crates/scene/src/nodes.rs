@@ -106,7 +106,7 @@ fn visible(node: &gltf::Node<'_>) -> bool {
         .unwrap_or(true)
 }
 
-fn finite(at: impl FnOnce() -> String, values: &[f32]) -> Result<(), Error> {
+pub(crate) fn finite(at: impl FnOnce() -> String, values: &[f32]) -> Result<(), Error> {
     match values.iter().find(|v| !v.is_finite()) {
         Some(v) => Err(Error::NonFinite {
             at: at(),

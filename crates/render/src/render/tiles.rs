@@ -26,11 +26,15 @@ pub(crate) fn tiles_of(w: Window) -> Vec<(u32, u32, u32, u32)> {
 /// Every pixel of `film`'s window at the job's samples (`sample_offset .. sample_offset + spp`
 /// of each pixel's sequence), summed onto what the film holds: a progressive render's pass
 /// continues each pixel's sums where the last pass left them, so that its passes together
-/// equal one render of all their samples bit for bit.
-pub(super) fn accumulate(job: &Job<'_>, film: &mut Film, progress: &(dyn Fn(usize, usize) + Sync)) {
+/// equal one render of all their samples bit for bit. A fresh film (`resume` false) holds zeros:
+/// its tiles start from empty sums without reading it.
+pub(super) fn accumulate(
+    job: &Job<'_>,
+    film: &mut Film,
+    resume: bool,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) {
     let window = film.window();
-    // A fresh film holds zeros: its tiles start from empty sums without reading it.
-    let resume = film.total_samples() > 0 || film.dropped_samples() > 0;
     let tiles = tiles_of(window);
     let total = tiles.len();
     let done = AtomicUsize::new(0);

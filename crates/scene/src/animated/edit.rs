@@ -6,9 +6,9 @@ use serde_json::Value;
 
 use super::{Animated, LightData};
 use crate::camera;
-use crate::edit::{graph_edit, trs_of, Edit, Touched};
+use crate::edit::{graph_edit, with_component, Edit, Touched};
 use crate::error::Error;
-use crate::nodes::{inherited, LocalTransform};
+use crate::nodes::{finite, inherited, LocalTransform};
 use crate::pointer::{self, CameraProperty, LightProperty, NodeProperty, Pointer};
 use crate::types::{LightKind, Projection, Scene};
 
@@ -35,7 +35,7 @@ impl Animated {
         match edit {
             Edit::NodeMatrix { node, matrix } => {
                 self.check_node(*node)?;
-                check_finite(&format!("nodes[{node}].matrix"), matrix.as_flattened())?;
+                finite(|| format!("nodes[{node}].matrix"), matrix.as_flattened())?;
                 self.set_local(*node, LocalTransform::Matrix(*matrix))
             }
             Edit::NodeVisible { node, .. } => {
@@ -151,16 +151,11 @@ impl Animated {
                     .into(),
             )),
             Pointer::Node(i, prop) => {
-                let (s, r, t) = trs_of(self.graph.nodes[i].transform);
-                let (s, r, t) = match prop {
-                    NodeProperty::Translation => (s, r, [f(0), f(1), f(2)]),
-                    NodeProperty::Rotation => (s, [f(0), f(1), f(2), f(3)], t),
-                    _ => ([f(0), f(1), f(2)], r, t),
-                };
-                if r.iter().all(|&x| x == 0.0) {
+                if prop == NodeProperty::Rotation && v.iter().all(|&x| x == 0.0) {
                     return Err(bad("a rotation of zero length".into()));
                 }
-                self.set_local(i, LocalTransform::Trs(t, r, s))
+                let t = with_component(self.graph.nodes[i].transform, prop, v);
+                self.set_local(i, t)
             }
             Pointer::NodeVisible(_) => Ok(Touched::Reload),
             Pointer::Camera(i, prop) => {
@@ -217,16 +212,6 @@ impl Animated {
                 }
             }
         }
-    }
-}
-
-fn check_finite(at: &str, values: &[f32]) -> Result<(), Error> {
-    match values.iter().find(|v| !v.is_finite()) {
-        Some(v) => Err(Error::NonFinite {
-            at: at.to_owned(),
-            value: v.to_string(),
-        }),
-        None => Ok(()),
     }
 }
 
