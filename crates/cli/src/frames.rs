@@ -1,63 +1,96 @@
-//! `aperture render --frames A..B[:STEP]`: maps the arguments to
-//! `aperture_output::sequence::render_sequence` and prints a line per frame with an overall ETA.
+//! The images of `aperture render`: the still image, or the frames of `--frames A..B[:STEP]`,
+//! mapped to `aperture_output::sequence::render_sequence` (a still is the sequence of one
+//! frame), with one progress display; a line per frame with an overall ETA, or the still's
+//! summary.
 
 use crate::progress::Progress;
 use crate::render_args::RenderArgs;
-use aperture_accel::BvhQuality;
-use aperture_output::sequence::{self, FrameReport, Sequence};
-use aperture_output::write::ImageFormat;
-use aperture_render::motion::MotionSettings;
-use aperture_render::sequence::FrameRange;
-use aperture_render::{RenderOptions, Session};
+use crate::render_opts::RenderPlan;
+use crate::render_summary::{print_summary, JobTimes};
+use anyhow::Context as _;
+use aperture_output::sequence::{self, FrameReport, FrameWork, Frames, Sequence};
+use aperture_render::Session;
 use std::time::Instant;
 
-/// Renders the frames of `--frames` from `session` with the options and output of one frame.
+/// When the job started, and what loading took.
+#[derive(Debug, Clone, Copy)]
+pub struct JobStart {
+    pub start: Instant,
+    pub load_secs: f64,
+}
+
+/// Renders the images of `args` from `session` as `plan` says (the still at `time` when there
+/// is no `--frames`), then prints the still's summary.
 pub fn run(
     args: &RenderArgs,
     session: &mut Session,
-    frames: FrameRange,
-    (format, denoiser): (ImageFormat, Option<&aperture_denoise::Denoiser>),
-    opts: &RenderOptions,
-    quality: BvhQuality,
+    plan: &RenderPlan,
+    time: Option<f64>,
+    denoiser: Option<&aperture_denoise::Denoiser>,
+    job: JobStart,
 ) -> anyhow::Result<()> {
+    let frames = match args.frames {
+        Some(range) => Frames::Range(range),
+        None => Frames::Still {
+            frame: args.when.frame,
+            time,
+        },
+    };
+    let shutter_time = args.frames.map(|r| r.start as f64).or(time);
     let seq = Sequence {
         frames,
         fps: args.when.fps,
-        opts,
-        quality,
+        opts: &plan.opts,
+        quality: plan.quality,
         pattern: &args.output,
-        format,
+        format: plan.format,
         skip_existing: args.skip_existing,
         denoiser,
-        motion: Some(MotionSettings::resolve(
-            &session.animated().motion_extras(),
-            &args.motion.overrides(),
-        )),
+        motion: crate::motion_args::settings(&args.motion, session.animated(), shutter_time),
     };
     let start = Instant::now();
     let (mut rendered, mut secs) = (0usize, 0.0f64);
+    let mut last: Option<FrameWork> = None;
     let quiet = args.quiet;
     let progress = Progress::with_mode(quiet, args.progress);
-    let samples = u64::from(opts.width) * u64::from(opts.height) * u64::from(opts.spp);
-    let mut frames_left = frames.frames();
-    progress.set_samples(samples, frames_left.next());
+    let o = &plan.opts;
+    let samples = u64::from(o.width) * u64::from(o.height) * u64::from(o.spp);
+    // The JSON lines' frame: each frame's number in a range, none for a still.
+    let mut frames_left = args.frames.into_iter().flat_map(|r| r.frames().map(Some));
+    progress.set_samples(samples, frames_left.next().flatten());
     let report = |done, total| progress.update(done, total);
     let done = sequence::render_sequence(session, &seq, &report, &mut |r: &FrameReport| {
         if let Some(w) = &r.rendered {
             rendered += 1;
             secs += w.total_secs;
-            progress.frame_written(Some(r.frame), &r.path, w.total_secs);
+            last = Some(*w);
+            progress.frame_written(r.frame, &r.path, w.total_secs);
         }
-        progress.set_samples(samples, frames_left.next());
+        progress.set_samples(samples, frames_left.next().flatten());
         // Dropped samples are reported even with --quiet, as for one frame.
         let dropped = r.rendered.is_some_and(|w| w.summary.dropped > 0);
-        if !quiet || dropped {
+        if args.frames.is_some() && (!quiet || dropped) {
             let line = frame_line(r, rendered, secs, start.elapsed().as_secs_f64());
             progress.next_frame(&line);
         }
     });
     progress.finish();
-    done?;
+    if args.frames.is_some() {
+        return Ok(done?);
+    }
+    done.with_context(|| format!("writing {}", args.output.display()))?;
+    if plan.opts.cancel.is_cancelled() {
+        let path = args.output.display().to_string();
+        return Err(crate::render_cmd::Interrupted(path).into());
+    }
+    if let Some(w) = last {
+        let job = JobTimes {
+            load_secs: job.load_secs,
+            bvh_secs: w.build_secs,
+            total_secs: job.start.elapsed().as_secs_f64(),
+        };
+        print_summary(args, &plan.opts, &w.summary, job, plan.quality, plan.part);
+    }
     Ok(())
 }
 
@@ -65,7 +98,8 @@ pub fn run(
 /// 0 dropped; ETA 0:25`.
 fn frame_line(r: &FrameReport, rendered: usize, secs: f64, elapsed: f64) -> String {
     let (i, n) = r.index;
-    let head = format!("frame {} ({}/{n}): {}", r.frame, i + 1, r.path.display());
+    let number = r.frame.map_or(String::new(), |f| f.to_string());
+    let head = format!("frame {number} ({}/{n}): {}", i + 1, r.path.display());
     let Some(w) = &r.rendered else {
         return format!("{head}: exists, skipped");
     };

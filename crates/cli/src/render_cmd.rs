@@ -1,13 +1,7 @@
 //! `aperture render`: scene in, EXR or PNG out.
 
-use crate::progress::Progress;
 use crate::render_args::RenderArgs;
-use crate::render_opts::{after_load, before_load, usage_error};
-use crate::render_summary::{print_summary, JobTimes};
-use anyhow::Context as _;
-use aperture_output::write::ImageOutput;
-use aperture_render::{Frame, FrameSpec, Pass, RenderOptions, Session, SessionError};
-use aperture_scene::LoadOptions;
+use crate::render_opts::{after_load, before_load, load_session};
 use std::time::Instant;
 
 /// A render stopped by a signal after writing its partial EXR (`--save-partial`).
@@ -22,18 +16,19 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     pool.install(|| run_on(args))
 }
 
-/// [`run`] on the pool's workers: the file loaded into a session, the frame posed, the image
-/// written, the summary printed.
+/// [`run`] on the pool's workers: the file loaded into a session, the scene posed, the
+/// image (or each frame) rendered and written, the summary printed.
 fn run_on(args: RenderArgs) -> anyhow::Result<()> {
     let t_job = Instant::now();
     let before = before_load(&args)?;
     // The library is needed before anything is loaded, rendered or written.
     let denoiser = args.denoise_options.load_if(args.denoise)?;
+    let mut session = load_session(&args, &before.load)?;
+    let time = before.load.time.map(f64::from);
     let first = args
         .frames
         .map(|f| f.start as f64 / f64::from(args.when.fps))
-        .or(before.load.time.map(f64::from));
-    let mut session = load_session(&args, &before.load)?;
+        .or(time);
     let scene = session.pose(first)?;
     let plan = after_load(&args, &before, scene)?;
     let load_warnings = match args.quiet {
@@ -44,77 +39,11 @@ fn run_on(args: RenderArgs) -> anyhow::Result<()> {
     for w in load_warnings.into_iter().chain(scene_warnings) {
         eprintln!("warning: {}: {w}", args.scene.display());
     }
-    let load_secs = t_job.elapsed().as_secs_f64();
-    if let Some(frames) = args.frames {
-        let out = (plan.format, denoiser.as_ref());
-        return crate::frames::run(&args, &mut session, frames, out, &plan.opts, plan.quality);
-    }
-    let time = before.load.time.map(f64::from);
-    let spec = FrameSpec {
-        time,
-        fps: args.when.fps,
-        quality: plan.quality,
-        motion: crate::motion_args::settings(&args.motion, session.animated(), time),
-        vector: time.is_some() && plan.opts.passes.contains(Pass::Vector),
-        view: (plan.opts.camera, plan.opts.width, plan.opts.height),
+    let job = crate::frames::JobStart {
+        start: t_job,
+        load_secs: t_job.elapsed().as_secs_f64(),
     };
-    let frame = session.frame(&spec)?;
-    let bvh_secs = frame.times().build_secs;
-    let out = ImageOutput {
-        path: &args.output,
-        format: plan.format,
-        denoiser: denoiser.as_ref(),
-    };
-    let summary = write_image(&args, frame, &plan.opts, &out)?;
-    if plan.opts.cancel.is_cancelled() {
-        return Err(Interrupted(args.output.display().to_string()).into());
-    }
-    let job = JobTimes {
-        load_secs,
-        bvh_secs,
-        total_secs: t_job.elapsed().as_secs_f64(),
-    };
-    print_summary(&args, &plan.opts, &summary, job, plan.quality, plan.part);
-    Ok(())
-}
-
-/// Renders the still image and writes it, showing progress.
-fn write_image(
-    args: &RenderArgs,
-    frame: &Frame,
-    opts: &RenderOptions,
-    out: &ImageOutput<'_>,
-) -> anyhow::Result<aperture_output::RenderSummary> {
-    let progress = Progress::with_mode(args.quiet, args.progress);
-    progress.set_samples(
-        u64::from(opts.width) * u64::from(opts.height) * u64::from(args.spp),
-        None,
-    );
-    let report = |done, total| progress.update(done, total);
-    let summary = aperture_output::write::write_image(frame, opts, out, &report);
-    progress.finish();
-    let summary = summary.with_context(|| format!("writing {}", args.output.display()))?;
-    progress.frame_written(args.when.frame, &args.output, summary.render_secs);
-    Ok(summary)
-}
-
-/// The file loaded into a session; a flag's value the scene refuses (`--focus-object` naming
-/// no node, `--scene 9`) is a usage error like any other bad flag value: exit code 2.
-fn load_session(args: &RenderArgs, load: &LoadOptions) -> anyhow::Result<Session> {
-    use aperture_scene::Error;
-    match Session::load(&args.scene, load) {
-        Ok(s) => Ok(s),
-        Err(SessionError::Scene(e)) => match e {
-            Error::InvalidDof { ref key, .. } if key.starts_with("command line") => {
-                usage_error(format!("{}: {e}", args.scene.display()))
-            }
-            Error::NoSuchScene { .. }
-            | Error::NoSuchAnimation { .. }
-            | Error::NoSuchVariant { .. } => usage_error(format!("{}: {e}", args.scene.display())),
-            e => Err(anyhow::Error::new(e).context(format!("loading {}", args.scene.display()))),
-        },
-        Err(e) => Err(anyhow::Error::new(e).context(format!("loading {}", args.scene.display()))),
-    }
+    crate::frames::run(&args, &mut session, &plan, time, denoiser.as_ref(), job)
 }
 
 #[cfg(test)]

@@ -61,6 +61,30 @@ pub(crate) fn before_load(args: &RenderArgs) -> anyhow::Result<BeforeLoad> {
     })
 }
 
+/// The file loaded into a session; a flag's value the scene refuses (`--focus-object` naming
+/// no node, `--scene 9`) is a usage error like any other bad flag value: exit code 2.
+pub(crate) fn load_session(
+    args: &RenderArgs,
+    load: &LoadOptions,
+) -> anyhow::Result<aperture_render::Session> {
+    use aperture_render::{Session, SessionError};
+    use aperture_scene::Error;
+    let context = || format!("loading {}", args.scene.display());
+    match Session::load(&args.scene, load) {
+        Ok(s) => Ok(s),
+        Err(SessionError::Scene(e)) => match e {
+            Error::InvalidDof { ref key, .. } if key.starts_with("command line") => {
+                usage_error(format!("{}: {e}", args.scene.display()))
+            }
+            Error::NoSuchScene { .. }
+            | Error::NoSuchAnimation { .. }
+            | Error::NoSuchVariant { .. } => usage_error(format!("{}: {e}", args.scene.display())),
+            e => Err(anyhow::Error::new(e).context(context())),
+        },
+        Err(e) => Err(anyhow::Error::new(e).context(context())),
+    }
+}
+
 /// What the arguments ask of the loaded scene: the render's options, the EXR writer's (with the
 /// part of the image), the BVH quality and the part.
 pub(crate) struct RenderPlan {

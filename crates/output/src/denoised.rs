@@ -3,8 +3,8 @@
 //! `Denoising Normal` passes kept, alpha untouched, and `aperture:denoised` = 1 in the header so
 //! `aperture merge` refuses the file (denoising is not linear: parts are merged first).
 //!
-//! Everything here works on plain images or rows of values; the renders that call it are in
-//! the crate root ([`crate::render_exr_denoised`], [`crate::render_png_denoised`]).
+//! Everything here works on plain images or rows of values; the render that calls it is
+//! [`crate::write::write_image`] with a denoiser.
 
 use crate::channels::HALF_MAX;
 use aperture_denoise::{Denoiser, Images};
@@ -27,6 +27,41 @@ pub(crate) fn with_aux(passes: aperture_render::PassSet) -> aperture_render::Pas
         .with(Pass::DenoisingAlbedo)
         .with(Pass::DenoisingNormal)
 }
+
+/// What denoising adds to a file.
+pub(crate) struct DenoisePlan {
+    /// The passes asked for, and the two the denoiser reads (albedo and normal).
+    pub passes: aperture_render::PassSet,
+    /// The channels of the noisy beauty, after the others.
+    pub channels: Vec<ChannelSpec>,
+    /// The header attributes that say it (the denoised flag and time filled in late).
+    pub metadata: Vec<(String, MetaValue)>,
+}
+
+/// What denoising with `denoiser` adds to a file of `passes` (nothing without one).
+pub(crate) fn plan(
+    denoiser: Option<&Denoiser>,
+    passes: aperture_render::PassSet,
+    half: bool,
+) -> DenoisePlan {
+    match denoiser {
+        None => DenoisePlan {
+            passes,
+            channels: Vec::new(),
+            metadata: Vec::new(),
+        },
+        Some(d) => DenoisePlan {
+            passes: with_aux(passes),
+            channels: noisy_channels(half),
+            metadata: vec![
+                (DENOISER.to_string(), MetaValue::Text(describe(d))),
+                (DENOISED.to_string(), MetaValue::Int(0)),
+                (DENOISE_TIME.to_string(), MetaValue::Float(0.0)),
+            ],
+        },
+    }
+}
+
 /// Cycles' name of the noisy beauty kept beside the denoised one.
 pub const NOISY_IMAGE: &str = "Noisy Image";
 /// The albedo pass the denoiser takes.

@@ -18,7 +18,7 @@ use aperture_render::{PassSet, RenderOptions, Window};
 pub enum OutputKind {
     /// EXR, rendered and written band by band.
     Exr,
-    /// EXR with the beauty denoised ([`crate::render_exr_denoised`]): rendered band by band,
+    /// EXR with the beauty denoised ([`crate::write::write_image`] with a denoiser): rendered band by band,
     /// but the resolved window is held until it is denoised.
     ExrDenoised,
     /// PNG, rendered whole in memory; 16 bits per channel when `sixteen_bit`.
@@ -93,7 +93,8 @@ pub fn footprint(opts: &RenderOptions, kind: OutputKind, exr: &ExrOptions) -> Fo
                 OutputKind::ExrDenoised => crate::denoised::with_aux(opts.passes),
                 _ => opts.passes,
             };
-            let passes = channels::file_passes(asked, adaptive || window != whole);
+            let passes =
+                channels::file_passes(asked, crate::plan::needs_sample_count(opts, window));
             let specs = channels::channels(passes, exr.half);
             let bpp = film_bytes_per_pixel(passes, adaptive, specs.len());
             let rows = u64::from(aperture_render::bands::band_rows(

@@ -2,6 +2,7 @@
 //! Cryptomatte manifests and the `aperture:*` attributes, with hashes that tell whether parts
 //! of a split render belong together.
 
+use crate::RenderSummary;
 use aperture_imageio::MetaValue;
 use aperture_render::camera::{Camera, CameraModel};
 use aperture_render::cryptomatte;
@@ -54,6 +55,38 @@ pub mod split {
     pub const POSE: &str = "aperture:pose";
 }
 
+/// The header values known only after rendering `summary` with `opts`; with
+/// `interrupted` when the file was saved partial (`Some(cancelled)`).
+pub(crate) fn late_values(
+    summary: &RenderSummary,
+    opts: &RenderOptions,
+    interrupted: Option<bool>,
+) -> Vec<(String, MetaValue)> {
+    let mut late = vec![
+        (
+            late::RENDER_TIME.to_string(),
+            MetaValue::Float(summary.render_secs as f32),
+        ),
+        (
+            late::DROPPED.to_string(),
+            MetaValue::Int(summary.dropped.min(i32::MAX as u64) as i32),
+        ),
+    ];
+    if opts.adaptive.is_some() {
+        late.push((
+            late::MEAN_SPP.to_string(),
+            MetaValue::Float(summary.mean_spp() as f32),
+        ));
+    }
+    if let Some(cancelled) = interrupted {
+        late.push((
+            late::INTERRUPTED.to_string(),
+            MetaValue::Int(i32::from(cancelled)),
+        ));
+    }
+    late
+}
+
 /// The pose of `scene` as text: `stored` for the pose in the file, else the time and the
 /// animations evaluated (`t=1.25 animations=0,2`).
 pub fn pose_text(scene: &Scene) -> String {
@@ -79,12 +112,12 @@ pub fn region_text(w: &Window) -> String {
 }
 
 /// The header attributes of a part of a split render: its sample offset and the scene's
-/// pose always, its region when `window` is not the whole image, and `tile` (K, N) when it is
-/// band K of N.
+/// pose always, its region when `window` is not the `whole` image, and `tile` (K, N) when it
+/// is band K of N.
 pub fn split_metadata(
     scene: &Scene,
     opts: &RenderOptions,
-    window: Window,
+    (window, whole): (Window, bool),
     tile: Option<(u32, u32)>,
 ) -> Vec<(String, MetaValue)> {
     let mut meta = vec![
@@ -94,7 +127,7 @@ pub fn split_metadata(
         ),
         (split::POSE.to_string(), MetaValue::Text(pose_text(scene))),
     ];
-    if window != Window::whole(opts.width, opts.height) {
+    if !whole {
         meta.push((
             split::REGION.to_string(),
             MetaValue::Text(region_text(&window)),
@@ -325,7 +358,11 @@ pub fn options_hash(opts: &RenderOptions) -> u64 {
         opts.material_override,
         opts.clamp,
         opts.adaptive,
-        opts.passes.without(Pass::SampleCount),
+        // The passes as a set (its Debug form), the sample count left out.
+        opts.passes
+            .iter()
+            .filter(|&p| p != Pass::SampleCount)
+            .collect::<PassSet>(),
     )
     .into_bytes();
     // Only with motion blur, so the hash of a render without it is what it always was.

@@ -31,6 +31,8 @@ mod exr_options;
 mod footprint;
 pub mod header;
 pub mod merge;
+mod plan;
+mod rows;
 pub mod sequence;
 pub mod write;
 
@@ -39,11 +41,11 @@ pub use footprint::{
     check_output, film_bytes_per_pixel, footprint, Footprint, FootprintError, OutputKind,
 };
 
-use aperture_imageio::{Image, Layer, MetaValue, Placement};
+use aperture_imageio::{Image, Layer};
 use aperture_render::film::{Film, Window};
+use aperture_render::resolve::Resolver;
 use aperture_render::{scene_camera, RenderError, RenderOptions};
 use aperture_scene::Scene;
-use channels::PixelResolver;
 use glam::Mat3;
 
 /// Why a render could not be written.
@@ -107,49 +109,8 @@ impl RenderSummary {
     }
 }
 
-/// True when a file of `window` rendered with `opts` must say how many samples each pixel
-/// took (SPEC §6): adaptive, a region of the image, or a batch of samples past the first.
-pub(crate) fn needs_sample_count(opts: &RenderOptions, window: Window) -> bool {
-    opts.adaptive.is_some()
-        || window != Window::whole(opts.width, opts.height)
-        || opts.sample_offset > 0
-}
-
-/// The header values known only after rendering.
-pub(crate) fn late_values(
-    summary: &RenderSummary,
-    opts: &RenderOptions,
-) -> Vec<(String, MetaValue)> {
-    let mut late = vec![
-        (
-            header::late::RENDER_TIME.to_string(),
-            MetaValue::Float(summary.render_secs as f32),
-        ),
-        (
-            header::late::DROPPED.to_string(),
-            MetaValue::Int(summary.dropped.min(i32::MAX as u64) as i32),
-        ),
-    ];
-    if opts.adaptive.is_some() {
-        late.push((
-            header::late::MEAN_SPP.to_string(),
-            MetaValue::Float(summary.mean_spp() as f32),
-        ));
-    }
-    late
-}
-
-/// Where `window` sits in the whole image, `None` when it is the whole image.
-pub(crate) fn placement(window: Window, whole: Window) -> Option<Placement> {
-    (window != whole).then_some(Placement {
-        x: window.x0,
-        y: window.y0,
-        full_width: whole.width,
-        full_height: whole.height,
-    })
-}
-
-/// A rendered film as a plain image with the channels and header of [`render_exr`]
+/// A rendered film as a plain image with the channels and header of
+/// [`write::write_image`]'s EXR
 /// (`render_secs` into the header's render time): the same file, for a film already in
 /// memory.
 pub fn film_to_image(
@@ -160,24 +121,22 @@ pub fn film_to_image(
     render_secs: f64,
 ) -> Result<Image, OutputError> {
     let camera = scene_camera(scene, opts)?;
-    let whole = Window::whole(opts.width, opts.height);
-    let passes = channels::file_passes(film.passes(), needs_sample_count(opts, film.window()));
+    let window = film.window();
+    let passes = channels::file_passes(film.passes(), plan::needs_sample_count(opts, window));
     let specs = channels::channels(passes, half);
-    let mut resolver = PixelResolver::new(
+    let world_from_camera = Mat3::from(camera.world_from_camera.matrix3);
+    let resolver = Resolver::new(
         film,
         passes,
-        half,
-        Mat3::from(camera.world_from_camera.matrix3),
+        world_from_camera,
         scene.world_origin.as_vec3(),
     );
-    let n = film.window().pixels();
-    let mut values = Vec::with_capacity(n * specs.len());
-    for i in 0..n {
-        resolver.pixel(i, &mut values);
-    }
+    let mut values = resolver.rows();
+    let half_clamped = channels::clamp_half(&mut values, &specs);
+    let n = window.pixels();
     let mut image = Image::new(film.width(), film.height());
     image.beauty_type = specs[0].sample_type;
-    image.placement = placement(film.window(), whole);
+    image.placement = plan::placement(window, opts);
     let stride = specs.len();
     for (p, px) in image.rgba.iter_mut().enumerate() {
         px.copy_from_slice(&values[p * stride..p * stride + 4]);
@@ -207,17 +166,18 @@ pub fn film_to_image(
         c += count;
     }
     image.metadata = header::metadata(scene, &camera, opts, passes);
+    let whole = plan::is_whole(window, opts);
     image
         .metadata
-        .extend(header::split_metadata(scene, opts, film.window(), None));
+        .extend(header::split_metadata(scene, opts, (window, whole), None));
     let summary = RenderSummary {
         samples: film.total_samples(),
         dropped: film.dropped_samples(),
         render_secs,
-        half_clamped: resolver.clamped,
+        half_clamped,
         ..RenderSummary::of(film.window())
     };
-    for (key, value) in late_values(&summary, opts) {
+    for (key, value) in header::late_values(&summary, opts, None) {
         if let Some(slot) = image.metadata.iter_mut().find(|(k, _)| *k == key) {
             slot.1 = value;
         }

@@ -1,5 +1,6 @@
-//! Frame sequences written to files (SPEC §7, `--frames A..B[:STEP]`): one file a frame, named
-//! from a pattern, whole or not at all, so a restarted job can leave the frames it finished.
+//! Images of a session written to files: a still, or a frame sequence (SPEC §7, `--frames
+//! A..B[:STEP]`) of one file a frame, named from a pattern, whole or not at all, so a
+//! restarted job can leave the frames it finished. A still is the sequence of one frame.
 //! Posing each frame and rebuilding only what moved is the render session's
 //! ([`aperture_render::Session::frame`]); each frame's file is the single-frame render's, bit
 //! for bit.
@@ -59,8 +60,8 @@ pub fn frame_path(pattern: &Path, frame: i64) -> PathBuf {
 /// What happened to one frame of a sequence.
 #[derive(Debug, Clone)]
 pub struct FrameReport {
-    /// The frame number.
-    pub frame: i64,
+    /// The frame number (`None`: a still image not at a frame).
+    pub frame: Option<i64>,
     /// Its file.
     pub path: PathBuf,
     /// Its position in the sequence (0-based) and the sequence's length.
@@ -78,21 +79,40 @@ pub struct FrameWork {
     pub accel: AccelStats,
     /// Seconds posing the scene.
     pub pose_secs: f64,
+    /// Seconds building what the frame's renders share (its BVH, motion, neighbours).
+    pub build_secs: f64,
     /// Seconds for the whole frame (posing, BVH, render, writing).
     pub total_secs: f64,
+}
+
+/// Which images a [`Sequence`] renders.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Frames {
+    /// One image at `time` seconds (`None`: the pose stored in the file), written to the
+    /// output path as it is; `frame` is its number, when it has one, for reports.
+    Still {
+        /// The frame number, if any.
+        frame: Option<i64>,
+        /// The time.
+        time: Option<f64>,
+    },
+    /// Each frame of the range at `frame / fps` seconds, its file named from the output
+    /// pattern ([`frame_path`]).
+    Range(FrameRange),
 }
 
 /// A sequence to render.
 pub struct Sequence<'a> {
     /// Which frames.
-    pub frames: FrameRange,
+    pub frames: Frames,
     /// Frames per second: frame N is at N / fps seconds (Blender's exporter).
     pub fps: f32,
     /// The options of every frame.
     pub opts: &'a RenderOptions,
     /// BVH quality.
     pub quality: BvhQuality,
-    /// The output name with `#` for the frame number (see [`frame_path`]).
+    /// The output file; for a range, a name with `#` for the frame number (see
+    /// [`frame_path`]).
     pub pattern: &'a Path,
     /// The file format.
     pub format: ImageFormat,
@@ -102,20 +122,34 @@ pub struct Sequence<'a> {
     /// Denoise every frame.
     pub denoiser: Option<&'a Denoiser>,
     /// Motion blur: each frame's shutter interval posed with these settings (`None`, or a
-    /// setting without a shutter: every frame an instant).
+    /// setting without a shutter, or a still without a time: every frame an instant).
     pub motion: Option<MotionSettings>,
 }
 
 impl Sequence<'_> {
-    /// The frame spec of frame `frame` (at `frame / fps` seconds).
-    fn spec(&self, frame: i64) -> FrameSpec {
+    /// Each image: its frame number, time and file.
+    fn images(&self) -> Vec<(Option<i64>, Option<f64>, PathBuf)> {
+        match self.frames {
+            Frames::Still { frame, time } => vec![(frame, time, self.pattern.to_path_buf())],
+            Frames::Range(range) => range
+                .frames()
+                .map(|f| {
+                    let time = f as f64 / f64::from(self.fps);
+                    (Some(f), Some(time), frame_path(self.pattern, f))
+                })
+                .collect(),
+        }
+    }
+
+    /// The frame spec of an image at `time`: motion blur and the Vector pass need a time.
+    fn spec(&self, time: Option<f64>) -> FrameSpec {
         let o = self.opts;
         FrameSpec {
-            time: Some(frame as f64 / f64::from(self.fps)),
+            time,
             fps: self.fps,
             quality: self.quality,
-            motion: self.motion,
-            vector: o.passes.contains(aperture_render::Pass::Vector),
+            motion: self.motion.filter(|_| time.is_some()),
+            vector: time.is_some() && o.passes.contains(aperture_render::Pass::Vector),
             view: (o.camera, o.width, o.height),
         }
     }
@@ -131,9 +165,9 @@ pub fn render_sequence(
     tile_progress: &(dyn Fn(usize, usize) + Sync),
     frame_done: &mut dyn FnMut(&FrameReport),
 ) -> Result<(), SequenceError> {
-    let total = seq.frames.frames().count();
-    for (index, frame) in seq.frames.frames().enumerate() {
-        let path = frame_path(seq.pattern, frame);
+    let images = seq.images();
+    let total = images.len();
+    for (index, (frame, time, path)) in images.into_iter().enumerate() {
         let mut report = FrameReport {
             frame,
             path,
@@ -142,7 +176,7 @@ pub fn render_sequence(
         };
         if !(seq.skip_existing && report.path.is_file()) {
             let t0 = Instant::now();
-            let posed = session.frame(&seq.spec(frame));
+            let posed = session.frame(&seq.spec(time));
             let posed = posed.map_err(|source| SequenceError::Pose { frame, source })?;
             let out = ImageOutput {
                 path: &report.path,
@@ -155,6 +189,7 @@ pub fn render_sequence(
                 summary,
                 accel: posed.accel().stats(),
                 pose_secs: posed.times().pose_secs,
+                build_secs: posed.times().build_secs,
                 total_secs: t0.elapsed().as_secs_f64(),
             });
         }
@@ -168,21 +203,26 @@ pub fn render_sequence(
 #[non_exhaustive]
 pub enum SequenceError {
     /// The scene could not be posed at a frame.
-    #[error("frame {frame}: {source}")]
+    #[error("{}{source}", frame_prefix(*.frame))]
     Pose {
-        /// The frame.
-        frame: i64,
+        /// The frame (`None`: a still not at a frame).
+        frame: Option<i64>,
         /// What the session said.
         source: SessionError,
     },
     /// A frame could not be rendered or written.
-    #[error("frame {frame}: {source}")]
+    #[error("{}{source}", frame_prefix(*.frame))]
     Render {
-        /// The frame.
-        frame: i64,
+        /// The frame (`None`: a still not at a frame).
+        frame: Option<i64>,
         /// What went wrong.
         source: OutputError,
     },
+}
+
+/// `frame N: ` before a frame's error; nothing for a still not at a frame.
+fn frame_prefix(frame: Option<i64>) -> String {
+    frame.map_or(String::new(), |f| format!("frame {f}: "))
 }
 
 #[cfg(test)]

@@ -1,12 +1,14 @@
 //! An image cut into bands of whole tile rows, rendered one after the other so that memory
-//! holds one band's sums ([`Bands`]: how a large image is streamed to a file), and the units
-//! of work progress counts.
+//! holds one band's sums ([`Bands`]: how a large image is streamed to a file, each band's
+//! pass values resolved), and the units of work progress counts.
 
 use crate::camera::Camera;
-use crate::film::{Film, Window};
+use crate::film::Window;
 use crate::frame::Frame;
 use crate::options::{RenderError, RenderOptions};
 use crate::render::{tiles_of, TILE};
+use crate::resolve::Resolver;
+use glam::Mat3;
 use std::time::Instant;
 
 /// What a [`Bands`] render took, over the bands rendered so far.
@@ -20,9 +22,20 @@ pub struct BandTotals {
     pub render_secs: f64,
 }
 
-/// The films of `bands` (windows of whole rows, top to bottom; see [`bands`]) of a frame,
-/// each rendered when it is asked for, so that memory holds one band's sums while its taker
-/// writes the one before. A band's pixels are those of a whole render.
+/// One band of [`Bands`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Band {
+    /// Its pixels' values, rows top to bottom ([`Resolver::rows`]).
+    pub values: Vec<f32>,
+    /// What the bands took so far, this one included.
+    pub totals: BandTotals,
+}
+
+/// The pixels of `bands` (windows of whole rows, top to bottom; see [`bands`]) of a frame,
+/// each band rendered when it is asked for and resolved into the values of `opts.passes`
+/// ([`Resolver`]: rows top to bottom, the beauty then each pass), so that memory holds one
+/// band's sums while its taker writes the one before. A band's pixels are those of a whole
+/// render.
 pub struct Bands<'a> {
     frame: &'a Frame,
     camera: &'a Camera,
@@ -57,15 +70,10 @@ impl<'a> Bands<'a> {
             totals: BandTotals::default(),
         }
     }
-
-    /// What the bands rendered so far took.
-    pub fn totals(&self) -> BandTotals {
-        self.totals
-    }
 }
 
 impl Iterator for Bands<'_> {
-    type Item = Result<Film, RenderError>;
+    type Item = Result<Band, RenderError>;
 
     fn next(&mut self) -> Option<Self::Item> {
         let band = self.bands.next()?;
@@ -78,11 +86,16 @@ impl Iterator for Bands<'_> {
             .render_window(self.camera, self.opts, band, &report);
         self.totals.render_secs += t0.elapsed().as_secs_f64();
         self.done_units += progress_units(self.opts, band);
-        if let Ok(f) = &film {
+        Some(film.map(|f| {
             self.totals.samples += f.total_samples();
             self.totals.dropped += f.dropped_samples();
-        }
-        Some(film)
+            let world_from_camera = Mat3::from(self.camera.world_from_camera.matrix3);
+            let world_origin = self.frame.scene().world_origin.as_vec3();
+            Band {
+                values: Resolver::new(&f, self.opts.passes, world_from_camera, world_origin).rows(),
+                totals: self.totals,
+            }
+        }))
     }
 }
 

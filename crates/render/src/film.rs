@@ -427,19 +427,6 @@ impl Film {
         self.accum.sums.iter().map(PixelSum::resolve).collect()
     }
 
-    /// The mean of an averaged pass (Normal, Denoising Albedo or Normal, a light pass before
-    /// its division by the Color pass) at pixel index `i`, or `None` when not rendered.
-    pub fn mean3(&self, i: usize, at: Option<usize>) -> Option<Vec3> {
-        let o = at?;
-        let s = &self.accum.aov[i * self.accum.layout.stride + o..][..3];
-        let n = self.accum.sums[i].count;
-        Some(if n > 0.0 {
-            Vec3::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)
-        } else {
-            Vec3::ZERO
-        })
-    }
-
     /// Copies a finished tile in (`x0`, `y0` relative to the window, `w` pixels wide), with
     /// the samples each of its pixels took. Tiles own disjoint pixels and `dropped` is a sum,
     /// so the order of calls does not change the result: the renderer merges each tile as it

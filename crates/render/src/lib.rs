@@ -41,13 +41,14 @@ pub mod passes;
 mod primary;
 mod progressive;
 mod render;
+pub mod resolve;
 pub mod sampler;
 pub mod sequence;
 mod session;
 mod spares;
 
 pub use adaptive::AdaptiveOptions;
-pub use bands::{BandTotals, Bands};
+pub use bands::{Band, BandTotals, Bands};
 pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, CameraSample};
 pub use cancel::Cancel;
 pub use film::{Film, PixelSum, Window};
