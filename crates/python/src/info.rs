@@ -44,6 +44,8 @@ fn camera(s: &Scene, i: usize) -> Value {
         "aspect_ratio": aspect.map(f),
         "xmag": xmag.map(f),
         "ymag": ymag.map(f),
+        // The automatic camera is framed once, on the stored pose (SPEC §3), whatever the time.
+        "framed_on": c.node.is_none().then_some("stored pose"),
         "position": file_point(origin, c.world_from_camera.translation.into()),
         "direction": v3((-c.world_from_camera.matrix3.z_axis).into()),
         "dof": {

@@ -333,6 +333,56 @@ pub(crate) fn camera_rays_of(
     Ok(camera_rays(&camera, lens_samples, seed))
 }
 
+/// The posed scene's triangles in world space, one copy per instance (what another ray
+/// library is given to answer the same queries), with each triangle's `instance` and
+/// `primitive` as `intersect` names them.
+pub(crate) struct Soup {
+    vertices: Vec<f32>,
+    instance: Vec<i32>,
+    primitive: Vec<i32>,
+}
+
+/// The triangles of `s`.
+pub(crate) fn triangles(s: &Scene) -> Soup {
+    let mut soup = Soup {
+        vertices: Vec::new(),
+        instance: Vec::new(),
+        primitive: Vec::new(),
+    };
+    for (k, inst) in s.instances.iter().enumerate() {
+        let Some(mesh) = s.meshes.get(inst.mesh as usize) else {
+            continue;
+        };
+        for (t, tri) in mesh.indices.iter().enumerate() {
+            for &v in tri {
+                let p = mesh.positions.get(v as usize).copied().unwrap_or(Vec3::NAN);
+                let w = inst.world_from_object.transform_point3(p);
+                soup.vertices.extend_from_slice(&w.to_array());
+            }
+            soup.instance.push(k as i32);
+            soup.primitive.push(t as i32);
+        }
+    }
+    soup
+}
+
+impl Soup {
+    /// `vertices` (3T, 3) float32, `indices` (T, 3) uint32, `instance`, `primitive` (T,).
+    pub fn into_dict(self, py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+        let n = self.instance.len();
+        let indices: Vec<u32> = (0..3 * n as u32).collect();
+        let bad = |e: numpy::ndarray::ShapeError| value_error(e.to_string());
+        let d = PyDict::new(py);
+        let vertices = Array2::from_shape_vec((3 * n, 3), self.vertices).map_err(bad)?;
+        d.set_item("vertices", vertices.into_pyarray(py))?;
+        let indices = Array2::from_shape_vec((n, 3), indices).map_err(bad)?;
+        d.set_item("indices", indices.into_pyarray(py))?;
+        d.set_item("instance", self.instance.into_pyarray(py))?;
+        d.set_item("primitive", self.primitive.into_pyarray(py))?;
+        Ok(d)
+    }
+}
+
 /// An occlusion answer as a numpy bool array.
 pub(crate) fn bool_array(py: Python<'_>, v: Vec<bool>) -> Bound<'_, PyArray1<bool>> {
     v.into_pyarray(py)

@@ -36,8 +36,15 @@ pub(crate) fn load(
     let mut kw = Kwargs::new(options, "load")?;
     let (load, defaults) = load_options(&mut kw)?;
     kw.finish()?;
+    // Posed at once, so a file that loads but cannot be posed (a focus object behind the
+    // camera) fails here, as the command line fails before rendering.
+    let time = defaults.time;
     let session = py
-        .detach(|| aperture_render::Session::load(&path, &load))
+        .detach(|| {
+            let mut session = aperture_render::Session::load(&path, &load)?;
+            session.pose(time)?;
+            Ok(session)
+        })
         .map_err(load_error)?;
     let state = State {
         session,
@@ -185,10 +192,11 @@ impl Scene {
     fn set_light(
         &self,
         py: Python<'_>,
-        light: usize,
+        light: i64,
         values: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<()> {
-        let edits = edits::light(light, values)?;
+        let light = in_range("light", light, 0, i64::from(u32::MAX))?;
+        let edits = edits::light(light as usize, values)?;
         self.edit(py, |_| Ok(edits))
     }
 
@@ -208,9 +216,10 @@ impl Scene {
         directions: &Bound<'py, PyAny>,
         tmin: Option<&Bound<'py, PyAny>>,
         tmax: Option<&Bound<'py, PyAny>>,
-        threads: Option<usize>,
+        threads: Option<i64>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let rays = self.rays(py, origins, directions, tmin, tmax, threads)?;
+        let threads = threads_of(threads)?;
+        let rays = self.rays(py, origins, directions, tmin, tmax)?;
         let hits = py.detach(|| -> PyResult<_> {
             let mut st = lock(&self.state);
             let frame = st.query_frame()?;
@@ -230,9 +239,10 @@ impl Scene {
         directions: &Bound<'py, PyAny>,
         tmax: Option<&Bound<'py, PyAny>>,
         tmin: Option<&Bound<'py, PyAny>>,
-        threads: Option<usize>,
+        threads: Option<i64>,
     ) -> PyResult<Bound<'py, numpy::PyArray1<bool>>> {
-        let rays = self.rays(py, origins, directions, tmin, tmax, threads)?;
+        let threads = threads_of(threads)?;
+        let rays = self.rays(py, origins, directions, tmin, tmax)?;
         let answers = py.detach(|| -> PyResult<_> {
             let mut st = lock(&self.state);
             let frame = st.query_frame()?;
@@ -247,17 +257,31 @@ impl Scene {
     fn camera_rays<'py>(
         &self,
         py: Python<'py>,
-        width: u32,
-        height: Option<u32>,
-        lens_samples: u32,
-        seed: u32,
+        width: i64,
+        height: Option<i64>,
+        lens_samples: i64,
+        seed: i64,
         camera: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let width = in_range("width", width, 1, 16384)?;
+        let height = height
+            .map(|h| in_range("height", h, 1, 16384))
+            .transpose()?;
+        let lens_samples = in_range("lens_samples", lens_samples, 1, 65536)?;
+        let seed = in_range("seed", seed, 0, i64::from(u32::MAX))?;
         let camera = camera.map(|c| Target::extract(c, "camera")).transpose()?;
         let rays = self.with_posed(py, |s| {
             crate::rays::camera_rays_of(s, camera.as_ref(), (width, height), lens_samples, seed)
         })?;
         rays.into_dict(py)
+    }
+
+    /// The scene's triangles in world space, one copy per instance: `vertices`, `indices`,
+    /// and each triangle's `instance` and `primitive` (to hand the same geometry to another
+    /// ray library).
+    fn triangles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let soup = self.with_posed(py, |s| Ok(crate::rays::triangles(s)))?;
+        soup.into_dict(py)
     }
 
     fn __repr__(&self) -> String {
@@ -274,11 +298,7 @@ impl Scene {
         directions: &Bound<'_, PyAny>,
         tmin: Option<&Bound<'_, PyAny>>,
         tmax: Option<&Bound<'_, PyAny>>,
-        threads: Option<usize>,
     ) -> PyResult<Vec<aperture_accel::Ray>> {
-        if threads == Some(0) {
-            return Err(value_error("threads must be ≥ 1"));
-        }
         let zero = 0.0f64.into_pyobject(py)?.into_any();
         let inf = f64::INFINITY.into_pyobject(py)?.into_any();
         crate::rays::rays(
@@ -288,4 +308,21 @@ impl Scene {
             tmax.unwrap_or(&inf),
         )
     }
+}
+
+/// `v` as a `u32` within `lo..=hi`, else a `ValueError` naming it.
+fn in_range(name: &str, v: i64, lo: i64, hi: i64) -> PyResult<u32> {
+    match (lo..=hi).contains(&v) {
+        true => Ok(v as u32),
+        false => Err(value_error(format!(
+            "invalid {name} = {v}: must be in {lo}..={hi}"
+        ))),
+    }
+}
+
+/// `threads=`: 1 to 4096 workers, `None` for all cores.
+fn threads_of(threads: Option<i64>) -> PyResult<Option<usize>> {
+    threads
+        .map(|n| in_range("threads", n, 1, 4096).map(|n| n as usize))
+        .transpose()
 }
