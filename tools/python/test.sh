@@ -21,13 +21,13 @@ venv="${APERTURE_PY_VENV:-$cache/py-venv}"
 python="${PYTHON311:-$(command -v python3.11 || command -v python3)}"
 start=$(date +%s)
 
-if ! "$venv/bin/python" -c 'import maturin, numpy, pytest, hypothesis' >/dev/null 2>&1; then
-    echo "== creating $venv (maturin, numpy, pytest, hypothesis)"
+if ! "$venv/bin/python" -c 'import maturin, numpy, pytest, hypothesis, OpenEXR' >/dev/null 2>&1; then
+    echo "== creating $venv (maturin, numpy, pytest, hypothesis, OpenEXR)"
     rm -rf "$venv"
     mkdir -p "$(dirname "$venv")"
     "$python" -m venv "$venv"
     "$venv/bin/pip" install --quiet --disable-pip-version-check \
-        "maturin>=1.9,<2" "numpy>=1.23" "pytest>=8" "hypothesis>=6"
+        "maturin>=1.9,<2" "numpy>=1.23" "pytest>=8" "hypothesis>=6" "OpenEXR==3.5.3"
 fi
 
 if [ -z "${APERTURE_BIN:-}" ]; then

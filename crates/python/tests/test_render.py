@@ -171,3 +171,24 @@ def test_ctrl_c_cancels_a_render(demo, tmp_path):
     assert out.startswith("interrupted"), out
     # A 4096-spp render takes minutes; the interrupt stops it within a batch of samples.
     assert stopped < 10.0, stopped
+
+
+def test_denoise_equals_the_cli(demo, aperture_bin, exr_reader, tmp_path):
+    """--denoise through Open Image Denoise (tools/oidn/install.sh puts it in the cache)."""
+    out = tmp_path / "dn.exr"
+    import subprocess
+    flags = ["--width", "48", "--height", "27", "--spp", "4", "--denoise", "--quiet"]
+    done = subprocess.run([str(aperture_bin), "render", str(demo), "-o", str(out), *flags],
+                          capture_output=True, text=True)
+    if done.returncode != 0 and "Open Image Denoise" in done.stderr:
+        from conftest import missing
+        missing("Open Image Denoise (tools/oidn/install.sh)")
+    assert done.returncode == 0, done.stderr
+    _, cli = exr_reader(out)
+    result = aperture.load(demo).render(width=48, height=27, spp=4, denoise=True)
+    image, passes = result
+    for k, c in enumerate("RGBA"):
+        assert np.array_equal(bits(image[..., k]), bits(cli[c])), c
+    noisy = passes["Noisy Image"]
+    assert not np.array_equal(noisy[..., :3], image[..., :3]), "the beauty is denoised"
+    assert np.array_equal(bits(noisy[..., 0]), bits(cli["Noisy Image.R"]))
