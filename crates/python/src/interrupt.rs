@@ -1,0 +1,67 @@
+//! Work without the GIL, cancelled by Ctrl-C: the work runs on a scoped thread while the
+//! calling thread waits for it, looking at Python's signals between waits; a
+//! `KeyboardInterrupt` (or any exception a signal handler raises) cancels the render's token
+//! and is raised once the work has stopped (within a batch of samples).
+
+use aperture_render::Cancel;
+use pyo3::exceptions::PyRuntimeError;
+use pyo3::prelude::*;
+use std::sync::mpsc;
+use std::time::Duration;
+
+/// How often the waiting thread looks at Python's signals.
+const POLL: Duration = Duration::from_millis(25);
+
+/// Runs `work` without the GIL (other Python threads run meanwhile) and returns its result; a
+/// signal's exception cancels `cancel` and is returned instead once `work` has returned. A
+/// panic in `work` becomes a `RuntimeError`, never a crash.
+pub(crate) fn run<T: Send>(
+    py: Python<'_>,
+    cancel: &Cancel,
+    work: impl FnOnce() -> PyResult<T> + Send,
+) -> PyResult<T> {
+    py.detach(|| {
+        std::thread::scope(|s| {
+            let (done, wait) = mpsc::channel::<()>();
+            let handle = s.spawn(move || {
+                let out = work();
+                // The waiter may be gone only if it panicked; nothing to tell then.
+                let _ = done.send(());
+                out
+            });
+            let mut raised = None;
+            while let Err(mpsc::RecvTimeoutError::Timeout) = wait.recv_timeout(POLL) {
+                if raised.is_none() {
+                    if let Err(e) = Python::attach(|py| py.check_signals()) {
+                        cancel.cancel();
+                        raised = Some(e);
+                    }
+                }
+            }
+            let out = handle
+                .join()
+                .unwrap_or_else(|_| Err(PyRuntimeError::new_err("aperture: internal panic")));
+            match raised {
+                Some(e) => Err(e),
+                None => out,
+            }
+        })
+    })
+}
+
+/// `work` on a pool of `threads` workers (`None`: rayon's global pool, all cores).
+pub(crate) fn with_threads<T: Send>(
+    threads: Option<usize>,
+    work: impl FnOnce() -> T + Send,
+) -> PyResult<T> {
+    match threads {
+        None => Ok(work()),
+        Some(n) => {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .map_err(|e| PyRuntimeError::new_err(format!("thread pool: {e}")))?;
+            Ok(pool.install(work))
+        }
+    }
+}

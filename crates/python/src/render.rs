@@ -1,0 +1,49 @@
+//! `scene.render(**options)`: one render of the session's frame, without the GIL and
+//! cancelled by Ctrl-C, turned into the image the EXR would hold.
+
+use crate::errors::{load_error, output_error, render_error, RenderError};
+use crate::images::RenderResult;
+use crate::interrupt::{run, with_threads};
+use crate::render_opts::{plan, RenderAsk};
+use crate::state::{lock, Shared};
+use aperture_denoise::Denoiser;
+use aperture_imageio::Image;
+use aperture_render::Cancel;
+use pyo3::prelude::*;
+use std::time::Instant;
+
+/// Open Image Denoise, loaded before anything is rendered (as the command line does).
+pub(crate) fn denoiser(wanted: bool) -> PyResult<Option<Denoiser>> {
+    match wanted {
+        false => Ok(None),
+        true => Denoiser::load(None)
+            .map(Some)
+            .map_err(|e| RenderError::new_err(e.to_string())),
+    }
+}
+
+/// Renders `ask` from `state`'s session into the image of the EXR (denoised when asked).
+pub(crate) fn render(py: Python<'_>, state: &Shared, ask: RenderAsk) -> PyResult<RenderResult> {
+    let denoiser = denoiser(ask.denoise)?;
+    let cancel = Cancel::new();
+    let (image, samples) = run(py, &cancel, || -> PyResult<(Image, u64)> {
+        let mut guard = lock(state);
+        let st = &mut *guard;
+        let plan = plan(&mut st.session, &ask, cancel.clone())?;
+        st.last_spec = Some(plan.spec.clone());
+        let frame = st.session.frame(&plan.spec).map_err(load_error)?;
+        let opts = frame.options(&plan.opts);
+        let t0 = Instant::now();
+        let film =
+            with_threads(ask.threads, || frame.render(&opts, &|_, _| {}))?.map_err(render_error)?;
+        let secs = t0.elapsed().as_secs_f64();
+        let mut image = aperture_output::film_to_image(&film, frame.scene(), &opts, false, secs)
+            .map_err(output_error)?;
+        if let Some(d) = &denoiser {
+            aperture_output::denoised::denoise_image(&mut image, d)
+                .map_err(|e| RenderError::new_err(e.to_string()))?;
+        }
+        Ok((image, film.total_samples()))
+    })?;
+    RenderResult::new(py, image, samples)
+}
