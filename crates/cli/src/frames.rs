@@ -12,6 +12,11 @@ use aperture_output::sequence::{self, FrameReport, FrameWork, Frames, Sequence};
 use aperture_render::Session;
 use std::time::Instant;
 
+/// A render stopped by a signal after writing its partial EXR (`--save-partial`).
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted: {0} holds the samples taken so far (--save-partial)")]
+pub struct Interrupted(pub String);
+
 /// When the job started, and what loading took.
 #[derive(Debug, Clone, Copy)]
 pub struct JobStart {
@@ -81,7 +86,7 @@ pub fn run(
     done.with_context(|| format!("writing {}", args.output.display()))?;
     if plan.opts.cancel.is_cancelled() {
         let path = args.output.display().to_string();
-        return Err(crate::render_cmd::Interrupted(path).into());
+        return Err(Interrupted(path).into());
     }
     if let Some(w) = last {
         let job = JobTimes {

@@ -74,7 +74,7 @@ fn main() -> std::process::ExitCode {
                     c.downcast_ref(),
                     Some(aperture_output::OutputError::Interrupted { .. })
                 )
-            }) || e.downcast_ref::<render_cmd::Interrupted>().is_some();
+            }) || e.downcast_ref::<frames::Interrupted>().is_some();
             if interrupted {
                 std::process::ExitCode::from(interrupt::EXIT_INTERRUPTED)
             } else {

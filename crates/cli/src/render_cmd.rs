@@ -4,11 +4,6 @@ use crate::render_args::RenderArgs;
 use crate::render_opts::{after_load, before_load, load_session};
 use std::time::Instant;
 
-/// A render stopped by a signal after writing its partial EXR (`--save-partial`).
-#[derive(Debug, thiserror::Error)]
-#[error("interrupted: {0} holds the samples taken so far (--save-partial)")]
-pub struct Interrupted(pub String);
-
 /// Runs `aperture render`: all of it (loading, texture decoding, BVH building, rendering,
 /// writing) on one pool of `--threads` workers, so that bound holds for the whole process.
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {

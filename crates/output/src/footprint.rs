@@ -94,7 +94,7 @@ pub fn footprint(opts: &RenderOptions, kind: OutputKind, exr: &ExrOptions) -> Fo
                 _ => opts.passes,
             };
             let passes =
-                channels::file_passes(asked, crate::plan::needs_sample_count(opts, window));
+                channels::file_passes(asked, crate::region::needs_sample_count(opts, window));
             let specs = channels::channels(passes, exr.half);
             let bpp = film_bytes_per_pixel(passes, adaptive, specs.len());
             let rows = u64::from(aperture_render::bands::band_rows(

@@ -2,7 +2,7 @@
 //! Cryptomatte manifests and the `aperture:*` attributes, with hashes that tell whether parts
 //! of a split render belong together.
 
-use crate::RenderSummary;
+use crate::summary::RenderSummary;
 use aperture_imageio::MetaValue;
 use aperture_render::camera::{Camera, CameraModel};
 use aperture_render::cryptomatte;

@@ -27,168 +27,32 @@
 
 pub mod channels;
 pub mod denoised;
+mod error;
 mod exr_options;
+mod film_image;
 mod footprint;
 pub mod header;
 pub mod merge;
 mod plan;
+mod region;
 mod rows;
 pub mod sequence;
+mod summary;
 pub mod write;
 
+pub use error::OutputError;
 pub use exr_options::{ExrOptions, BAND_BYTES};
+pub use film_image::film_to_image;
 pub use footprint::{
     check_output, film_bytes_per_pixel, footprint, Footprint, FootprintError, OutputKind,
 };
-
-use aperture_imageio::{Image, Layer};
-use aperture_render::film::{Film, Window};
-use aperture_render::resolve::Resolver;
-use aperture_render::{scene_camera, RenderError, RenderOptions};
-use aperture_scene::Scene;
-use glam::Mat3;
-
-/// Why a render could not be written.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum OutputError {
-    /// The render could not start.
-    #[error(transparent)]
-    Render(#[from] RenderError),
-    /// The image could not be written.
-    #[error(transparent)]
-    Image(#[from] aperture_imageio::Error),
-    /// The image could not be denoised.
-    #[error(transparent)]
-    Denoise(#[from] denoised::DenoisingError),
-    /// The render was cancelled ([`RenderOptions::cancel`]) and nothing was written
-    /// ([`ExrOptions::save_partial`] writes what was rendered instead).
-    #[error("interrupted after {samples} samples: nothing written")]
-    Interrupted {
-        /// Samples taken before the render stopped.
-        samples: u64,
-    },
-}
-
-/// What a written render took.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RenderSummary {
-    /// The pixels rendered.
-    pub window: Window,
-    /// Samples taken, dropped ones included.
-    pub samples: u64,
-    /// Samples dropped as NaN or infinite.
-    pub dropped: u64,
-    /// Seconds spent rendering (not writing).
-    pub render_secs: f64,
-    /// Seconds spent denoising.
-    pub denoise_secs: f64,
-    /// Seconds spent resolving and writing the file (the rest of the job).
-    pub write_secs: f64,
-    /// Colour values clamped to the half-float range (`--half`).
-    pub half_clamped: u64,
-}
-
-impl RenderSummary {
-    /// Nothing done yet for `window`.
-    pub fn of(window: Window) -> Self {
-        Self {
-            window,
-            samples: 0,
-            dropped: 0,
-            render_secs: 0.0,
-            denoise_secs: 0.0,
-            write_secs: 0.0,
-            half_clamped: 0,
-        }
-    }
-
-    /// Mean samples per pixel.
-    pub fn mean_spp(&self) -> f64 {
-        self.samples as f64 / self.window.pixels().max(1) as f64
-    }
-}
-
-/// A rendered film as a plain image with the channels and header of
-/// [`write::write_image`]'s EXR
-/// (`render_secs` into the header's render time): the same file, for a film already in
-/// memory.
-pub fn film_to_image(
-    film: &Film,
-    scene: &Scene,
-    opts: &RenderOptions,
-    half: bool,
-    render_secs: f64,
-) -> Result<Image, OutputError> {
-    let camera = scene_camera(scene, opts)?;
-    let window = film.window();
-    let passes = channels::file_passes(film.passes(), plan::needs_sample_count(opts, window));
-    let specs = channels::channels(passes, half);
-    let world_from_camera = Mat3::from(camera.world_from_camera.matrix3);
-    let resolver = Resolver::new(
-        film,
-        passes,
-        world_from_camera,
-        scene.world_origin.as_vec3(),
-    );
-    let mut values = resolver.rows();
-    let half_clamped = channels::clamp_half(&mut values, &specs);
-    let n = window.pixels();
-    let mut image = Image::new(film.width(), film.height());
-    image.beauty_type = specs[0].sample_type;
-    image.placement = plan::placement(window, opts);
-    let stride = specs.len();
-    for (p, px) in image.rgba.iter_mut().enumerate() {
-        px.copy_from_slice(&values[p * stride..p * stride + 4]);
-    }
-    // Channels `Layer.c` of one layer are adjacent: group them.
-    let mut c = 4;
-    while c < stride {
-        let (layer, _) = specs[c].name.rsplit_once('.').expect("dotted pass channel");
-        let count = specs[c..]
-            .iter()
-            .take_while(|s| s.name.rsplit_once('.').map(|x| x.0) == Some(layer))
-            .count();
-        let names: Vec<&str> = specs[c..c + count]
-            .iter()
-            .map(|s| s.name.rsplit_once('.').expect("dotted").1)
-            .collect();
-        let data = (0..n)
-            .flat_map(|p| {
-                values[p * stride + c..p * stride + c + count]
-                    .iter()
-                    .copied()
-            })
-            .collect();
-        let mut l = Layer::new(layer, &names, data);
-        l.sample_type = specs[c].sample_type;
-        image.layers.push(l);
-        c += count;
-    }
-    image.metadata = header::metadata(scene, &camera, opts, passes);
-    let whole = plan::is_whole(window, opts);
-    image
-        .metadata
-        .extend(header::split_metadata(scene, opts, (window, whole), None));
-    let summary = RenderSummary {
-        samples: film.total_samples(),
-        dropped: film.dropped_samples(),
-        render_secs,
-        half_clamped,
-        ..RenderSummary::of(film.window())
-    };
-    for (key, value) in header::late_values(&summary, opts, None) {
-        if let Some(slot) = image.metadata.iter_mut().find(|(k, _)| *k == key) {
-            slot.1 = value;
-        }
-    }
-    Ok(image)
-}
+pub use summary::RenderSummary;
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use aperture_render::bands::{band_rows, bands};
+    use aperture_render::film::Window;
     use aperture_render::passes::PassSet;
     use aperture_render::TILE;
 

@@ -2,14 +2,43 @@
 //! window, its channels and, for EXR, its header. Planned from plain data only; rendering is
 //! [`crate::rows`]'s.
 
-use crate::write::{ImageFormat, ImageOutput};
-use crate::{channels, denoised, film_bytes_per_pixel, header, ExrOptions, BAND_BYTES};
+use crate::exr_options::{ExrOptions, BAND_BYTES};
+use crate::footprint::film_bytes_per_pixel;
+use crate::region::{is_whole, needs_sample_count, placement};
+use crate::{channels, denoised, header};
 use aperture_denoise::Denoiser;
-use aperture_imageio::{ChannelSpec, ExrLayout, MetaValue, Placement};
+use aperture_imageio::{ChannelSpec, ExrLayout, MetaValue, PngOptions};
 use aperture_render::camera::Camera;
 use aperture_render::film::Window;
 use aperture_render::{PassSet, RenderOptions};
 use aperture_scene::Scene;
+use std::path::Path;
+
+/// The file format of an image.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ImageFormat {
+    /// EXR with the passes of the render options.
+    Exr(ExrOptions),
+    /// PNG with its view transform, opaque unless `transparent`.
+    Png {
+        /// Exposure and view.
+        png: PngOptions,
+        /// Keep coverage as alpha.
+        transparent: bool,
+    },
+}
+
+/// Where and how an image is written.
+#[derive(Clone, Copy)]
+pub struct ImageOutput<'a> {
+    /// The file.
+    pub path: &'a Path,
+    /// Its format.
+    pub format: ImageFormat,
+    /// Denoise the beauty ([`denoised`]): the Denoising passes are rendered for it, and an EXR
+    /// keeps the noisy beauty as `Noisy Image`.
+    pub denoiser: Option<&'a Denoiser>,
+}
 
 /// A file to render and write.
 pub(crate) struct FilePlan<'a> {
@@ -93,25 +122,4 @@ impl<'a> FilePlan<'a> {
             save_partial: exr.is_some_and(|e| e.save_partial),
         }
     }
-}
-
-/// True when a file of `window` rendered with `opts` must say how many samples each pixel
-/// took (SPEC §6): adaptive, a region of the image, or a batch of samples past the first.
-pub(crate) fn needs_sample_count(opts: &RenderOptions, window: Window) -> bool {
-    opts.adaptive.is_some() || !is_whole(window, opts) || opts.sample_offset > 0
-}
-
-/// True when `window` is the whole image of `opts`.
-pub(crate) fn is_whole(window: Window, opts: &RenderOptions) -> bool {
-    (window.x0, window.y0, window.width, window.height) == (0, 0, opts.width, opts.height)
-}
-
-/// Where `window` sits in the whole image of `opts`, `None` when it is the whole image.
-pub(crate) fn placement(window: Window, opts: &RenderOptions) -> Option<Placement> {
-    (!is_whole(window, opts)).then_some(Placement {
-        x: window.x0,
-        y: window.y0,
-        full_width: opts.width,
-        full_height: opts.height,
-    })
 }

@@ -2,8 +2,10 @@
 //! band ([`aperture_render::Bands`], each band's pass values resolved by the renderer), the
 //! values stored as the file's channels say and handed on, denoised when asked.
 
+use crate::error::OutputError;
 use crate::plan::FilePlan;
-use crate::{channels, denoised, header, OutputError, RenderSummary};
+use crate::summary::RenderSummary;
+use crate::{channels, denoised, header};
 use aperture_imageio::MetaValue;
 use aperture_render::bands::{band_rows, bands};
 use aperture_render::camera::Camera;

@@ -5,8 +5,9 @@
 //! ([`aperture_render::Session::frame`]); each frame's file is the single-frame render's, bit
 //! for bit.
 
+use crate::error::OutputError;
+use crate::summary::RenderSummary;
 use crate::write::{write_image, ImageFormat, ImageOutput};
-use crate::{OutputError, RenderSummary};
 use aperture_accel::{AccelStats, BvhQuality};
 use aperture_denoise::Denoiser;
 use aperture_render::motion::MotionSettings;

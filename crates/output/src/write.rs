@@ -2,42 +2,16 @@
 //! the renderer yields them, turned into the file of SPEC §6 — EXR streamed band by band, or
 //! PNG — denoised when a denoiser is given.
 
+use crate::error::OutputError;
 use crate::plan::FilePlan;
+pub use crate::plan::{ImageFormat, ImageOutput};
 use crate::rows::render_rows;
+use crate::summary::RenderSummary;
 #[cfg(doc)]
 use crate::{channels, header};
-use crate::{ExrOptions, OutputError, RenderSummary};
-use aperture_denoise::Denoiser;
-use aperture_imageio::{Image, PngOptions};
+use aperture_imageio::Image;
 use aperture_render::{Frame, RenderOptions};
-use std::path::Path;
 use std::time::Instant;
-
-/// The file format of an image.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum ImageFormat {
-    /// EXR with the passes of the render options.
-    Exr(ExrOptions),
-    /// PNG with its view transform, opaque unless `transparent`.
-    Png {
-        /// Exposure and view.
-        png: PngOptions,
-        /// Keep coverage as alpha.
-        transparent: bool,
-    },
-}
-
-/// Where and how an image is written.
-#[derive(Clone, Copy)]
-pub struct ImageOutput<'a> {
-    /// The file.
-    pub path: &'a Path,
-    /// Its format.
-    pub format: ImageFormat,
-    /// Denoise the beauty ([`denoised`]): the Denoising passes are rendered for it, and an EXR
-    /// keeps the noisy beauty as `Noisy Image`.
-    pub denoiser: Option<&'a Denoiser>,
-}
 
 /// Renders `opts` from `frame` and writes it as `out` says: the one way a still image, each
 /// frame of a sequence, a tile or a batch is written. EXR gets the beauty, the passes of
