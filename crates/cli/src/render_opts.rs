@@ -5,10 +5,9 @@ use crate::render_args::{EnvArg, RenderArgs};
 use anyhow::Context as _;
 use aperture_render::{Pass, RenderOptions};
 use aperture_scene::{DofOverrides, LoadOptions};
-use aperture_shading::{EnvImage, EnvSampling, Environment, MaterialOverride};
+use aperture_shading::{EnvLight, Environment, MaterialOverride};
 use clap::error::ErrorKind;
 use clap::CommandFactory as _;
-use glam::Vec3;
 
 /// A usage error in clap's format, exit code 2 (as clap's own parse errors).
 pub(crate) fn usage_error(msg: impl std::fmt::Display) -> ! {
@@ -103,7 +102,8 @@ pub(crate) fn after_load(
     scene: &aperture_scene::Scene,
 ) -> anyhow::Result<RenderPlan> {
     let camera = camera_index(args, scene);
-    let (width, height) = image_size(args, &scene.cameras[camera]);
+    let (width, height) =
+        aperture_render::image_size(&scene.cameras[camera], args.width, args.height);
     let quality = bvh_quality(args, scene, width, height);
     check_split_and_spp(args);
     let part = image_part(args, width, height, before.png_out);
@@ -257,20 +257,6 @@ pub(crate) fn find_camera(c: &str, scene: &aperture_scene::Scene) -> Result<usiz
         .map_err(|e| format!("invalid value '{c}' for '--camera': {e}"))
 }
 
-/// `--width`/`--height`, the missing side (or both) from the camera's aspect.
-fn image_size(args: &RenderArgs, cam: &aperture_scene::Camera) -> (u32, u32) {
-    match (args.width, args.height) {
-        (Some(w), Some(h)) => (w, h),
-        (Some(w), None) => (w, aperture_render::default_height(cam, w)),
-        (None, Some(h)) => {
-            // The camera's aspect from the default 960-wide frame.
-            let aspect = 960.0 / aperture_render::default_height(cam, 960) as f32;
-            (((h as f32 * aspect).round() as u32).max(1), h)
-        }
-        (None, None) => (960, aperture_render::default_height(cam, 960)),
-    }
-}
-
 /// `--bvh-quality`; `auto` chooses from the triangles and the samples to trace.
 fn bvh_quality(
     args: &RenderArgs,
@@ -334,39 +320,27 @@ fn render_options(args: &RenderArgs) -> RenderOptions {
     }
 }
 
-/// `--env`, `--env-rotation`, `--env-strength`; an image is held to `max_bytes`. Without
-/// `--env`, the file's own (`EXT_lights_image_based`), else black.
+/// `--env` with `--env-rotation` and `--env-strength`; without it, the file's image light,
+/// else black.
 fn environment(
     args: &RenderArgs,
     scene: &aperture_scene::Scene,
     max_bytes: u64,
 ) -> anyhow::Result<Environment> {
-    Ok(match &args.env {
-        None => match &scene.environment {
-            Some(e) => Environment::Image(std::sync::Arc::new(EnvImage {
-                width: e.width,
-                height: e.height,
-                texels: e.texels.clone(),
-                rotation: args.env_rotation.to_radians(),
-                strength: e.intensity * args.env_strength,
-                sampling: EnvSampling::Importance,
-            })),
-            None => Environment::Constant(Vec3::ZERO),
-        },
-        Some(EnvArg::Color(c)) => Environment::Constant(*c * args.env_strength),
-        Some(EnvArg::File(path)) => {
-            let (width, height, texels) = load_env_image(path, max_bytes)
-                .with_context(|| format!("reading the environment {}", path.display()))?;
-            Environment::Image(std::sync::Arc::new(EnvImage {
-                width,
-                height,
-                texels,
-                rotation: args.env_rotation.to_radians(),
-                strength: args.env_strength,
-                sampling: EnvSampling::Importance,
-            }))
-        }
-    })
+    let asked = match &args.env {
+        None => None,
+        Some(EnvArg::Color(c)) => Some(EnvLight::Color(*c)),
+        Some(EnvArg::File(path)) => Some(
+            load_env_image(path, max_bytes)
+                .with_context(|| format!("reading the environment {}", path.display()))?,
+        ),
+    };
+    Ok(aperture_shading::choose_environment(
+        asked,
+        scene,
+        args.env_rotation,
+        args.env_strength,
+    ))
 }
 
 /// `--exposure`, `--view`.
@@ -378,29 +352,15 @@ fn png_options(args: &RenderArgs) -> aperture_imageio::PngOptions {
     }
 }
 
-/// Reads an equirectangular environment image (HDR or EXR, by content) as linear RGB
-/// texels, rows top to bottom, refusing one whose texels would not fit `max_bytes`.
-fn load_env_image(path: &std::path::Path, max_bytes: u64) -> anyhow::Result<(u32, u32, Vec<Vec3>)> {
+/// An environment image's texels (`--env FILE`), within `max_bytes`.
+fn load_env_image(path: &std::path::Path, max_bytes: u64) -> anyhow::Result<EnvLight> {
     let im = aperture_imageio::read_env_image(path, max_bytes)?;
-    let (w, h) = (im.width, im.height);
-    let texels: Vec<Vec3> = im
-        .rgba
-        .iter()
-        .map(|p| Vec3::new(p[0], p[1], p[2]))
-        .collect();
-    if w == 0 || h == 0 {
+    if im.width == 0 || im.height == 0 {
         anyhow::bail!("the image has no pixels");
     }
-    // Non-finite or negative texels would poison every sample that sees them.
-    let texels = texels
-        .into_iter()
-        .map(|t: Vec3| {
-            if t.is_finite() {
-                t.max(Vec3::ZERO)
-            } else {
-                Vec3::ZERO
-            }
-        })
-        .collect();
-    Ok((w, h, texels))
+    Ok(EnvLight::Image {
+        width: im.width,
+        height: im.height,
+        rgba: im.rgba,
+    })
 }

@@ -24,7 +24,6 @@
 mod edits;
 mod errors;
 mod images;
-mod info;
 mod interrupt;
 mod load_opts;
 mod options;

@@ -13,7 +13,7 @@ use aperture_render::{
     AdaptiveOptions, BvhQualityChoice, Cancel, Clamp, FilterKind, FrameSpec, Pass, PassSet,
     RenderOptions, SamplerKind, Session,
 };
-use aperture_shading::{EnvImage, EnvSampling, Environment, MaterialOverride};
+use aperture_shading::{EnvLight, Environment, MaterialOverride};
 use glam::Vec3;
 use pyo3::prelude::*;
 
@@ -263,7 +263,7 @@ pub(crate) fn plan(session: &mut Session, ask: &RenderAsk, cancel: Cancel) -> Py
         .cameras
         .get(camera)
         .ok_or_else(|| value_error("the scene has no camera"))?;
-    let (width, height) = image_size(ask.width, ask.height, cam);
+    let (width, height) = aperture_render::image_size(cam, ask.width, ask.height);
     let samples = u64::from(width) * u64::from(height) * u64::from(ask.base.spp);
     let quality = ask.bvh.resolve(scene.unique_triangle_count(), samples);
     let opts = RenderOptions {
@@ -288,59 +288,27 @@ pub(crate) fn plan(session: &mut Session, ask: &RenderAsk, cancel: Cancel) -> Py
     Ok(Plan { opts, spec })
 }
 
-/// `width`/`height`, the missing side (or both) from the camera's aspect, as the command line.
-fn image_size(width: Option<u32>, height: Option<u32>, cam: &aperture_scene::Camera) -> (u32, u32) {
-    match (width, height) {
-        (Some(w), Some(h)) => (w, h),
-        (Some(w), None) => (w, aperture_render::default_height(cam, w)),
-        (None, Some(h)) => {
-            let aspect = 960.0 / aperture_render::default_height(cam, 960) as f32;
-            (((h as f32 * aspect).round() as u32).max(1), h)
-        }
-        (None, None) => (960, aperture_render::default_height(cam, 960)),
-    }
-}
-
-/// `env=` with its rotation and strength; without it, the file's image light, else black.
+/// `env=` with its rotation and strength; without it, the file's image light, else black
+/// (the command line's rule: `aperture_shading::choose_environment`).
 fn environment(ask: &RenderAsk, scene: &aperture_scene::Scene) -> PyResult<Environment> {
-    let image = |width, height, texels, strength| {
-        Environment::Image(std::sync::Arc::new(EnvImage {
-            width,
-            height,
-            texels,
-            rotation: ask.env_rotation.to_radians(),
-            strength,
-            sampling: EnvSampling::Importance,
-        }))
-    };
-    Ok(match &ask.env {
-        None => match &scene.environment {
-            Some(e) => image(
-                e.width,
-                e.height,
-                e.texels.clone(),
-                e.intensity * ask.env_strength,
-            ),
-            None => Environment::Constant(Vec3::ZERO),
-        },
-        Some(EnvAsk::Color(c)) => Environment::Constant(*c * ask.env_strength),
+    let asked = match &ask.env {
+        None => None,
+        Some(EnvAsk::Color(c)) => Some(EnvLight::Color(*c)),
         Some(EnvAsk::File(path)) => {
             let budget = aperture_budget::MemoryBudget::from_system().limit;
             let im = aperture_imageio::read_env_image(path.as_ref(), budget)
                 .map_err(|e| value_error(format!("reading the environment {path}: {e}")))?;
-            let texels = im
-                .rgba
-                .iter()
-                .map(|p| Vec3::new(p[0], p[1], p[2]))
-                .map(|t| {
-                    if t.is_finite() {
-                        t.max(Vec3::ZERO)
-                    } else {
-                        Vec3::ZERO
-                    }
-                })
-                .collect();
-            image(im.width, im.height, texels, ask.env_strength)
+            Some(EnvLight::Image {
+                width: im.width,
+                height: im.height,
+                rgba: im.rgba,
+            })
         }
-    })
+    };
+    Ok(aperture_shading::choose_environment(
+        asked,
+        scene,
+        ask.env_rotation,
+        ask.env_strength,
+    ))
 }

@@ -91,9 +91,14 @@ impl Scene {
 
 #[pymethods]
 impl Scene {
-    /// What the scene holds, as `aperture info --json` reports it (a dict).
+    /// What the scene holds, as `aperture info --json` reports it (a dict; the same report,
+    /// `aperture_render::info`, under the scene's transmission and single-sided conventions;
+    /// `motion` is the command line's, for a frame it is given).
     fn info(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
-        let text = self.with_posed(py, |s| Ok(crate::info::report(s).to_string()))?;
+        let d = py.detach(|| lock(&self.state).defaults.clone());
+        let (transmission, sides) = (d.transmission, d.single_sided);
+        let report = |s: &_| Ok(aperture_render::info::report(s, transmission, sides).to_string());
+        let text = self.with_posed(py, report)?;
         let json = py.import("json")?;
         Ok(json.call_method1("loads", (text,))?.unbind())
     }

@@ -276,22 +276,6 @@ impl Camera {
     }
 }
 
-/// The image height for `width` pixels that keeps the camera's aspect ratio (the file's
-/// `aspectRatio`, or `xmag / ymag`; 16:9 when the file gives none).
-pub fn default_height(cam: &aperture_scene::Camera, width: u32) -> u32 {
-    let aspect = match cam.projection {
-        Projection::Perspective {
-            aspect_ratio: Some(a),
-            ..
-        } if a.is_finite() && a > 0.0 => a,
-        Projection::Orthographic { xmag, ymag } if xmag != 0.0 && ymag != 0.0 => {
-            (xmag / ymag).abs()
-        }
-        _ => 16.0 / 9.0,
-    };
-    ((width as f32 / aspect).round() as u32).max(1)
-}
-
 /// The scene camera of the render crate's camera tests: perspective (`yfov` 0.8), placed off
 /// the axes and turned, with depth of field `dof`.
 #[cfg(test)]
@@ -457,16 +441,6 @@ mod tests {
             .unwrap();
         assert!((top.dir.y / -top.dir.z - (0.4f32).tan()).abs() < 1e-6);
         assert!((top_left.dir.x / top_left.dir.z - 2.0 * (0.4f32).tan()).abs() < 1e-5);
-    }
-
-    #[test]
-    fn default_height_follows_the_aspect() {
-        let mut sc = scene_camera(0.0, 0, 1.0);
-        sc.projection = Projection::Perspective {
-            yfov: 0.5,
-            aspect_ratio: Some(2.0),
-        };
-        assert_eq!(default_height(&sc, 960), 480);
     }
 
     mod properties {

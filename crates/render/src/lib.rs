@@ -34,6 +34,8 @@ mod filter;
 mod frame;
 mod frame_accel;
 mod frame_lights;
+mod image_size;
+pub mod info;
 mod integrator;
 pub mod motion;
 mod options;
@@ -49,7 +51,7 @@ mod spares;
 
 pub use adaptive::AdaptiveOptions;
 pub use bands::{Band, BandTotals, Bands};
-pub use camera::{default_height, Aperture, Camera, CameraModel, CameraRay, CameraSample};
+pub use camera::{Aperture, Camera, CameraModel, CameraRay, CameraSample};
 pub use cancel::Cancel;
 pub use film::{Film, PixelSum, Window};
 pub use filter::{Filter, FilterKind};
@@ -58,6 +60,7 @@ pub use frame_accel::{
     auto_bvh_quality, build_accel, build_motion_accel, BvhQualityChoice, SceneHints,
 };
 pub use frame_lights::FrameLights;
+pub use image_size::{default_height, image_size};
 pub use integrator::Clamp;
 pub use options::{RenderError, RenderOptions, DEFAULT_MAX_BOUNCES};
 pub use passes::{Pass, PassSet};

@@ -26,6 +26,7 @@
 pub mod bsdf;
 pub mod color;
 pub mod convention;
+mod env_choice;
 pub mod environment;
 pub mod hit_prefetch;
 pub mod light_bounds;
@@ -49,6 +50,7 @@ pub use bsdf::{
 };
 pub use color::srgb_to_linear;
 pub use convention::{Convention, ConventionModel};
+pub use env_choice::{choose_environment, EnvLight};
 pub use environment::{EnvImage, EnvSampling, Environment};
 pub use sides::{single_sided_materials, SidesModel};
 pub use surface::{Geometry, MaterialOverride};
