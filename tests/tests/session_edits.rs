@@ -292,7 +292,7 @@ fn progressive_passes_equal_the_one_shot_render() {
             .expect("render");
         let mut p = Progressive::new(frame, &o, w).expect("progressive");
         let mut totals = Vec::new();
-        while let Some(n) = p.next_pass(&|_, _| {}).expect("pass") {
+        while let Some(n) = p.next_pass(frame, &|_, _| {}).expect("pass") {
             totals.push(n);
         }
         assert_eq!(totals, [1, 2, 4, 8]);

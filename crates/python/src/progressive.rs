@@ -1,17 +1,15 @@
 //! `r = scene.start(**options)`: a progressive render (SPEC §9) whose film is read between
-//! steps. Each step renders the next samples of every pixel's sequence onto the film where
-//! the last left off (as `aperture_render::Progressive`, which borrows its frame and so cannot
-//! live in a Python object: the frame is taken from the session at each step instead), so a
-//! render that reaches N samples equals the one-shot N-sample render bit for bit.
+//! steps: an `aperture_render::Progressive`, each step rendered from the session's frame
+//! (refused once the scene was edited since the start), so a render that reaches N samples
+//! equals the one-shot N-sample render bit for bit.
 
 use crate::errors::{load_error, output_error, render_error, value_error, RenderError};
 use crate::images::RenderResult;
 use crate::interrupt::{run, with_threads};
 use crate::render_opts::{plan, RenderAsk};
 use crate::state::{lock, Shared, State};
-use aperture_render::camera::Camera;
 use aperture_render::Frame;
-use aperture_render::{Cancel, Film, FrameSpec, RenderOptions, Window};
+use aperture_render::{Cancel, FrameSpec, Progressive, Window};
 use pyo3::prelude::*;
 use std::sync::{Mutex, MutexGuard};
 use std::time::Instant;
@@ -19,11 +17,7 @@ use std::time::Instant;
 /// What the render has reached.
 struct Inner {
     spec: FrameSpec,
-    opts: RenderOptions,
-    camera: Camera,
-    film: Film,
-    /// Samples every pixel has been given so far.
-    done: u32,
+    render: Progressive,
     /// The session's edits when the render started: an edit since makes it refuse to go on.
     edits: usize,
     secs: f64,
@@ -56,14 +50,11 @@ impl Render {
             let edits = st.session.edits().len();
             let frame = st.session.frame(&plan.spec).map_err(load_error)?;
             let opts = frame.options(&plan.opts);
-            let camera = frame.camera(&opts).map_err(render_error)?;
             let whole = Window::whole(opts.width, opts.height);
+            let render = Progressive::new(frame, &opts, whole).map_err(render_error)?;
             Ok(Inner {
                 spec: plan.spec,
-                film: Film::for_window(whole, opts.width, opts.height, opts.passes),
-                opts,
-                camera,
-                done: 0,
+                render,
                 edits,
                 secs: 0.0,
             })
@@ -106,32 +97,20 @@ impl Render {
             let mut guard = lock(&self.state);
             let mut inner = self.inner();
             let inner = &mut *inner;
-            let left = inner.opts.spp - inner.done;
-            let asked = samples.map_or(inner.done.max(1), |n| n.min(i64::from(u32::MAX)) as u32);
-            let n = match inner.opts.adaptive {
-                Some(_) => left,
-                None => asked.min(left),
-            };
-            if n == 0 || self.cancel.is_cancelled() {
-                return Ok(inner.done);
+            if inner.render.is_done() {
+                return Ok(inner.render.samples());
             }
             let frame = frame_of(&mut guard, inner)?;
-            let pass = RenderOptions {
-                sample_offset: inner.opts.sample_offset + inner.done,
-                spp: n,
-                ..inner.opts.clone()
-            };
             let t0 = Instant::now();
-            let film = &mut inner.film;
-            with_threads(self.threads, || {
-                frame.render_onto(&inner.camera, &pass, film, &|_, _| {})
+            let render = &mut inner.render;
+            let total = with_threads(self.threads, || match samples {
+                // The doubling schedule 1, 1, 2, 4, …
+                None => render.next_pass(frame, &|_, _| {}).map(|n| n.unwrap_or(0)),
+                Some(n) => render.step(frame, n.min(i64::from(u32::MAX)) as u32, &|_, _| {}),
             })?
             .map_err(render_error)?;
             inner.secs += t0.elapsed().as_secs_f64();
-            if !self.cancel.is_cancelled() {
-                inner.done += n;
-            }
-            Ok(inner.done)
+            Ok(total.max(inner.render.samples()))
         })
     }
 
@@ -143,14 +122,14 @@ impl Render {
             let inner = self.inner();
             let frame = frame_of(&mut guard, &inner)?;
             let image = aperture_output::film_to_image(
-                &inner.film,
+                inner.render.film(),
                 frame.scene(),
-                &inner.opts,
+                inner.render.options(),
                 false,
                 inner.secs,
             )
             .map_err(output_error)?;
-            Ok((image, inner.film.total_samples()))
+            Ok((image, inner.render.film().total_samples()))
         })?;
         RenderResult::new(py, image, samples)
     }
@@ -164,31 +143,29 @@ impl Render {
     /// Samples every pixel has so far.
     #[getter]
     fn samples(&self, py: Python<'_>) -> u32 {
-        py.detach(|| self.inner().done)
+        py.detach(|| self.inner().render.samples())
     }
 
     /// The samples asked for (`spp`).
     #[getter]
     fn target(&self, py: Python<'_>) -> u32 {
-        py.detach(|| self.inner().opts.spp)
+        py.detach(|| self.inner().render.target())
     }
 
     /// True once every sample is taken, or the render was cancelled.
     #[getter]
     fn done(&self, py: Python<'_>) -> bool {
-        let (done, spp) = py.detach(|| {
-            let inner = self.inner();
-            (inner.done, inner.opts.spp)
-        });
-        done >= spp || self.cancel.is_cancelled()
+        py.detach(|| self.inner().render.is_done()) || self.cancel.is_cancelled()
     }
 
     fn __repr__(&self, py: Python<'_>) -> String {
         py.detach(|| {
-            let inner = self.inner();
+            let r = &self.inner().render;
+            let o = r.options();
+            let (done, spp) = (r.samples(), r.target());
             format!(
-                "<aperture.Render {}x{} {}/{} spp>",
-                inner.opts.width, inner.opts.height, inner.done, inner.opts.spp
+                "<aperture.Render {}x{} {done}/{spp} spp>",
+                o.width, o.height
             )
         })
     }

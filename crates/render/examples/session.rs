@@ -41,9 +41,9 @@ fn refine(
     let to_preview = t.elapsed().as_secs_f64();
     let whole = Window::whole(opts.width, opts.height);
     let mut render = Progressive::new(frame, opts, whole)?;
-    render.next_pass(&|_, _| {})?;
+    render.next_pass(frame, &|_, _| {})?;
     let to_first = t.elapsed().as_secs_f64();
-    while render.next_pass(&|_, _| {})?.is_some() {}
+    while render.next_pass(frame, &|_, _| {})?.is_some() {}
     Ok((to_preview, to_first, t.elapsed().as_secs_f64()))
 }
 

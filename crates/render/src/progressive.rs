@@ -1,7 +1,10 @@
 //! A progressive render (SPEC §9): a frame's image refined pass by pass into one film that
 //! can be read between passes. Each pass renders the next samples of every pixel's sequence
 //! and sums them onto the film where the last pass left off, so a render that reaches N
-//! samples equals the one-shot N-sample render bit for bit, whatever the passes were.
+//! samples equals the one-shot N-sample render bit for bit, whatever the passes were. The
+//! render holds no borrow of its frame: each pass is given the frame it started from, so a
+//! progressive render can live beside a session (in a viewport, in a Python object) and be
+//! refused by its owner when the scene was edited since.
 
 use crate::camera::Camera;
 use crate::film::{Film, Window};
@@ -16,15 +19,14 @@ use crate::options::{RenderError, RenderOptions};
 /// let frame = Frame::still(test_scenes::lit_plane(1.0), Default::default());
 /// let opts = RenderOptions { width: 8, height: 8, spp: 4, ..Default::default() };
 /// let mut render = Progressive::new(&frame, &opts, Window::whole(8, 8))?;
-/// while let Some(total) = render.next_pass(&|_, _| {})? {
+/// while let Some(total) = render.next_pass(&frame, &|_, _| {})? {
 ///     assert!(render.film().pixel(4, 4)[0] > 0.0, "readable after the pass to {total}");
 /// }
 /// let once = frame.render(&opts, &|_, _| {})?;
 /// assert_eq!(render.film().to_rgba(), once.to_rgba());
 /// # Ok::<(), aperture_render::RenderError>(())
 /// ```
-pub struct Progressive<'a> {
-    frame: &'a Frame,
+pub struct Progressive {
     camera: Camera,
     /// The whole render's options: its samples are `sample_offset .. sample_offset + spp`.
     opts: RenderOptions,
@@ -33,14 +35,10 @@ pub struct Progressive<'a> {
     done: u32,
 }
 
-impl<'a> Progressive<'a> {
+impl Progressive {
     /// A render of `window` of `frame` with `opts` (its `spp` the samples to reach), no pass
     /// taken yet.
-    pub fn new(
-        frame: &'a Frame,
-        opts: &RenderOptions,
-        window: Window,
-    ) -> Result<Self, RenderError> {
+    pub fn new(frame: &Frame, opts: &RenderOptions, window: Window) -> Result<Self, RenderError> {
         let camera = frame.camera(opts)?;
         crate::options::check(opts)?;
         if !window.fits(opts.width, opts.height) {
@@ -51,7 +49,6 @@ impl<'a> Progressive<'a> {
             });
         }
         Ok(Self {
-            frame,
             camera,
             opts: opts.clone(),
             film: Film::for_window(window, opts.width, opts.height, opts.passes),
@@ -59,11 +56,13 @@ impl<'a> Progressive<'a> {
         })
     }
 
-    /// Renders the next `samples` samples of every pixel (at most the ones left) and returns
-    /// the samples each pixel has now. Adaptive sampling decides from all of a pixel's
-    /// samples, so an adaptive render takes all of them in its first pass.
+    /// Renders the next `samples` samples of every pixel (at most the ones left) from
+    /// `frame`, the frame the render started from, and returns the samples each pixel has
+    /// now. Adaptive sampling decides from all of a pixel's samples, so an adaptive render
+    /// takes all of them in its first pass.
     pub fn step(
         &mut self,
+        frame: &Frame,
         samples: u32,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<u32, RenderError> {
@@ -80,8 +79,7 @@ impl<'a> Progressive<'a> {
             spp: n,
             ..self.opts.clone()
         };
-        self.frame
-            .render_onto(&self.camera, &pass, &mut self.film, progress)?;
+        frame.render_onto(&self.camera, &pass, &mut self.film, progress)?;
         if !self.opts.cancel.is_cancelled() {
             self.done += n;
         }
@@ -93,13 +91,14 @@ impl<'a> Progressive<'a> {
     /// cancelled.
     pub fn next_pass(
         &mut self,
+        frame: &Frame,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<Option<u32>, RenderError> {
         if self.is_done() {
             return Ok(None);
         }
         let n = self.done.max(1);
-        self.step(n, progress).map(Some)
+        self.step(frame, n, progress).map(Some)
     }
 
     /// True once every sample was taken, or the render was cancelled.
