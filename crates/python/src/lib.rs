@@ -29,6 +29,7 @@ mod interrupt;
 mod load_opts;
 mod options;
 mod progressive;
+mod ray_input;
 mod rays;
 mod render;
 mod render_opts;
