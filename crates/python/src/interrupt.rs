@@ -1,7 +1,8 @@
 //! Work without the GIL, cancelled by Ctrl-C: the work runs on a scoped thread while the
 //! calling thread waits for it, looking at Python's signals between waits; a
 //! `KeyboardInterrupt` (or any exception a signal handler raises) cancels the render's token
-//! and is raised once the work has stopped (within a batch of samples).
+//! and is raised once the work has stopped (within a batch of samples). Short work runs on the
+//! calling thread instead ([`run_inline`]): the watcher thread costs more than it saves there.
 
 use aperture_render::Cancel;
 use pyo3::exceptions::PyRuntimeError;
