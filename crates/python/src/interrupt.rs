@@ -1,7 +1,8 @@
 //! Work without the GIL, cancelled by Ctrl-C: the work runs on a scoped thread while the
 //! calling thread waits for it, looking at Python's signals between waits; a
 //! `KeyboardInterrupt` (or any exception a signal handler raises) cancels the render's token
-//! and is raised once the work has stopped (within a batch of samples).
+//! and is raised once the work has stopped (within a batch of samples). Short work runs on the
+//! calling thread instead ([`run_inline`]): the watcher thread costs more than it saves there.
 
 use aperture_render::Cancel;
 use pyo3::exceptions::PyRuntimeError;
@@ -49,6 +50,19 @@ pub(crate) fn run<T: Send>(
     })
 }
 
+/// Runs `work` without the GIL on the calling thread, with no thread to watch for signals: for
+/// work too short to need cancelling (a signal's exception is raised by Python as soon as the
+/// call returns). A panic in `work` becomes a `RuntimeError`, never a crash.
+pub(crate) fn run_inline<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce() -> PyResult<T> + Send,
+) -> PyResult<T> {
+    py.detach(|| {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(work))
+            .unwrap_or_else(|_| Err(PyRuntimeError::new_err("aperture: internal panic")))
+    })
+}
+
 /// `work` on a pool of `threads` workers (`None`: rayon's global pool, all cores).
 pub(crate) fn with_threads<T: Send>(
     threads: Option<usize>,
@@ -63,5 +77,17 @@ pub(crate) fn with_threads<T: Send>(
                 .map_err(|e| PyRuntimeError::new_err(format!("thread pool: {e}")))?;
             Ok(pool.install(work))
         }
+    }
+}
+
+/// `work(serial)` for a query: on the calling thread for one thread (`serial`: no pool is
+/// built), else as [`with_threads`].
+pub(crate) fn on_threads<T: Send>(
+    threads: Option<usize>,
+    work: impl FnOnce(bool) -> T + Send,
+) -> PyResult<T> {
+    match threads {
+        Some(1) => Ok(work(true)),
+        _ => with_threads(threads, || work(false)),
     }
 }

@@ -18,7 +18,8 @@
 //! Everything is the library's: a [`aperture_render::Session`] holds the scene, renders are
 //! its frames' films turned into the EXR's image by [`aperture_output::film_to_image`], ray
 //! queries are the frame's BVH. Work runs without the GIL and Ctrl-C cancels a render within
-//! a batch of samples. Bad input raises `ValueError`, `TypeError`, `aperture.LoadError` or
+//! a batch of samples (renders of at most 128×128 samples are not watched: the interrupt is
+//! raised when they return, milliseconds later). Bad input raises `ValueError`, `TypeError`, `aperture.LoadError` or
 //! `aperture.RenderError` with the library's message.
 
 mod edits;
@@ -28,6 +29,7 @@ mod interrupt;
 mod load_opts;
 mod options;
 mod progressive;
+mod ray_input;
 mod rays;
 mod render;
 mod render_opts;

@@ -1,142 +1,18 @@
 //! Ray queries for numpy (SPEC §9): closest hits and occlusion of N rays given as (N, 3)
-//! float32 or float64 arrays in any memory order, answered by the frame's BVH on all threads
-//! (or `threads=`) without the GIL; the answers are arrays that own the library's vectors (no
-//! copy). `camera_rays` gives the thin-lens rays `aperture bench-rays` times.
+//! float32 or float64 arrays in any memory order, read in place and answered by the frame's
+//! BVH on all threads (or `threads=`) without the GIL ([`crate::ray_input`]); the answers are
+//! columns allocated once, filled by the workers and handed to numpy without a copy. `camera_rays` gives the thin-lens rays `aperture bench-rays` times.
 
 use crate::errors::value_error;
-use aperture_accel::{Accel, Hit, Ray};
+use crate::ray_input::{each_batch, RaySource, BATCH, TASK};
+use aperture_accel::{Accel, Hit};
 use aperture_scene::Scene;
-use glam::Vec3;
-use numpy::ndarray::{Array1, Array2, ArrayView2};
-use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods,
-};
+use glam::{Affine3A, Vec3};
+use numpy::ndarray::{Array1, Array2};
+use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-
-/// Rows of an (N, 3) array view as vectors, each checked by `ok`.
-fn rows_of<T: Copy + Into<f64>>(
-    view: ArrayView2<'_, T>,
-    name: &str,
-    ok: fn(Vec3) -> bool,
-) -> PyResult<Vec<Vec3>> {
-    let to = |r: [T; 3]| Vec3::new(r[0].into() as f32, r[1].into() as f32, r[2].into() as f32);
-    let out: Vec<Vec3> = match view.as_slice() {
-        Some(flat) => flat
-            .chunks_exact(3)
-            .map(|c| to([c[0], c[1], c[2]]))
-            .collect(),
-        None => view
-            .rows()
-            .into_iter()
-            .map(|r| to([r[0], r[1], r[2]]))
-            .collect(),
-    };
-    match out.iter().position(|v| !ok(*v)) {
-        None => Ok(out),
-        Some(i) => Err(value_error(format!(
-            "{name}[{i}] = {} is not allowed: {name} must be finite{}",
-            out[i],
-            if name == "directions" {
-                " and not zero"
-            } else {
-                ""
-            }
-        ))),
-    }
-}
-
-/// An (N, 3) float32 or float64 array (a list is turned into one) as N vectors.
-fn vectors(v: &Bound<'_, PyAny>, name: &str, ok: fn(Vec3) -> bool) -> PyResult<Vec<Vec3>> {
-    let array = match v.cast::<PyUntypedArray>() {
-        Ok(a) => a.clone(),
-        Err(_) => {
-            let np = v.py().import("numpy")?;
-            let a = np.call_method1("asarray", (v, "float64")).map_err(|e| {
-                value_error(format!("{name} must be an (N, 3) array of numbers: {e}"))
-            })?;
-            a.cast_into::<PyUntypedArray>()?
-        }
-    };
-    if array.ndim() != 2 || array.shape()[1] != 3 {
-        return Err(value_error(format!(
-            "{name} must have shape (N, 3), got {:?}",
-            array.shape()
-        )));
-    }
-    if let Ok(a) = array.cast::<PyArray2<f32>>() {
-        return rows_of(a.readonly().as_array(), name, ok);
-    }
-    if let Ok(a) = array.cast::<PyArray2<f64>>() {
-        return rows_of(a.readonly().as_array(), name, ok);
-    }
-    Err(value_error(format!(
-        "{name} must be float32 or float64, got {}",
-        array.dtype()
-    )))
-}
-
-/// A ray bound: one number for every ray, or an (N,) array of them.
-fn bounds(v: &Bound<'_, PyAny>, name: &str, n: usize) -> PyResult<Vec<f32>> {
-    let all: Vec<f64> = match v.extract::<f64>() {
-        Ok(x) => vec![x; n],
-        Err(_) => v.extract().map_err(|_| {
-            value_error(format!(
-                "{name} must be a number or an (N,) array of numbers"
-            ))
-        })?,
-    };
-    if all.len() != n {
-        return Err(value_error(format!(
-            "{name} has {} values for {n} rays",
-            all.len()
-        )));
-    }
-    match all.iter().position(|x| x.is_nan() || *x < 0.0) {
-        None => Ok(all.into_iter().map(|x| x as f32).collect()),
-        Some(i) => Err(value_error(format!(
-            "{name}[{i}] = {} is not allowed: must be ≥ 0 (inf allowed)",
-            all[i]
-        ))),
-    }
-}
-
-/// The rays of the arrays, checked: finite origins, finite non-zero directions, 0 ≤ tmin ≤ tmax.
-pub(crate) fn rays(
-    origins: &Bound<'_, PyAny>,
-    directions: &Bound<'_, PyAny>,
-    tmin: &Bound<'_, PyAny>,
-    tmax: &Bound<'_, PyAny>,
-) -> PyResult<Vec<Ray>> {
-    let o = vectors(origins, "origins", |v| v.is_finite())?;
-    let d = vectors(directions, "directions", |v| {
-        v.is_finite() && v != Vec3::ZERO
-    })?;
-    if o.len() != d.len() {
-        return Err(value_error(format!(
-            "{} origins for {} directions",
-            o.len(),
-            d.len()
-        )));
-    }
-    let lo = bounds(tmin, "tmin", o.len())?;
-    let hi = bounds(tmax, "tmax", o.len())?;
-    if let Some(i) = (0..o.len()).find(|&i| lo[i] > hi[i] || lo[i].is_infinite()) {
-        return Err(value_error(format!(
-            "ray {i}: tmin {} must be finite and at most tmax {}",
-            lo[i], hi[i]
-        )));
-    }
-    Ok((0..o.len())
-        .map(|i| Ray {
-            origin: o[i],
-            dir: d[i],
-            tmin: lo[i],
-            tmax: hi[i],
-            time: 0.0,
-        })
-        .collect())
-}
+use std::mem::MaybeUninit;
 
 /// Closest hits as columns: what `intersect` returns.
 pub(crate) struct Hits {
@@ -150,60 +26,176 @@ pub(crate) struct Hits {
     hit: Vec<bool>,
 }
 
-/// The world-space geometric normal of a hit (unit length; `(p1 - p0) × (p2 - p0)`).
-fn normal(scene: &Scene, h: &Hit) -> Vec3 {
-    let Some(inst) = scene.instances.get(h.instance as usize) else {
-        return Vec3::ZERO;
-    };
-    let Some(mesh) = scene.meshes.get(inst.mesh as usize) else {
-        return Vec3::ZERO;
-    };
-    let Some(tri) = mesh.indices.get(h.triangle as usize) else {
-        return Vec3::ZERO;
-    };
-    let p = tri.map(|k| {
-        let local = mesh
-            .positions
-            .get(k as usize)
-            .copied()
-            .unwrap_or(Vec3::ZERO);
-        inst.world_from_object.transform_point3(local)
-    });
-    (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero()
+/// One task's slices of the columns, not yet written.
+struct HitSlices<'a> {
+    t: &'a mut [MaybeUninit<f32>],
+    primitive: &'a mut [MaybeUninit<i32>],
+    instance: &'a mut [MaybeUninit<i32>],
+    mesh: &'a mut [MaybeUninit<i32>],
+    u: &'a mut [MaybeUninit<f32>],
+    v: &'a mut [MaybeUninit<f32>],
+    normal: &'a mut [MaybeUninit<f32>],
+    hit: &'a mut [MaybeUninit<bool>],
 }
 
-/// The closest hits of `rays` (on the current rayon pool) as columns.
-pub(crate) fn intersect(scene: &Scene, accel: &Accel, rays: &[Ray]) -> Hits {
-    let mut found = vec![None; rays.len()];
-    // Packets of coherent runs (a pixel's lens samples), incoherent runs interleaved as in the
-    // batch query: the same answers as one ray at a time, the fastest of bench-rays' modes.
-    aperture_raybench::closest_hits(accel, rays, aperture_raybench::Mode::Packet, &mut found);
-    let n = rays.len();
-    let mut h = Hits {
-        t: vec![f32::INFINITY; n],
-        primitive: vec![-1; n],
-        instance: vec![-1; n],
-        mesh: vec![-1; n],
-        u: vec![0.0; n],
-        v: vec![0.0; n],
-        normal: vec![0.0; 3 * n],
-        hit: vec![false; n],
-    };
-    for (i, hit) in found.iter().enumerate() {
-        let Some(x) = hit else { continue };
-        h.t[i] = x.t;
-        h.primitive[i] = x.triangle as i32;
-        h.instance[i] = x.instance as i32;
-        h.mesh[i] = scene
-            .instances
-            .get(x.instance as usize)
-            .map_or(-1, |inst| inst.mesh as i32);
-        h.u[i] = x.u;
-        h.v[i] = x.v;
-        h.normal[3 * i..3 * i + 3].copy_from_slice(&normal(scene, x).to_array());
-        h.hit[i] = true;
+impl Hits {
+    /// Empty columns with room for `n` rays (allocated once; nothing is written here: the
+    /// workers write every element, so no pass of zeros either).
+    fn with_capacity(n: usize) -> Self {
+        Self {
+            t: Vec::with_capacity(n),
+            primitive: Vec::with_capacity(n),
+            instance: Vec::with_capacity(n),
+            mesh: Vec::with_capacity(n),
+            u: Vec::with_capacity(n),
+            v: Vec::with_capacity(n),
+            normal: Vec::with_capacity(3 * n),
+            hit: Vec::with_capacity(n),
+        }
     }
-    h
+
+    /// The columns' room for `n` rays cut into the slices of consecutive tasks of `TASK` rays.
+    fn tasks(&mut self, n: usize) -> Vec<HitSlices<'_>> {
+        let m = TASK;
+        self.t.spare_capacity_mut()[..n]
+            .chunks_mut(m)
+            .zip(self.primitive.spare_capacity_mut()[..n].chunks_mut(m))
+            .zip(self.instance.spare_capacity_mut()[..n].chunks_mut(m))
+            .zip(self.mesh.spare_capacity_mut()[..n].chunks_mut(m))
+            .zip(self.u.spare_capacity_mut()[..n].chunks_mut(m))
+            .zip(self.v.spare_capacity_mut()[..n].chunks_mut(m))
+            .zip(self.normal.spare_capacity_mut()[..3 * n].chunks_mut(3 * m))
+            .zip(self.hit.spare_capacity_mut()[..n].chunks_mut(m))
+            .map(
+                |(((((((t, primitive), instance), mesh), u), v), normal), hit)| HitSlices {
+                    t,
+                    primitive,
+                    instance,
+                    mesh,
+                    u,
+                    v,
+                    normal,
+                    hit,
+                },
+            )
+            .collect()
+    }
+
+    /// The columns once every element of the first `n` rays has been written.
+    ///
+    /// # Safety
+    /// Elements `..n` of every column (`..3 * n` of `normal`) must have been written.
+    unsafe fn written(mut self, n: usize) -> Self {
+        // SAFETY: the caller's promise; the capacities are `n` and `3 * n`.
+        unsafe {
+            self.t.set_len(n);
+            self.primitive.set_len(n);
+            self.instance.set_len(n);
+            self.mesh.set_len(n);
+            self.u.set_len(n);
+            self.v.set_len(n);
+            self.normal.set_len(3 * n);
+            self.hit.set_len(n);
+        }
+        self
+    }
+}
+
+/// What a hit's columns need of its instance: its mesh's index, triangles and vertices, and
+/// where it is.
+struct Placed<'a> {
+    mesh: i32,
+    indices: &'a [[u32; 3]],
+    positions: &'a [Vec3],
+    world_from_object: Affine3A,
+}
+
+impl Placed<'_> {
+    /// The world-space geometric normal of `triangle` (unit length; `(p1 - p0) × (p2 - p0)`).
+    #[inline(always)]
+    fn normal(&self, triangle: u32) -> Vec3 {
+        let Some(tri) = self.indices.get(triangle as usize) else {
+            return Vec3::ZERO;
+        };
+        let p = tri.map(|k| {
+            let local = self
+                .positions
+                .get(k as usize)
+                .copied()
+                .unwrap_or(Vec3::ZERO);
+            self.world_from_object.transform_point3(local)
+        });
+        (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero()
+    }
+}
+
+/// Every instance of `scene` as [`Placed`] (`None` when its mesh is missing).
+fn placed(scene: &Scene) -> Vec<Option<Placed<'_>>> {
+    scene
+        .instances
+        .iter()
+        .map(|inst| {
+            let mesh = scene.meshes.get(inst.mesh as usize)?;
+            Some(Placed {
+                mesh: inst.mesh as i32,
+                indices: &mesh.indices,
+                positions: &mesh.positions,
+                world_from_object: inst.world_from_object,
+            })
+        })
+        .collect()
+}
+
+/// Writes the answers `found` of rays `at..` of a task into its columns: every element of
+/// those rays.
+#[inline(always)]
+fn write_hits(places: &[Option<Placed<'_>>], found: &[Option<Hit>], at: usize, h: &mut HitSlices) {
+    for (k, f) in found.iter().enumerate() {
+        let i = at + k;
+        let (t, primitive, instance, u, v, hit) = match f {
+            Some(x) => (x.t, x.triangle as i32, x.instance as i32, x.u, x.v, true),
+            None => (f32::INFINITY, -1, -1, 0.0, 0.0, false),
+        };
+        let (mesh, normal) = match f.map(|x| (x, places.get(x.instance as usize))) {
+            Some((x, Some(Some(p)))) => (p.mesh, p.normal(x.triangle)),
+            _ => (-1, Vec3::ZERO),
+        };
+        h.t[i].write(t);
+        h.primitive[i].write(primitive);
+        h.instance[i].write(instance);
+        h.mesh[i].write(mesh);
+        h.u[i].write(u);
+        h.v[i].write(v);
+        h.hit[i].write(hit);
+        for (slot, c) in h.normal[3 * i..3 * i + 3].iter_mut().zip(normal.to_array()) {
+            slot.write(c);
+        }
+    }
+}
+
+/// The closest hits of `src`'s rays as columns, read, checked and answered batch by batch (on
+/// the caller's thread when `serial`, else on the current rayon pool), or the flag of a ray
+/// not allowed (`None`). Packets of coherent runs (a pixel's lens samples), incoherent runs interleaved
+/// as in the batch query: the same answers as one ray at a time, the fastest of bench-rays'
+/// modes.
+pub(crate) fn intersect(
+    scene: &Scene,
+    accel: &Accel,
+    src: &RaySource<'_>,
+    serial: bool,
+) -> Option<Hits> {
+    let places = placed(scene);
+    let mut hits = Hits::with_capacity(src.n);
+    let allowed = each_batch(src, hits.tasks(src.n), serial, |rays, at, out| {
+        let mut found = [None; BATCH];
+        let found = &mut found[..rays.len()];
+        accel.intersect_packets(rays, found);
+        write_hits(&places, found, at, out);
+    });
+    // SAFETY: `each_batch` answered every batch of every task (it would have returned false
+    // otherwise), the tasks cover rays `..n` and `write_hits` writes every element of the rays
+    // it is given.
+    allowed.then(|| unsafe { hits.written(src.n) })
 }
 
 impl Hits {
@@ -225,11 +217,14 @@ impl Hits {
     }
 }
 
-/// Whether each of `rays` is blocked (on the current rayon pool).
-pub(crate) fn occluded(accel: &Accel, rays: &[Ray]) -> Vec<bool> {
-    let mut out = vec![false; rays.len()];
-    aperture_raybench::occlusions(accel, rays, aperture_raybench::Mode::Packet, &mut out);
-    out
+/// Whether each of `src`'s rays is blocked, as [`intersect`] answers.
+pub(crate) fn occluded(accel: &Accel, src: &RaySource<'_>, serial: bool) -> Option<Vec<bool>> {
+    let mut out = vec![false; src.n];
+    let tasks: Vec<&mut [bool]> = out.chunks_mut(TASK).collect();
+    let allowed = each_batch(src, tasks, serial, |rays, at, task| {
+        accel.occluded_packets(rays, &mut task[at..at + rays.len()]);
+    });
+    allowed.then_some(out)
 }
 
 /// Thin-lens primary rays as `bench-rays` makes them (its `primary_tile` set).
@@ -383,9 +378,4 @@ impl Soup {
         d.set_item("primitive", self.primitive.into_pyarray(py))?;
         Ok(d)
     }
-}
-
-/// An occlusion answer as a numpy bool array.
-pub(crate) fn bool_array(py: Python<'_>, v: Vec<bool>) -> Bound<'_, PyArray1<bool>> {
-    v.into_pyarray(py)
 }

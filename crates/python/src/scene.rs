@@ -5,13 +5,15 @@
 use crate::edits::{self, Target};
 use crate::errors::{edit_error, load_error, value_error};
 use crate::images::RenderResult;
-use crate::interrupt::with_threads;
+use crate::interrupt::on_threads;
 use crate::load_opts::load_options;
 use crate::options::Kwargs;
 use crate::progressive::Render;
+use crate::ray_input::RayArrays;
 use crate::render_opts::render_ask;
 use crate::state::{lock, Shared, State};
 use aperture_scene::{Edit, Scene as Posed};
+use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
@@ -224,15 +226,16 @@ impl Scene {
         threads: Option<i64>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let threads = threads_of(threads)?;
-        let rays = self.rays(py, origins, directions, tmin, tmax)?;
+        let arrays = RayArrays::new(origins, directions, tmin, tmax)?;
+        let src = arrays.source();
         let hits = py.detach(|| -> PyResult<_> {
             let mut st = lock(&self.state);
             let frame = st.query_frame()?;
-            with_threads(threads, || {
-                crate::rays::intersect(frame.scene(), frame.accel(), &rays)
+            on_threads(threads, |serial| {
+                crate::rays::intersect(frame.scene(), frame.accel(), &src, serial)
             })
         })?;
-        hits.into_dict(py)
+        hits.ok_or_else(|| arrays.error())?.into_dict(py)
     }
 
     /// Whether each of N rays is blocked between `tmin` and `tmax`: a bool array.
@@ -247,13 +250,16 @@ impl Scene {
         threads: Option<i64>,
     ) -> PyResult<Bound<'py, numpy::PyArray1<bool>>> {
         let threads = threads_of(threads)?;
-        let rays = self.rays(py, origins, directions, tmin, tmax)?;
+        let arrays = RayArrays::new(origins, directions, tmin, tmax)?;
+        let src = arrays.source();
         let answers = py.detach(|| -> PyResult<_> {
             let mut st = lock(&self.state);
             let frame = st.query_frame()?;
-            with_threads(threads, || crate::rays::occluded(frame.accel(), &rays))
+            on_threads(threads, |serial| {
+                crate::rays::occluded(frame.accel(), &src, serial)
+            })
         })?;
-        Ok(crate::rays::bool_array(py, answers))
+        Ok(answers.ok_or_else(|| arrays.error())?.into_pyarray(py))
     }
 
     /// The thin-lens primary rays of `aperture bench-rays` (its `primary_tile` set): a dict of
@@ -291,27 +297,6 @@ impl Scene {
 
     fn __repr__(&self) -> String {
         format!("<aperture.Scene {:?}>", self.path)
-    }
-}
-
-impl Scene {
-    /// The checked rays of `intersect` and `occluded` (read with the GIL: they are numpy's).
-    fn rays(
-        &self,
-        py: Python<'_>,
-        origins: &Bound<'_, PyAny>,
-        directions: &Bound<'_, PyAny>,
-        tmin: Option<&Bound<'_, PyAny>>,
-        tmax: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Vec<aperture_accel::Ray>> {
-        let zero = 0.0f64.into_pyobject(py)?.into_any();
-        let inf = f64::INFINITY.into_pyobject(py)?.into_any();
-        crate::rays::rays(
-            origins,
-            directions,
-            tmin.unwrap_or(&zero),
-            tmax.unwrap_or(&inf),
-        )
     }
 }
 

@@ -116,3 +116,33 @@ def test_outputs_own_their_data(demo):
         assert len(a) == len(rays["origins"])
     assert h["hit"].dtype == np.bool_ and h["t"].dtype == np.float32
     assert h["primitive"].dtype == np.int32 and h["normal"].shape == (len(h["t"]), 3)
+
+
+def test_many_tasks_agree_and_bad_rays_are_named_exactly(demo):
+    """More rays than one worker's task (2048): every layout, thread count and bound form
+    answers as the contiguous float32 call, and a bad ray deep in the array is the one named."""
+    scene = aperture.load(demo)
+    rays = scene.camera_rays(64, lens_samples=4, seed=2)
+    o, d = rays["origins"], rays["directions"]
+    assert len(o) > 3 * 2048
+    base = scene.intersect(o, d, threads=1)
+    t = np.where(base["hit"], base["t"], 1.0).astype(np.float32)
+    for vo, vd, kw in [
+        (o, d, {}),
+        (np.asfortranarray(o.astype(np.float64)), d, {"threads": 2}),
+        (o, d, {"tmin": np.zeros(len(o), np.float32), "tmax": np.full(len(o), np.inf)}),
+    ]:
+        other = scene.intersect(vo, vd, **kw)
+        for key in base:
+            assert np.array_equal(base[key], other[key]), key
+    assert np.array_equal(scene.occluded(o, d, threads=1), base["hit"])
+    assert np.array_equal(scene.occluded(o, d, tmax=t * 0.5), scene.occluded(o, d, tmax=t * 0.5, threads=1))
+    bad_o, bad_d = o.copy(), d.copy()
+    bad_o[5000, 1] = np.nan
+    bad_d[100] = 0.0
+    bad_d[6000, 2] = np.inf
+    for threads in (1, None):
+        with pytest.raises(ValueError, match=r"origins\[5000\]"):
+            scene.intersect(bad_o, bad_d, threads=threads)
+        with pytest.raises(ValueError, match=r"directions\[100\]"):
+            scene.occluded(o, bad_d, threads=threads)
