@@ -15,6 +15,8 @@ import time
 import bpy
 
 from . import exr, world
+from .scene_export import export_scene, resolution  # noqa: F401 (the engine's names)
+from .viewport import ViewportMixin
 
 # Blender pass name -> (channels, channel ids, type, aperture pass, view layer flag or None).
 PASSES = [
@@ -50,12 +52,6 @@ def enabled_passes(scene, view_layer):
     return rows, crypto
 
 
-def resolution(scene):
-    r = scene.render
-    return (max(1, round(r.resolution_x * r.resolution_percentage / 100)),
-            max(1, round(r.resolution_y * r.resolution_percentage / 100)))
-
-
 def find_binary(settings):
     path = bpy.path.abspath(settings.binary) if settings.binary else shutil.which("aperture")
     if not path or not os.path.isfile(path):
@@ -78,25 +74,6 @@ def border(scene):
     if x1 <= x0 or top <= bottom:
         return None
     return x0, h - top, x1, h - bottom
-
-
-def export_scene(path, motion_blur=False):
-    """The evaluated scene at the current frame, as a GLB: cameras, lights, custom properties
-    and this add-on's depth of field on, modifiers applied, render-visible objects only. With
-    motion blur, the animation too (aperture poses the shutter's motion steps from it, and the
-    scene's extras carry the shutter)."""
-    bpy.ops.export_scene.gltf(
-        filepath=path,
-        export_format="GLB",
-        use_renderable=True,
-        export_cameras=True,
-        export_lights=True,
-        export_extras=True,
-        export_apply=True,
-        export_animations=motion_blur,
-        export_current_frame=not motion_blur,
-        export_yup=True,
-    )
 
 
 def motion_arguments(scene):
@@ -162,7 +139,7 @@ def command(binary, glb, out, scene, view_layer):
     return cmd + env, problems
 
 
-class ApertureRenderEngine(bpy.types.RenderEngine):
+class ApertureRenderEngine(ViewportMixin, bpy.types.RenderEngine):
     """aperture: physically based depth of field from glTF, as a Blender render engine."""
 
     bl_idname = "APERTURE"
