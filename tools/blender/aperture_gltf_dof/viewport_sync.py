@@ -1,0 +1,326 @@
+# SPDX-License-Identifier: MIT OR Apache-2.0
+"""The viewport's session (issue 63): one ``aperture`` scene loaded from one export of the
+Blender scene, kept in step with Blender by edits made from the depsgraph's updates, and a
+worker thread that renders it progressively.
+
+What takes which path (``Session.sync`` returns ``[(path, name)]``):
+
+- ``camera``: the active camera's move, lens, sensor or depth of field: ``set_camera``;
+- ``transform``: an object's move (``is_updated_transform``): ``set_transform`` of its node;
+- ``light``: a light's colour, power, exposure or temperature: ``set_light``;
+- ``material``: a Principled BSDF's Base Color, Alpha, Metallic, Roughness: ``set_material``;
+- ``visible``: an exported object's Disable in Renders: ``set_visible``;
+- ``options``: world and render settings: the next render's options (no edit);
+- ``reexport``: a mesh's geometry, a new object, or a change the edits cannot express (a
+  light's type, a material's links, ...): the whole scene is exported again and reloaded
+  (this session re-exports everything, not the changed object alone).
+
+A geometry flag is confirmed against a hash of the evaluated mesh, so a material or modifier
+update that leaves the mesh as it was does not re-export.
+"""
+
+import json
+import os
+import shutil
+import struct
+import tempfile
+import threading
+
+import bpy
+import numpy as np
+
+from . import viewport_mirror as mirror, world
+from .scene_export import export_scene, resolution
+
+
+def available():
+    """True when the ``aperture`` Python module imports (else the engine keeps the CLI)."""
+    try:
+        import aperture  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def glb_json(path):
+    """The JSON chunk of a .glb."""
+    with open(path, "rb") as f:
+        head = f.read(20)
+        length, kind = struct.unpack_from("<II", head, 12)
+        if kind != 0x4E4F534A:
+            raise ValueError(f"{path}: the first chunk is not JSON")
+        return json.loads(f.read(length))
+
+
+def env_options(scene):
+    """The world as ``render`` options (the engine's `--env` arguments, parsed)."""
+    args, _ = world.env_arguments(scene.world)
+    opts = {}
+    for flag, value in zip(args[::2], args[1::2]):
+        if flag == "--env":
+            parts = value.split(",")
+            opts["env"] = [float(v) for v in parts] if len(parts) == 3 else value
+        else:
+            opts[flag[2:].replace("-", "_")] = float(value)
+    return opts
+
+
+def render_options(scene, size=None):
+    """``scene.render`` options equal to the F12 command's (no passes, no denoising)."""
+    s = scene.aperture
+    w, h = size or resolution(scene)
+    opts = dict(width=w, height=h, spp=s.samples, seed=s.seed, max_bounces=s.max_bounces,
+                clamp_direct=s.clamp_direct, clamp_indirect=s.clamp_indirect,
+                filter=s.filter.lower().replace("_", "-"), passes="none")
+    if s.noise_threshold > 0.0:
+        opts["noise_threshold"] = s.noise_threshold
+    if s.transmission != "AUTO":
+        opts["transmission"] = s.transmission.lower()
+    if scene.camera is not None:
+        opts["camera"] = scene.camera.data.name
+    opts.update(env_options(scene))
+    return opts
+
+
+def _same(a, b):
+    """Equal edit values (numpy matrices, dicts, lists, numbers)."""
+    if isinstance(a, tuple):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    if isinstance(a, np.ndarray):
+        return np.array_equal(a, b)
+    return a == b
+
+
+class Worker:
+    """Renders one progressive render on a thread (the doubling schedule) until it is done or
+    stopped; ``film`` is the latest image, ``samples`` its samples per pixel."""
+
+    def __init__(self, scene, options):
+        self.render = scene.start(**options)
+        self.film, self.samples, self.error = None, 0, None
+        self._lock = threading.Lock()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self):
+        try:
+            while not self.render.done:
+                self.render.step()
+                image = self.render.image().image
+                with self._lock:
+                    self.film, self.samples = image, self.render.samples
+        except Exception as e:  # reported by the engine, never raised into Blender
+            self.error = e
+
+    def latest(self):
+        with self._lock:
+            return self.film, self.samples
+
+    def stop(self):
+        """Cancels within a batch of samples and waits for the thread."""
+        self.render.cancel()
+        self._thread.join()
+
+    def wait(self, timeout=None):
+        self._thread.join(timeout)
+        return not self._thread.is_alive()
+
+
+class Session:
+    """One loaded export of the scene, its name maps, the last synced state, and a worker."""
+
+    def __init__(self, depsgraph, size=None, export=export_scene):
+        import aperture
+
+        self._aperture, self._export, self._size = aperture, export, size
+        self.folder = tempfile.mkdtemp(prefix="aperture-viewport-")
+        self.exports = 0
+        self.edits = []  # every (path, name) synced, for tests and the header's report
+        self.worker = None
+        self._busy = False  # an export's own depsgraph updates are not synced
+        self._reload(depsgraph)
+
+    # -- the export and its maps ------------------------------------------------------------
+    def _reload(self, depsgraph):
+        self.exports += 1
+        path = os.path.join(self.folder, f"scene{self.exports}.glb")
+        self._busy = True
+        try:
+            self._export(path)
+        finally:
+            self._busy = False
+        self.scene = self._aperture.load(path)
+        self.path = path
+        doc = glb_json(path)
+        self.nodes = {n.get("name"): i for i, n in enumerate(doc.get("nodes", []))}
+        self.parents = {c: p for p, n in enumerate(doc.get("nodes", [])) for c in n.get("children", [])}
+        lights = doc.get("extensions", {}).get("KHR_lights_punctual", {}).get("lights", [])
+        self.lights = {l.get("name"): i for i, l in enumerate(lights)}
+        self.materials = {m.get("name"): i for i, m in enumerate(doc.get("materials", []))}
+        self.scene_options = render_options(depsgraph.scene, self._size)
+        self._snapshot(depsgraph)
+
+    def _snapshot(self, depsgraph):
+        """What the export holds now: visibility, geometry hashes and the signatures of what
+        the edits do not cover."""
+        self.visible, self.geometry, self.signatures, self.sent = {}, {}, {}, {}
+        for light in bpy.data.lights:
+            self.signatures[("light", light.name)] = mirror.rna_signature(light, mirror.LIGHT_EDITED)
+        for cam in bpy.data.cameras:
+            self.signatures[("camera", cam.name)] = mirror.rna_signature(cam, mirror.CAMERA_EDITED)
+        for mat in bpy.data.materials:
+            self.signatures[("material", mat.name)] = mirror.material_signature(mat)
+        for obj in self._objects():
+            self.visible[obj.name] = not obj.hide_render
+            if obj.type == "MESH":
+                self.geometry[obj.name] = mirror.geometry_signature(obj.evaluated_get(depsgraph))
+            self._edits(obj, send=False)
+
+    def _objects(self):
+        return [bpy.data.objects[n] for n in self.nodes if n in bpy.data.objects]
+
+    def _parent(self, obj):
+        p = self.parents.get(self.nodes[obj.name])
+        names = {i: n for n, i in self.nodes.items()}
+        return bpy.data.objects.get(names.get(p)) if p is not None else None
+
+    # -- the edits --------------------------------------------------------------------------
+    def _changed(self, key, value):
+        old = self.signatures.get(key)
+        self.signatures[key] = value
+        return old != value
+
+    def _send(self, key, value, apply, send=True):
+        """Applies an edit unless the session has its value already; the path, or None."""
+        if self.sent.get(key) is not None and _same(self.sent[key], value):
+            return None
+        self.sent[key] = value
+        if send:
+            apply(value)
+        return key[0]
+
+    def _edits(self, obj, send=True):
+        """Sends (or, at a reload, records) every edit value of an exported object."""
+        if obj.type == "CAMERA":
+            self._camera(obj, send)
+        else:
+            self._transform(obj, send)
+        if obj.type == "LIGHT":
+            self._light(obj, send)
+        for slot in getattr(obj, "material_slots", []):
+            if slot.material is not None:
+                self._material(slot.material, send)
+
+    def _transform(self, obj, send=True):
+        m = mirror.node_matrix(obj, self._parent(obj))
+        return self._send(("transform", obj.name), m,
+                          lambda m: self.scene.set_transform(self.nodes[obj.name], m), send)
+
+    def _camera(self, obj, send=True):
+        if self._changed(("camera", obj.data.name), mirror.rna_signature(obj.data, mirror.CAMERA_EDITED)):
+            return "reexport"
+        value = (mirror.node_matrix(obj, self._parent(obj)), mirror.camera_keys(obj.data))
+        return self._send(("camera", obj.name), value, lambda v: self.scene.set_camera(
+            obj.data.name, v[0], **v[1]), send)
+
+    def _light(self, obj, send=True):
+        values = mirror.light_values(obj.data, obj.matrix_world)
+        if values is None or obj.data.name not in self.lights or self._changed(
+                ("light", obj.data.name), mirror.rna_signature(obj.data, mirror.LIGHT_EDITED)):
+            return "reexport"
+        index = self.lights[obj.data.name]
+        return self._send(("light", obj.data.name), values,
+                          lambda v: self.scene.set_light(index, **v), send)
+
+    def _material(self, mat, send=True):
+        factors = mirror.material_factors(mat)
+        if mat.name not in self.materials:
+            return "ignored"  # not used by an exported mesh (a new use is a geometry edit)
+        if factors is None or self._changed(("material", mat.name), mirror.material_signature(mat)):
+            return "reexport"
+        index = self.materials[mat.name]
+        return self._send(("material", mat.name), factors,
+                          lambda f: self.scene.set_material(index, **f), send)
+
+    def _object(self, update, obj, depsgraph):
+        """The paths an object's update takes."""
+        if obj.name not in self.nodes:
+            return ["reexport"] if not obj.hide_render else []
+        paths = []
+        if update.is_updated_geometry and obj.type == "MESH":
+            sig = mirror.geometry_signature(obj.evaluated_get(depsgraph))
+            if sig != self.geometry.get(obj.name):
+                return ["reexport"]
+        if obj.type == "CAMERA":
+            return [self._camera(obj)] if update.is_updated_transform else []
+        if update.is_updated_transform:
+            paths.append(self._transform(obj))
+        if obj.type == "LIGHT" and (update.is_updated_shading or update.is_updated_geometry):
+            paths.append(self._light(obj))
+        return paths
+
+    def _update(self, update, depsgraph):
+        """``[(path, name)]`` for one of ``depsgraph.updates``."""
+        data = update.id.original if update.id.is_evaluated else update.id
+        users = lambda: [o for o in self._objects() if o.data == data]
+        if isinstance(data, bpy.types.Object):
+            paths = self._object(update, data, depsgraph)
+        elif isinstance(data, bpy.types.Camera):
+            paths = [self._camera(o) for o in users()]
+        elif isinstance(data, bpy.types.Light):
+            paths = [self._light(o) for o in users()]
+        elif isinstance(data, bpy.types.Material):
+            paths = [self._material(data)]
+        else:
+            paths = []  # meshes' own updates come with their object's; world: options
+        return [(p, data.name) for p in paths if p is not None]
+
+    def _visibility(self):
+        out = []
+        for obj in self._objects():
+            shown = not obj.hide_render
+            if shown != self.visible.get(obj.name, shown):
+                self.scene.set_visible(self.nodes[obj.name], shown)
+                out.append(("visible", obj.name))
+            self.visible[obj.name] = shown
+        return out
+
+    def sync(self, depsgraph):
+        """Applies ``depsgraph.updates``; returns ``[(path, name)]`` (a re-export reloads the
+        scene once however many updates ask for it). The worker restarts if anything
+        changed."""
+        if self._busy:
+            return []
+        self.stop()
+        done = []
+        for update in depsgraph.updates:
+            done += self._update(update, depsgraph)
+        done += self._visibility()
+        if any(p == "reexport" for p, _ in done):
+            self._reload(depsgraph)
+        options = render_options(depsgraph.scene, self._size)
+        if options != self.scene_options:
+            self.scene_options = options
+            done.append(("options", depsgraph.scene.name))
+        self.edits += done
+        return done
+
+    # -- rendering --------------------------------------------------------------------------
+    def start(self, **overrides):
+        """Starts the worker on the synced scene (stopping the last one)."""
+        self.stop()
+        self.worker = Worker(self.scene, {**self.scene_options, **overrides})
+        return self.worker
+
+    def stop(self):
+        if self.worker is not None:
+            self.worker.stop()
+
+    def film(self):
+        """The latest image (H×W×4 float32, rows from the top) or None."""
+        return self.worker.latest()[0] if self.worker is not None else None
+
+    def free(self):
+        self.stop()
+        self.worker = None
+        shutil.rmtree(self.folder, ignore_errors=True)
