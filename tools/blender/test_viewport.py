@@ -1,0 +1,183 @@
+# SPDX-License-Identifier: MIT OR Apache-2.0
+"""Headless test of the viewport's sync and session (issue 63), with Blender as a Python module
+(bpy 5.0.1) and the `aperture` Python module installed in its venv (tools/python/test.sh):
+
+    python test_viewport.py [--require-all]
+
+A small scene (plane, cube with a material, camera with depth of field, point light) is loaded
+into the add-on's viewport session. Then each of a camera move with an f-stop change, a
+transform, a light's power, a material's base colour, a geometry edit and a hide is applied in
+bpy; the depsgraph's real updates (`depsgraph_update_post`, the updates `view_update` gets) go
+to `Session.sync`, which must take the right path (only the geometry edit re-exports); and the
+session's progressive film after N samples must be bit-identical to an F12-equivalent render of
+the same state: the edited scene exported fresh, `aperture.load`ed and rendered with the same
+options (same spp, same seed). The film must also differ from the previous state's.
+Without the module: SKIP, or FAIL with --require-all or CI=true.
+"""
+
+import argparse
+import math
+import os
+import shutil
+import sys
+import tempfile
+
+import numpy as np
+
+from addon_zip import ADDON, addon_zip
+from checks import check, record, summary
+
+W, H, SPP = 64, 48, 8
+WORK = None
+
+
+def build_scene(bpy):
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = W, H, 100
+    mat = bpy.data.materials.new("Paint")
+    mat.use_nodes = True
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (0.8, 0.2, 0.1, 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.6
+    bpy.ops.mesh.primitive_plane_add(size=10.0)
+    bpy.context.active_object.name = "Ground"
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0.0, 0.0, 0.5))
+    cube = bpy.context.active_object
+    cube.name = "Cube"
+    cube.data.materials.append(mat)
+    cam = bpy.data.cameras.new("Cam")
+    cam.dof.use_dof, cam.dof.focus_object, cam.dof.aperture_fstop = True, cube, 1.4
+    obj = bpy.data.objects.new("Cam", cam)
+    obj.location, obj.rotation_euler = (0.0, -5.0, 2.0), (math.radians(72.0), 0.0, 0.0)
+    sc.collection.objects.link(obj)
+    sc.camera = obj
+    lamp = bpy.data.objects.new("Lamp", bpy.data.lights.new("Lamp", "POINT"))
+    lamp.data.energy = 500.0
+    lamp.location = (2.0, -2.0, 3.0)
+    sc.collection.objects.link(lamp)
+    sc.world = bpy.data.worlds.new("World")
+    sc.world.use_nodes = True
+    sc.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.1, 0.15, 0.2, 1.0)
+    sc.render.engine = "APERTURE"
+    s = sc.aperture
+    s.samples, s.seed, s.denoise = SPP, 3, False
+
+
+def edits(bpy):
+    """(name, the path it must take, the edit)."""
+    cube = bpy.data.objects["Cube"]
+
+    def camera():
+        cam = bpy.data.objects["Cam"]
+        cam.location.x += 0.4
+        cam.rotation_euler.z += math.radians(5.0)
+        cam.data.dof.aperture_fstop = 0.8
+
+    def transform():
+        cube.location = (0.6, 0.3, 0.5)
+        cube.rotation_euler.z = math.radians(30.0)
+
+    def light():
+        bpy.data.lights["Lamp"].energy = 1500.0
+
+    def material():
+        bsdf = bpy.data.materials["Paint"].node_tree.nodes["Principled BSDF"]
+        bsdf.inputs["Base Color"].default_value = (0.1, 0.3, 0.9, 1.0)
+
+    def geometry():
+        for v in cube.data.vertices:
+            if v.co.z > 0:
+                v.co.z += 0.6
+        cube.data.update()
+
+    def hide():
+        cube.hide_render = True
+
+    return [("camera", "camera", camera), ("transform", "transform", transform),
+            ("light", "light", light), ("material", "material", material),
+            ("geometry", "reexport", geometry), ("visibility", "visible", hide)]
+
+
+def reference(bpy, vs, aperture, options, k):
+    """F12's equivalent of the current state: a fresh export, loaded and rendered."""
+    path = os.path.join(WORK, f"fresh{k}.glb")
+    vs.export_scene(path)
+    return aperture.load(path).render(**options).image
+
+
+def bits_equal(a, b):
+    return a.shape == b.shape and np.array_equal(a.view(np.uint32), b.view(np.uint32))
+
+
+def run(bpy):
+    import aperture
+
+    vs = sys.modules[ADDON + ".viewport_sync"]
+    build_scene(bpy)
+    dg = bpy.context.evaluated_depsgraph_get()
+    dg.update()
+    session = vs.Session(dg)
+    seen = []
+    handler = lambda scene, depsgraph: seen.extend(session.sync(depsgraph))  # noqa: E731
+    bpy.app.handlers.depsgraph_update_post.append(handler)
+    film = session.start().wait() and session.film()
+    ref = reference(bpy, vs, aperture, session.scene_options, 0)
+    check("viewport.start", session.exports == 1 and bits_equal(film, ref),
+          f"one export at start; the {W}x{H} film after {SPP} spp equals a fresh render: "
+          f"{bits_equal(film, ref)} (mean {film[..., :3].mean():.4f})")
+    before = film
+    for k, (name, want, edit) in enumerate(edits(bpy), start=1):
+        seen.clear()
+        exports = session.exports
+        edit()
+        bpy.context.view_layer.update()  # evaluates the depsgraph: the handler runs sync
+        paths = sorted({p for p, _ in seen if p != "ignored"})
+        session.start().wait()
+        film = session.film()
+        ref = reference(bpy, vs, aperture, session.scene_options, k)
+        re_exported = session.exports - exports
+        same = bits_equal(film, ref)
+        moved = float(np.abs(film - before).mean())
+        check(f"viewport.{name}", paths == [want] and re_exported == (want == "reexport")
+              and same and moved > 1e-4,
+              f"updates {sorted(set(seen))} took {paths} (want [{want!r}]); re-exports: "
+              f"{re_exported}; film after {session.worker.samples} spp bit-identical to a fresh "
+              f"export's render: {same} (largest difference {float(np.abs(film - ref).max()):.3g}); "
+              f"mean change from the last state {moved:.4f}")
+        before = film
+    bpy.app.handlers.depsgraph_update_post.remove(handler)
+    session.free()
+
+
+def main():
+    global WORK
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--require-all", action="store_true")
+    args, _ = parser.parse_known_args()
+    strict = args.require_all or os.environ.get("CI") == "true"
+    try:
+        import aperture  # noqa: F401
+    except ImportError as e:
+        record("viewport", False if strict else None, f"the aperture Python module is missing ({e}; "
+               "tools/python/test.sh installs it into Blender's venv)")
+        return summary()
+    WORK = tempfile.mkdtemp(prefix="aperture-viewport-test-")
+    tempfile.tempdir = WORK
+    os.environ["BLENDER_USER_SCRIPTS"] = os.path.join(WORK, "scripts")
+    os.environ["BLENDER_USER_CONFIG"] = os.path.join(WORK, "scripts", "config")
+    try:
+        import bpy
+
+        print(f"Blender {bpy.app.version_string}, working in {WORK}")
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        bpy.ops.preferences.addon_install(filepath=addon_zip(WORK), overwrite=True)
+        bpy.ops.preferences.addon_enable(module=ADDON)
+        run(bpy)
+    finally:
+        tempfile.tempdir = None
+        shutil.rmtree(WORK, ignore_errors=True)
+    return summary()
+
+
+if __name__ == "__main__":
+    sys.exit(main())
