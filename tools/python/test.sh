@@ -57,6 +57,10 @@ if [ "${APERTURE_SKIP_BLENDER:-0}" != 1 ]; then
         echo "== the wheel in Blender's Python ($bpy_venv)"
         "$bpy_venv/bin/pip" install --quiet --disable-pip-version-check --force-reinstall --no-deps "$wheel"
         "$bpy_venv/bin/python" tools/python/blender_render.py assets/demo.glb || status=$?
+        # Issue 63: the add-on's viewport sync (depsgraph updates -> session edits -> film),
+        # headless, through this wheel.
+        echo "== tools/blender/test_viewport.py"
+        "$bpy_venv/bin/python" tools/blender/test_viewport.py --require-all || status=$?
     elif [ "${CI:-}" = true ]; then
         echo "error: no bpy venv at $bpy_venv (tools/blender/run_test.sh installs it)" >&2
         status=1
