@@ -140,8 +140,17 @@ class Scene:
         use_dof: bool | None = ...,
     ) -> None:
         """Moves the camera's node and sets its depth-of-field keys (None removes a key)."""
-    def set_transform(self, node: int | str, matrix: _Matrix) -> None:
-        """Replaces a node's local transform."""
+    def set_transform(
+        self,
+        node: int | str,
+        matrix: _Matrix | None = None,
+        *,
+        translation: Sequence[float] | None = None,
+        rotation: Sequence[float] | None = None,
+        scale: Sequence[float] | None = None,
+    ) -> None:
+        """Replaces a node's local transform (``matrix``), or the given components of its
+        stored TRS (``rotation`` a unit quaternion x, y, z, w)."""
     def set_material(
         self,
         material: int | str,

@@ -66,10 +66,52 @@ pub(crate) fn matrix(v: &Bound<'_, PyAny>) -> PyResult<[[f32; 4]; 4]> {
     }))
 }
 
-/// `set_transform(node, matrix)`.
-pub(crate) fn transform(s: &Scene, node: &Target, m: [[f32; 4]; 4]) -> PyResult<Vec<Edit>> {
+/// What `set_transform` replaces: the whole matrix, or TRS components (name, values).
+pub(crate) enum NewTransform {
+    Matrix([[f32; 4]; 4]),
+    Components(Vec<(&'static str, Vec<f64>)>),
+}
+
+/// `set_transform`'s arguments checked: a matrix or TRS components, not both, not neither;
+/// 3 numbers for translation and scale, 4 for rotation.
+pub(crate) fn transform_of(
+    matrix: Option<&Bound<'_, PyAny>>,
+    trs: [(&'static str, Option<&Bound<'_, PyAny>>); 3],
+) -> PyResult<NewTransform> {
+    let mut parts = Vec::new();
+    for (name, v) in trs {
+        if let Some(v) = v {
+            let values = numbers(name, v)?;
+            let want = if name == "rotation" { 4 } else { 3 };
+            if values.len() != want {
+                return Err(value_error(format!("{name} must be {want} numbers")));
+            }
+            parts.push((name, values));
+        }
+    }
+    match (matrix, parts.is_empty()) {
+        (Some(m), true) => Ok(NewTransform::Matrix(self::matrix(m)?)),
+        (None, false) => Ok(NewTransform::Components(parts)),
+        (Some(_), false) => Err(value_error(
+            "give a matrix or translation/rotation/scale, not both",
+        )),
+        (None, true) => Err(value_error("give a matrix or translation/rotation/scale")),
+    }
+}
+
+/// `set_transform(node, …)`.
+pub(crate) fn transform(s: &Scene, node: &Target, how: &NewTransform) -> PyResult<Vec<Edit>> {
     let node = node.resolve("node", s.node_names.iter().map(|n| n.as_deref()))?;
-    Ok(vec![Edit::NodeMatrix { node, matrix: m }])
+    Ok(match how {
+        NewTransform::Matrix(m) => vec![Edit::NodeMatrix { node, matrix: *m }],
+        NewTransform::Components(parts) => parts
+            .iter()
+            .map(|(name, values)| Edit::Pointer {
+                path: format!("/nodes/{node}/{name}"),
+                value: values.clone(),
+            })
+            .collect(),
+    })
 }
 
 /// `set_visible(node, visible)`.

@@ -152,16 +152,28 @@ impl Scene {
         self.edit(py, |s| edits::camera(s, camera.as_deref(), matrix, keys))
     }
 
-    /// Replaces node `node`'s local transform by `matrix` (4×4, as math writes it).
+    /// Replaces node `node`'s local transform by `matrix` (4×4, as math writes it), or
+    /// replaces the components given of its stored TRS: `translation` (3), `rotation` (a unit
+    /// quaternion x, y, z, w) and `scale` (3), as an animation channel would (the others keep
+    /// their values).
+    #[pyo3(signature = (node, matrix=None, *, translation=None, rotation=None, scale=None))]
     fn set_transform(
         &self,
         py: Python<'_>,
         node: &Bound<'_, PyAny>,
-        matrix: &Bound<'_, PyAny>,
+        matrix: Option<&Bound<'_, PyAny>>,
+        translation: Option<&Bound<'_, PyAny>>,
+        rotation: Option<&Bound<'_, PyAny>>,
+        scale: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
         let node = Target::extract(node, "node")?;
-        let m = edits::matrix(matrix)?;
-        self.edit(py, |s| edits::transform(s, &node, m))
+        let trs = [
+            ("translation", translation),
+            ("rotation", rotation),
+            ("scale", scale),
+        ];
+        let how = edits::transform_of(matrix, trs)?;
+        self.edit(py, |s| edits::transform(s, &node, &how))
     }
 
     /// Sets material factors: `base_color`, `metallic`, `roughness`, `emissive`,

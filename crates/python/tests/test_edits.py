@@ -49,6 +49,15 @@ def edit_transform_by_name(scene, doc):
     set_matrix(doc["nodes"][2], MATRIX)
 
 
+def edit_translation_and_rotation(scene, doc):
+    # The components given replace the node's stored ones; the others (scale) stay.
+    t, r = [0.5, 1.25, -2.0], [0.0, 0.38268343, 0.0, 0.92387953]
+    scene.set_transform(4, translation=t, rotation=r)
+    node = doc["nodes"][4]
+    node.pop("matrix", None)
+    node["translation"], node["rotation"] = t, r
+
+
 def edit_visible(scene, doc):
     scene.set_visible(2, False)
     doc["nodes"][2].setdefault("extensions", {})["KHR_node_visibility"] = {"visible": False}
@@ -91,7 +100,8 @@ def edit_camera_matrix(scene, doc):
     scene.set_camera(focus_object=None)
 
 
-EDITS = [edit_transform, edit_transform_by_name, edit_visible, edit_material,
+EDITS = [edit_transform, edit_transform_by_name, edit_translation_and_rotation, edit_visible,
+         edit_material,
          edit_material_by_name, edit_light, edit_camera_keys, edit_camera_matrix]
 
 

@@ -147,6 +147,14 @@ def test_bad_edits(demo):
         scene.set_transform(1, np.eye(3))
     with pytest.raises(ValueError, match="finite"):
         scene.set_transform(1, np.full((4, 4), np.nan))
+    with pytest.raises(ValueError, match="not both"):
+        scene.set_transform(1, np.eye(4), translation=[0, 0, 0])
+    with pytest.raises(ValueError, match="give a matrix"):
+        scene.set_transform(1)
+    with pytest.raises(ValueError, match="rotation must be 4"):
+        scene.set_transform(1, rotation=[0, 0, 1])
+    with pytest.raises(ValueError, match="finite"):
+        scene.set_transform(1, scale=[1, float("inf"), 1])
     with pytest.raises(ValueError):
         scene.set_visible(999, False)
     with pytest.raises(ValueError):
