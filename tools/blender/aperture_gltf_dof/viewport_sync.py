@@ -212,9 +212,11 @@ class Session:
                 self._material(slot.material, send)
 
     def _transform(self, obj, send=True):
-        m = mirror.node_matrix(obj, self._parent(obj))
-        return self._send(("transform", obj.name), m,
-                          lambda m: self.scene.set_transform(self.nodes[obj.name], m), send)
+        # The node's TRS as the exporter stores it: the session builds the matrix as a load
+        # of that file does (exact for parented nodes too).
+        trs = mirror.node_trs(obj, self._parent(obj))
+        return self._send(("transform", obj.name), trs, lambda v: self.scene.set_transform(
+            self.nodes[obj.name], translation=v[0], rotation=v[1], scale=v[2]), send)
 
     def _camera(self, obj, send=True):
         if self._changed(("camera", obj.data.name), mirror.rna_signature(obj.data, mirror.CAMERA_EDITED)):
