@@ -1,0 +1,143 @@
+//! Warps of the lens clipped by its barrel (optical vignetting, issue 61): uniform points in the
+//! intersection of the aperture and a second, offset disc. Beside `warp.rs`, which is full.
+
+use crate::warp::concentric_disc;
+use glam::Vec2;
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// Uniform point in the intersection of the unit disc and the disc of `radius` around `centre`,
+/// from `u ∈ [0,1)²`; `None` when they do not meet.
+///
+/// When the unit disc lies inside the other, this is [`concentric_disc`]`(u)` bit for bit (an
+/// unclipped lens is unchanged). Otherwise the lens-shaped region is cut in chords across the
+/// line of centres: `u.x` picks the chord by the inverse of the area on one side of it (two
+/// circular segments meeting at the common chord, solved by safeguarded Newton in `f64`), `u.y`
+/// the point along it. Continuous and area-preserving, so strata of `u` stay strata.
+pub fn disc_in_disc(u: Vec2, centre: Vec2, radius: f32) -> Option<Vec2> {
+    let d = centre.length();
+    if !(d.is_finite() && radius > 0.0) || d >= 1.0 + radius {
+        return None;
+    }
+    if d + 1.0 <= radius {
+        return Some(concentric_disc(u));
+    }
+    if d + radius <= 1.0 {
+        return Some(concentric_disc(u) * radius + centre);
+    }
+    let lens = Lens::new(f64::from(d), f64::from(radius));
+    let s = lens.invert(f64::from(u.x) * lens.total);
+    let t = (2.0 * f64::from(u.y) - 1.0) * lens.half_width(s);
+    let e = centre / d;
+    Some(e * s as f32 + e.perp() * t as f32)
+}
+
+/// The lens-shaped intersection of the unit disc and a disc of radius `r` at distance `d` along
+/// +s, in chord coordinates: left of the common chord it is the second disc's cap, right of it
+/// the unit disc's.
+struct Lens {
+    d: f64,
+    r: f64,
+    chord: f64,
+    left: f64,
+    total: f64,
+}
+
+impl Lens {
+    fn new(d: f64, r: f64) -> Self {
+        let chord = (d * d + 1.0 - r * r) / (2.0 * d);
+        let left = segment(r, chord - d);
+        let total = left + PI - segment(1.0, chord);
+        Self {
+            d,
+            r,
+            chord,
+            left,
+            total,
+        }
+    }
+
+    /// Half the chord's length at `s`.
+    fn half_width(&self, s: f64) -> f64 {
+        let h2 = if s <= self.chord {
+            let q = s - self.d;
+            self.r * self.r - q * q
+        } else {
+            1.0 - s * s
+        };
+        h2.max(0.0).sqrt()
+    }
+
+    /// The region's area left of `s`.
+    fn area_left_of(&self, s: f64) -> f64 {
+        if s <= self.chord {
+            segment(self.r, s - self.d)
+        } else {
+            self.left + segment(1.0, s) - segment(1.0, self.chord)
+        }
+    }
+
+    /// The `s` whose left area is `target`: Newton (the derivative is the chord's length),
+    /// falling back to bisection whenever a step would leave the bracket.
+    fn invert(&self, target: f64) -> f64 {
+        let (mut lo, mut hi) = (self.d - self.r, 1.0);
+        let mut s = lo + (hi - lo) * (target / self.total);
+        for _ in 0..48 {
+            let g = self.area_left_of(s) - target;
+            if g > 0.0 {
+                hi = s;
+            } else {
+                lo = s;
+            }
+            let mut next = s - g / (2.0 * self.half_width(s));
+            if !(next > lo && next < hi) {
+                next = 0.5 * (lo + hi);
+            }
+            if (next - s).abs() <= 1e-13 {
+                return next;
+            }
+            s = next;
+        }
+        s
+    }
+}
+
+/// Area of the disc of radius `rho` (centred at 0) left of `x`.
+fn segment(rho: f64, x: f64) -> f64 {
+    let q = (x / rho).clamp(-1.0, 1.0);
+    rho * rho * (q.asin() + q * (1.0 - q * q).max(0.0).sqrt() + FRAC_PI_2)
+}
+
+/// Uniform point of a shape (`sample`, a uniform warp of `[0,1)²` onto it) that also lies in the
+/// disc of `radius` around `centre`: the first of `u` and up to 63 numbers hashed from it whose
+/// point is inside (rejection, deterministic in `u`). For shapes without a closed-form clipped
+/// warp (the blade polygon). After 64 misses (when the two barely meet) the last point is pulled
+/// into the disc.
+pub fn clipped_by_disc(u: Vec2, sample: impl Fn(Vec2) -> Vec2, centre: Vec2, radius: f32) -> Vec2 {
+    let mut h = u64::from(u.x.to_bits()) | (u64::from(u.y.to_bits()) << 32);
+    let mut v = u;
+    let mut p = sample(v);
+    for _ in 0..63 {
+        if (p - centre).length_squared() <= radius * radius {
+            return p;
+        }
+        h = splitmix64(h);
+        let unit = |b: u64| (b >> 40) as f32 * (1.0 / (1u64 << 24) as f32);
+        v = Vec2::new(unit(h), unit(h << 24));
+        p = sample(v);
+    }
+    let off = p - centre;
+    let len = off.length();
+    if len > radius {
+        centre + off * (radius / len)
+    } else {
+        p
+    }
+}
+
+/// SplitMix64's step: a well-mixed 64-bit hash of `x`.
+fn splitmix64(x: u64) -> u64 {
+    let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
