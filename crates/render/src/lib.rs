@@ -36,6 +36,7 @@ mod frame_accel;
 mod frame_lights;
 mod image_size;
 pub mod info;
+pub mod lens;
 mod integrator;
 pub mod motion;
 mod options;
