@@ -116,7 +116,9 @@ impl Aperture {
         let (d, radius, ratio) = match *self {
             Self::Pinhole => return Vec2::ZERO,
             // The barrel is at most one radius off centre (vignetting ≤ 1): the discs meet.
-            Self::Disc { radius, ratio } => (disc_in_disc(u, c, 1.0).unwrap_or(0.5 * c), radius, ratio),
+            Self::Disc { radius, ratio } => {
+                (disc_in_disc(u, c, 1.0).unwrap_or(0.5 * c), radius, ratio)
+            }
             Self::Polygon {
                 radius,
                 blades,
@@ -221,7 +223,12 @@ impl Camera {
             world_from_camera: cam.world_from_camera,
             model,
             aperture,
-            lens: Lens::new(&cam.dof.lens_options, corner, aperture.radius(), perspective),
+            lens: Lens::new(
+                &cam.dof.lens_options,
+                corner,
+                aperture.radius(),
+                perspective,
+            ),
             focus_distance: cam.dof.focus_distance,
             width,
             height,

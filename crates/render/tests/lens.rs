@@ -85,10 +85,7 @@ fn neutral_lens_options_render_the_plain_thin_lens_bit_for_bit() {
     // And the options do change the image when they are not neutral.
     let strong = render(LensOptions {
         vignetting: 1.0,
-        distortion: Distortion {
-            k1: -0.2,
-            ..zero
-        },
+        distortion: Distortion { k1: -0.2, ..zero },
     });
     assert_ne!(bits(&plain), bits(&strong));
 }
@@ -96,7 +93,11 @@ fn neutral_lens_options_render_the_plain_thin_lens_bit_for_bit() {
 #[test]
 fn vignetting_leaves_the_axis_alone_and_clips_the_corners_by_the_barrel() {
     for blades in [0, 6] {
-        let plain = Camera::new(&scene_camera(lens_dof(LensOptions::default(), blades)), 64, 48);
+        let plain = Camera::new(
+            &scene_camera(lens_dof(LensOptions::default(), blades)),
+            64,
+            48,
+        );
         let options = LensOptions {
             vignetting: 1.0,
             ..LensOptions::default()
@@ -116,7 +117,10 @@ fn vignetting_leaves_the_axis_alone_and_clips_the_corners_by_the_barrel() {
             let r = cam.generate_ray_camera_space(&sample(corner, u)).unwrap();
             let o = r.origin.truncate();
             assert!(o.length() <= 0.2 * (1.0 + 1e-5), "{o} outside the aperture");
-            assert!(o.distance(barrel) <= 0.2 * (1.0 + 1e-5), "{o} outside the barrel");
+            assert!(
+                o.distance(barrel) <= 0.2 * (1.0 + 1e-5),
+                "{o} outside the barrel"
+            );
             // Still the thin lens: every ray meets the focal plane where the centre ray does.
             let hit = r.origin + r.dir * ((-3.0 - r.origin.z) / r.dir.z);
             let want = Vec3::new(ps.x * 3.0, ps.y * 3.0, -3.0);
@@ -124,7 +128,10 @@ fn vignetting_leaves_the_axis_alone_and_clips_the_corners_by_the_barrel() {
             let p = plain.generate_ray_camera_space(&sample(corner, u)).unwrap();
             clipped += usize::from(p.origin.truncate().distance(barrel) > 0.2);
         }
-        assert!(clipped > 100, "the plain lens would have {clipped} points outside");
+        assert!(
+            clipped > 100,
+            "the plain lens would have {clipped} points outside"
+        );
     }
 }
 
@@ -188,10 +195,15 @@ fn distortion_round_trips_with_opencv_within_1e4_pixel() {
     let (cam, fx, fy) = distorted_camera();
     let mut worst = (0.0f64, 0.0f64);
     for p_film in pixels() {
-        let r = cam.generate_ray_camera_space(&sample(p_film, Vec2::ZERO)).unwrap();
+        let r = cam
+            .generate_ray_camera_space(&sample(p_film, Vec2::ZERO))
+            .unwrap();
         assert_eq!(r.origin, Vec3::ZERO);
         // The ray's normalised coordinates, OpenCV's way round (y down).
-        let (x, y) = (f64::from(r.dir.x / -r.dir.z), -f64::from(r.dir.y / -r.dir.z));
+        let (x, y) = (
+            f64::from(r.dir.x / -r.dir.z),
+            -f64::from(r.dir.y / -r.dir.z),
+        );
         let (u, v) = (f64::from(p_film.x), f64::from(p_film.y));
         let (xd, yd) = cv_distort(x, y);
         let forward = (fx * xd + 160.0 - u).hypot(fy * yd + 120.0 - v);
@@ -203,7 +215,10 @@ fn distortion_round_trips_with_opencv_within_1e4_pixel() {
         let q = raster_of(&cam, c.origin + 5.0 * c.dir).unwrap();
         assert!(q.distance(p_film) < 2e-3, "{q} vs {p_film}");
     }
-    println!("worst: projectPoints {:.2e} px, undistortPoints {:.2e} px", worst.0, worst.1);
+    println!(
+        "worst: projectPoints {:.2e} px, undistortPoints {:.2e} px",
+        worst.0, worst.1
+    );
     assert!(worst.0 < 1e-4 && worst.1 < 1e-4, "{worst:?}");
 }
 

@@ -39,17 +39,24 @@ fn an_unclipped_lens_is_unchanged_bit_for_bit() {
 fn samples_lie_in_both_discs() {
     for (c, r) in CASES {
         let c = Vec2::from(c);
-        for u in numbers(2, 20_000)
-            .into_iter()
-            .chain([Vec2::ZERO, Vec2::ONE * (1.0 - f32::EPSILON), Vec2::new(0.0, 0.999)])
-        {
+        for u in numbers(2, 20_000).into_iter().chain([
+            Vec2::ZERO,
+            Vec2::ONE * (1.0 - f32::EPSILON),
+            Vec2::new(0.0, 0.999),
+        ]) {
             let p = disc_in_disc(u, c, r).expect("the discs meet");
             assert!(p.is_finite(), "{u}");
             assert!(p.length() <= 1.0 + 1e-5, "{p} outside the lens ({c}, {r})");
-            assert!(p.distance(c) <= r * (1.0 + 1e-5), "{p} outside the barrel ({c}, {r})");
+            assert!(
+                p.distance(c) <= r * (1.0 + 1e-5),
+                "{p} outside the barrel ({c}, {r})"
+            );
         }
     }
-    assert_eq!(disc_in_disc(Vec2::splat(0.5), Vec2::new(2.5, 0.0), 1.0), None);
+    assert_eq!(
+        disc_in_disc(Vec2::splat(0.5), Vec2::new(2.5, 0.0), 1.0),
+        None
+    );
 }
 
 /// Chi-square of the warp's histogram on an 8×8 grid over `[-1,1]²` against each cell's share
@@ -97,7 +104,10 @@ fn density_is_uniform_over_the_intersection() {
             // p ≈ 1e-6 for the degrees of freedom here (≤ 63): mean dof, sd sqrt(2 dof).
             let limit = dof as f64 + 7.0 * (2.0 * dof as f64).sqrt();
             println!("centre {c} radius {r} seed {seed}: chi2 {chi2:.1} over {dof} cells");
-            assert!(chi2 < limit, "chi2 {chi2} >= {limit} ({c}, {r}, seed {seed})");
+            assert!(
+                chi2 < limit,
+                "chi2 {chi2} >= {limit} ({c}, {r}, seed {seed})"
+            );
         }
     }
 }

@@ -17,8 +17,14 @@ fn forward(d: &Distortion, x: f64, y: f64) -> ((f64, f64), [[f64; 2]; 2]) {
     let yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
     let cross = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y;
     let j = [
-        [radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x, cross],
-        [cross, radial + 2.0 * y * y * dradial + 6.0 * p1 * y + 2.0 * p2 * x],
+        [
+            radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x,
+            cross,
+        ],
+        [
+            cross,
+            radial + 2.0 * y * y * dradial + 6.0 * p1 * y + 2.0 * p2 * x,
+        ],
     ];
     ((xd, yd), j)
 }
@@ -40,7 +46,7 @@ pub(super) fn undistort(d: &Distortion, q: Vec2) -> Option<Vec2> {
         let ((xd, yd), j) = forward(d, x, y);
         let (ex, ey) = (xd - qx, yd - qy);
         let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-        if !(det > 0.0) {
+        if det.is_nan() || det <= 0.0 {
             return None;
         }
         let sx = (j[1][1] * ex - j[0][1] * ey) / det;

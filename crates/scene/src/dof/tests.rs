@@ -393,12 +393,30 @@ fn lens_options_are_read_key_by_key_the_node_winning() {
 #[test]
 fn invalid_lens_options_name_camera_key_and_value() {
     for (extras, key) in [
-        (json!({"aperture_vignetting": -0.1}), "cameras.extras.aperture_vignetting"),
-        (json!({"aperture_vignetting": 1.5}), "cameras.extras.aperture_vignetting"),
-        (json!({"aperture_vignetting": "x"}), "cameras.extras.aperture_vignetting"),
-        (json!({"distortion_k1": "x"}), "cameras.extras.distortion_k1"),
-        (json!({"distortion_k3": 1e300}), "cameras.extras.distortion_k3"),
-        (json!({"distortion_p1": null}), "cameras.extras.distortion_p1"),
+        (
+            json!({"aperture_vignetting": -0.1}),
+            "cameras.extras.aperture_vignetting",
+        ),
+        (
+            json!({"aperture_vignetting": 1.5}),
+            "cameras.extras.aperture_vignetting",
+        ),
+        (
+            json!({"aperture_vignetting": "x"}),
+            "cameras.extras.aperture_vignetting",
+        ),
+        (
+            json!({"distortion_k1": "x"}),
+            "cameras.extras.distortion_k1",
+        ),
+        (
+            json!({"distortion_k3": 1e300}),
+            "cameras.extras.distortion_k3",
+        ),
+        (
+            json!({"distortion_p1": null}),
+            "cameras.extras.distortion_p1",
+        ),
     ] {
         let s = invalid(extras.clone());
         assert!(s.contains(key), "{extras}: {s}");
