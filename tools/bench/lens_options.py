@@ -64,6 +64,8 @@ def main():
     p.add_argument("--height", type=int, default=180)
     p.add_argument("--spp", type=int, default=16)
     p.add_argument("--write-only", nargs=2, metavar=("OUT", "JSON"))
+    p.add_argument("--baseline", help="a binary without the options (e.g. main's), timed on the "
+                   "plain lenses too")
     args = p.parse_args()
     if args.write_only:
         with_extras(args.scene, args.write_only[0], json.loads(args.write_only[1]))
@@ -72,16 +74,20 @@ def main():
     for i, (name, keys) in enumerate(VARIANTS.items()):
         paths[name] = f"/tmp/lens_bench_{i}.glb"
         with_extras(args.scene, paths[name], keys)
-    times = {name: [] for name in VARIANTS}
+    runs = [(name, args.binary, paths[name]) for name in VARIANTS]
+    if args.baseline:
+        for name in ["plain (6 blades, f/1.4)", "round, plain"]:
+            runs.append((f"{name}, baseline binary", args.baseline, paths[name]))
+    times = {name: [] for name, _, _ in runs}
     for _ in range(args.rounds):
-        for name in VARIANTS:
-            times[name].append(render_time(args.binary, paths[name], args, "/tmp/lens_bench.exr"))
+        for name, binary, path in runs:
+            times[name].append(render_time(binary, path, args, "/tmp/lens_bench.exr"))
     med = {name: statistics.median(t) for name, t in times.items()}
     base = {name: med["round, plain" if name.startswith("round") else
-                      "plain (6 blades, f/1.4)"] for name in VARIANTS}
+                      "plain (6 blades, f/1.4)"] for name in times}
     print("| variant | median render time | ratio to its plain lens |")
     print("|---|---|---|")
-    for name in VARIANTS:
+    for name in times:
         print(f"| {name} | {med[name]:.3f} s | {med[name] / base[name]:.3f} |")
 
 
