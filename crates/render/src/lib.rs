@@ -37,6 +37,7 @@ mod frame_lights;
 mod image_size;
 pub mod info;
 mod integrator;
+pub mod lens;
 pub mod motion;
 mod options;
 pub mod passes;

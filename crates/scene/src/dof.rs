@@ -19,7 +19,7 @@ use glam::{Affine3A, Vec3};
 use serde_json::Value;
 
 use crate::error::Error;
-use crate::types::{Dof, DofOverrides, Projection, SensorFit};
+use crate::types::{Distortion, Dof, DofOverrides, LensOptions, Projection, SensorFit};
 use layer::{parse_extras, parse_overrides, parse_physical, Ctx, FocusTarget, Layer};
 
 /// Blender's default image aspect (36 × 24 mm sensor) when a camera has no `aspectRatio`.
@@ -120,7 +120,23 @@ pub(crate) fn resolve(
         rotation: last(&|l| l.rotation).unwrap_or(d.rotation),
         ratio: last(&|l| l.ratio).unwrap_or(d.ratio),
         focus_object,
+        lens_options: lens_options(&layers),
     })
+}
+
+/// Vignetting and distortion, key by key from the highest source giving each.
+fn lens_options(layers: &[Layer; 4]) -> LensOptions {
+    let last = |f: &dyn Fn(&Layer) -> Option<f32>| layers.iter().rev().find_map(f).unwrap_or(0.0);
+    LensOptions {
+        vignetting: last(&|l| l.vignetting),
+        distortion: Distortion {
+            k1: last(&|l| l.distortion[0]),
+            k2: last(&|l| l.distortion[1]),
+            k3: last(&|l| l.distortion[2]),
+            p1: last(&|l| l.distortion[3]),
+            p2: last(&|l| l.distortion[4]),
+        },
+    }
 }
 
 /// The key prefixes of the four sources, in precedence order (lowest first).

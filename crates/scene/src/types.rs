@@ -1,12 +1,14 @@
 //! The render-ready scene model. Everything here is plain data: the loader fills it, the renderer
 //! reads it, and tests may build it by hand.
 
+pub(crate) mod lens;
 pub(crate) mod material;
 pub(crate) mod texture_ref;
 
 use glam::{Affine3A, DVec3, Vec2, Vec3, Vec4};
 
 pub use crate::prepass::ExtensionStatus;
+pub use lens::*;
 pub use material::*;
 pub use texture_ref::*;
 
@@ -237,6 +239,8 @@ pub struct Dof {
     pub ratio: f32,
     /// Name of the node focused on, when `focus_object` decided the focus distance.
     pub focus_object: Option<String>,
+    /// Vignetting and distortion (issue 61); the default is the ideal thin lens.
+    pub lens_options: LensOptions,
 }
 
 impl Dof {
@@ -265,6 +269,7 @@ impl Default for Dof {
             rotation: 0.0,
             ratio: 1.0,
             focus_object: None,
+            lens_options: LensOptions::default(),
         }
     }
 }

@@ -43,6 +43,7 @@ pub mod test_scenes;
 pub mod texture;
 pub mod transmission;
 pub mod warp;
+pub mod warp_lens;
 
 pub use bsdf::{
     Albedos, Bsdf, BsdfSample, CoatLayer, Compensation, DeltaSample, Dielectric, Frame, Interface,

@@ -59,6 +59,7 @@ fn camera(rng: &mut Rng, aperture: Aperture, width: u32, height: u32) -> Camera 
         focus_distance: rng.range(0.5, 20.0),
         width,
         height,
+        lens: crate::lens::Lens::IDEAL,
     }
 }
 
@@ -255,6 +256,7 @@ fn grounds_and_walls_through_the_lens_plane() {
             focus_distance: rng.range(0.5, 20.0),
             width,
             height,
+            lens: crate::lens::Lens::IDEAL,
         };
         let extent = rng.range(5.0, 60.0);
         let (lo, hi) = if case % 4 == 3 {
@@ -364,6 +366,7 @@ fn cut_camera(rng: &mut Rng, case: usize) -> Camera {
         focus_distance: rng.range(2.0, 12.0),
         width,
         height,
+        lens: crate::lens::Lens::IDEAL,
     }
 }
 

@@ -75,7 +75,12 @@ pub(crate) struct LensView {
 
 impl LensView {
     /// The view of `camera`, a pixel's samples reaching `filter_half` pixels from its centre.
+    /// Vignetting only shrinks the aperture, so the bound holds; distortion bends the rays
+    /// off the thin lens's, so a distorted camera gets no bound.
     pub fn new(camera: &Camera, filter_half: f32) -> Option<Self> {
+        if camera.lens.distortion.is_some() {
+            return None;
+        }
         let (tan_half_x, tan_half_y) = camera.model.tan_half()?;
         let (tx, ty) = (f64::from(tan_half_x), f64::from(tan_half_y));
         if !(tx > 0.0 && ty > 0.0 && tx.is_finite() && ty.is_finite()) {

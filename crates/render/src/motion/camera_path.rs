@@ -43,6 +43,10 @@ impl CameraPath {
             focus_distance: lerp(a.focus_distance, b.focus_distance),
             width: a.width,
             height: a.height,
+            lens: crate::lens::Lens {
+                barrel_shift: lerp(a.lens.barrel_shift, b.lens.barrel_shift),
+                ..a.lens
+            },
         }
     }
 

@@ -39,8 +39,8 @@ pub struct DeformedNeighbours {
     pub next: Vec<Vec3>,
 }
 
-/// Where `camera` images world point `p`, in raster coordinates (x right, y down); `None`
-/// behind a perspective camera.
+/// Where `camera` images world point `p`, in raster coordinates (x right, y down), through the
+/// lens's centre ray (distortion included); `None` behind a perspective camera.
 pub fn raster_of(camera: &Camera, p: Vec3) -> Option<Vec2> {
     let c = camera.world_from_camera.inverse().transform_point3(p);
     let (sx, sy) = match camera.model {
@@ -51,7 +51,13 @@ pub fn raster_of(camera: &Camera, p: Vec3) -> Option<Vec2> {
             if c.z >= 0.0 {
                 return None;
             }
-            (c.x / (-c.z * tan_half_x), c.y / (-c.z * tan_half_y))
+            if camera.lens.distortion.is_some() {
+                // Through the lens's centre ray: the direction's screen point, distorted.
+                let p = camera.lens.distort(Vec2::new(c.x / -c.z, c.y / -c.z));
+                (p.x / tan_half_x, p.y / tan_half_y)
+            } else {
+                (c.x / (-c.z * tan_half_x), c.y / (-c.z * tan_half_y))
+            }
         }
         CameraModel::Orthographic { half_x, half_y } => (c.x / half_x, c.y / half_y),
     };

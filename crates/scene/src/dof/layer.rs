@@ -29,7 +29,20 @@ pub(crate) struct Layer {
     pub blades: Option<u32>,
     pub rotation: Option<f32>,
     pub ratio: Option<f32>,
+    /// `aperture_vignetting`.
+    pub vignetting: Option<f32>,
+    /// `distortion_k1`, `_k2`, `_k3`, `_p1`, `_p2`.
+    pub distortion: [Option<f32>; 5],
 }
+
+/// The distortion keys, in the order of [`Layer::distortion`].
+const DISTORTION_KEYS: [&str; 5] = [
+    "distortion_k1",
+    "distortion_k2",
+    "distortion_k3",
+    "distortion_p1",
+    "distortion_p2",
+];
 
 /// Where a source's values come from, for error messages: the camera and the key's prefix.
 pub(crate) struct Ctx<'a> {
@@ -105,7 +118,18 @@ pub(crate) fn parse_extras(extras: Option<&Value>, ctx: &Ctx<'_>) -> Result<Laye
             "aperture_blades" => l.blades = Some(blades(key, v, ctx)?),
             "aperture_rotation" => l.rotation = Some(ctx.number(key, v)?),
             "aperture_ratio" => l.ratio = Some(ctx.positive(key, v)?),
-            _ => {}
+            "aperture_vignetting" => {
+                let x = ctx.number(key, v)?;
+                if !(0.0..=1.0).contains(&x) {
+                    return Err(ctx.err(key, v, "must be between 0 and 1"));
+                }
+                l.vignetting = Some(x);
+            }
+            k => {
+                if let Some(i) = DISTORTION_KEYS.iter().position(|d| *d == k) {
+                    l.distortion[i] = Some(ctx.number(key, v)?);
+                }
+            }
         }
     }
     Ok(l)

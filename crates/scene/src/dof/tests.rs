@@ -368,3 +368,57 @@ fn unknown_keys_and_non_object_extras_are_ignored() {
     .unwrap();
     assert_eq!(d, run(&Case::default()).unwrap());
 }
+
+#[test]
+fn lens_options_default_to_the_ideal_thin_lens() {
+    let d = run(&Case::default()).unwrap();
+    assert_eq!(d.lens_options, LensOptions::default());
+    assert!(d.lens_options.distortion.is_zero());
+}
+
+#[test]
+fn lens_options_are_read_key_by_key_the_node_winning() {
+    let c = Case {
+        camera: Some(json!({"aperture_vignetting": 0.4, "distortion_k1": -0.2,
+                            "distortion_p2": 0.01})),
+        node: Some(json!({"aperture_vignetting": 0.7, "distortion_k2": 0.05})),
+        ..Case::default()
+    };
+    let o = run(&c).unwrap().lens_options;
+    assert_eq!(o.vignetting, 0.7);
+    let d = o.distortion;
+    assert_eq!((d.k1, d.k2, d.k3, d.p1, d.p2), (-0.2, 0.05, 0.0, 0.0, 0.01));
+}
+
+#[test]
+fn invalid_lens_options_name_camera_key_and_value() {
+    for (extras, key) in [
+        (
+            json!({"aperture_vignetting": -0.1}),
+            "cameras.extras.aperture_vignetting",
+        ),
+        (
+            json!({"aperture_vignetting": 1.5}),
+            "cameras.extras.aperture_vignetting",
+        ),
+        (
+            json!({"aperture_vignetting": "x"}),
+            "cameras.extras.aperture_vignetting",
+        ),
+        (
+            json!({"distortion_k1": "x"}),
+            "cameras.extras.distortion_k1",
+        ),
+        (
+            json!({"distortion_k3": 1e300}),
+            "cameras.extras.distortion_k3",
+        ),
+        (
+            json!({"distortion_p1": null}),
+            "cameras.extras.distortion_p1",
+        ),
+    ] {
+        let s = invalid(extras.clone());
+        assert!(s.contains(key), "{extras}: {s}");
+    }
+}
