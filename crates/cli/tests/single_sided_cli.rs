@@ -199,3 +199,87 @@ fn texture_settings_test_single_sided_marker() {
     assert!(blender > 0.05, "the ✗ should show under blender: {blender}");
     assert!(gltf < 0.25 * blender, "gltf {gltf} vs blender {blender}");
 }
+
+/// A white floor lit by a point light through a single-sided quad between them whose back
+/// faces the floor, seen from between floor and quad (the quad's back in view); `with_quad`
+/// false leaves the quad out of the scene.
+fn floor_under_a_one_way_quad(with_quad: bool) -> Vec<u8> {
+    let mut doc = quad_json();
+    doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    doc["extensions"] = json!({"KHR_lights_punctual": {"lights": [
+        {"type": "point", "color": [1.0, 0.9, 0.8], "intensity": 40.0}]}});
+    doc["materials"] = json!([
+        {"doubleSided": true, "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1.0],
+            "metallicFactor": 0.0, "roughnessFactor": 0.6}},
+        {"doubleSided": false, "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.1, 0.1, 1.0],
+            "metallicFactor": 0.0}}
+    ]);
+    let prim = |m: usize| json!({"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": m}]});
+    doc["meshes"] = json!([prim(0), prim(1)]);
+    doc["cameras"] = json!([{"type": "perspective", "perspective": {"yfov": 1.2, "znear": 0.1}}]);
+    // −90° about x: the quad's +z normal turns to +y (the floor's front, the quad's front up).
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let up = [-h, 0.0, 0.0, h];
+    doc["nodes"] = json!([
+        {"mesh": 0, "rotation": up, "scale": [5.0, 5.0, 1.0]},
+        {"mesh": 1, "rotation": up, "translation": [0.0, 1.0, 0.0], "scale": [1.5, 1.5, 1.0]},
+        {"camera": 0, "translation": [0.0, 0.6, 3.0]},
+        {"translation": [0.0, 3.0, 0.0], "extensions": {"KHR_lights_punctual": {"light": 0}}}]);
+    let nodes = if with_quad {
+        json!([0, 1, 2, 3])
+    } else {
+        json!([0, 2, 3])
+    };
+    doc["scenes"] = json!([{"nodes": nodes}]);
+    quad_glb(&doc)
+}
+
+/// Under glTF's meaning a culled back is not there for any ray: camera rays see the sky
+/// through it, shadow rays from the floor reach the light through it, bounces leave through
+/// it. The image equals the render without the quad bit for bit (the immediate and the
+/// deferred shadow rays both pass it); with both sides seen it shadows the floor.
+#[test]
+fn a_culled_back_is_absent_for_camera_shadow_and_bounce_rays() {
+    let dir = Scratch::new("single-sided-absent");
+    let render = |name: &str, with_quad: bool, mode: &str| {
+        let scene = dir.path(&format!("{name}.glb"));
+        std::fs::write(&scene, floor_under_a_one_way_quad(with_quad)).unwrap();
+        let out = dir.path(&format!("{name}.exr"));
+        let status = Command::new(aperture())
+            .arg("render")
+            .arg(&scene)
+            .arg("-o")
+            .arg(&out)
+            .args(["--width", "24", "--height", "16", "--spp", "8", "--quiet"])
+            .args([
+                "--env",
+                "0.2,0.3,0.4",
+                "--max-bounces",
+                "3",
+                "--single-sided",
+                mode,
+            ])
+            .status()
+            .unwrap();
+        assert!(status.success(), "{name}");
+        read_exr(&out).unwrap()
+    };
+    let culled = render("culled", true, "gltf");
+    let absent = render("absent", false, "gltf");
+    let both = render("both", true, "blender");
+    let bits = |i: &aperture_imageio::Image| -> Vec<u32> {
+        i.rgba.iter().flatten().map(|v| v.to_bits()).collect()
+    };
+    assert_eq!(
+        bits(&culled),
+        bits(&absent),
+        "the culled quad changed the image"
+    );
+    let sum = |i: &aperture_imageio::Image| i.rgba.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>();
+    assert!(
+        sum(&both) < 0.9 * sum(&absent),
+        "seen from both sides the quad should shadow the floor: {} vs {}",
+        sum(&both),
+        sum(&absent)
+    );
+}

@@ -284,14 +284,25 @@ impl Integrator<'_> {
         (dist, time): (f32, f32),
         sigma_a: Vec3,
     ) -> Vec3 {
-        let (mut ray, absorbed) = shadow_ray(origin, dir, dist, sigma_a, time);
-        if !self.geom.has_alpha && !self.geom.has_thin && !self.geom.has_culled {
-            return if self.accel.occluded(&ray) {
-                Vec3::ZERO
-            } else {
-                absorbed
-            };
+        let (ray, absorbed) = shadow_ray(origin, dir, dist, sigma_a, time);
+        if !self.geom.has_alpha && !self.geom.has_thin {
+            // Only opaque surfaces: any hit decides, unless it may be a culled back (then the
+            // walk below decides; a ray that meets nothing is lit either way).
+            if !self.accel.occluded(&ray) {
+                return absorbed;
+            }
+            if !self.geom.has_culled {
+                return Vec3::ZERO;
+            }
         }
+        self.passing_transmittance(ray, absorbed)
+    }
+
+    /// The fraction of light through the surfaces along shadow `ray` (unit direction), from
+    /// `absorbed` (the medium's), surface by surface: [`Integrator::visibility`]'s walk, also
+    /// the answer for a deferred shadow ray found blocked in a scene with culled backs.
+    pub(super) fn passing_transmittance(&self, mut ray: Ray, absorbed: Vec3) -> Vec3 {
+        let dir = ray.dir;
         let mut tr = absorbed;
         for _ in 0..MAX_ALPHA_PASSES {
             let Some(hit) = self.accel.intersect(&ray) else {

@@ -31,13 +31,19 @@ impl<const AOV: bool> PathInFlight<AOV> {
 
     /// Adds the waiting light samples, given whether each one's shadow ray is `blocked` (in
     /// the order of [`PathInFlight::shadow_rays`]). The arithmetic of an immediate light
-    /// sample: the clamped contribution times zero or the medium's transmittance.
+    /// sample: the clamped contribution times the medium's transmittance, or, when blocked,
+    /// times `through(ray, transmittance)` (zero, or what passes culled backs).
     #[inline]
-    pub fn resolve(&mut self, blocked: &[bool]) {
+    pub fn resolve(&mut self, blocked: &[bool], through: impl Fn(Ray, Vec3) -> Vec3) {
         // Taken out and put back (emptied) so that its capacity serves the next vertex.
         let mut pending = std::mem::take(&mut self.path.pending);
         for (p, &b) in pending.iter().zip(blocked) {
-            let lit = p.clamped * if b { Vec3::ZERO } else { p.absorbed };
+            let lit = p.clamped
+                * if b {
+                    through(p.ray, p.absorbed)
+                } else {
+                    p.absorbed
+                };
             self.path.add_lit(lit, p.scatterings, &p.split);
         }
         pending.clear();

@@ -143,7 +143,7 @@ impl Integrator<'_> {
             path.features = Features::default();
         }
         path.light_passes = self.light_passes;
-        path.defer = defer && !self.geom.has_alpha && !self.geom.has_thin && !self.geom.has_culled;
+        path.defer = defer && !self.geom.has_alpha && !self.geom.has_thin;
         path.pending.clear();
         p.w = Walk::start(origin, dir);
         p.covered = false;

@@ -62,13 +62,23 @@ impl Integrator<'_> {
         first: Option<Option<Hit>>,
         w: &mut Walk,
     ) -> Option<(Hit, Surface, f32)> {
-        if self.geom.has_alpha || self.geom.has_refractive || self.geom.has_culled {
+        if self.geom.has_alpha || self.geom.has_refractive {
             return self.trace_passing(ray, stream, vertex, u_alpha, first, w);
         }
-        // Nothing to pass through: the first hit is the surface (inline, so that a ray that
-        // escapes costs no call and the surface is built where the vertex reads it).
+        // Nothing to pass through but culled backs: the first hit is the surface (inline, so
+        // that a ray that escapes costs no call and the surface is built where the vertex
+        // reads it). A culled back is passed as `trace_passing` passes it, from this hit.
         let hit = first.unwrap_or_else(|| self.accel.intersect(ray))?;
         let s = self.hit_surface(ray, &hit, true);
+        if self.geom.has_culled {
+            if self.geom.is_culled(&s, ray.dir) {
+                return self.trace_passing(ray, stream, vertex, u_alpha, Some(Some(hit)), w);
+            }
+            let sigma = w.media.sigma_a();
+            if sigma != Vec3::ZERO {
+                w.beta *= absorption(sigma, hit.t * ray.dir.length());
+            }
+        }
         Some((hit, s, self.accel.spawn_point(ray, &hit).error))
     }
 

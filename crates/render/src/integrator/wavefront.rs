@@ -14,7 +14,7 @@ use super::in_flight::PathInFlight;
 use super::Integrator;
 use crate::aov::SampleAov;
 use crate::sampler::SampleStream;
-use aperture_accel::{Accel, Hit, Ray};
+use aperture_accel::{Hit, Ray};
 use glam::Vec3;
 
 /// Paths between asking for a hit's vertex data and shading it.
@@ -76,7 +76,7 @@ impl<const AOV: bool> Wavefront<AOV> {
                 integrator.advance(p, &starts[i].2, hit);
                 self.shadows.extend(p.shadow_rays());
             }
-            self.resolve_shadows(accel);
+            self.resolve_shadows(integrator);
             let paths = &self.paths;
             self.live.retain(|&i| paths[i].live);
         }
@@ -123,16 +123,27 @@ impl<const AOV: bool> Wavefront<AOV> {
     }
 
     /// Traces the shadow rays of this round's light samples and hands each path its answers.
-    fn resolve_shadows(&mut self, accel: &Accel) {
+    fn resolve_shadows(&mut self, integrator: &Integrator<'_>) {
         if !self.shadows.is_empty() {
             self.blocked.clear();
             self.blocked.resize(self.shadows.len(), false);
-            accel.occluded_packets(&self.shadows, &mut self.blocked);
+            integrator
+                .accel
+                .occluded_packets(&self.shadows, &mut self.blocked);
+            // A blocked ray may only have met culled backs: those walk the surfaces.
+            let culled = integrator.geom.has_culled;
+            let through = |ray: Ray, absorbed: Vec3| {
+                if culled {
+                    integrator.passing_transmittance(ray, absorbed)
+                } else {
+                    Vec3::ZERO
+                }
+            };
             let mut at = 0;
             for &i in &self.live {
                 let p = &mut self.paths[i];
                 let n = p.path.pending.len();
-                p.resolve(&self.blocked[at..at + n]);
+                p.resolve(&self.blocked[at..at + n], through);
                 at += n;
             }
         }
