@@ -217,6 +217,13 @@ def add_rule_cameras():
     bone.data.dof.focus_subtarget = "Bone"
     made["bone"] = bone
 
+    lensed = add_camera("CamLens", (0.2, -0.25, 0.1))
+    lensed.data.dof.use_dof = True
+    lensed.data.aperture_lens.vignetting = 0.3
+    lensed.data.aperture_lens.k1 = -0.1
+    lensed.data.aperture_lens.p2 = 0.01
+    made["lens"] = lensed
+
     hidden_target = bpy.data.objects.new("NotExported", None)
     bpy.context.scene.collection.objects.link(hidden_target)
     hidden_target.location = (0.0, 2.0, 0.1)
@@ -347,6 +354,14 @@ def test_extras_rules(cams, binary):
           f"aperture_fstop = {cu.get('aperture_fstop')} (native 2.0, custom 8.0), "
           f"focus_distance = {cu.get('focus_distance')} (custom 1.25), lens = {cu.get('lens')}")
 
+    lens = ex["lens"]
+    lens_keys = {k: v for k, v in lens.items() if k.startswith(("aperture_vign", "distortion_"))}
+    check("a.lens-keys", lens_keys == {"aperture_vignetting": 0.3, "distortion_k1": -0.1,
+                                       "distortion_p2": 0.01}
+          and not any(k.startswith(("aperture_vign", "distortion_")) for k in off),
+          f"CamLens: {lens_keys} (vignetting 0.3, k1 -0.1, p2 0.01 set; the zeros left out); "
+          f"CamOff (no lens settings): {[k for k in off if k.startswith('distortion_')]}")
+
     orth = ex["ortho"]
     check("a.orthographic", orth.get("use_dof") is True and close(orth.get("aperture_radius"), 0.25)
           and "orthographic" in next(c for c in doc["cameras"] if c["name"] == "CamOrtho"),
@@ -445,6 +460,11 @@ def test_info_rules(binary, scene_path, cams):
           and close(custom.get("focus_distance"), 1.25, 1e-5),
           f"CamCustom: aperture_radius = {custom.get('aperture_radius')} (35 mm/(2·8) = {want}), "
           f"focus_distance = {custom.get('focus_distance')}")
+    lens = info_camera(info, "CamLens")
+    k = lens.get("distortion") or {}
+    check("b.lens-options", close(lens.get("vignetting"), 0.3, 1e-6) and close(k.get("k1"), -0.1, 1e-6)
+          and close(k.get("p2"), 0.01, 1e-6) and k.get("k2") == 0.0,
+          f"CamLens: vignetting = {lens.get('vignetting')}, distortion = {k}")
     off = info_camera(info, "CamOff")
     check("b.dof-off", off.get("enabled") is False, f"CamOff: enabled = {off.get('enabled')}")
     hidden = info_camera(info, "CamHiddenFocus")

@@ -193,6 +193,16 @@ fn print_cameras(r: &Value) {
             d["rotation"],
             d["ratio"],
         );
+        let k = &d["distortion"];
+        let distorted = ["k1", "k2", "k3", "p1", "p2"]
+            .iter()
+            .any(|c| k[c].as_f64().is_some_and(|v| v != 0.0));
+        if d["vignetting"].as_f64().is_some_and(|v| v != 0.0) || distorted {
+            println!(
+                "      lens: vignetting {}, distortion k1 {} k2 {} k3 {} p1 {} p2 {}",
+                d["vignetting"], k["k1"], k["k2"], k["k3"], k["p1"], k["p2"]
+            );
+        }
     }
 }
 

@@ -123,6 +123,16 @@ pub struct RenderArgs {
     /// Focus on a node's origin (node name, or index).
     #[arg(long)]
     pub focus_object: Option<String>,
+    /// Optical vignetting: how far the lens barrel clips the aperture at the image's corners, in
+    /// lens radii, 0–1 (the file's `aperture_vignetting`; docs/lenses.md) [default: the file's,
+    /// else 0].
+    #[arg(long, value_parser = crate::number_args::unit_f32)]
+    pub aperture_vignetting: Option<f32>,
+    /// Lens distortion, OpenCV's Brown–Conrady coefficients `K1[,K2[,K3[,P1[,P2]]]]` (the file's
+    /// `distortion_k1` … `distortion_p2`; left-out ones are 0; docs/lenses.md) [default: the
+    /// file's, else none].
+    #[arg(long, value_name = "K1,K2,K3,P1,P2", value_parser = crate::number_args::distortion, allow_hyphen_values = true)]
+    pub distortion: Option<[f32; 5]>,
     /// Pinhole camera whatever the file says.
     #[arg(long)]
     pub no_dof: bool,

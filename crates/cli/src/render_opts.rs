@@ -232,6 +232,8 @@ fn load_options(args: &RenderArgs, memory: aperture_budget::MemoryBudget) -> Loa
             aperture_fstop: args.fstop,
             focus_distance: args.focus_distance,
             focus_object: args.focus_object.clone(),
+            vignetting: args.aperture_vignetting,
+            distortion: args.distortion,
         },
         skip_textures: false,
         variant: args.materials.variant.clone(),

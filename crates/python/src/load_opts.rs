@@ -113,5 +113,6 @@ fn dof_overrides(kw: &mut Kwargs<'_>) -> PyResult<DofOverrides> {
         aperture_fstop: fstop.map(|f| f as f32),
         focus_distance: focus.map(|d| d as f32),
         focus_object: object,
+        ..DofOverrides::default()
     })
 }

@@ -307,6 +307,10 @@ pub struct DofOverrides {
     pub focus_distance: Option<f32>,
     /// `--focus-object` (a node name, or a node index written as digits).
     pub focus_object: Option<String>,
+    /// `--aperture-vignetting` (0–1).
+    pub vignetting: Option<f32>,
+    /// `--distortion`: `k1, k2, k3, p1, p2`.
+    pub distortion: Option<[f32; 5]>,
 }
 
 /// What to load and how.

@@ -66,7 +66,7 @@ bl_info = {
 
 import bpy
 
-from . import engine, settings
+from . import engine, lens_settings, settings
 # The glTF exporter looks for this name in every enabled add-on's module.
 from .dof_export import glTF2ExportUserExtension  # noqa: F401
 
@@ -91,6 +91,7 @@ def _panels():
 
 def register():
     settings.register()
+    lens_settings.register()
     engine.register()
     for panel in _panels():
         panel.COMPAT_ENGINES.add(engine.ApertureRenderEngine.bl_idname)
@@ -100,4 +101,5 @@ def unregister():
     for panel in _panels():
         panel.COMPAT_ENGINES.discard(engine.ApertureRenderEngine.bl_idname)
     engine.unregister()
+    lens_settings.unregister()
     settings.unregister()

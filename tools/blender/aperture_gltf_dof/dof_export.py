@@ -22,7 +22,24 @@ KEYS = (
     "sensor_width",
     "sensor_height",
     "sensor_fit",
+    # Issue 61's lens keys (docs/lenses.md), written only when not 0.
+    "aperture_vignetting",
+    "distortion_k1",
+    "distortion_k2",
+    "distortion_k3",
+    "distortion_p1",
+    "distortion_p2",
 )
+
+# The lens keys and the ``camera.aperture_lens`` property each comes from.
+LENS_KEYS = {
+    "aperture_vignetting": "vignetting",
+    "distortion_k1": "k1",
+    "distortion_k2": "k2",
+    "distortion_k3": "k3",
+    "distortion_p1": "p1",
+    "distortion_p2": "p2",
+}
 
 # Written for orthographic cameras only (Cycles' radius for them).
 ORTHO_RADIUS_KEY = "aperture_radius"
@@ -77,6 +94,7 @@ def native_extras(camera):
         "sensor_height": _f32(camera.sensor_height),
         "sensor_fit": str(camera.sensor_fit),
     }
+    extras.update(lens_extras(camera))
     target = dof.focus_object
     if target is not None:
         extras["focus_object"] = target.name
@@ -87,6 +105,16 @@ def native_extras(camera):
                 f"not supported; the focus is on the origin of '{target.name}' instead"
             )
     return extras, warnings
+
+
+def lens_extras(camera):
+    """The camera's ``aperture_lens`` settings as extras, the keys that are not 0 (absent: the
+    ideal thin lens, as aperture reads a missing key)."""
+    lens = getattr(camera, "aperture_lens", None)
+    if lens is None:
+        return {}
+    values = {key: _f32(getattr(lens, name)) for key, name in LENS_KEYS.items()}
+    return {key: value for key, value in values.items() if value != 0.0}
 
 
 def _warn(export_settings, message):

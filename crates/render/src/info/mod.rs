@@ -111,6 +111,14 @@ fn camera_json(s: &Scene, i: usize) -> Value {
             "rotation": f(d.rotation),
             "ratio": f(d.ratio),
             "focus_object": d.focus_object,
+            "vignetting": f(d.lens_options.vignetting),
+            "distortion": {
+                "k1": f(d.lens_options.distortion.k1),
+                "k2": f(d.lens_options.distortion.k2),
+                "k3": f(d.lens_options.distortion.k3),
+                "p1": f(d.lens_options.distortion.p1),
+                "p2": f(d.lens_options.distortion.p2),
+            },
         },
     })
 }

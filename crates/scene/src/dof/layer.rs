@@ -185,6 +185,20 @@ pub(crate) fn parse_overrides(o: &DofOverrides, ctx: &Ctx<'_>) -> Result<Layer, 
             _ => FocusTarget::Name(name.clone()),
         });
     }
+    if let Some(v) = o.vignetting {
+        if !(0.0..=1.0).contains(&v) {
+            return Err(ctx.err("aperture_vignetting", v, "must be between 0 and 1"));
+        }
+        l.vignetting = Some(v);
+    }
+    if let Some(d) = o.distortion {
+        for (k, (slot, c)) in l.distortion.iter_mut().zip(d).enumerate() {
+            if !c.is_finite() {
+                return Err(ctx.err(DISTORTION_KEYS[k], c, "must be a finite number"));
+            }
+            *slot = Some(c);
+        }
+    }
     if l.use_dof.is_none() && (l.aperture_radius.is_some() || l.aperture_fstop.is_some()) {
         l.use_dof = Some(true);
     }

@@ -348,6 +348,14 @@ fn invalid_physical_and_cli_values() {
             focus_object: Some("7".into()),
             ..Default::default()
         },
+        DofOverrides {
+            vignetting: Some(1.5),
+            ..Default::default()
+        },
+        DofOverrides {
+            distortion: Some([0.1, f32::INFINITY, 0.0, 0.0, 0.0]),
+            ..Default::default()
+        },
     ] {
         let e = run(&Case {
             cli: cli.clone(),
@@ -421,4 +429,34 @@ fn invalid_lens_options_name_camera_key_and_value() {
         let s = invalid(extras.clone());
         assert!(s.contains(key), "{extras}: {s}");
     }
+}
+
+#[test]
+fn command_line_lens_options_win_over_the_file() {
+    let c = Case {
+        camera: Some(json!({"aperture_vignetting": 0.4, "distortion_k1": -0.2,
+                            "distortion_p2": 0.01})),
+        cli: DofOverrides {
+            vignetting: Some(0.0),
+            distortion: Some([0.1, 0.0, 0.0, 0.0, 0.0]),
+            ..Default::default()
+        },
+        ..Case::default()
+    };
+    let o = run(&c).unwrap().lens_options;
+    assert_eq!(o.vignetting, 0.0);
+    let d = o.distortion;
+    // The command line gives all five: the file's p2 is replaced by 0.
+    assert_eq!((d.k1, d.k2, d.k3, d.p1, d.p2), (0.1, 0.0, 0.0, 0.0, 0.0));
+    // Vignetting alone leaves the file's distortion.
+    let c = Case {
+        cli: DofOverrides {
+            vignetting: Some(0.3),
+            ..Default::default()
+        },
+        ..c
+    };
+    let o = run(&c).unwrap().lens_options;
+    assert_eq!(o.vignetting, 0.3);
+    assert_eq!(o.distortion.k1, -0.2);
 }

@@ -1,0 +1,65 @@
+# SPDX-License-Identifier: MIT OR Apache-2.0
+"""The thin lens's imperfections on a camera (``camera.aperture_lens``, issue 61) and their panel
+in Camera Properties: exported as the extras keys ``aperture_vignetting`` and ``distortion_*``
+(docs/lenses.md) by the exporter hook (``dof_export.lens_extras``)."""
+
+import bpy
+
+
+class ApertureLens(bpy.types.PropertyGroup):
+    """Optical vignetting and Brown–Conrady distortion (OpenCV's coefficients)."""
+
+    vignetting: bpy.props.FloatProperty(
+        name="Vignetting",
+        description="How far the lens barrel clips the aperture at the image's corners, in "
+        "lens radii (0: none; cat's-eye bokeh off axis)",
+        default=0.0, min=0.0, max=1.0,
+    )
+    k1: bpy.props.FloatProperty(name="K1", description="Radial distortion, r² term "
+                                "(negative: barrel)", default=0.0, precision=4)
+    k2: bpy.props.FloatProperty(name="K2", description="Radial distortion, r⁴ term",
+                                default=0.0, precision=4)
+    k3: bpy.props.FloatProperty(name="K3", description="Radial distortion, r⁶ term",
+                                default=0.0, precision=4)
+    p1: bpy.props.FloatProperty(name="P1", description="Tangential distortion",
+                                default=0.0, precision=4)
+    p2: bpy.props.FloatProperty(name="P2", description="Tangential distortion",
+                                default=0.0, precision=4)
+
+
+class DATA_PT_aperture_lens(bpy.types.Panel):
+    """Camera Properties › aperture Lens."""
+
+    bl_label = "aperture Lens"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "data"
+    COMPAT_ENGINES = {"APERTURE"}
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine in cls.COMPAT_ENGINES and context.camera is not None
+
+    def draw(self, context):
+        lens = context.camera.aperture_lens
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(lens, "vignetting")
+        column = layout.column(heading="Distortion")
+        for name in ("k1", "k2", "k3", "p1", "p2"):
+            column.prop(lens, name)
+
+
+CLASSES = (ApertureLens, DATA_PT_aperture_lens)
+
+
+def register():
+    for c in CLASSES:
+        bpy.utils.register_class(c)
+    bpy.types.Camera.aperture_lens = bpy.props.PointerProperty(type=ApertureLens)
+
+
+def unregister():
+    del bpy.types.Camera.aperture_lens
+    for c in reversed(CLASSES):
+        bpy.utils.unregister_class(c)
