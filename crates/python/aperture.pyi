@@ -138,8 +138,15 @@ class Scene:
         rotation: float | None = ...,
         ratio: float | None = ...,
         use_dof: bool | None = ...,
+        aperture_vignetting: float | None = ...,
+        distortion_k1: float | None = ...,
+        distortion_k2: float | None = ...,
+        distortion_k3: float | None = ...,
+        distortion_p1: float | None = ...,
+        distortion_p2: float | None = ...,
     ) -> None:
-        """Moves the camera's node and sets its depth-of-field keys (None removes a key)."""
+        """Moves the camera's node and sets its depth-of-field and lens keys (None removes a
+        key; the lens keys are docs/lenses.md's)."""
     def set_transform(
         self,
         node: int | str,

@@ -223,6 +223,13 @@ const CAMERA_KEYS: &[(&str, &str)] = &[
     ("aperture_blades", "aperture_blades"),
     ("aperture_rotation", "aperture_rotation"),
     ("aperture_ratio", "aperture_ratio"),
+    // Issue 61's lens options (docs/lenses.md), under their extras names only.
+    ("aperture_vignetting", "aperture_vignetting"),
+    ("distortion_k1", "distortion_k1"),
+    ("distortion_k2", "distortion_k2"),
+    ("distortion_k3", "distortion_k3"),
+    ("distortion_p1", "distortion_p1"),
+    ("distortion_p2", "distortion_p2"),
 ];
 
 /// A camera key's value as JSON: a bool, a finite number, a string, or `None` (removes it).

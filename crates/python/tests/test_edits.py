@@ -89,6 +89,12 @@ def edit_camera_keys(scene, doc):
                                        focus_object="Row4_Box")
 
 
+def edit_lens_options(scene, doc):
+    scene.set_camera(aperture_vignetting=0.5, distortion_k1=-0.2, distortion_p2=0.01)
+    doc["cameras"][0]["extras"].update(aperture_vignetting=0.5, distortion_k1=-0.2,
+                                       distortion_p2=0.01)
+
+
 def edit_camera_matrix(scene, doc):
     m = look_at([0.6, 0.5, 0.4], [0.0, 0.1, -1.8])
     scene.set_camera(matrix=m, focus_distance=2.0)
@@ -102,7 +108,7 @@ def edit_camera_matrix(scene, doc):
 
 EDITS = [edit_transform, edit_transform_by_name, edit_translation_and_rotation, edit_visible,
          edit_material,
-         edit_material_by_name, edit_light, edit_camera_keys, edit_camera_matrix]
+         edit_material_by_name, edit_light, edit_camera_keys, edit_lens_options, edit_camera_matrix]
 
 
 @pytest.mark.parametrize("edit", EDITS, ids=lambda f: f.__name__)
