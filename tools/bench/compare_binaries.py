@@ -84,7 +84,7 @@ def header_end(data):
 
 def render(binary, scene, args, threads, out):
     """(render-only seconds, wall seconds, sha256 of the EXR's pixel bytes)."""
-    cmd = ["nice", binary, "render", scene, "-o", out, "--threads", str(threads), "--quiet",
+    cmd = [binary, "render", scene, "-o", out, "--threads", str(threads), "--quiet",
            *args]
     t0 = time.perf_counter()
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)

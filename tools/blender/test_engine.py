@@ -88,6 +88,8 @@ def build_scene():
     # render's pixels, strength 2 doubling the mean) hold for the raw render; denoising is
     # not linear. test_denoise turns it on (as a new scene has it).
     s.denoise = False
+    # This test is of the command-line path (test_viewport.py tests F12 in the session).
+    s.f12_session = False
     vl = sc.view_layers[0]
     vl.use_pass_z = True
     vl.use_pass_normal = True

@@ -147,6 +147,59 @@ def run(bpy):
         before = film
     bpy.app.handlers.depsgraph_update_post.remove(handler)
     session.free()
+    test_f12(bpy, vs, aperture)
+
+
+def f12(bpy, name):
+    """F12 (``bpy.ops.render.render``) with the engine: Combined as RGBA, rows from the top."""
+    import OpenEXR
+
+    sc = bpy.context.scene
+    sc.render.use_compositing = False
+    sc.render.image_settings.file_format = "OPEN_EXR"
+    sc.render.image_settings.color_depth = "32"
+    sc.view_settings.view_transform = "Standard"
+    path = os.path.join(WORK, name + ".exr")
+    sc.render.filepath = path
+    bpy.ops.render.render(write_still=True)
+    ch = {k: np.array(v.pixels, dtype=np.float32)
+          for k, v in OpenEXR.File(path, separate_channels=True).channels().items()}
+    prefix = next(n[:-1] for n in ch if n.endswith("R"))
+    return np.stack([ch[prefix + c] for c in "RGBA"], axis=-1)
+
+
+def test_f12(bpy, vs, aperture):
+    """F12 through the session F12 and the viewport share: the first exports once, a second
+    with nothing changed exports and sends nothing and gives the same bits, a transform is one
+    edit (no export), a geometry edit one re-export; each image's RGB equals a fresh export's
+    render bit for bit."""
+    engine = sys.modules[ADDON + ".engine"]
+    cube = bpy.data.objects["Cube"]
+    cube.hide_render = False  # the edits above hid it
+    steps = [("f12.first", None, ["export"], 1), ("f12.unchanged", None, [], 1),
+             ("f12.transform", lambda: setattr(cube, "location", (-0.7, 0.4, 0.5)),
+              ["transform"], 1),
+             ("f12.geometry", lambda: [setattr(v.co, "x", v.co.x * 1.5) for v in cube.data.vertices]
+              and cube.data.update(), ["reexport"], 2)]
+    last = None
+    for k, (name, edit, want, exports) in enumerate(steps):
+        if edit is not None:
+            edit()
+            bpy.context.view_layer.update()
+        img = f12(bpy, name)
+        run = dict(engine.LAST_RUN)
+        paths = sorted({p for p, _ in run.get("sync", [])})
+        s = vs.existing(bpy.context.evaluated_depsgraph_get())
+        ref = reference(bpy, vs, aperture, s.scene_options, f"f12-{k}")[..., :3]
+        same = bits_equal(np.ascontiguousarray(img[..., :3]), np.ascontiguousarray(ref))
+        repeat_ok = name != "f12.unchanged" or bits_equal(img, last)
+        check(f"viewport.{name}", run.get("path") == "session" and paths == want
+              and run.get("exports") == exports and same and repeat_ok,
+              f"path {run.get('path')}, sync took {paths} (want {want}), exports so far "
+              f"{run.get('exports')} (want {exports}); RGB bit-identical to a fresh export's "
+              f"render: {same}; same as the last F12 where nothing changed: {repeat_ok}")
+        last = img
+    vs.free_shared()
 
 
 def main():

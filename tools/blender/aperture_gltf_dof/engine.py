@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: MIT OR Apache-2.0
 """The "aperture" render engine: F12 exports the evaluated scene at the current frame to a
 temporary GLB through Blender's own glTF exporter, runs `aperture render` on it, and loads its
-EXR into the render result, passes included."""
+EXR into the render result, passes included. With the `aperture` Python module, F12 renders the
+scene the viewport keeps loaded instead (f12_session: nothing exported when nothing changed)."""
 
 import json
 import os
@@ -14,7 +15,7 @@ import time
 
 import bpy
 
-from . import exr, world
+from . import exr, f12_session, viewport_sync, world
 from .scene_export import export_scene, resolution  # noqa: F401 (the engine's names)
 from .viewport import ViewportMixin
 
@@ -162,6 +163,9 @@ class ApertureRenderEngine(ViewportMixin, bpy.types.RenderEngine):
     def render(self, depsgraph):
         scene = depsgraph.scene
         view_layer = depsgraph.view_layer
+        if f12_session.usable(scene):
+            self.render_in_session(depsgraph)
+            return
         folder = tempfile.mkdtemp(prefix="aperture-blender-")
         LAST_RUN.clear()
         LAST_RUN["dir"] = folder
@@ -182,6 +186,25 @@ class ApertureRenderEngine(ViewportMixin, bpy.types.RenderEngine):
         finally:
             if not scene.aperture.keep_files:
                 shutil.rmtree(folder, ignore_errors=True)
+
+    def render_in_session(self, depsgraph):
+        """F12 through the session the viewport shares (f12_session): no export when nothing
+        changed."""
+        scene, view_layer = depsgraph.scene, depsgraph.view_layer
+        LAST_RUN.clear()
+        LAST_RUN["path"] = "session"
+        try:
+            rows, crypto = enabled_passes(scene, view_layer)
+            names = [r[4] for r in rows] + crypto
+            chans, synced = f12_session.render(depsgraph, names, self.cancelled,
+                                               self.update_progress)
+            LAST_RUN["sync"] = synced
+            s = viewport_sync.existing(depsgraph)
+            LAST_RUN["exports"] = s.exports if s is not None else 0
+            if chans is not None:
+                self.load_channels(chans, scene, view_layer)
+        except Exception as e:  # every failure reaches the report area with its message
+            self.report({"ERROR"}, f"aperture: {e}")
 
     def run(self, cmd):
         """Runs aperture, forwarding its JSON progress; False when cancelled (Esc). Raises with
@@ -244,6 +267,11 @@ class ApertureRenderEngine(ViewportMixin, bpy.types.RenderEngine):
         """aperture's EXR into the render result: the beauty as Combined, each pass by name
         (rows flipped: Blender's are bottom to top)."""
         channels, _ = exr.read(path)
+        self.load_channels(channels, scene, view_layer)
+
+    def load_channels(self, channels, scene, view_layer):
+        """EXR-style channels (``{"R": …, "Depth.Z": …}``, rows from the top) into the render
+        result."""
         w, h = resolution(scene)
         x0, y0, x1, y1 = border(scene) or (0, 0, w, h)
         # With a border, Blender's render result is the border itself (placed in the image by
@@ -276,7 +304,12 @@ class ApertureRenderEngine(ViewportMixin, bpy.types.RenderEngine):
 
 def register():
     bpy.utils.register_class(ApertureRenderEngine)
+    # A new file frees the sessions F12 and the viewport share.
+    bpy.app.handlers.load_pre.append(viewport_sync.free_shared)
 
 
 def unregister():
+    if viewport_sync.free_shared in bpy.app.handlers.load_pre:
+        bpy.app.handlers.load_pre.remove(viewport_sync.free_shared)
+    viewport_sync.free_shared()
     bpy.utils.unregister_class(ApertureRenderEngine)

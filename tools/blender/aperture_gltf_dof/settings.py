@@ -82,6 +82,14 @@ class ApertureSettings(bpy.types.PropertyGroup):
         subtype="FILE_PATH",
         default="",
     )
+    f12_session: bpy.props.BoolProperty(
+        name="Keep Scene Loaded",
+        description="F12 renders the scene the viewport keeps loaded (with the aperture Python "
+        "module): a second F12 exports only what changed. Off, or without the module, or with "
+        "motion blur, a border or denoising: every F12 exports the scene and runs the aperture "
+        "program",
+        default=True,
+    )
     keep_files: bpy.props.BoolProperty(
         name="Keep Files",
         description="Keep the exported glTF and aperture's EXR in the temporary folder (for "
@@ -110,7 +118,7 @@ class RENDER_PT_aperture(bpy.types.Panel):
         for name in ("samples", "noise_threshold", "max_bounces", "clamp_direct",
                      "clamp_indirect", "filter", "seed", "transmission", "denoising_data",
                      "denoise", "denoise_prefilter", "denoise_quality", "oidn", "binary",
-                     "keep_files"):
+                     "f12_session", "keep_files"):
             layout.prop(s, name)
 
 

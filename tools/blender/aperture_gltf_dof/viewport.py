@@ -24,19 +24,26 @@ class ViewportMixin:
     def view_update(self, context, depsgraph):
         if not viewport_sync.available():
             return
+        # The session F12 shares: while F12 renders with it, the viewport tries again later
+        # rather than wait (Blender's main thread never blocks on a render).
+        held = viewport_sync.existing(depsgraph)
+        if held is not None and not held.lock.acquire(blocking=False):
+            self.tag_update()
+            return
         try:
-            s = self._aperture_session
-            if s is None:
-                s = self._aperture_session = viewport_sync.Session(depsgraph)
-            else:
-                s.sync(depsgraph)
+            s = self._aperture_session = viewport_sync.synced(depsgraph)
+            camera = depsgraph.scene.camera
             rd = context.region_data
-            if rd is not None and rd.view_perspective != "CAMERA" and depsgraph.scene.camera:
-                s.scene.set_camera(depsgraph.scene.camera.data.name, view_matrix(rd),
-                                   lens=context.space_data.lens, sensor_width=72.0, use_dof=False)
+            if rd is not None and rd.view_perspective != "CAMERA" and camera:
+                s.scene.set_camera(camera.data.name, view_matrix(rd), lens=context.space_data.lens,
+                                   sensor_width=72.0, use_dof=False)
+                s.forget_camera(camera)
             s.start(width=context.region.width, height=context.region.height)
         except Exception as e:  # never raised into Blender: the header shows it
             self.report({"ERROR"}, f"aperture: {e}")
+        finally:
+            if held is not None:
+                held.lock.release()
 
     def view_draw(self, context, depsgraph):
         s = self._aperture_session
@@ -57,8 +64,10 @@ class ViewportMixin:
             self.tag_redraw()  # more samples are coming
 
     def __del__(self):
+        # The session is shared with F12 (viewport_sync.shared): it stays loaded; a new file
+        # or disabling the add-on frees it (viewport_sync.free_shared).
         try:
             if self._aperture_session is not None:
-                self._aperture_session.free()
+                self._aperture_session.stop()
         except ReferenceError:
             pass

@@ -17,6 +17,11 @@ What takes which path (``Session.sync`` returns ``[(path, name)]``):
 
 A geometry flag is confirmed against a hash of the evaluated mesh, so a material or modifier
 update that leaves the mesh as it was does not re-export.
+
+F12 and the viewport share one session per Blender scene (``shared``): F12's depsgraph is a
+fresh evaluation, so F12 brings the session to it with ``Session.refresh``, which compares every
+exported object's edit values with the ones sent (the same edits, no updates needed): a second
+F12 with nothing changed exports nothing and sends nothing.
 """
 
 import json
@@ -82,6 +87,10 @@ def render_options(scene, size=None):
     return opts
 
 
+# Object types the export writes a node for that a new object of would need a re-export.
+EXPORTED = {"MESH", "CURVE", "SURFACE", "META", "FONT", "LIGHT", "CAMERA", "EMPTY"}
+
+
 def _same(a, b):
     """Equal edit values (numpy matrices, dicts, lists, numbers)."""
     if isinstance(a, tuple):
@@ -126,6 +135,47 @@ class Worker:
         return not self._thread.is_alive()
 
 
+_SHARED = {}
+
+
+def shared(depsgraph, export=export_scene):
+    """The session F12 and the viewport share for this Blender scene: created (one export) on
+    first use, else brought to ``depsgraph``'s state by ``Session.refresh``. Its ``last_sync``
+    says what that took (``[("export", scene)]`` for a new one). Hold ``lock`` while using it."""
+    key = (bpy.data.filepath, depsgraph.scene.name)
+    s = _SHARED.get(key)
+    if s is None:
+        s = _SHARED[key] = Session(depsgraph, export=export)
+        s.last_sync = [("export", depsgraph.scene.name)]
+    else:
+        s.last_sync = s.refresh(depsgraph)
+    return s
+
+
+def existing(depsgraph):
+    """The shared session of ``depsgraph``'s scene, or None (nothing is created)."""
+    return _SHARED.get((bpy.data.filepath, depsgraph.scene.name))
+
+
+def synced(depsgraph, export=export_scene):
+    """The shared session for the viewport: created as ``shared`` does, else synced from
+    ``depsgraph.updates`` (cheaper than a refresh: only what changed is looked at)."""
+    key = (bpy.data.filepath, depsgraph.scene.name)
+    s = _SHARED.get(key)
+    if s is None:
+        return shared(depsgraph, export)
+    s.last_sync = s.sync(depsgraph)
+    return s
+
+
+@bpy.app.handlers.persistent
+def free_shared(*_):
+    """Frees every shared session (a file is loaded, the add-on is disabled)."""
+    for s in _SHARED.values():
+        s.free()
+    _SHARED.clear()
+
+
 class Session:
     """One loaded export of the scene, its name maps, the last synced state, and a worker."""
 
@@ -133,6 +183,9 @@ class Session:
         import aperture
 
         self._aperture, self._export, self._size = aperture, export, size
+        # F12 (a render thread) and the viewport (the main thread) take turns.
+        self.lock = threading.RLock()
+        self.last_sync = []
         self.folder = tempfile.mkdtemp(prefix="aperture-viewport-")
         self.exports = 0
         self.edits = []  # every (path, name) synced, for tests and the header's report
@@ -306,6 +359,46 @@ class Session:
             done.append(("options", depsgraph.scene.name))
         self.edits += done
         return done
+
+    def refresh(self, depsgraph):
+        """Brings the session to ``depsgraph``'s state without its updates (F12's depsgraph is
+        a fresh evaluation): each exported object's edit values are sent where they differ
+        from the ones sent; a changed mesh, a new or deleted object, or a change the edits
+        cannot express re-exports. Returns ``[(path, name)]`` as ``sync`` does."""
+        if self._busy:
+            return []
+        self.stop()
+        done = []
+        for obj in depsgraph.scene.objects:
+            if obj.name not in self.nodes and not obj.hide_render and obj.type in EXPORTED:
+                done.append(("reexport", obj.name))
+        done += [("reexport", n) for n in self.visible if n not in bpy.data.objects]
+        for obj in self._objects():
+            if obj.type == "MESH" and self.geometry.get(obj.name) != mirror.geometry_signature(
+                    obj.evaluated_get(depsgraph)):
+                done.append(("reexport", obj.name))
+                continue
+            paths = [self._camera(obj)] if obj.type == "CAMERA" else [self._transform(obj)]
+            if obj.type == "LIGHT":
+                paths.append(self._light(obj))
+            for slot in getattr(obj, "material_slots", []):
+                if slot.material is not None:
+                    paths.append(self._material(slot.material))
+            done += [(p, obj.name) for p in paths if p not in (None, "ignored")]
+        done += self._visibility()
+        if any(p == "reexport" for p, _ in done):
+            self._reload(depsgraph)
+        options = render_options(depsgraph.scene, self._size)
+        if options != self.scene_options:
+            self.scene_options = options
+            done.append(("options", depsgraph.scene.name))
+        self.edits += done
+        return done
+
+    def forget_camera(self, obj):
+        """The session's camera was moved outside the sync (the viewport's own view): the next
+        sync or refresh sends ``obj``'s camera again."""
+        self.sent.pop(("camera", obj.name), None)
 
     # -- rendering --------------------------------------------------------------------------
     def start(self, **overrides):
