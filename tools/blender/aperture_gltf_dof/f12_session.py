@@ -31,9 +31,9 @@ def render(depsgraph, pass_names, cancelled, progress):
     """The F12 image of ``depsgraph``'s scene as EXR-style channels (``{"R": …, "Depth.Z": …}``,
     H×W float32 each, rows from the top), or None when ``cancelled()`` became true; and what
     the sync took (``[(path, name)]``)."""
-    s = viewport_sync.existing(depsgraph)
-    if s is not None:
-        s.lock.acquire()  # the viewport lets go within its own update
+    held = viewport_sync.existing(depsgraph)
+    if held is not None:
+        held.lock.acquire()  # the viewport lets go within its own update
     try:
         s = viewport_sync.shared(depsgraph)
         with s.lock:
@@ -51,8 +51,8 @@ def render(depsgraph, pass_names, cancelled, progress):
                 result = run.image()
             return channels(result), s.last_sync
     finally:
-        if s is not None:
-            s.lock.release()
+        if held is not None:
+            held.lock.release()
 
 
 def channels(result):
