@@ -146,8 +146,30 @@ def run(bpy):
               f"mean change from the last state {moved:.4f}")
         before = film
     bpy.app.handlers.depsgraph_update_post.remove(handler)
+    test_preview(vs, session)
     session.free()
     test_f12(bpy, vs, aperture)
+
+
+def test_preview(vs, session):
+    """The quick first image: one sample at 1/pixel-size of the resolution, then the full
+    progressive render, whose film is the same bits as without the preview; the pixel size is
+    the smallest power of two whose pass fits 1/30 s (a pure function of the measured time)."""
+    full = session.start(pixel_size=1)
+    full.wait()
+    plain, plain_shape = session.film(), full.first_shape
+    quick = session.start(pixel_size=4)
+    quick.wait()
+    same = bits_equal(session.film(), plain)
+    want = (-(-H // 4), -(-W // 4))
+    check("viewport.preview", quick.first_shape == want and plain_shape == (H, W) and same
+          and quick.full_pass_seconds is not None,
+          f"first image {quick.first_shape} (want {want}; without a preview {plain_shape}); final "
+          f"film the same bits as without the preview: {same}")
+    sizes = [vs.pixel_size_for(t) for t in (0.01, 0.05, 0.5, 0.6, 1000.0)]
+    check("viewport.pixel-size", sizes == [1, 2, 4, 8, 16],
+          f"pixel size for a full pass of 10 ms, 50 ms, 0.5 s, 0.6 s, 1000 s: {sizes} "
+          "(want [1, 2, 4, 8, 16] at 1/30 s a first image)")
 
 
 def f12(bpy, name):

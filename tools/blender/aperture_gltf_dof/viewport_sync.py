@@ -30,6 +30,7 @@ import shutil
 import struct
 import tempfile
 import threading
+import time
 
 import bpy
 import numpy as np
@@ -100,22 +101,63 @@ def _same(a, b):
     return a == b
 
 
-class Worker:
-    """Renders one progressive render on a thread (the doubling schedule) until it is done or
-    stopped; ``film`` is the latest image, ``samples`` its samples per pixel."""
+# The first image after an update should come within this (Cycles' viewport aims at 1/30 s).
+FIRST_IMAGE_SECONDS = 1.0 / 30.0
+# The coarsest preview: one pixel of it covers PIXEL_SIZE_MAX² of the viewport's.
+PIXEL_SIZE_MAX = 16
 
-    def __init__(self, scene, options):
+
+def pixel_size_for(full_pass_seconds, target=FIRST_IMAGE_SECONDS):
+    """The preview's pixel size (a power of two) for a viewport whose full-resolution
+    one-sample pass took ``full_pass_seconds``: the smallest whose pass (a quarter of the
+    pixels at each doubling) fits ``target``, as Cycles halves the resolution until an update
+    fits. 1 (no preview) when the full pass fits already."""
+    size = 1
+    while size < PIXEL_SIZE_MAX and full_pass_seconds / (size * size) > target:
+        size *= 2
+    return size
+
+
+class Worker:
+    """Renders one progressive render on a thread until it is done or stopped: first, when
+    ``pixel_size`` > 1, one sample at 1/pixel_size of the resolution (shown with each of its
+    pixels covering pixel_size² of the film's: the quick first image while the view changes),
+    then the doubling schedule at full resolution. ``film`` is the latest image (always the
+    full size), ``samples`` its samples per pixel (0 for the preview); ``first_shape`` the
+    resolution of the first image and ``full_pass_seconds`` the first full-resolution pass's
+    time (what the next update's pixel size is chosen from)."""
+
+    def __init__(self, scene, options, pixel_size=1):
         self.render = scene.start(**options)
         self.film, self.samples, self.error = None, 0, None
+        self.first_shape, self.full_pass_seconds = None, None
+        self._scene, self._options, self.pixel_size = scene, options, pixel_size
         self._lock = threading.Lock()
         self._thread = threading.Thread(target=self._run, daemon=True)
         self._thread.start()
 
+    def _preview(self):
+        """The quick first image: one sample at 1/pixel_size of the resolution, scaled up."""
+        w, h, ps = self._options["width"], self._options["height"], self.pixel_size
+        opts = {k: v for k, v in self._options.items() if k not in ("noise_threshold", "min_spp")}
+        opts.update(width=-(-w // ps), height=-(-h // ps), spp=1, passes="none")
+        small = self._scene.render(**opts).image
+        self.first_shape = small.shape[:2]
+        big = np.repeat(np.repeat(small, ps, axis=0), ps, axis=1)[:h, :w]
+        with self._lock:
+            self.film, self.samples = big, 0
+
     def _run(self):
         try:
+            if self.pixel_size > 1 and "width" in self._options and "height" in self._options:
+                self._preview()
             while not self.render.done:
+                t = time.perf_counter()
                 self.render.step()
                 image = self.render.image().image
+                if self.full_pass_seconds is None:
+                    self.full_pass_seconds = time.perf_counter() - t
+                    self.first_shape = self.first_shape or image.shape[:2]
                 with self._lock:
                     self.film, self.samples = image, self.render.samples
         except Exception as e:  # reported by the engine, never raised into Blender
@@ -401,10 +443,19 @@ class Session:
         self.sent.pop(("camera", obj.name), None)
 
     # -- rendering --------------------------------------------------------------------------
-    def start(self, **overrides):
-        """Starts the worker on the synced scene (stopping the last one)."""
+    def start(self, pixel_size=None, **overrides):
+        """Starts the worker on the synced scene (stopping the last one). The first image
+        comes at a reduced resolution when the last full-resolution pass did not fit
+        ``FIRST_IMAGE_SECONDS`` (``pixel_size`` forces one; the very first start, with nothing
+        measured, previews at 4)."""
         self.stop()
-        self.worker = Worker(self.scene, {**self.scene_options, **overrides})
+        last = self.worker
+        if pixel_size is None:
+            if last is None or last.full_pass_seconds is None:
+                pixel_size = last.pixel_size if last is not None else 4
+            else:
+                pixel_size = pixel_size_for(last.full_pass_seconds)
+        self.worker = Worker(self.scene, {**self.scene_options, **overrides}, pixel_size)
         return self.worker
 
     def stop(self):
