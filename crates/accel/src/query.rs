@@ -42,6 +42,47 @@ impl Accel {
         self.occluded_impl::<false>(ray)
     }
 
+    /// A hit in `[ray.tmin, ray.tmax]` if any: the first the any-hit walk meets, not the
+    /// closest ([`Accel::occluded`] saying which). For shadow rays that must tell an occluder
+    /// from a surface they pass (the back of a culled single-sided face).
+    pub fn occluder(&self, ray: &Ray) -> Option<Hit> {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: as in `intersect`.
+            return unsafe { self.occluder_avx2(ray) };
+        }
+        self.occluder_impl::<false>(ray)
+    }
+
+    /// [`Accel::intersect_avx2`] for [`Accel::occluder`].
+    ///
+    /// # Safety
+    /// As for [`Accel::intersect_avx2`].
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
+    unsafe fn occluder_avx2(&self, ray: &Ray) -> Option<Hit> {
+        self.occluder_impl::<true>(ray)
+    }
+
+    #[inline(always)]
+    pub(crate) fn occluder_impl<const AVX2: bool>(&self, ray: &Ray) -> Option<Hit> {
+        if self.misses_bounds(ray) {
+            return None;
+        }
+        let mut inline: InlineStack = [MaybeUninit::uninit(); INLINE_STACK];
+        let mut heap = Vec::new();
+        let blas_stack = stack_for(self.max_blas_depth, &mut inline, &mut heap);
+        let mut tmax = ray.tmax;
+        let mut leaf = EntriesBlocker::<AVX2> {
+            accel: self,
+            ray,
+            stack: blas_stack,
+            found: None,
+        };
+        self.for_entries::<AVX2>(ray, &mut tmax, &mut leaf);
+        leaf.found
+    }
+
     /// The whole query compiled for AVX2: the per-ray setup (reciprocals, shear, stack) and the
     /// traversal become one function, without a call boundary between them where the traversal
     /// had to spill its ray constants (about 60 instructions per ray).

@@ -12,7 +12,9 @@ mod ordered;
 mod stack;
 
 pub(crate) use group::take_child;
-pub(crate) use leaf::{AnyLeaf, BlasLeaf, ClosestLeaf, EntriesAny, EntriesClosest, Leaf};
+pub(crate) use leaf::{
+    AnyLeaf, BlasLeaf, ClosestLeaf, EntriesAny, EntriesBlocker, EntriesClosest, Leaf,
+};
 use ordered::Walk;
 pub(crate) use stack::{stack_for, stack_len, Group, InlineStack, INLINE_STACK};
 

@@ -181,6 +181,21 @@ proptest! {
                 slow.map(|h| (h.t, h.instance, h.triangle))
             );
             prop_assert_eq!(accel.occluded(&ray), slow.is_some());
+            // The any hit that says which: present exactly when something is hit, no closer
+            // than the closest hit, and a point of its triangle on the ray.
+            let any = accel.occluder(&ray);
+            prop_assert_eq!(any.is_some(), slow.is_some());
+            if let (Some(a), Some(s)) = (any, slow) {
+                prop_assert!(a.t >= s.t && a.t <= ray.tmax, "{a:?} against the closest {s:?}");
+                let p = accel.triangle_world(a.instance, a.triangle).expect("its triangle");
+                let on_triangle = (1.0 - a.u - a.v) * p[0] + a.u * p[1] + a.v * p[2];
+                let on_ray = ray.origin + a.t * ray.dir;
+                let scale = 1.0 + on_ray.length() + ray.origin.length();
+                prop_assert!(
+                    (on_triangle - on_ray).length() <= 1e-4 * scale,
+                    "{a:?}: {on_triangle} on the triangle, {on_ray} on the ray"
+                );
+            }
         }
     }
 }

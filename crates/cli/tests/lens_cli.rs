@@ -58,7 +58,12 @@ fn flags_render_what_the_files_keys_render() {
         &dir,
         "flags",
         &plain,
-        &["--aperture-vignetting", "0.6", "--distortion", "-0.3,0.05,0,0.01"],
+        &[
+            "--aperture-vignetting",
+            "0.6",
+            "--distortion",
+            "-0.3,0.05,0,0.01",
+        ],
     );
     let ideal = render(&dir, "ideal", &plain, &[]);
     assert_ne!(from_file, ideal, "the lens keys should change the image");

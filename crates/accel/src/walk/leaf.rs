@@ -81,6 +81,32 @@ impl<const AVX2: bool> Leaf for EntriesAny<'_, AVX2> {
     }
 }
 
+/// The top level's leaf for an any hit that says which ([`EntriesAny`] keeping the hit): stops
+/// at the first entry with a hit.
+pub(crate) struct EntriesBlocker<'a, const AVX2: bool> {
+    pub(crate) accel: &'a Accel,
+    pub(crate) ray: &'a Ray,
+    pub(crate) stack: &'a mut [MaybeUninit<Group>],
+    pub(crate) found: Option<Hit>,
+}
+
+impl<const AVX2: bool> Leaf for EntriesBlocker<'_, AVX2> {
+    const CLOSEST: bool = false;
+    #[inline(always)]
+    fn visit(&mut self, primitive: u32, _: &mut f32) -> bool {
+        let mut tmax = self.ray.tmax;
+        let Some(entry) = self.accel.entries.get(primitive as usize) else {
+            return false;
+        };
+        let entry = &self.accel.entry_at(entry, self.ray);
+        let hit = self
+            .accel
+            .walk_entry::<AVX2, BlockerLeaf<AVX2>>(entry, self.ray, &mut tmax, self.stack);
+        self.found = hit.flatten();
+        self.found.is_some()
+    }
+}
+
 /// Closest hit over a bottom-level BVH's triangles: `(triangle index, (t, u, v))`. With `AVX`
 /// its triangle test takes the AVX path (`triangle::intersect`): such a leaf is only walked
 /// inside the queries compiled for AVX2 (`AVX2` of the walks), as `AnyLeaf`'s.
@@ -116,6 +142,28 @@ pub(crate) struct AnyLeaf<'a, const AVX: bool> {
 }
 
 impl<const AVX: bool> Leaf for AnyLeaf<'_, AVX> {
+    const CLOSEST: bool = false;
+    #[inline(always)]
+    fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
+        let hit = self
+            .tris
+            .get(primitive as usize)
+            .and_then(|tri| crate::triangle::intersect::<AVX>(&self.ray, tri, self.tmin, *tmax));
+        hit.is_some_and(|h| self.record(primitive, h, tmax))
+    }
+}
+
+/// Any hit over a bottom-level BVH's triangles, keeping it: `(triangle index, (t, u, v))` of
+/// the first hit found (not the closest).
+#[derive(Clone, Copy)]
+pub(crate) struct BlockerLeaf<'a, const AVX: bool> {
+    pub(crate) tris: &'a [Tri],
+    pub(crate) ray: TriRay,
+    pub(crate) tmin: f32,
+    pub(crate) hit: Option<(usize, (f32, f32, f32))>,
+}
+
+impl<const AVX: bool> Leaf for BlockerLeaf<'_, AVX> {
     const CLOSEST: bool = false;
     #[inline(always)]
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
@@ -245,6 +293,52 @@ impl<'a, const AVX: bool> BlasLeaf<'a> for AnyLeaf<'a, AVX> {
     #[inline(always)]
     fn record(&mut self, primitive: u32, _: (f32, f32, f32), _: &mut f32) -> bool {
         self.blocker = primitive;
+        true
+    }
+}
+
+impl<'a, const AVX: bool> BlasLeaf<'a> for BlockerLeaf<'a, AVX> {
+    type Answer = Option<Hit>;
+
+    #[inline(always)]
+    fn start(tris: &'a [Tri], ray: TriRay, tmin: f32) -> Self {
+        Self {
+            tris,
+            ray,
+            tmin,
+            hit: None,
+        }
+    }
+
+    #[inline(always)]
+    fn answer(&self, blas: &Blas, entry: &Entry, _: bool) -> Option<Hit> {
+        self.hit.map(|(i, h)| Accel::make_hit(blas, entry, i, h))
+    }
+
+    #[inline(always)]
+    fn one<const AVX2: bool>(accel: &Accel, ray: &Ray) -> Option<Hit> {
+        accel.occluder_impl::<AVX2>(ray)
+    }
+
+    #[inline(always)]
+    fn miss() -> Option<Hit> {
+        None
+    }
+
+    #[inline(always)]
+    fn blocker(&self) -> Option<u32> {
+        // Which hit stops the walk changes the answer: not one a packet may share.
+        None
+    }
+
+    #[inline(always)]
+    fn triangles(&self) -> (&'a [Tri], &TriRay, f32) {
+        (self.tris, &self.ray, self.tmin)
+    }
+
+    #[inline(always)]
+    fn record(&mut self, primitive: u32, h: (f32, f32, f32), _: &mut f32) -> bool {
+        self.hit = Some((primitive as usize, h));
         true
     }
 }

@@ -286,14 +286,31 @@ impl Integrator<'_> {
     ) -> Vec3 {
         let (ray, absorbed) = shadow_ray(origin, dir, dist, sigma_a, time);
         if !self.geom.has_alpha && !self.geom.has_thin {
-            // Only opaque surfaces: any hit decides, unless it may be a culled back (then the
-            // walk below decides; a ray that meets nothing is lit either way).
-            if !self.accel.occluded(&ray) {
-                return absorbed;
-            }
             if !self.geom.has_culled {
-                return Vec3::ZERO;
+                // Only opaque surfaces: any hit decides.
+                return if self.accel.occluded(&ray) {
+                    Vec3::ZERO
+                } else {
+                    absorbed
+                };
             }
+            return self.past_culled_backs(ray, absorbed);
+        }
+        self.passing_transmittance(ray, absorbed)
+    }
+
+    /// [`Integrator::visibility`] where every surface is opaque but backs of single-sided
+    /// faces are culled: a ray that meets nothing is lit; one whose any hit is a surface seen
+    /// from its front (or double-sided) is blocked; only one that met a culled back walks the
+    /// surfaces ([`Integrator::passing_transmittance`]). Also the answer for a deferred shadow
+    /// ray of such a scene found blocked.
+    pub(super) fn past_culled_backs(&self, ray: Ray, absorbed: Vec3) -> Vec3 {
+        let Some(hit) = self.accel.occluder(&ray) else {
+            return absorbed;
+        };
+        let s = self.hit_surface(&ray, &hit, false);
+        if !self.geom.is_culled(&s, ray.dir) {
+            return Vec3::ZERO;
         }
         self.passing_transmittance(ray, absorbed)
     }

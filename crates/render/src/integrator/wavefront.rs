@@ -134,7 +134,7 @@ impl<const AOV: bool> Wavefront<AOV> {
             let culled = integrator.geom.has_culled;
             let through = |ray: Ray, absorbed: Vec3| {
                 if culled {
-                    integrator.passing_transmittance(ray, absorbed)
+                    integrator.past_culled_backs(ray, absorbed)
                 } else {
                     Vec3::ZERO
                 }
