@@ -245,6 +245,7 @@ class Session:
         finally:
             self._busy = False
         self.scene = self._aperture.load(path)
+        self.triangles = self.scene.info()["triangles"]["drawn"]
         self.path = path
         doc = glb_json(path)
         self.nodes = {n.get("name"): i for i, n in enumerate(doc.get("nodes", []))}
@@ -455,8 +456,17 @@ class Session:
                 pixel_size = last.pixel_size if last is not None else 4
             else:
                 pixel_size = pixel_size_for(last.full_pass_seconds)
-        self.worker = Worker(self.scene, {**self.scene_options, **overrides}, pixel_size)
+        opts = {**self.scene_options, **overrides}
+        opts.setdefault("bvh_quality", self.bvh_quality(opts))
+        self.worker = Worker(self.scene, opts, pixel_size)
         return self.worker
+
+    def bvh_quality(self, opts):
+        """The BVH preset ``auto`` would choose for the whole progressive render (``fast``
+        when it takes fewer samples than half the triangles), named explicitly so that the
+        preview, which takes far fewer, uses the same BVH instead of building another."""
+        samples = opts.get("width", 1) * opts.get("height", 1) * opts.get("spp", 64)
+        return "fast" if 2 * samples < self.triangles else "medium"
 
     def stop(self):
         if self.worker is not None:
