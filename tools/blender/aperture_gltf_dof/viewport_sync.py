@@ -393,6 +393,10 @@ class Session:
         done = []
         for update in depsgraph.updates:
             done += self._update(update, depsgraph)
+        return self._finish(depsgraph, done)
+
+    def _finish(self, depsgraph, done):
+        """The end of ``sync`` and ``refresh``: visibility, at most one re-export, options."""
         done += self._visibility()
         if any(p == "reexport" for p, _ in done):
             self._reload(depsgraph)
@@ -428,15 +432,7 @@ class Session:
                 if slot.material is not None:
                     paths.append(self._material(slot.material))
             done += [(p, obj.name) for p in paths if p not in (None, "ignored")]
-        done += self._visibility()
-        if any(p == "reexport" for p, _ in done):
-            self._reload(depsgraph)
-        options = render_options(depsgraph.scene, self._size)
-        if options != self.scene_options:
-            self.scene_options = options
-            done.append(("options", depsgraph.scene.name))
-        self.edits += done
-        return done
+        return self._finish(depsgraph, done)
 
     def forget_camera(self, obj):
         """The session's camera was moved outside the sync (the viewport's own view): the next

@@ -137,8 +137,9 @@ pub(crate) struct AnyLeaf<'a, const AVX: bool> {
     pub(crate) tris: &'a [Tri],
     pub(crate) ray: TriRay,
     pub(crate) tmin: f32,
-    /// The primitive that stopped the walk (meaningful once one has).
+    /// The primitive that stopped the walk and its `(t, u, v)` (meaningful once one has).
     pub(crate) blocker: u32,
+    pub(crate) hit: (f32, f32, f32),
 }
 
 impl<const AVX: bool> Leaf for AnyLeaf<'_, AVX> {
@@ -153,25 +154,15 @@ impl<const AVX: bool> Leaf for AnyLeaf<'_, AVX> {
     }
 }
 
-/// Any hit over a bottom-level BVH's triangles, keeping it: `(triangle index, (t, u, v))` of
-/// the first hit found (not the closest).
+/// [`AnyLeaf`] whose answer is the hit that stopped the walk ([`crate::Accel::occluder`]).
 #[derive(Clone, Copy)]
-pub(crate) struct BlockerLeaf<'a, const AVX: bool> {
-    pub(crate) tris: &'a [Tri],
-    pub(crate) ray: TriRay,
-    pub(crate) tmin: f32,
-    pub(crate) hit: Option<(usize, (f32, f32, f32))>,
-}
+pub(crate) struct BlockerLeaf<'a, const AVX: bool>(AnyLeaf<'a, AVX>);
 
 impl<const AVX: bool> Leaf for BlockerLeaf<'_, AVX> {
     const CLOSEST: bool = false;
     #[inline(always)]
     fn visit(&mut self, primitive: u32, tmax: &mut f32) -> bool {
-        let hit = self
-            .tris
-            .get(primitive as usize)
-            .and_then(|tri| crate::triangle::intersect::<AVX>(&self.ray, tri, self.tmin, *tmax));
-        hit.is_some_and(|h| self.record(primitive, h, tmax))
+        self.0.visit(primitive, tmax)
     }
 }
 
@@ -262,6 +253,7 @@ impl<'a, const AVX: bool> BlasLeaf<'a> for AnyLeaf<'a, AVX> {
             ray,
             tmin,
             blocker: 0,
+            hit: (0.0, 0.0, 0.0),
         }
     }
 
@@ -291,8 +283,8 @@ impl<'a, const AVX: bool> BlasLeaf<'a> for AnyLeaf<'a, AVX> {
     }
 
     #[inline(always)]
-    fn record(&mut self, primitive: u32, _: (f32, f32, f32), _: &mut f32) -> bool {
-        self.blocker = primitive;
+    fn record(&mut self, primitive: u32, h: (f32, f32, f32), _: &mut f32) -> bool {
+        (self.blocker, self.hit) = (primitive, h);
         true
     }
 }
@@ -302,17 +294,12 @@ impl<'a, const AVX: bool> BlasLeaf<'a> for BlockerLeaf<'a, AVX> {
 
     #[inline(always)]
     fn start(tris: &'a [Tri], ray: TriRay, tmin: f32) -> Self {
-        Self {
-            tris,
-            ray,
-            tmin,
-            hit: None,
-        }
+        Self(AnyLeaf::start(tris, ray, tmin))
     }
 
     #[inline(always)]
-    fn answer(&self, blas: &Blas, entry: &Entry, _: bool) -> Option<Hit> {
-        self.hit.map(|(i, h)| Accel::make_hit(blas, entry, i, h))
+    fn answer(&self, blas: &Blas, entry: &Entry, stopped: bool) -> Option<Hit> {
+        stopped.then(|| Accel::make_hit(blas, entry, self.0.blocker as usize, self.0.hit))
     }
 
     #[inline(always)]
@@ -333,13 +320,12 @@ impl<'a, const AVX: bool> BlasLeaf<'a> for BlockerLeaf<'a, AVX> {
 
     #[inline(always)]
     fn triangles(&self) -> (&'a [Tri], &TriRay, f32) {
-        (self.tris, &self.ray, self.tmin)
+        self.0.triangles()
     }
 
     #[inline(always)]
-    fn record(&mut self, primitive: u32, h: (f32, f32, f32), _: &mut f32) -> bool {
-        self.hit = Some((primitive as usize, h));
-        true
+    fn record(&mut self, primitive: u32, h: (f32, f32, f32), tmax: &mut f32) -> bool {
+        self.0.record(primitive, h, tmax)
     }
 }
 
