@@ -67,11 +67,12 @@ pub(super) fn check_mesh(mesh: &MeshInput<'_>, keep: bool) -> Checked {
     c
 }
 
-/// The flattened instances' triangles in world space, tagged with the instance, and how many
-/// triangles only become degenerate there (rounding).
+/// The flattened instances' triangles in world space, tagged with the instance (collected when
+/// `keep`), and how many triangles only become degenerate there (rounding).
 pub(super) fn flatten(
     meshes: &[MeshInput<'_>],
     flat: &[(u32, InstanceInput)],
+    keep: bool,
 ) -> (Vec<(Tri, u32)>, usize) {
     let mut tris: Vec<(Tri, u32)> = Vec::new();
     let mut degenerate = 0;
@@ -84,7 +85,8 @@ pub(super) fn flatten(
             .collect();
         for (i, tri) in mesh.indices.iter().enumerate() {
             match check_triangle(&world, *tri) {
-                TriCheck::Ok(p) => tris.push((Tri { p, prim: i as u32 }, *id)),
+                TriCheck::Ok(p) if keep => tris.push((Tri { p, prim: i as u32 }, *id)),
+                TriCheck::Ok(_) => {}
                 TriCheck::Degenerate
                     if check_triangle(mesh.positions, *tri) != TriCheck::Degenerate =>
                 {
