@@ -247,7 +247,7 @@ fn blas_jobs(
                 BlasJob::Reuse(blas)
             }
             None => {
-                let (tris, degenerate) = flatten(meshes, flat, true);
+                let (tris, degenerate) = flatten(meshes, flat);
                 flat_degenerate = degenerate;
                 BlasJob::Build(tris, true, None)
             }

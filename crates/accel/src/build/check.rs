@@ -2,7 +2,7 @@
 
 use crate::triangle::Tri;
 use crate::types::{InstanceInput, MeshInput};
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 
 /// Why a triangle is left out.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -67,12 +67,11 @@ pub(super) fn check_mesh(mesh: &MeshInput<'_>, keep: bool) -> Checked {
     c
 }
 
-/// The flattened instances' triangles in world space, tagged with the instance (collected when
-/// `keep`), and how many triangles only become degenerate there (rounding).
+/// The flattened instances' triangles in world space, tagged with the instance, and how many
+/// triangles only become degenerate there (rounding).
 pub(super) fn flatten(
     meshes: &[MeshInput<'_>],
     flat: &[(u32, InstanceInput)],
-    keep: bool,
 ) -> (Vec<(Tri, u32)>, usize) {
     let mut tris: Vec<(Tri, u32)> = Vec::new();
     let mut degenerate = 0;
@@ -85,8 +84,7 @@ pub(super) fn flatten(
             .collect();
         for (i, tri) in mesh.indices.iter().enumerate() {
             match check_triangle(&world, *tri) {
-                TriCheck::Ok(p) if keep => tris.push((Tri { p, prim: i as u32 }, *id)),
-                TriCheck::Ok(_) => {}
+                TriCheck::Ok(p) => tris.push((Tri { p, prim: i as u32 }, *id)),
                 TriCheck::Degenerate
                     if check_triangle(mesh.positions, *tri) != TriCheck::Degenerate =>
                 {
@@ -97,4 +95,17 @@ pub(super) fn flatten(
         }
     }
     (tris, degenerate)
+}
+
+/// How many triangles of `mesh` only become degenerate placed by `world_from_object` (what
+/// [`flatten`] counts for an instance), without storing any: each triangle's points are
+/// moved as it is checked.
+pub(super) fn world_degenerate(mesh: &MeshInput<'_>, world_from_object: &Affine3A) -> usize {
+    let degenerate = |tri: &[u32; 3]| {
+        let TriCheck::Ok(p) = check_triangle(mesh.positions, *tri) else {
+            return false;
+        };
+        classify(p.map(|v| world_from_object.transform_point3(v))) == TriCheck::Degenerate
+    };
+    mesh.indices.iter().filter(|t| degenerate(t)).count()
 }
