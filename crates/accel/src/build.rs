@@ -3,6 +3,7 @@
 //! BVHs of meshes that did not change since the previous frame.
 
 mod check;
+mod counts;
 mod placement;
 mod tree;
 
@@ -44,6 +45,15 @@ fn world_bounds(world_from_object: &Affine3A, (lo, hi): (Vec3, Vec3)) -> Aabb {
             .max_element()
             .max(f32::MIN_POSITIVE);
     Aabb::new((wlo - margin).into(), (whi + margin).into())
+}
+
+/// Structures built by [`Accel::build_frame`] in this process ([`builds`]).
+static BUILDS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// How many structures [`Accel::build`] and [`Accel::build_frame`] have built in this process
+/// so far: what a command that needs no ray queries (`aperture info`) shows it did not pay for.
+pub fn builds() -> usize {
+    BUILDS.load(std::sync::atomic::Ordering::Relaxed)
 }
 
 /// A usable instance: its index, its input and its `object_from_world`.
@@ -297,6 +307,7 @@ impl Accel {
         previous: Option<Accel>,
     ) -> Self {
         let start = std::time::Instant::now();
+        BUILDS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let mut stats = AccelStats::default();
 
         let Placement {
@@ -373,20 +384,21 @@ impl Accel {
         stats.bvh_nodes =
             self.tlas.len() + self.blases.iter().map(|b| b.nodes.len()).sum::<usize>();
         stats.max_blas_depth = self.max_blas_depth;
-        stats.memory_bytes = self
-            .blases
-            .iter()
+        let blases = self.blases.iter();
+        stats.node_bytes = (self.tlas.len() + blases.clone().map(|b| b.nodes.len()).sum::<usize>())
+            * size_of::<Node>();
+        stats.triangle_bytes = blases
+            .clone()
             .map(|b| {
-                b.nodes.len() * size_of::<Node>()
-                    + b.tris.len() * size_of::<Tri>()
+                b.tris.len() * size_of::<Tri>()
                     + b.deform
                         .as_ref()
                         .map_or(0, |d| d.keys.len() * size_of::<[Vec3; 3]>())
-                    + b.tri_instance.len() * 4
             })
-            .sum::<usize>()
-            + self.tlas.len() * size_of::<Node>()
+            .sum();
+        stats.instance_bytes = blases.map(|b| b.tri_instance.len() * 4).sum::<usize>()
             + self.entries.len() * size_of::<Entry>();
+        stats.memory_bytes = stats.node_bytes + stats.triangle_bytes + stats.instance_bytes;
     }
 
     /// The top-level BVH over the world-space BVH (`blases[0]` when `has_flat`) and the

@@ -62,7 +62,7 @@ mod triangle;
 mod types;
 mod walk;
 
-pub use build::{FrameHints, FLATTEN_SHARED_LIMIT};
+pub use build::{builds, FrameHints, FLATTEN_SHARED_LIMIT};
 pub use deform::{lerp_point, VertexMotion};
 pub use motion::MotionTransform;
 pub use packet::{PACKET_CONE_COS, PACKET_LANES};

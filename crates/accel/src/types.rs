@@ -154,8 +154,18 @@ pub struct AccelStats {
     pub bvh_nodes: usize,
     /// Deepest bottom-level BVH, in nodes (the traversal stack adapts to it).
     pub max_blas_depth: usize,
-    /// Bytes held by the structure (nodes, triangles, instances).
+    /// Bytes held by the structure (nodes, triangles, instances): the sum of
+    /// `node_bytes`, `triangle_bytes` and `instance_bytes`.
     pub memory_bytes: usize,
+    /// Bytes of the BVH nodes, every level (the wide nodes of the bottom-level BVHs and of the
+    /// top level).
+    pub node_bytes: usize,
+    /// Bytes of the triangle store: each kept triangle's three points and its index, in BVH
+    /// order (one copy per bottom-level BVH), plus the keyed triangles of deforming meshes.
+    pub triangle_bytes: usize,
+    /// Bytes placing triangles in instances: the world-space BVH's instance of each triangle
+    /// and the top level's entries.
+    pub instance_bytes: usize,
     /// Wall time of [`Accel::build`](crate::Accel::build).
     pub build_time: std::time::Duration,
     /// Bottom-level BVHs taken from the previous frame instead of built

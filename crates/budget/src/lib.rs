@@ -18,7 +18,7 @@ mod parse;
 mod system;
 
 pub use parse::parse_bytes;
-pub use system::{free_disk_bytes, system_memory, SystemMemory};
+pub use system::{free_disk_bytes, peak_resident_bytes, system_memory, SystemMemory};
 
 /// Where a budget's limit comes from, for messages.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

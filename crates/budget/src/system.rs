@@ -23,19 +23,34 @@ impl SystemMemory {
     }
 }
 
+/// The bytes of the `name` line (`"MemTotal:"`, `"VmHWM:"`) of a `/proc` file that counts in
+/// kB, as `/proc/meminfo` and `/proc/self/status` do.
+fn kb_field(text: &str, name: &str) -> Option<u64> {
+    let line = text.lines().find(|l| l.starts_with(name))?;
+    let kb: u64 = line[name.len()..]
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    kb.checked_mul(1024)
+}
+
+/// The most resident memory this process has held so far (`VmHWM` of `/proc/self/status`), in
+/// bytes; `None` where that cannot be read (not Linux).
+pub fn peak_resident_bytes() -> Option<u64> {
+    peak_in_status(&std::fs::read_to_string("/proc/self/status").ok()?)
+}
+
+/// `VmHWM` of a `/proc/<pid>/status` text, in bytes.
+fn peak_in_status(status: &str) -> Option<u64> {
+    kb_field(status, "VmHWM:")
+}
+
 /// Reads the machine's memory (`None` where `/proc/meminfo` cannot be read: not Linux).
 pub fn system_memory() -> Option<SystemMemory> {
     let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let field = |name: &str| -> Option<u64> {
-        let line = info.lines().find(|l| l.starts_with(name))?;
-        let kb: u64 = line[name.len()..]
-            .trim()
-            .trim_end_matches("kB")
-            .trim()
-            .parse()
-            .ok()?;
-        kb.checked_mul(1024)
-    };
+    let field = |name: &str| kb_field(&info, name);
     let total = field("MemTotal:")?;
     Some(SystemMemory {
         total,
@@ -101,5 +116,20 @@ mod tests {
         assert!(m.limit() <= m.total);
         let free = free_disk_bytes(&std::env::temp_dir().join("no-such-file")).expect("statvfs");
         assert!(free > 0);
+    }
+
+    #[test]
+    fn the_peak_is_read_from_vmhwm() {
+        let status = "Name:\taperture\nVmPeak:\t  900 kB\nVmHWM:\t   1234 kB\nVmRSS:\t 1000 kB\n";
+        assert_eq!(peak_in_status(status), Some(1234 * 1024));
+        assert_eq!(peak_in_status("Name:\taperture\n"), None);
+        assert_eq!(peak_in_status("VmHWM:\t lots kB\n"), None);
+        if cfg!(target_os = "linux") {
+            // This process holds at least the 64 MB it just touched.
+            let held = vec![1u8; 64 << 20];
+            let peak = peak_resident_bytes().expect("/proc/self/status");
+            assert!(peak >= 64 << 20, "{peak}");
+            assert_eq!(held.iter().map(|&b| u64::from(b)).sum::<u64>(), 64 << 20);
+        }
     }
 }

@@ -63,7 +63,12 @@ pub fn run(
     // The JSON lines' frame: each frame's number in a range, none for a still.
     let mut frames_left = args.frames.into_iter().flat_map(|r| r.frames().map(Some));
     progress.set_samples(samples, frames_left.next().flatten());
-    let report = |done, total| progress.update(done, total);
+    // The job's first samples: when the first tile (or round) of the first image was done.
+    let first_samples = std::sync::OnceLock::new();
+    let report = |done, total| {
+        first_samples.get_or_init(|| job.start.elapsed().as_secs_f64());
+        progress.update(done, total)
+    };
     let done = sequence::render_sequence(session, &seq, &report, &mut |r: &FrameReport| {
         if let Some(w) = &r.rendered {
             rendered += 1;
@@ -92,7 +97,9 @@ pub fn run(
         let job = JobTimes {
             load_secs: job.load_secs,
             bvh_secs: w.build_secs,
+            first_samples_secs: first_samples.get().copied(),
             total_secs: job.start.elapsed().as_secs_f64(),
+            peak_bytes: aperture_budget::peak_resident_bytes(),
         };
         print_summary(args, &plan.opts, &w.summary, job, plan.quality, plan.part);
     }

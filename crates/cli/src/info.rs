@@ -17,6 +17,11 @@ pub struct InfoArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Also report the memory each stage holds: the file, the meshes by attribute, the
+    /// decoded textures and the BVH (nodes, triangle store); decodes the textures and builds
+    /// the BVH (medium quality) as `render` would, which info otherwise skips.
+    #[arg(long)]
+    pub memory: bool,
     /// Time, frame and animation (SPEC §7): bounds, lights and cameras as posed then.
     #[command(flatten)]
     pub when: crate::time_args::TimeArgs,
@@ -37,6 +42,7 @@ fn print_text(path: &std::path::Path, r: &Value) {
     print_time(r);
     crate::info_motion::print_motion(r);
     print_cameras(r);
+    crate::info_memory::print_memory(r);
 }
 
 /// A JSON string ("" when missing).
@@ -210,8 +216,8 @@ fn print_cameras(r: &Value) {
 pub fn run(args: InfoArgs) -> anyhow::Result<()> {
     let options = LoadOptions {
         scene: args.scene_index,
-        // Counts need no texels.
-        skip_textures: true,
+        // Counts need no texels; the memory report measures them.
+        skip_textures: !args.memory,
         time: args.when.seconds(),
         animation: args.when.selection(),
         variant: args.materials.variant.clone(),
@@ -225,6 +231,16 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
     let mut r = info::report(&s, m.transmission, m.single_sided);
     let when = (options.time, args.when.fps);
     r["motion"] = info::motion::motion_json(&args.motion.overrides(), &animated, &s, when)?;
+    if args.memory {
+        let quality = aperture_accel::BvhQuality::Medium;
+        let accel = aperture_render::build_accel(&s, quality);
+        r["memory"] = info::memory::memory_json(&info::memory::MemoryInputs {
+            scene: &s,
+            file_bytes: std::fs::metadata(&args.scene).ok().map(|m| m.len()),
+            textures_decoded: true,
+            accel: Some((accel.stats(), quality)),
+        });
+    }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&r)?);
     } else {

@@ -12,6 +12,7 @@ mod frames;
 mod frames_tests;
 mod info;
 mod info_materials;
+mod info_memory;
 mod info_motion;
 mod interrupt;
 mod load_warnings;

@@ -4,12 +4,29 @@ use crate::render_args::RenderArgs;
 use aperture_render::RenderOptions;
 
 /// The parts of a job's time that come before the render: loading (file → posed scene) and
-/// building the frame's BVH; and the whole job's wall time.
+/// building the frame's BVH; when its first samples were done (the first tile, from the job's
+/// start); the whole job's wall time; and the process's peak resident memory (`VmHWM`, Linux).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct JobTimes {
     pub load_secs: f64,
     pub bvh_secs: f64,
+    pub first_samples_secs: Option<f64>,
     pub total_secs: f64,
+    pub peak_bytes: Option<u64>,
+}
+
+impl JobTimes {
+    /// `, first samples at 1.23 s, peak memory 479.2 MB`: the parts that are known.
+    fn extras(&self) -> String {
+        let mut out = String::new();
+        if let Some(t) = self.first_samples_secs {
+            out += &format!(", first samples at {t:.2} s");
+        }
+        if let Some(b) = self.peak_bytes {
+            out += &format!(", peak memory {}", aperture_budget::human_bytes(b));
+        }
+        out
+    }
 }
 
 /// The warnings a finished render owes, and its one-line summary unless `--quiet` (always when
@@ -63,9 +80,10 @@ pub(crate) fn print_summary(
             job.load_secs, job.bvh_secs, summary.denoise_secs, summary.write_secs
         );
         eprintln!(
-            "{}: {size}, {spp}, {:.2} s ({parts}), {:.2} Msamples/s, {dropped} dropped samples (NaN/Inf)",
+            "{}: {size}, {spp}, {:.2} s ({parts}){}, {:.2} Msamples/s, {dropped} dropped samples (NaN/Inf)",
             args.output.display(),
             job.total_secs,
+            job.extras(),
             summary.samples as f64 / render_secs.max(1e-9) / 1e6,
         );
     }

@@ -106,6 +106,30 @@ impl SceneHints {
     }
 }
 
+/// The scene's meshes and instances as the accel's build takes them.
+fn accel_inputs(scene: &Scene) -> (Vec<MeshInput<'_>>, Vec<InstanceInput>) {
+    let meshes = (scene.meshes.iter())
+        .map(|m| MeshInput {
+            positions: &m.positions,
+            indices: &m.indices,
+        })
+        .collect();
+    let instances = (scene.instances.iter())
+        .map(|i| InstanceInput {
+            mesh: i.mesh,
+            world_from_object: i.world_from_object,
+        })
+        .collect();
+    (meshes, instances)
+}
+
+/// What [`build_accel`] would count of `scene`'s triangles and instances (degenerate, out of
+/// range, skipped: [`Accel::input_counts`]), without building it.
+pub fn accel_input_counts(scene: &Scene) -> aperture_accel::AccelStats {
+    let (meshes, instances) = accel_inputs(scene);
+    Accel::input_counts(&meshes, &instances, FrameHints::STILL)
+}
+
 /// The ray-query structure of one frame of `scene` (see [`Accel::build_frame`]); `previous`
 /// is the frame before's, whose unchanged parts are taken over (the result does not depend on
 /// it). The instances that move within the frame's shutter (`motion`) are bounded over it and
@@ -121,22 +145,7 @@ pub fn build_motion_accel(
     motion: Option<&crate::motion::FrameMotion>,
 ) -> Accel {
     let keys = motion.map(|m| m.instance_keys()).unwrap_or_default();
-    let meshes: Vec<MeshInput<'_>> = scene
-        .meshes
-        .iter()
-        .map(|m| MeshInput {
-            positions: &m.positions,
-            indices: &m.indices,
-        })
-        .collect();
-    let instances: Vec<InstanceInput> = scene
-        .instances
-        .iter()
-        .map(|i| InstanceInput {
-            mesh: i.mesh,
-            world_from_object: i.world_from_object,
-        })
-        .collect();
+    let (meshes, instances) = accel_inputs(scene);
     let frame = FrameHints {
         moving: &hints.moving,
         deforming_from: hints.deforming_from,

@@ -58,7 +58,8 @@ pub use film::{Film, PixelSum, Window};
 pub use filter::{Filter, FilterKind};
 pub use frame::{Frame, FrameTimes};
 pub use frame_accel::{
-    auto_bvh_quality, build_accel, build_motion_accel, BvhQualityChoice, SceneHints,
+    accel_input_counts, auto_bvh_quality, build_accel, build_motion_accel, BvhQualityChoice,
+    SceneHints,
 };
 pub use frame_lights::FrameLights;
 pub use image_size::{default_height, image_size};

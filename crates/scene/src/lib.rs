@@ -79,5 +79,5 @@ pub use pbr::*;
 pub use prepass::SUPPORTED_EXTENSIONS;
 pub use shutter_extras::{MotionExtras, RollingShutter, ShutterPosition};
 pub use tangents::generate_missing_tangents;
-pub use texels::decode_texture;
+pub use texels::{decode_texture, decodes as texture_decodes};
 pub use types::*;

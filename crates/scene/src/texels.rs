@@ -165,7 +165,18 @@ fn decode_checked(bytes: &[u8], image: usize, h: Header) -> Result<(u32, u32, Te
     })
 }
 
+/// Images whose texels [`decode_unguarded`] has begun to decode in this process ([`decodes`]).
+static DECODES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// How many images have had their texels decoded in this process so far (headers, which give
+/// sizes, are not counted): what shows that a load skipping textures (`aperture info`), or a
+/// texture no material reads, decoded nothing.
+pub fn decodes() -> usize {
+    DECODES.load(std::sync::atomic::Ordering::Relaxed)
+}
+
 fn decode_unguarded(bytes: &[u8], image: usize, h: Header) -> Result<(u32, u32, Texels), Error> {
+    DECODES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     if crate::basis::is_ktx2(bytes) {
         let (width, height, texels) = crate::basis::decode(bytes, image)?;
         return Ok((width, height, Texels::Rgba8(texels)));

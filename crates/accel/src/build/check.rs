@@ -2,7 +2,7 @@
 
 use crate::triangle::Tri;
 use crate::types::{InstanceInput, MeshInput};
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 
 /// Why a triangle is left out.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -95,4 +95,17 @@ pub(super) fn flatten(
         }
     }
     (tris, degenerate)
+}
+
+/// How many triangles of `mesh` only become degenerate placed by `world_from_object` (what
+/// [`flatten`] counts for an instance), without storing any: each triangle's points are
+/// moved as it is checked.
+pub(super) fn world_degenerate(mesh: &MeshInput<'_>, world_from_object: &Affine3A) -> usize {
+    let degenerate = |tri: &[u32; 3]| {
+        let TriCheck::Ok(p) = check_triangle(mesh.positions, *tri) else {
+            return false;
+        };
+        classify(p.map(|v| world_from_object.transform_point3(v))) == TriCheck::Degenerate
+    };
+    mesh.indices.iter().filter(|t| degenerate(t)).count()
 }

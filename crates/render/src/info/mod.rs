@@ -2,11 +2,11 @@
 //! `aperture info --json` and of Python's `scene.info()` (the keys are SPEC §2's).
 
 pub mod materials;
+pub mod memory;
 pub mod motion;
 #[cfg(test)]
 mod tests;
 
-use aperture_accel::BvhQuality;
 use aperture_scene::{LightKind, Projection, Scene};
 use aperture_shading::Convention;
 use serde_json::{json, Value};
@@ -42,10 +42,9 @@ fn counts(s: &Scene) -> Counts {
             k => per_set.get(k as usize - 1).copied().unwrap_or(0),
         })
         .sum();
-    // Degenerate triangles are what the BVH builder leaves out, so ask it.
-    let degenerate = crate::build_accel(s, BvhQuality::Fast)
-        .stats()
-        .degenerate_triangles;
+    // Degenerate triangles are what the BVH builder leaves out: counted as it counts them,
+    // without building (a report traces no ray).
+    let degenerate = crate::frame_accel::accel_input_counts(s).degenerate_triangles;
     Counts {
         point: kind(|k| matches!(k, LightKind::Point)),
         spot: kind(|k| matches!(k, LightKind::Spot { .. })),
