@@ -16,6 +16,23 @@ use signal_hook::consts::{SIGINT, SIGTERM};
 /// Exit code of a render stopped by a signal: 128 + SIGINT, as shells report it.
 pub const EXIT_INTERRUPTED: u8 = 130;
 
+/// Exit code when stdout's reader went away (`aperture info … | head`): 128 + SIGPIPE.
+pub const EXIT_BROKEN_PIPE: u8 = 141;
+
+/// A closed pipe on stdout ends the process at once with [`EXIT_BROKEN_PIPE`], as Unix tools
+/// end, instead of the print panicking on its write error (Rust ignores SIGPIPE). For commands
+/// whose output is text to read (`info`); a render keeps going whatever reads its progress.
+pub fn end_on_broken_pipe() -> anyhow::Result<()> {
+    #[cfg(unix)]
+    signal_hook::flag::register_conditional_shutdown(
+        signal_hook::consts::SIGPIPE,
+        i32::from(EXIT_BROKEN_PIPE),
+        Arc::new(AtomicBool::new(true)),
+    )
+    .context("installing the SIGPIPE handler")?;
+    Ok(())
+}
+
 /// Installs the handlers and returns the token they cancel.
 pub fn install() -> anyhow::Result<Cancel> {
     let flag = Arc::new(AtomicBool::new(false));

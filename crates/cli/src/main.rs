@@ -59,7 +59,7 @@ pub(crate) enum Command {
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Info(args) => info::run(args),
+        Command::Info(args) => interrupt::end_on_broken_pipe().and_then(|()| info::run(args)),
         Command::Render(args) => render_cmd::run(*args),
         Command::Denoise(args) => denoise_cmd::run(args),
         Command::Merge(args) => merge_cmd::run(args),
