@@ -301,7 +301,9 @@ fn a_focus_object_behind_the_camera_fails_live_as_it_fails_cold() {
     let cold = outcome(&mut load(&edited), &o);
     std::fs::remove_file(&base).ok();
     std::fs::remove_file(&edited).ok();
-    let error = live.as_ref().expect_err("the focus point is behind the camera");
+    let error = live
+        .as_ref()
+        .expect_err("the focus point is behind the camera");
     assert!(error.contains("not in front of the camera"), "{error}");
     assert_eq!(live, cold);
     // The session stays usable: moving the node back renders the first image again.
@@ -309,7 +311,10 @@ fn a_focus_object_behind_the_camera_fails_live_as_it_fails_cold() {
     for e in back.edits() {
         session.edit(e).expect("edit");
     }
-    let first = render(&mut load(&write_glb(&demo_document().0, &bin, "behind-again.glb")), &o);
+    let first = render(
+        &mut load(&write_glb(&demo_document().0, &bin, "behind-again.glb")),
+        &o,
+    );
     assert_eq!(render(&mut session, &o), first);
     std::fs::remove_file(scratch("behind-again.glb")).ok();
 }
