@@ -50,3 +50,16 @@ pub enum DenoiseError {
         message: String,
     },
 }
+
+#[cfg(test)]
+mod tests {
+    use super::HOW_TO_GET;
+
+    #[test]
+    fn the_hint_names_this_platforms_library() {
+        assert!(
+            HOW_TO_GET.contains(crate::platform::LIBRARY),
+            "{HOW_TO_GET}"
+        );
+    }
+}

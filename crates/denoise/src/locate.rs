@@ -12,7 +12,7 @@
 //!    (the project's own under `~/.cache/aperture/bpy-*/` too), or beside a `blender` on `PATH`
 //!    (`blender.exe`, and its `blender.shared/` too, on Windows).
 
-use crate::platform::{self, BLENDER, BLENDER_LIB_DIRS, PACKAGE_LIB_DIRS};
+use crate::platform::{self, subdirs, BLENDER, BLENDER_LIB_DIRS, PACKAGE_LIB_DIRS};
 use std::path::{Path, PathBuf};
 
 pub use crate::platform::LIBRARY;
@@ -183,21 +183,6 @@ fn blender_dirs() -> Vec<PathBuf> {
             })
             .map(|d| d.join("lib")),
     );
-    out
-}
-
-/// The folders inside `dir`, sorted (newest versions last is not assumed); none if unreadable.
-pub(crate) fn subdirs(dir: &Path) -> Vec<PathBuf> {
-    let mut out: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map(|entries| {
-            entries
-                .filter_map(Result::ok)
-                .map(|e| e.path())
-                .filter(|p| p.is_dir())
-                .collect()
-        })
-        .unwrap_or_default();
-    out.sort();
     out
 }
 
