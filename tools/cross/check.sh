@@ -7,8 +7,8 @@
 # 1. installs what it lacks: the rustup targets, Debian's aarch64 and mingw-w64 cross compilers
 #    (C and C++: meshopt and FLIP are built from C++), qemu-user and wine;
 # 2. clippy -D warnings for aarch64-unknown-linux-gnu and x86_64-pc-windows-gnu (all targets);
-#    cargo check for aarch64-apple-darwin of the crates that build no C++ (budget, denoise,
-#    accel: the platform-specific code), as no macOS SDK is on Debian;
+#    the same clippy for aarch64-apple-darwin (check only, no linking: no macOS SDK), with zig
+#    from PyPI's `ziglang` wheel as its C and C++ compiler (tools/cross/zig_cc.py);
 # 3. builds `aperture` (debug) for aarch64 and for Windows, renders the demo with each, under
 #    qemu-aarch64 and wine, and compares the pixels bit for bit with the x86-64 build's
 #    (target/debug/aperture, built here when missing).
@@ -62,8 +62,21 @@ if want windows; then
     step "clippy $WIN"
     cargo clippy --workspace --all-targets --target "$WIN" -- -D warnings
 fi
-step "check $MAC (crates without C++)"
-cargo check --target "$MAC" -p aperture-budget -p aperture-denoise -p aperture-accel
+step "clippy $MAC (zig as the C/C++ compiler; no linking)"
+zig_venv="${XDG_CACHE_HOME:-$HOME/.cache}/aperture/zig-venv"
+if ! "$zig_venv/bin/python" -m ziglang version >/dev/null 2>&1; then
+    python3 -m venv "$zig_venv"
+    "$zig_venv/bin/pip" install --quiet --disable-pip-version-check "ziglang==0.17.1"
+fi
+zig_bin="$zig_venv/aperture-bin"
+mkdir -p "$zig_bin"
+ln -sf "$PWD/tools/cross/zig_cc.py" "$zig_bin/zig-cc"
+ln -sf "$PWD/tools/cross/zig_cc.py" "$zig_bin/zig-c++"
+printf '#!/bin/sh\nexec "%s" -m ziglang ar "$@"\n' "$zig_venv/bin/python" >"$zig_bin/zig-ar"
+chmod +x "$zig_bin/zig-ar"
+ZIG_PYTHON="$zig_venv/bin/python" CC_aarch64_apple_darwin="$zig_bin/zig-cc" \
+    CXX_aarch64_apple_darwin="$zig_bin/zig-c++" AR_aarch64_apple_darwin="$zig_bin/zig-ar" \
+    cargo clippy --workspace --all-targets --target "$MAC" -- -D warnings
 
 out=$(mktemp -d)
 export WINEPREFIX="$out/wine" WINEDEBUG=-all
