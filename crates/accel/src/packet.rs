@@ -28,6 +28,7 @@
 //! (neighbouring rays are mostly blocked by the same triangle, and any blocker gives the same
 //! answer): a packet it blocks whole needs no walk.
 
+#[cfg(target_arch = "x86_64")]
 use crate::node::Node;
 use crate::structure::Accel;
 #[cfg(target_arch = "x86_64")]
@@ -35,11 +36,13 @@ use crate::triangle::lanes::{intersect_lanes, transpose, TriLanes};
 #[cfg(target_arch = "x86_64")]
 use crate::triangle::TriRay;
 use crate::types::{Hit, Ray};
+#[cfg(target_arch = "x86_64")]
 use crate::walk::{stack_for, take_child, BlasLeaf, Group, InlineStack, Leaf, INLINE_STACK};
 #[cfg(target_arch = "x86_64")]
 use glam::Vec3A;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::__m128;
+#[cfg(target_arch = "x86_64")]
 use std::mem::MaybeUninit;
 
 #[cfg(target_arch = "x86_64")]
@@ -59,6 +62,7 @@ pub use shape::{PACKET_CONE_COS, PACKET_LANES};
 
 /// The lanes of `active` that primitive `b` stops (`leaf.visit`), trying the first active lane
 /// alone before the others: a miss there costs one triangle test for the packet.
+#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn try_blocker<L: Leaf>(
     leaves: &mut [L; PACKET_LANES],

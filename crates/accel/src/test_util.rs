@@ -11,7 +11,9 @@ pub(crate) fn mix(mut x: u32) -> u32 {
 }
 
 /// A test coordinate for counter `k`: uniform in `[-scale, scale)`, and one time in sixteen
-/// each exactly zero, negative zero, tiny (times 1e-30), infinite or NaN.
+/// each exactly zero, negative zero, tiny (times 1e-30), infinite or NaN. Used by the x86-64
+/// packet tests only.
+#[cfg(target_arch = "x86_64")]
 pub(crate) fn awkward(k: u32, scale: f32) -> f32 {
     let u = scale * (2.0 * ((mix(k) >> 8) as f32 / (1u32 << 24) as f32) - 1.0);
     match mix(k ^ 0x3c) % 16 {

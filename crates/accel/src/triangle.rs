@@ -40,7 +40,8 @@ pub(crate) struct TriRay {
     /// product with the matrix of rows `e_kx + sx e_kz`, `e_ky + sy e_kz`, `e_kz` ([`sheared`];
     /// the packets' lanes build that matrix, `lanes::TriLanes`).
     pub perm: [i32; 4],
-    /// The origin's components in that order.
+    /// The origin's components in that order (read by the x86-64 kernels only).
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     pub origin_k: Vec3A,
     /// `(sx, sy, 1)`: `sx = -dir[kx] / dir[kz]`, `sy = -dir[ky] / dir[kz]` (only the first two
     /// lanes are used).

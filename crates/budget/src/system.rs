@@ -1,17 +1,22 @@
-//! What the machine has: memory from `/proc/meminfo` and the control group, free disk space
-//! from `statvfs`.
+//! What the machine has: physical and available memory (sysinfo, on every platform), the
+//! control group's memory limit on Linux, free disk space (fs4: statvfs, or
+//! `GetDiskFreeSpaceExW` on Windows).
 
 use std::path::Path;
+use sysinfo::{MemoryRefreshKind, RefreshKind, System};
 
-/// The machine's memory as Linux reports it.
+#[cfg(target_os = "linux")]
+mod cgroup;
+
+/// The machine's memory.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SystemMemory {
-    /// `MemTotal`: physical memory.
+    /// Physical memory (`MemTotal` on Linux).
     pub total: u64,
-    /// `MemAvailable`: what can be allocated now without swapping.
+    /// What can be allocated now without swapping (`MemAvailable` on Linux).
     pub available: u64,
     /// The memory limit of the process's control group (v2 `memory.max`, v1
-    /// `memory.limit_in_bytes`), when it has one.
+    /// `memory.limit_in_bytes`), when it has one; always `None` off Linux.
     pub cgroup_limit: Option<u64>,
 }
 
@@ -47,43 +52,34 @@ fn peak_in_status(status: &str) -> Option<u64> {
     kb_field(status, "VmHWM:")
 }
 
-/// Reads the machine's memory (`None` where `/proc/meminfo` cannot be read: not Linux).
+/// Reads the machine's memory (`None` where the platform does not tell it).
 pub fn system_memory() -> Option<SystemMemory> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let field = |name: &str| kb_field(&info, name);
-    let total = field("MemTotal:")?;
+    let sys = System::new_with_specifics(
+        RefreshKind::nothing().with_memory(MemoryRefreshKind::nothing().with_ram()),
+    );
+    let total = sys.total_memory();
+    if total == 0 {
+        return None;
+    }
+    let available = match sys.available_memory() {
+        0 => total,
+        a => a.min(total),
+    };
     Some(SystemMemory {
         total,
-        available: field("MemAvailable:").unwrap_or(total),
+        available,
         cgroup_limit: cgroup_limit(),
     })
 }
 
-/// The control group's memory limit: v2 (`/sys/fs/cgroup/<group>/memory.max`) or v1
-/// (`/sys/fs/cgroup/memory/<group>/memory.limit_in_bytes`); "max" or a value near `u64::MAX`
-/// (v1's "no limit") is none.
+#[cfg(target_os = "linux")]
 fn cgroup_limit() -> Option<u64> {
-    let groups = std::fs::read_to_string("/proc/self/cgroup").ok()?;
-    let mut candidates = Vec::new();
-    for line in groups.lines() {
-        let mut parts = line.splitn(3, ':');
-        let (_, controllers, path) = (parts.next()?, parts.next()?, parts.next()?);
-        let path = path.trim_start_matches('/');
-        if controllers.is_empty() {
-            candidates.push(Path::new("/sys/fs/cgroup").join(path).join("memory.max"));
-        } else if controllers.split(',').any(|c| c == "memory") {
-            candidates.push(
-                Path::new("/sys/fs/cgroup/memory")
-                    .join(path)
-                    .join("memory.limit_in_bytes"),
-            );
-        }
-    }
-    candidates
-        .iter()
-        .filter_map(|p| std::fs::read_to_string(p).ok()?.trim().parse::<u64>().ok())
-        .filter(|&v| v < (1 << 60))
-        .min()
+    cgroup::limit()
+}
+
+#[cfg(not(target_os = "linux"))]
+fn cgroup_limit() -> Option<u64> {
+    None
 }
 
 /// Bytes free for an unprivileged user on the file system holding `path` (or its folder, when
@@ -97,8 +93,7 @@ pub fn free_disk_bytes(path: &Path) -> Option<u64> {
             _ => Path::new("."),
         }
     };
-    let s = rustix::fs::statvfs(dir).ok()?;
-    s.f_bavail.checked_mul(s.f_frsize)
+    fs4::available_space(dir).ok()
 }
 
 #[cfg(test)]
@@ -107,14 +102,11 @@ mod tests {
 
     #[test]
     fn this_machine_reports_its_memory_and_disk() {
-        if !cfg!(target_os = "linux") {
-            return;
-        }
-        let m = system_memory().expect("/proc/meminfo");
+        let m = system_memory().expect("the machine's memory");
         assert!(m.total > 64 << 20, "{m:?}");
         assert!(m.available <= m.total, "{m:?}");
         assert!(m.limit() <= m.total);
-        let free = free_disk_bytes(&std::env::temp_dir().join("no-such-file")).expect("statvfs");
+        let free = free_disk_bytes(&std::env::temp_dir().join("no-such-file")).expect("free disk");
         assert!(free > 0);
     }
 
@@ -131,5 +123,14 @@ mod tests {
             assert!(peak >= 64 << 20, "{peak}");
             assert_eq!(held.iter().map(|&b| u64::from(b)).sum::<u64>(), 64 << 20);
         }
+    }
+
+    /// The total agrees with `/proc/meminfo`'s, which the budget read itself before sysinfo.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn the_total_is_meminfos() {
+        let info = std::fs::read_to_string("/proc/meminfo").expect("/proc/meminfo");
+        let total = kb_field(&info, "MemTotal:").expect("MemTotal");
+        assert_eq!(system_memory().expect("memory").total, total);
     }
 }

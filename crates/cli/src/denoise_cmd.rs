@@ -9,7 +9,9 @@ use std::path::PathBuf;
 /// the library and Cycles' two Denoising settings.
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct DenoiseOptions {
-    /// The libOpenImageDenoise.so.2 to load (or its folder), before all other places.
+    /// The Open Image Denoise library to load (or its folder), before all other places:
+    /// libOpenImageDenoise.so.2, OpenImageDenoise.dll on Windows, libOpenImageDenoise.2.dylib
+    /// on macOS.
     #[arg(long, value_name = "PATH")]
     pub oidn: Option<PathBuf>,
     /// The denoising network, as Cycles' Denoising "Quality": high (the default), balanced

@@ -5,6 +5,8 @@
 //! Needs a cluster: `tools/farm/local-slurm.sh start` runs one on this machine and prints the
 //! `SLURM_CONF` to export (`.ci/run` does both). Without `SLURM_CONF` the tests skip with a
 //! message, and fail under `CI=true`.
+// Slurm and its shell wrappers: Unix only (farms are Linux).
+#![cfg(unix)]
 
 mod common;
 

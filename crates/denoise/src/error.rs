@@ -3,8 +3,11 @@
 use std::path::PathBuf;
 
 /// How to get the library, said by every "not found" error.
-pub const HOW_TO_GET: &str = "run tools/oidn/install.sh (or `pip install pyoidn`), or point \
-     --oidn / APERTURE_OIDN at libOpenImageDenoise.so.2 (Blender ships one in its lib/ folder)";
+pub const HOW_TO_GET: &str = concat!(
+    "run tools/oidn/install.sh (or `pip install pyoidn`), or point --oidn / APERTURE_OIDN at ",
+    crate::platform::library_name!(),
+    " (Blender ships one beside its executable)"
+);
 
 /// Why the denoiser could not be loaded or run.
 #[derive(Debug, thiserror::Error)]
@@ -46,4 +49,17 @@ pub enum DenoiseError {
         /// OIDN's message.
         message: String,
     },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::HOW_TO_GET;
+
+    #[test]
+    fn the_hint_names_this_platforms_library() {
+        assert!(
+            HOW_TO_GET.contains(crate::platform::LIBRARY),
+            "{HOW_TO_GET}"
+        );
+    }
 }

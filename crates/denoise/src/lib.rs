@@ -35,6 +35,7 @@
 mod error;
 mod ffi;
 pub mod locate;
+mod platform;
 mod settings;
 
 pub use error::{DenoiseError, HOW_TO_GET};

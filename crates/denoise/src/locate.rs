@@ -1,17 +1,21 @@
 //! Where the OIDN library is looked for, in order (README "Denoising"):
 //!
 //! 1. an explicit path: `--oidn PATH`, else the `APERTURE_OIDN` environment variable (a file,
-//!    or a folder holding `libOpenImageDenoise.so.2`); when given, nothing else is tried;
-//! 2. the system's library search path (`libOpenImageDenoise.so.2`, as `dlopen` finds it);
+//!    or a folder holding the library: `libOpenImageDenoise.so.2` on Linux,
+//!    `OpenImageDenoise.dll` on Windows, `libOpenImageDenoise.2.dylib` on macOS, [`LIBRARY`]);
+//!    when given, nothing else is tried;
+//! 2. the system's library search path (as `dlopen`, or `LoadLibraryExW` on Windows, finds it);
 //! 3. the copy `tools/oidn/install.sh` installs: `${XDG_CACHE_HOME:-~/.cache}/aperture/oidn/lib/`;
-//! 4. the `pyoidn` wheel in a Python site-packages folder (`pyoidn/oidn/lib/`);
+//! 4. the `pyoidn` wheel in a Python site-packages folder (`pyoidn/oidn/lib/`, also `bin/` on
+//!    Windows);
 //! 5. a Blender installation's `lib/`: the `bpy` module's `bpy/lib/` in a site-packages folder
-//!    (the project's own under `~/.cache/aperture/bpy-*/` too), or beside a `blender` on `PATH`.
+//!    (the project's own under `~/.cache/aperture/bpy-*/` too), or beside a `blender` on `PATH`
+//!    (`blender.exe`, and its `blender.shared/` too, on Windows).
 
+use crate::platform::{self, subdirs, BLENDER, BLENDER_LIB_DIRS, PACKAGE_LIB_DIRS};
 use std::path::{Path, PathBuf};
 
-/// The library's file name (its soname: any OIDN 2.x).
-pub const LIBRARY: &str = "libOpenImageDenoise.so.2";
+pub use crate::platform::LIBRARY;
 
 /// The environment variable naming the library (or its folder) when no path is given.
 pub const ENV: &str = "APERTURE_OIDN";
@@ -88,9 +92,7 @@ pub fn cache_dir() -> Option<PathBuf> {
 }
 
 fn home() -> Option<PathBuf> {
-    std::env::var_os("HOME")
-        .filter(|v| !v.is_empty())
-        .map(PathBuf::from)
+    platform::home()
 }
 
 /// The implicit places of steps 2–5, in order; only existing files past step 2.
@@ -110,10 +112,14 @@ pub fn implicit_candidates() -> Vec<Candidate> {
     }
     let sites = site_packages();
     for site in &sites {
-        push(site.join("pyoidn").join("oidn").join("lib"), Origin::Pyoidn);
+        for lib in PACKAGE_LIB_DIRS {
+            push(site.join("pyoidn").join("oidn").join(lib), Origin::Pyoidn);
+        }
     }
     for site in &sites {
-        push(site.join("bpy").join("lib"), Origin::Blender);
+        for lib in BLENDER_LIB_DIRS {
+            push(site.join("bpy").join(lib), Origin::Blender);
+        }
     }
     for dir in blender_dirs() {
         push(dir, Origin::Blender);
@@ -148,13 +154,7 @@ fn site_packages() -> Vec<PathBuf> {
     prefixes.extend(["/usr/local", "/usr"].map(PathBuf::from));
     let mut out = Vec::new();
     for prefix in prefixes {
-        for python in subdirs(&prefix.join("lib")) {
-            let name = python.file_name().map(|n| n.to_string_lossy().into_owned());
-            if name.is_some_and(|n| n.starts_with("python3")) {
-                out.push(python.join("site-packages"));
-                out.push(python.join("dist-packages"));
-            }
-        }
+        platform::site_packages_of(&prefix, &mut out);
     }
     out
 }
@@ -165,11 +165,11 @@ fn blender_dirs() -> Vec<PathBuf> {
     let mut out = Vec::new();
     if let Some(path) = std::env::var_os("PATH") {
         for dir in std::env::split_paths(&path) {
-            let exe = dir.join("blender");
+            let exe = dir.join(BLENDER);
             if exe.is_file() {
                 let real = std::fs::canonicalize(&exe).unwrap_or(exe);
                 if let Some(parent) = real.parent() {
-                    out.push(parent.join("lib"));
+                    out.extend(BLENDER_LIB_DIRS.iter().map(|d| parent.join(d)));
                 }
             }
         }
@@ -183,21 +183,6 @@ fn blender_dirs() -> Vec<PathBuf> {
             })
             .map(|d| d.join("lib")),
     );
-    out
-}
-
-/// The folders inside `dir`, sorted (newest versions last is not assumed); none if unreadable.
-fn subdirs(dir: &Path) -> Vec<PathBuf> {
-    let mut out: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map(|entries| {
-            entries
-                .filter_map(Result::ok)
-                .map(|e| e.path())
-                .filter(|p| p.is_dir())
-                .collect()
-        })
-        .unwrap_or_default();
-    out.sort();
     out
 }
 

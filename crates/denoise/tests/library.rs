@@ -42,7 +42,7 @@ fn a_folder_without_the_library_is_a_clean_error() {
     let err = Denoiser::load(Some(Path::new("/"))).unwrap_err();
     assert!(matches!(err, DenoiseError::Load { .. }), "{err:?}");
     assert!(
-        err.to_string().contains("libOpenImageDenoise.so.2"),
+        err.to_string().contains(aperture_denoise::locate::LIBRARY),
         "{err}"
     );
 }

@@ -4,6 +4,8 @@
 //! via the shell's `ulimit`): a stack overflow, an allocation past the ceiling or a quadratic
 //! loop kills the child, and the test fails saying which limit it hit. No wall-clock
 //! assertion: the ceilings are the kernel's.
+// The limits are bash's `ulimit` and the deaths Unix signals: Unix only.
+#![cfg(unix)]
 
 use std::io::Cursor;
 use std::path::Path;

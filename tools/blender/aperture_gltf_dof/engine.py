@@ -15,7 +15,7 @@ import time
 
 import bpy
 
-from . import exr, f12_session, viewport_sync, world
+from . import exr, f12_session, platforms, viewport_sync, world
 from .scene_export import export_scene, resolution  # noqa: F401 (the engine's names)
 from .viewport import ViewportMixin
 
@@ -54,11 +54,14 @@ def enabled_passes(scene, view_layer):
 
 
 def find_binary(settings):
-    path = bpy.path.abspath(settings.binary) if settings.binary else shutil.which("aperture")
-    if not path or not os.path.isfile(path):
+    setting = bpy.path.abspath(settings.binary) if settings.binary else ""
+    path_dirs = os.environ.get("PATH", "").split(os.pathsep)
+    home = os.path.expanduser("~")
+    path = platforms.find_aperture(setting, path_dirs, home)
+    if path is None:
         raise RuntimeError(
-            "the aperture binary was not found: set it in Render Properties › aperture, or "
-            "install it on PATH with `cargo install --path crates/cli`"
+            f"the aperture binary ({platforms.exe('aperture')}) was not found: set it in Render "
+            "Properties › aperture, or install it on PATH with `cargo install --path crates/cli`"
         )
     return path
 
@@ -88,13 +91,14 @@ def motion_arguments(scene):
 
 def blender_oidn():
     """The Open Image Denoise library that ships with this Blender (the `bpy` module's `lib/`,
-    or the `lib/` beside the Blender executable), or None."""
+    or the `lib/` beside the Blender executable, also `blender.shared/` on Windows), or None."""
     # Blender's <version>/ folder sits beside its lib/, in an installation and in the bpy module.
-    folders = [os.path.join(os.path.dirname(bpy.utils.resource_path("LOCAL")), "lib")]
+    bases = [os.path.dirname(bpy.utils.resource_path("LOCAL"))]
     if bpy.app.binary_path:
-        folders.append(os.path.join(os.path.dirname(bpy.app.binary_path), "lib"))
+        bases.append(os.path.dirname(bpy.app.binary_path))
+    folders = [os.path.join(b, d) for b in bases for d in platforms.blender_lib_dirs()]
     for folder in folders:
-        lib = os.path.join(folder, "libOpenImageDenoise.so.2")
+        lib = os.path.join(folder, platforms.oidn_library())
         if os.path.isfile(lib):
             return lib
     return None

@@ -31,8 +31,9 @@ class ApertureSettings(bpy.types.PropertyGroup):
 
     binary: bpy.props.StringProperty(
         name="aperture binary",
-        description="Path of the aperture program (empty: `aperture` found on PATH; install it "
-        "with `cargo install --path crates/cli`)",
+        description="Path of the aperture program, or its folder (empty: `aperture`, "
+        "`aperture.exe` on Windows, found on PATH or in ~/.cargo/bin; install it with "
+        "`cargo install --path crates/cli`)",
         subtype="FILE_PATH",
         default="",
     )
@@ -77,7 +78,8 @@ class ApertureSettings(bpy.types.PropertyGroup):
     )
     oidn: bpy.props.StringProperty(
         name="OIDN Library",
-        description="libOpenImageDenoise.so.2 to denoise with (empty: APERTURE_OIDN if set, "
+        description="Open Image Denoise library to denoise with: libOpenImageDenoise.so.2, "
+        "OpenImageDenoise.dll on Windows (empty: APERTURE_OIDN if set, "
         "else the one that ships with this Blender, else aperture's own search)",
         subtype="FILE_PATH",
         default="",

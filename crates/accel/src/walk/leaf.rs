@@ -180,7 +180,8 @@ pub(crate) trait BlasLeaf<'a>: Leaf + Copy {
     /// The answer for a ray that meets nothing.
     fn miss() -> Self::Answer;
     /// The primitive that stopped the walk, for leaves whose answer any stopping primitive
-    /// gives alike (any hit); `None` for the others.
+    /// gives alike (any hit); `None` for the others. Used by the x86-64 packets only.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     fn blocker(&self) -> Option<u32>;
     /// The triangles the leaf tests, its ray's triangle-test constants and `tmin`: what a
     /// packet tests for several leaves at once ([`crate::triangle::lanes`]).

@@ -142,10 +142,11 @@ pub enum MergeError {
         path: PathBuf,
         /// The part it overlaps.
         other: PathBuf,
-        /// Its sample range.
-        range: String,
+        /// Its sample range (`Box<str>` here and in [`MergeError::MissingSamples`]: Windows'
+        /// 32-byte `PathBuf` would otherwise make the error over clippy's 128-byte limit).
+        range: Box<str>,
         /// The other's.
-        other_range: String,
+        other_range: Box<str>,
         /// Their window, `X0,Y0,X1,Y1`.
         region: String,
     },
@@ -187,11 +188,11 @@ pub enum MergeError {
         /// Its window.
         region: String,
         /// The ranges it has.
-        has: String,
+        has: Box<str>,
         /// A part of a window with more.
         other: PathBuf,
         /// The ranges that one has.
-        other_has: String,
+        other_has: Box<str>,
     },
     /// A part's pixels do not match its header (the file changed while merging).
     #[error("{}: its pixels do not match its header (did the file change during the merge?)", path.display())]

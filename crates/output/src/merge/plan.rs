@@ -337,8 +337,8 @@ fn groups(parts: &[Part]) -> Result<Vec<Group>, MergeError> {
                         return Err(MergeError::OverlappingSamples {
                             path: parts[*i].path.clone(),
                             other: parts[*j].path.clone(),
-                            range: format!("{}..{}", r.start, r.end),
-                            other_range: format!("{}..{}", f.start, f.end),
+                            range: format!("{}..{}", r.start, r.end).into(),
+                            other_range: format!("{}..{}", f.start, f.end).into(),
                             region: region_text(&window),
                         });
                     }
@@ -393,9 +393,9 @@ fn check_sample_ranges(
             return Err(MergeError::MissingSamples {
                 path: parts[g.parts[0]].path.clone(),
                 region: region_text(&g.window),
-                has: g.ranges.to_string(),
+                has: g.ranges.to_string().into(),
                 other: parts[most.parts[0]].path.clone(),
-                other_has: most.ranges.to_string(),
+                other_has: most.ranges.to_string().into(),
             });
         }
     }

@@ -1,0 +1,124 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT OR Apache-2.0
+# Issue 62: the other platforms, checked from this x86-64 Linux machine.
+#
+#   tools/cross/check.sh [aarch64] [windows]     (both when none is named)
+#
+# 1. installs what it lacks: the rustup targets, Debian's aarch64 and mingw-w64 cross compilers
+#    (C and C++: meshopt and FLIP are built from C++), qemu-user and wine;
+# 2. clippy -D warnings for aarch64-unknown-linux-gnu and x86_64-pc-windows-gnu (all targets);
+#    the same clippy for aarch64-apple-darwin (check only, no linking: no macOS SDK), with zig
+#    from PyPI's `ziglang` wheel as its C and C++ compiler (tools/cross/zig_cc.py);
+# 3. builds `aperture` (debug) for aarch64 and for Windows, renders the demo with each, under
+#    qemu-aarch64 and wine, and compares the pixels bit for bit with the x86-64 build's
+#    (target/debug/aperture, built here when missing).
+#
+# Cross builds compile dependencies at opt-level 0 and without debug info (the dev profile's
+# opt-level 3 is for tests): half the build time, and the same images, as Rust's float
+# arithmetic does not depend on the optimisation level.
+#
+# Windows: the C++ runtime is linked statically (cc's CXXSTDLIB_STATIC), so aperture.exe needs
+# no libstdc++-6.dll; Debian 12's wine 8 lacks bcryptprimitives.dll (ProcessPrng, which Rust's
+# std calls for random seeds; wine has it from 9), so a stand-in built from
+# tools/cross/bcryptprimitives.c is put beside the .exe for the test only.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+export CARGO_TERM_COLOR=never
+export CARGO_INCREMENTAL=0
+start=$(date +%s)
+step() { echo "== $* ($(($(date +%s) - start)) s)"; }
+
+ARM=aarch64-unknown-linux-gnu
+WIN=x86_64-pc-windows-gnu
+MAC=aarch64-apple-darwin
+target_dir="${CARGO_TARGET_DIR:-target}"
+cross=(--config 'profile.dev.package."*".opt-level=0' --config 'profile.dev.debug=false')
+platforms=" ${*:-aarch64 windows} "
+want() { [[ "$platforms" == *" $1 "* ]]; }
+for p in $platforms; do
+    [[ "$p" == aarch64 || "$p" == windows ]] || { echo "unknown platform: $p" >&2; exit 2; }
+done
+
+step "install: rustup targets, cross compilers, qemu-user, wine"
+rustup target add "$ARM" "$WIN" "$MAC" 2>&1 | grep -v "is up to date" || true
+missing=()
+for p in gcc-aarch64-linux-gnu g++-aarch64-linux-gnu libc6-dev-arm64-cross \
+    gcc-mingw-w64-x86-64 g++-mingw-w64-x86-64 qemu-user wine wine64; do
+    dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
+export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L /usr/aarch64-linux-gnu"
+export CXXSTDLIB_STATIC_x86_64_pc_windows_gnu=1
+
+if want aarch64; then
+    step "clippy $ARM"
+    cargo clippy --workspace --all-targets --target "$ARM" -- -D warnings
+fi
+if want windows; then
+    step "clippy $WIN"
+    cargo clippy --workspace --all-targets --target "$WIN" -- -D warnings
+fi
+step "clippy $MAC (zig as the C/C++ compiler; no linking)"
+zig_venv="${XDG_CACHE_HOME:-$HOME/.cache}/aperture/zig-venv"
+if ! "$zig_venv/bin/python" -m ziglang version >/dev/null 2>&1; then
+    python3 -m venv "$zig_venv"
+    "$zig_venv/bin/pip" install --quiet --disable-pip-version-check "ziglang==0.17.1"
+fi
+zig_bin="$zig_venv/aperture-bin"
+mkdir -p "$zig_bin"
+ln -sf "$PWD/tools/cross/zig_cc.py" "$zig_bin/zig-cc"
+ln -sf "$PWD/tools/cross/zig_cc.py" "$zig_bin/zig-c++"
+printf '#!/bin/sh\nexec "%s" -m ziglang ar "$@"\n' "$zig_venv/bin/python" >"$zig_bin/zig-ar"
+chmod +x "$zig_bin/zig-ar"
+ZIG_PYTHON="$zig_venv/bin/python" CC_aarch64_apple_darwin="$zig_bin/zig-cc" \
+    CXX_aarch64_apple_darwin="$zig_bin/zig-c++" AR_aarch64_apple_darwin="$zig_bin/zig-ar" \
+    cargo clippy --workspace --all-targets --target "$MAC" -- -D warnings
+
+out=$(mktemp -d)
+export WINEPREFIX="$out/wine" WINEDEBUG=-all
+trap 'wineserver -k >/dev/null 2>&1 || true; rm -rf "$out"' EXIT
+args=(render assets/demo.glb --width 160 --height 90 --spp 4 --quiet)
+step "render the demo on x86-64"
+cargo build --quiet -p aperture-cli
+"$target_dir/debug/aperture" "${args[@]}" -o "$out/x86_64.png"
+
+if want aarch64; then
+    step "build aperture for $ARM (debug); the budget and denoise tests under qemu-aarch64"
+    cargo build --quiet "${cross[@]}" -p aperture-cli --target "$ARM"
+    cargo test --quiet "${cross[@]}" --target "$ARM" -p aperture-budget -p aperture-denoise
+    step "render the demo under qemu-aarch64"
+    qemu-aarch64 -L /usr/aarch64-linux-gnu "$target_dir/$ARM/debug/aperture" "${args[@]}" \
+        -o "$out/aarch64.png"
+fi
+
+if want windows; then
+    step "build aperture.exe for $WIN (debug)"
+    cargo build --quiet "${cross[@]}" -p aperture-cli --target "$WIN"
+    exe="$target_dir/$WIN/debug/aperture.exe"
+    if x86_64-w64-mingw32-objdump -p "$exe" | grep -iE "DLL Name: (libstdc|libgcc|libwinpthread)"; then
+        echo "error: aperture.exe needs the MinGW runtime DLLs above" >&2
+        exit 1
+    fi
+    x86_64-w64-mingw32-gcc -O2 -shared -o "$out/bcryptprimitives.dll" \
+        tools/cross/bcryptprimitives.c -ladvapi32
+    cp "$exe" "$out/aperture.exe"
+    step "render the demo under wine"
+    wine "$out/aperture.exe" "${args[@]}" -o "$out/windows.png"
+fi
+
+step "compare with x86-64"
+sha256sum "$out"/*.png
+python3 tools/cross/png_pixels.py "$out"/*.png | tee "$out/pixels.txt"
+if [ "$(wc -l <"$out/pixels.txt")" != $((1 + $(wc -w <<<"$platforms"))) ]; then
+    echo "error: an image is missing" >&2
+    exit 1
+fi
+if [ "$(cut -d' ' -f1 "$out/pixels.txt" | sort -u | wc -l)" != 1 ]; then
+    echo "error: the platforms' images differ" >&2
+    exit 1
+fi
+step "cross check passed: the images are bit-identical"
