@@ -17,6 +17,7 @@ use signal_hook::consts::{SIGINT, SIGTERM};
 pub const EXIT_INTERRUPTED: u8 = 130;
 
 /// Exit code when stdout's reader went away (`aperture info … | head`): 128 + SIGPIPE.
+#[cfg(unix)]
 pub const EXIT_BROKEN_PIPE: u8 = 141;
 
 /// A closed pipe on stdout ends the process at once with [`EXIT_BROKEN_PIPE`], as Unix tools

@@ -1,5 +1,7 @@
 //! `aperture info SCENE | head -1`: when the reader closes the pipe, info ends quietly as Unix
 //! tools do (status 141, 128 + SIGPIPE), never with Rust's "failed printing to stdout" panic.
+//! Unix only: Windows has no SIGPIPE.
+#![cfg(unix)]
 
 mod common;
 
@@ -24,7 +26,6 @@ fn many_cameras() -> Vec<u8> {
     quad_glb(&doc)
 }
 
-#[cfg(unix)]
 #[test]
 fn info_into_a_closed_pipe_ends_without_a_panic() {
     let dir = Scratch::new("broken-pipe");
