@@ -72,8 +72,9 @@ class Render:
     def step(self, samples: int | None = None) -> int:
         """Renders the next `samples` samples of every pixel (None: the doubling schedule
         1, 1, 2, 4, …); returns the samples each pixel has now."""
-    def image(self) -> RenderResult:
-        """The film so far."""
+    def image(self, denoise: bool | None = None) -> RenderResult:
+        """The film so far: denoised when the render was started with ``denoise=True``
+        (``denoise=False``: the noisy film; ``True`` without a denoised start: ValueError)."""
     def cancel(self) -> None:
         """Stops the render (also during a step, from another thread)."""
 
@@ -93,6 +94,9 @@ class Scene:
         seed: int = 0,
         passes: str | Sequence[str] = "default",
         denoise: bool = False,
+        denoise_quality: Literal["high", "balanced", "fast"] | None = None,
+        denoise_prefilter: Literal["accurate", "fast", "none"] | None = None,
+        oidn: str | None = None,
         sample_offset: int = 0,
         max_bounces: int = 12,
         clamp_direct: float = 0.0,

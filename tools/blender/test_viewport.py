@@ -147,6 +147,7 @@ def run(bpy):
         before = film
     bpy.app.handlers.depsgraph_update_post.remove(handler)
     test_preview(vs, session)
+    test_denoise(bpy, vs, session, aperture)
     session.free()
     test_f12(bpy, vs, aperture)
 
@@ -172,6 +173,34 @@ def test_preview(vs, session):
           "(want [1, 2, 4, 8, 16] at 1/30 s a first image)")
 
 
+def test_denoise(bpy, vs, session, aperture):
+    """*Viewport Denoise* (Cycles' viewport settings: quality balanced, prefilter fast): from
+    the start sample on, the film at N samples equals ``scene.render(spp=N, denoise=True)``
+    with those settings, bit for bit; a start sample past the samples leaves the noisy film,
+    the same bits as without denoising."""
+    sc = bpy.context.scene
+    plain = session.start(pixel_size=1).wait() and session.film()
+    sc.aperture.viewport_denoise = True
+    films = {}
+    for start in (1, SPP + 1):
+        sc.aperture.viewport_denoise_start = start
+        opts, first = vs.viewport_denoise(sc)
+        session.start(pixel_size=1, denoise_start=first, **opts).wait()
+        films[start] = session.film()
+        if session.notice:
+            strict = "--require-all" in sys.argv or os.environ.get("CI") == "true"
+            record("viewport.denoise", False if strict else None, session.notice)
+            sc.aperture.viewport_denoise = False
+            return
+    ref = session.scene.render(**{**session.scene_options, **vs.VIEWPORT_DENOISE}).image
+    denoised = bits_equal(films[1], ref)
+    late = bits_equal(films[SPP + 1], plain)
+    check("viewport.denoise", denoised and late and not bits_equal(films[1], plain),
+          f"from sample 1 the {SPP}-spp film equals a denoised render (balanced, fast) bit for "
+          f"bit: {denoised}; with the start sample past {SPP} the film is the noisy one: {late}")
+    sc.aperture.viewport_denoise = False
+
+
 def f12(bpy, name):
     """F12 (``bpy.ops.render.render``) with the engine: Combined as RGBA, rows from the top."""
     import OpenEXR
@@ -186,15 +215,17 @@ def f12(bpy, name):
     bpy.ops.render.render(write_still=True)
     ch = {k: np.array(v.pixels, dtype=np.float32)
           for k, v in OpenEXR.File(path, separate_channels=True).channels().items()}
-    prefix = next(n[:-1] for n in ch if n.endswith("R"))
+    prefix = next((n[:-1] for n in ch if n.endswith("Combined.R")),
+                  next(n[:-1] for n in ch if n.endswith("R")))
     return np.stack([ch[prefix + c] for c in "RGBA"], axis=-1)
 
 
 def test_f12(bpy, vs, aperture):
     """F12 through the session F12 and the viewport share: the first exports once, a second
     with nothing changed exports and sends nothing and gives the same bits, a transform is one
-    edit (no export), a geometry edit one re-export; each image's RGB equals a fresh export's
-    render bit for bit."""
+    edit (no export), a geometry edit one re-export, denoising switched on neither (it is
+    denoised in the session, no longer by the command line); each image's RGB equals a fresh
+    export's render (denoised the same way) bit for bit."""
     engine = sys.modules[ADDON + ".engine"]
     cube = bpy.data.objects["Cube"]
     cube.hide_render = False  # the edits above hid it
@@ -202,7 +233,8 @@ def test_f12(bpy, vs, aperture):
              ("f12.transform", lambda: setattr(cube, "location", (-0.7, 0.4, 0.5)),
               ["transform"], 1),
              ("f12.geometry", lambda: [setattr(v.co, "x", v.co.x * 1.5) for v in cube.data.vertices]
-              and cube.data.update(), ["reexport"], 2)]
+              and cube.data.update(), ["reexport"], 2),
+             ("f12.denoise", lambda: setattr(bpy.context.scene.aperture, "denoise", True), [], 2)]
     last = None
     for k, (name, edit, want, exports) in enumerate(steps):
         if edit is not None:
@@ -212,7 +244,11 @@ def test_f12(bpy, vs, aperture):
         run = dict(engine.LAST_RUN)
         paths = sorted({p for p, _ in run.get("sync", [])})
         s = vs.existing(bpy.context.evaluated_depsgraph_get())
-        ref = reference(bpy, vs, aperture, s.scene_options, f"f12-{k}")[..., :3]
+        opts = dict(s.scene_options)
+        if bpy.context.scene.aperture.denoise:  # as the command line: high, accurate
+            lib = engine.oidn_library(bpy.context.scene.aperture)
+            opts.update(denoise=True, **({"oidn": lib} if lib else {}))
+        ref = reference(bpy, vs, aperture, opts, f"f12-{k}")[..., :3]
         same = bits_equal(np.ascontiguousarray(img[..., :3]), np.ascontiguousarray(ref))
         repeat_ok = name != "f12.unchanged" or bits_equal(img, last)
         check(f"viewport.{name}", run.get("path") == "session" and paths == want

@@ -1,13 +1,17 @@
 //! `r = scene.start(**options)`: a progressive render (SPEC §9) whose film is read between
 //! steps: an `aperture_render::Progressive`, each step rendered from the session's frame
 //! (refused once the scene was edited since the start), so a render that reaches N samples
-//! equals the one-shot N-sample render bit for bit.
+//! equals the one-shot N-sample render bit for bit. Started with `denoise=True`, its images
+//! are denoised (the viewport's denoising): the film of N samples then equals
+//! `scene.render(spp=N, denoise=True)` with the same settings.
 
 use crate::errors::{load_error, output_error, render_error, value_error, RenderError};
 use crate::images::RenderResult;
 use crate::interrupt::{run, with_threads};
+use crate::render::denoiser;
 use crate::render_opts::{plan, RenderAsk};
 use crate::state::{lock, Shared, State};
+use aperture_denoise::Denoiser;
 use aperture_render::Frame;
 use aperture_render::{Cancel, FrameSpec, Progressive, Window};
 use pyo3::prelude::*;
@@ -30,17 +34,15 @@ pub struct Render {
     state: Shared,
     cancel: Cancel,
     threads: Option<usize>,
+    /// Open Image Denoise, loaded at the start when the render was started with `denoise=True`.
+    denoiser: Option<Denoiser>,
     inner: Mutex<Inner>,
 }
 
 impl Render {
     /// A render of `ask` from `state`'s session, no samples taken yet.
     pub(crate) fn start(py: Python<'_>, state: &Shared, ask: RenderAsk) -> PyResult<Self> {
-        if ask.denoise {
-            return Err(value_error(
-                "a progressive render is not denoised: denoise its final image with scene.render(denoise=True)",
-            ));
-        }
+        let denoiser = denoiser(ask.denoise.as_ref())?;
         let cancel = Cancel::new();
         let inner = run(py, &cancel, || {
             let mut guard = lock(state);
@@ -63,6 +65,7 @@ impl Render {
             state: state.clone(),
             cancel,
             threads: ask.threads,
+            denoiser,
             inner: Mutex::new(inner),
         })
     }
@@ -115,21 +118,40 @@ impl Render {
     }
 
     /// The film so far as a render result (`image, passes = r.image()`): each pixel the mean
-    /// of the samples it has.
-    fn image(&self, py: Python<'_>) -> PyResult<RenderResult> {
+    /// of the samples it has, denoised when the render was started with `denoise=True`
+    /// (`denoise=False`: the noisy film, e.g. before the viewport's first denoised sample).
+    #[pyo3(signature = (denoise=None))]
+    fn image(&self, py: Python<'_>, denoise: Option<bool>) -> PyResult<RenderResult> {
+        let denoiser = match (denoise, &self.denoiser) {
+            (Some(true), None) => {
+                return Err(value_error(
+                    "image(denoise=True) needs a render started with denoise=True",
+                ))
+            }
+            (Some(false), _) => None,
+            (_, d) => d.as_ref(),
+        };
         let (image, samples) = py.detach(|| -> PyResult<_> {
-            let mut guard = lock(&self.state);
-            let inner = self.inner();
-            let frame = frame_of(&mut guard, &inner)?;
-            let image = aperture_output::film_to_image(
-                inner.render.film(),
-                frame.scene(),
-                inner.render.options(),
-                false,
-                inner.secs,
-            )
-            .map_err(output_error)?;
-            Ok((image, inner.render.film().total_samples()))
+            let (mut image, samples) = {
+                let mut guard = lock(&self.state);
+                let inner = self.inner();
+                let frame = frame_of(&mut guard, &inner)?;
+                let image = aperture_output::film_to_image(
+                    inner.render.film(),
+                    frame.scene(),
+                    inner.render.options(),
+                    false,
+                    inner.secs,
+                )
+                .map_err(output_error)?;
+                (image, inner.render.film().total_samples())
+            };
+            // After the locks: the session's edits need not wait for the denoiser.
+            if let Some(d) = denoiser {
+                aperture_output::denoised::denoise_image(&mut image, d)
+                    .map_err(|e| RenderError::new_err(e.to_string()))?;
+            }
+            Ok((image, samples))
         })?;
         RenderResult::new(py, image, samples)
     }

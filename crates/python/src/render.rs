@@ -4,7 +4,7 @@
 use crate::errors::{load_error, output_error, render_error, RenderError};
 use crate::images::RenderResult;
 use crate::interrupt::{run, run_inline, with_threads};
-use crate::render_opts::{plan, RenderAsk};
+use crate::render_opts::{plan, DenoiseAsk, RenderAsk};
 use crate::state::{lock, Shared};
 use aperture_denoise::Denoiser;
 use aperture_imageio::Image;
@@ -12,12 +12,13 @@ use aperture_render::Cancel;
 use pyo3::prelude::*;
 use std::time::Instant;
 
-/// Open Image Denoise, loaded before anything is rendered (as the command line does).
-pub(crate) fn denoiser(wanted: bool) -> PyResult<Option<Denoiser>> {
-    match wanted {
-        false => Ok(None),
-        true => Denoiser::load(None)
-            .map(Some)
+/// Open Image Denoise with `ask`'s settings, loaded before anything is rendered (as the
+/// command line does); `None` without denoising.
+pub(crate) fn denoiser(ask: Option<&DenoiseAsk>) -> PyResult<Option<Denoiser>> {
+    match ask {
+        None => Ok(None),
+        Some(a) => Denoiser::load(a.library.as_deref())
+            .map(|d| Some(d.with_settings(a.settings)))
             .map_err(|e| RenderError::new_err(e.to_string())),
     }
 }
@@ -33,12 +34,12 @@ fn small(ask: &RenderAsk) -> bool {
     let Some(w) = ask.width else { return false };
     let h = ask.height.unwrap_or(w);
     let samples = u64::from(w) * u64::from(h) * u64::from(ask.base.spp);
-    !ask.denoise && samples <= INLINE_SAMPLES
+    ask.denoise.is_none() && samples <= INLINE_SAMPLES
 }
 
 /// Renders `ask` from `state`'s session into the image of the EXR (denoised when asked).
 pub(crate) fn render(py: Python<'_>, state: &Shared, ask: RenderAsk) -> PyResult<RenderResult> {
-    let denoiser = denoiser(ask.denoise)?;
+    let denoiser = denoiser(ask.denoise.as_ref())?;
     let cancel = Cancel::new();
     let inline = small(&ask);
     let work = || -> PyResult<(Image, u64)> {

@@ -8,6 +8,7 @@ use crate::errors::value_error;
 use crate::load_opts::{time_options, SceneDefaults};
 use crate::options::{non_negative, positive, Kwargs};
 use aperture_accel::BvhQuality;
+use aperture_denoise::{Prefilter, Quality, Settings};
 use aperture_render::motion::{MotionOverrides, MotionSettings, ShutterPosition};
 use aperture_render::{
     AdaptiveOptions, BvhQualityChoice, Cancel, Clamp, FilterKind, FrameSpec, Pass, PassSet,
@@ -16,6 +17,7 @@ use aperture_render::{
 use aperture_shading::{EnvLight, Environment, MaterialOverride};
 use glam::Vec3;
 use pyo3::prelude::*;
+use std::path::PathBuf;
 
 /// `env=`: a colour or an equirectangular image file.
 #[derive(Debug, Clone)]
@@ -41,8 +43,17 @@ pub(crate) struct RenderAsk {
     pub time: Option<f64>,
     pub fps: f32,
     pub motion: MotionOverrides,
-    pub denoise: bool,
+    /// Denoising, `None` without.
+    pub denoise: Option<DenoiseAsk>,
     pub threads: Option<usize>,
+}
+
+/// `denoise=True` with its settings and `oidn=` (the library, as the command line's `--oidn`;
+/// else `APERTURE_OIDN`, else the usual places).
+#[derive(Debug, Clone)]
+pub(crate) struct DenoiseAsk {
+    pub settings: Settings,
+    pub library: Option<PathBuf>,
 }
 
 /// The resolved render: the renderer's options and the frame they render.
@@ -56,8 +67,8 @@ pub(crate) fn render_ask(kw: &mut Kwargs<'_>, defaults: &SceneDefaults) -> PyRes
     let spp = kw.uint("spp", 1, 65536)?.unwrap_or(64);
     let sample_offset = kw.uint("sample_offset", 0, 65535)?.unwrap_or(0);
     let passes = passes(kw)?;
-    let denoise = kw.flag("denoise")?.unwrap_or(false);
-    let passes = match denoise {
+    let denoise = denoise(kw)?;
+    let passes = match denoise.is_some() {
         true => passes
             .with(Pass::DenoisingAlbedo)
             .with(Pass::DenoisingNormal),
@@ -129,6 +140,30 @@ pub(crate) fn render_ask(kw: &mut Kwargs<'_>, defaults: &SceneDefaults) -> PyRes
         denoise,
         threads: kw.uint("threads", 1, 4096)?.map(|n| n as usize),
     })
+}
+
+/// `denoise=`, with `denoise_quality=` and `denoise_prefilter=` (Cycles' Quality and
+/// Prefilter, the command line's `--denoise-quality` and `--denoise-prefilter`; high and
+/// accurate by default) and `oidn=`.
+fn denoise(kw: &mut Kwargs<'_>) -> PyResult<Option<DenoiseAsk>> {
+    let on = kw.flag("denoise")?.unwrap_or(false);
+    let qualities = [Quality::High, Quality::Balanced, Quality::Fast].map(|q| (q.name(), q));
+    let prefilters = [Prefilter::Accurate, Prefilter::Fast, Prefilter::None].map(|p| (p.name(), p));
+    let quality = kw.choice("denoise_quality", &qualities)?;
+    let prefilter = kw.choice("denoise_prefilter", &prefilters)?;
+    let library = kw.string("oidn")?.map(PathBuf::from);
+    if !on && (quality.is_some() || prefilter.is_some() || library.is_some()) {
+        return Err(value_error(
+            "denoise_quality, denoise_prefilter and oidn need denoise=True",
+        ));
+    }
+    Ok(on.then(|| DenoiseAsk {
+        settings: Settings {
+            quality: quality.unwrap_or_default(),
+            prefilter: prefilter.unwrap_or_default(),
+        },
+        library,
+    }))
 }
 
 /// `passes=`: a list of EXR pass names, or the command line's string (`"default"`, `"all"`,

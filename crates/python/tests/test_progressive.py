@@ -87,3 +87,51 @@ def test_an_edit_ends_a_progressive_render(demo):
     fresh = scene.start(spp=4, passes=[], **OPTS)
     fresh.step(4)
     same(fresh.image(), scene.render(spp=4, passes=[], **OPTS))
+
+
+def _start_denoised(scene, **opts):
+    """``scene.start(denoise=True, ...)``, or the missing-input rule when OIDN is absent."""
+    try:
+        return scene.start(denoise=True, **opts)
+    except aperture.RenderError as e:
+        if "Open Image Denoise" not in str(e):
+            raise
+        from conftest import missing
+        missing("Open Image Denoise (tools/oidn/install.sh)")
+
+
+@pytest.mark.parametrize("settings", [{}, dict(denoise_quality="balanced", denoise_prefilter="fast")])
+def test_denoised_steps_equal_a_denoised_one_shot_render(demo, settings):
+    """The viewport's denoising: a progressive render started with denoise=True gives, at N
+    samples, the image of scene.render(spp=N, denoise=True) with the same settings, bit for
+    bit; image(denoise=False) is the noisy film, which is the one-shot render's Noisy Image."""
+    scene = aperture.load(demo)
+    r = _start_denoised(scene, spp=4, passes="none", **settings, **OPTS)
+    r.step(1)
+    r.step(3)
+    assert r.done
+    once = scene.render(spp=4, passes="none", denoise=True, **settings, **OPTS)
+    denoised = r.image()
+    assert np.array_equal(bits(denoised.image), bits(once.image))
+    noisy = r.image(denoise=False).image
+    assert not np.array_equal(noisy[..., :3], denoised.image[..., :3]), "denoised"
+    assert np.array_equal(bits(noisy[..., :3]), bits(once.passes["Noisy Image"][..., :3]))
+
+
+def test_denoise_settings_differ_and_need_denoise(demo):
+    scene = aperture.load(demo)
+    _start_denoised(scene, spp=1, **OPTS)
+    high = scene.render(spp=2, passes="none", denoise=True, **OPTS)
+    fast = scene.render(spp=2, passes="none", denoise=True, denoise_quality="fast",
+                        denoise_prefilter="none", **OPTS)
+    assert not np.array_equal(bits(high.image), bits(fast.image)), "the settings reach OIDN"
+    with pytest.raises(ValueError, match="need denoise=True"):
+        scene.start(spp=2, denoise_quality="fast", **OPTS)
+    with pytest.raises(ValueError, match="need denoise=True"):
+        scene.render(spp=1, oidn="/nowhere/libOpenImageDenoise.so.2", **OPTS)
+    with pytest.raises(aperture.RenderError, match="nowhere"):
+        scene.render(spp=1, denoise=True, oidn="/nowhere/libOpenImageDenoise.so.2", **OPTS)
+    with pytest.raises(ValueError, match="denoise_prefilter"):
+        scene.render(spp=2, denoise=True, denoise_prefilter="slow", **OPTS)
+    with pytest.raises(ValueError, match="started with denoise=True"):
+        scene.start(spp=1, **OPTS).image(denoise=True)

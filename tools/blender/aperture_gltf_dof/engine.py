@@ -104,14 +104,20 @@ def blender_oidn():
     return None
 
 
-def denoise_arguments(s):
-    """`--denoise`, its settings and the library: the panel's, else APERTURE_OIDN (aperture
-    reads it), else Blender's own, else aperture's search."""
-    if not s.denoise:
-        return []
+def oidn_library(s):
+    """The library to denoise with: the panel's, else None when APERTURE_OIDN is set (aperture
+    reads it), else Blender's own, else None (aperture's search)."""
     lib = bpy.path.abspath(s.oidn) if s.oidn else None
     if lib is None and not os.environ.get("APERTURE_OIDN"):
         lib = blender_oidn()
+    return lib
+
+
+def denoise_arguments(s):
+    """`--denoise`, its settings and the library (``oidn_library``)."""
+    if not s.denoise:
+        return []
+    lib = oidn_library(s)
     settings = ["--denoise-prefilter", s.denoise_prefilter.lower(),
                 "--denoise-quality", s.denoise_quality.lower()]
     return ["--denoise"] + settings + (["--oidn", lib] if lib else [])
@@ -200,8 +206,9 @@ class ApertureRenderEngine(ViewportMixin, bpy.types.RenderEngine):
         try:
             rows, crypto = enabled_passes(scene, view_layer)
             names = [r[4] for r in rows] + crypto
+            lib = oidn_library(scene.aperture) if scene.aperture.denoise else None
             chans, synced = f12_session.render(depsgraph, names, self.cancelled,
-                                               self.update_progress)
+                                               self.update_progress, lib)
             LAST_RUN["sync"] = synced
             s = viewport_sync.existing(depsgraph)
             LAST_RUN["exports"] = s.exports if s is not None else 0

@@ -2,11 +2,11 @@
 """F12 through the session the viewport shares (issue 63): with the ``aperture`` Python module,
 F12 brings the loaded scene up to date (``viewport_sync.shared``: one export the first time,
 then only the edits that changed, a re-export only for what edits cannot express) and renders
-it in process, passes included. A second F12 with nothing changed exports nothing.
+it in process, passes included, and denoised as the command line would (the same settings and
+library, the same bits). A second F12 with nothing changed exports nothing.
 
 The command-line path stays for what this one does not do yet: motion blur (the export then
-carries the animation), a render border, denoising (the CLI finds Blender's own OIDN), and when
-the module is missing."""
+carries the animation), a render border, and when the module is missing."""
 
 from . import viewport_sync
 from .scene_export import resolution
@@ -17,27 +17,35 @@ def usable(scene):
     r = scene.render
     s = scene.aperture
     return (s.f12_session and viewport_sync.available() and not r.use_motion_blur
-            and not r.use_border and not s.denoise)
+            and not r.use_border)
 
 
-def options(scene, pass_names):
-    """``render`` options equal to the F12 command's, with its passes."""
+def options(scene, pass_names, oidn=None):
+    """``render`` options equal to the F12 command's, with its passes and its denoising
+    (``oidn``: the library the command would get with ``--oidn``)."""
     opts = viewport_sync.render_options(scene, resolution(scene))
     opts["passes"] = list(pass_names) or "none"
+    s = scene.aperture
+    if s.denoise:
+        opts.update(denoise=True, denoise_quality=s.denoise_quality.lower(),
+                    denoise_prefilter=s.denoise_prefilter.lower())
+        if oidn:
+            opts["oidn"] = oidn
     return opts
 
 
-def render(depsgraph, pass_names, cancelled, progress):
+def render(depsgraph, pass_names, cancelled, progress, oidn=None):
     """The F12 image of ``depsgraph``'s scene as EXR-style channels (``{"R": …, "Depth.Z": …}``,
     H×W float32 each, rows from the top), or None when ``cancelled()`` became true; and what
-    the sync took (``[(path, name)]``)."""
+    the sync took (``[(path, name)]``). Denoised when the panel says so (``oidn``: the
+    library)."""
     held = viewport_sync.existing(depsgraph)
     if held is not None:
         held.lock.acquire()  # the viewport lets go within its own update
     try:
         s = viewport_sync.shared(depsgraph)
         with s.lock:
-            opts = options(depsgraph.scene, pass_names)
+            opts = options(depsgraph.scene, pass_names, oidn)
             if "noise_threshold" in opts:  # adaptive: one call (no progressive schedule)
                 result = s.scene.render(**opts)
             else:

@@ -84,11 +84,26 @@ class ApertureSettings(bpy.types.PropertyGroup):
         subtype="FILE_PATH",
         default="",
     )
+    viewport_denoise: bpy.props.BoolProperty(
+        name="Viewport Denoise",
+        description="Denoise the viewport with Open Image Denoise at Cycles' viewport settings "
+        "(quality balanced, prefilter fast), from the Start Sample on; off when the library is "
+        "not found (the viewport header says so)",
+        default=False,
+    )
+    viewport_denoise_start: bpy.props.IntProperty(
+        name="Start Sample",
+        description="The viewport shows the noisy image until it has this many samples, as "
+        "Cycles' viewport denoising Start Sample",
+        default=1,
+        min=1,
+        soft_max=64,
+    )
     f12_session: bpy.props.BoolProperty(
         name="Keep Scene Loaded",
         description="F12 renders the scene the viewport keeps loaded (with the aperture Python "
         "module): a second F12 exports only what changed. Off, or without the module, or with "
-        "motion blur, a border or denoising: every F12 exports the scene and runs the aperture "
+        "motion blur or a border: every F12 exports the scene and runs the aperture "
         "program",
         default=True,
     )
@@ -120,6 +135,7 @@ class RENDER_PT_aperture(bpy.types.Panel):
         for name in ("samples", "noise_threshold", "max_bounces", "clamp_direct",
                      "clamp_indirect", "filter", "seed", "transmission", "denoising_data",
                      "denoise", "denoise_prefilter", "denoise_quality", "oidn", "binary",
+                     "viewport_denoise", "viewport_denoise_start",
                      "f12_session", "keep_files"):
             layout.prop(s, name)
 

@@ -38,7 +38,11 @@ class ViewportMixin:
                 s.scene.set_camera(camera.data.name, view_matrix(rd), lens=context.space_data.lens,
                                    sensor_width=72.0, use_dof=False)
                 s.forget_camera(camera)
-            s.start(width=context.region.width, height=context.region.height)
+            denoise, start = viewport_sync.viewport_denoise(depsgraph.scene)
+            s.start(width=context.region.width, height=context.region.height,
+                    denoise_start=start, **denoise)
+            if s.notice:
+                self.report({"WARNING"}, f"aperture: {s.notice}")
         except Exception as e:  # never raised into Blender: the header shows it
             self.report({"ERROR"}, f"aperture: {e}")
         finally:

@@ -88,6 +88,20 @@ def render_options(scene, size=None):
     return opts
 
 
+# Cycles' viewport denoising settings (faster than F12's high/accurate).
+VIEWPORT_DENOISE = dict(denoise=True, denoise_quality="balanced", denoise_prefilter="fast")
+DENOISE_KEYS = tuple(VIEWPORT_DENOISE)
+
+
+def viewport_denoise(scene):
+    """The worker's options for the *Viewport Denoise* setting: ``({options}, start sample)``,
+    ``({}, None)`` when it is off."""
+    s = scene.aperture
+    if not s.viewport_denoise:
+        return {}, None
+    return dict(VIEWPORT_DENOISE), s.viewport_denoise_start
+
+
 # Object types the export writes a node for that a new object of would need a re-export.
 EXPORTED = {"MESH", "CURVE", "SURFACE", "META", "FONT", "LIGHT", "CAMERA", "EMPTY"}
 
@@ -125,10 +139,12 @@ class Worker:
     then the doubling schedule at full resolution. ``film`` is the latest image (always the
     full size), ``samples`` its samples per pixel (0 for the preview); ``first_shape`` the
     resolution of the first image and ``full_pass_seconds`` the first full-resolution pass's
-    time (what the next update's pixel size is chosen from)."""
+    time (what the next update's pixel size is chosen from). With ``denoise_start`` (options
+    with ``denoise``), each film from that many samples on is denoised."""
 
-    def __init__(self, scene, options, pixel_size=1):
+    def __init__(self, scene, options, pixel_size=1, denoise_start=None):
         self.render = scene.start(**options)
+        self.denoise_start = denoise_start if options.get("denoise") else None
         self.film, self.samples, self.error = None, 0, None
         self.first_shape, self.full_pass_seconds = None, None
         self._scene, self._options, self.pixel_size = scene, options, pixel_size
@@ -139,7 +155,8 @@ class Worker:
     def _preview(self):
         """The quick first image: one sample at 1/pixel_size of the resolution, scaled up."""
         w, h, ps = self._options["width"], self._options["height"], self.pixel_size
-        opts = {k: v for k, v in self._options.items() if k not in ("noise_threshold", "min_spp")}
+        drop = ("noise_threshold", "min_spp") + DENOISE_KEYS
+        opts = {k: v for k, v in self._options.items() if k not in drop}
         opts.update(width=-(-w // ps), height=-(-h // ps), spp=1, passes="none")
         small = self._scene.render(**opts).image
         self.first_shape = small.shape[:2]
@@ -154,7 +171,8 @@ class Worker:
             while not self.render.done:
                 t = time.perf_counter()
                 self.render.step()
-                image = self.render.image().image
+                denoise = self.denoise_start is not None and self.render.samples >= self.denoise_start
+                image = self.render.image(denoise=denoise).image
                 if self.full_pass_seconds is None:
                     self.full_pass_seconds = time.perf_counter() - t
                     self.first_shape = self.first_shape or image.shape[:2]
@@ -232,6 +250,7 @@ class Session:
         self.exports = 0
         self.edits = []  # every (path, name) synced, for tests and the header's report
         self.worker = None
+        self.notice = None  # a warning for the viewport's header (denoising unavailable)
         self._busy = False  # an export's own depsgraph updates are not synced
         self._reload(depsgraph)
 
@@ -440,11 +459,13 @@ class Session:
         self.sent.pop(("camera", obj.name), None)
 
     # -- rendering --------------------------------------------------------------------------
-    def start(self, pixel_size=None, **overrides):
+    def start(self, pixel_size=None, denoise_start=None, **overrides):
         """Starts the worker on the synced scene (stopping the last one). The first image
         comes at a reduced resolution when the last full-resolution pass did not fit
         ``FIRST_IMAGE_SECONDS`` (``pixel_size`` forces one; the very first start, with nothing
-        measured, previews at 4)."""
+        measured, previews at 4). With the denoise options (``viewport_denoise``) the film is
+        denoised from ``denoise_start`` samples on; without Open Image Denoise the viewport
+        renders undenoised and ``notice`` says why."""
         self.stop()
         last = self.worker
         if pixel_size is None:
@@ -454,7 +475,15 @@ class Session:
                 pixel_size = pixel_size_for(last.full_pass_seconds)
         opts = {**self.scene_options, **overrides}
         opts.setdefault("bvh_quality", self.bvh_quality(opts))
-        self.worker = Worker(self.scene, opts, pixel_size)
+        self.notice = None
+        try:
+            self.worker = Worker(self.scene, opts, pixel_size, denoise_start)
+        except self._aperture.RenderError as e:
+            if not opts.get("denoise") or "Open Image Denoise" not in str(e):
+                raise
+            self.notice = f"viewport denoising is off: {str(e).splitlines()[0]}"
+            opts = {k: v for k, v in opts.items() if k not in DENOISE_KEYS}
+            self.worker = Worker(self.scene, opts, pixel_size)
         return self.worker
 
     def bvh_quality(self, opts):
