@@ -289,6 +289,7 @@ fn throughput_scene() -> (&'static str, OwnedScene) {
                 meshes: s
                     .meshes
                     .into_iter()
+                    .map(std::sync::Arc::unwrap_or_clone)
                     .map(|m| (m.positions, m.indices))
                     .collect(),
             },

@@ -19,7 +19,7 @@ use glam::{Affine3A, Vec3};
 fn build(c: &mut Criterion) {
     let mut scene = test_scenes::lit_plane(1.0);
     scene.materials.push(test_scenes::emitter(Vec3::ONE));
-    scene.meshes.push(test_scenes::icosphere(3, 1));
+    scene.meshes.push(test_scenes::icosphere(3, 1).into());
     for k in 0..80 {
         let at = Vec3::new((k % 10) as f32 * 3.0, 2.0, (k / 10) as f32 * 3.0);
         scene.instances.push(Instance {

@@ -20,7 +20,7 @@ fn scene(lens_radius: f32) -> Scene {
     s.cameras[0].dof.focus_distance = 61f32.sqrt();
     s.materials
         .push(test_scenes::emitter(Vec3::new(4.0, 3.0, 2.0)));
-    s.meshes.push(test_scenes::icosphere(3, 1));
+    s.meshes.push(test_scenes::icosphere(3, 1).into());
     s.instances.push(aperture_scene::Instance {
         mesh: 1,
         world_from_object: Affine3A::from_scale_rotation_translation(

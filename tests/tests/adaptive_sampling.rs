@@ -16,7 +16,7 @@ fn scene() -> Scene {
     s.cameras[0].dof.focus_distance = 61f32.sqrt();
     s.materials
         .push(test_scenes::emitter(Vec3::new(4.0, 3.0, 2.0)));
-    s.meshes.push(test_scenes::icosphere(1, 1));
+    s.meshes.push(test_scenes::icosphere(1, 1).into());
     let axis = Vec3::new(0.0, -6.0, -5.0).normalize();
     s.instances.push(aperture_scene::Instance {
         mesh: 1,

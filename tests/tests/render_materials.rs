@@ -168,7 +168,7 @@ fn a_texture_may_read_any_texcoord_set() {
         t.tex_coord = 2;
     }
     let mut scene = textured_quad(material);
-    let mesh = &mut scene.meshes[0];
+    let mesh = std::sync::Arc::make_mut(&mut scene.meshes[0]);
     mesh.uv_more = vec![std::mem::take(&mut mesh.uv0)];
     mesh.uv0 = vec![glam::Vec2::ZERO; 4];
     mesh.uv1 = vec![glam::Vec2::ZERO; 4];

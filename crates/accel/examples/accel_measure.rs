@@ -119,6 +119,7 @@ fn load_scene(scene_path: &str) -> (Vec<Mesh>, Vec<InstanceInput>) {
         (
             s.meshes
                 .into_iter()
+                .map(std::sync::Arc::unwrap_or_clone)
                 .map(|m| (m.positions, m.indices))
                 .collect(),
             instances,

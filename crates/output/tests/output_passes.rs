@@ -99,7 +99,7 @@ fn glass_scene() -> Scene {
         ),
     ];
     for (mesh, xf) in added {
-        s.meshes.push(mesh);
+        s.meshes.push(mesh.into());
         s.instances.push(aperture_scene::Instance {
             mesh: s.meshes.len() as u32 - 1,
             world_from_object: xf,

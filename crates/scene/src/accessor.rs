@@ -239,12 +239,36 @@ fn read_view<T>(
     charge()?;
     // Safe to allocate: every element is backed by bytes we hold.
     let (offset, stride, elem) = (offset as usize, stride as usize, elem as usize);
+    if stride == elem {
+        // Tightly packed (what exporters write): one pass over one slice, allocated once.
+        let packed = &bytes[offset..][..count as usize * elem];
+        return Ok(packed.chunks_exact(csize).map(conv).collect());
+    }
     let mut out = Vec::with_capacity(count as usize * dims);
     for i in 0..count as usize {
         let e = &bytes[offset + i * stride..][..elem];
         out.extend(e.chunks_exact(csize).map(conv));
     }
     Ok(out)
+}
+
+/// A little-endian `f32` from a 4-byte component (callers pass `chunks_exact(4)` pieces).
+#[inline(always)]
+fn le_f32(b: &[u8]) -> f32 {
+    b.first_chunk::<4>().map_or(0.0, |c| f32::from_le_bytes(*c))
+}
+
+/// A little-endian `u16` index from a 2-byte component.
+#[inline(always)]
+fn le_u16(b: &[u8]) -> u32 {
+    b.first_chunk::<2>()
+        .map_or(0, |c| u32::from(u16::from_le_bytes(*c)))
+}
+
+/// A little-endian `u32` index from a 4-byte component.
+#[inline(always)]
+fn le_u32(b: &[u8]) -> u32 {
+    b.first_chunk::<4>().map_or(0, |c| u32::from_le_bytes(*c))
 }
 
 /// Writes an accessor's sparse values over `out`, indices and values checked against their views
@@ -338,7 +362,11 @@ pub(crate) fn read_f32(
     }
     let ctype = acc.data_type();
     let normalized = acc.normalized();
-    let v = read(acc, buffers, at, |b| to_f32(ctype, b, normalized))?;
+    // Floats (nearly every accessor) get their own loop, free of the per-component type match.
+    let v = match ctype {
+        DataType::F32 => read(acc, buffers, at, le_f32)?,
+        _ => read(acc, buffers, at, |b| to_f32(ctype, b, normalized))?,
+    };
     Ok((v, dimension_count(acc.dimensions())))
 }
 
@@ -354,7 +382,7 @@ pub(crate) fn read_mat4(
             reason: format!("accessors[{}] must be a float MAT4", acc.index()),
         });
     }
-    read(acc, buffers, at, |b| to_f32(DataType::F32, b, false))
+    read(acc, buffers, at, le_f32)
 }
 
 /// Reads a scalar accessor of unsigned integers (vertex indices).
@@ -377,7 +405,11 @@ pub(crate) fn read_indices(
             ),
         });
     }
-    read(acc, buffers, at, |b| to_u32(ctype, b))
+    match ctype {
+        DataType::U16 => read(acc, buffers, at, le_u16),
+        DataType::U32 => read(acc, buffers, at, le_u32),
+        _ => read(acc, buffers, at, |b| to_u32(ctype, b)),
+    }
 }
 
 /// Reads a float accessor and checks it has the expected number of components per element.

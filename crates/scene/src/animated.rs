@@ -10,11 +10,13 @@
 mod edit;
 mod framing;
 mod pose;
+mod shapes;
 mod variants;
 mod visibility;
 
 use std::collections::HashMap;
 use std::path::Path;
+use std::sync::Arc;
 
 use serde_json::Value;
 
@@ -28,11 +30,10 @@ use crate::error::Error;
 use crate::material::Materials;
 use crate::mesh::LoadedMesh;
 use crate::nodes::{node_graph, NodeGraph};
-use crate::origin::recentre;
 use crate::pointer::Pointer;
 use crate::skin::Skin;
 use crate::types::{LightKind, LoadOptions, Material, Mesh, Scene, SceneStats, Texture};
-use crate::{glb, morph, prepass, skin};
+use crate::{glb, prepass, skin};
 use variants::{resolve_variant, variant_names};
 
 /// Watts per lumen at 555 nm: Blender's importer divides candela and lux by it (SPEC §4).
@@ -97,7 +98,7 @@ pub struct Animated {
     material_index: HashMap<usize, u32>,
     textures: Vec<Texture>,
     animations: Animations,
-    static_meshes: Vec<Mesh>,
+    static_meshes: Vec<Arc<Mesh>>,
     shapes: HashMap<usize, Shape>,
     /// Per node: it or an ancestor is moved by a selected channel.
     moves: Vec<bool>,
@@ -112,10 +113,6 @@ pub struct Animated {
     /// `content_hash` of the file's bytes.
     source_hash: u64,
 }
-
-/// What makes a static deformed mesh unique: the glTF mesh, the skin posing it and the bits of
-/// its morph weights.
-type StaticKey = (usize, Option<usize>, Vec<u32>);
 
 /// Node transforms and morph weights at one time, plus the pointer values.
 struct Pose {
@@ -298,83 +295,6 @@ impl Animated {
         self.build(time, meshes, textures)
     }
 
-    /// Decides, per drawing node, whether its mesh is static (built now) or deformed per pose.
-    fn classify(&mut self) -> Result<(), Error> {
-        let n = self.graph.nodes.len();
-        let mut moved = vec![false; n];
-        let mut weights_animated = vec![false; n];
-        let mut mesh_weights_animated: Vec<usize> = Vec::new();
-        for c in &self.animations.channels {
-            match &c.target {
-                Target::Node(i, NodeProperty::Weights) => weights_animated[*i] = true,
-                Target::Node(i, _) => moved[*i] = true,
-                Target::Pointer(Pointer::MeshWeights(m)) => mesh_weights_animated.push(*m),
-                Target::Pointer(_) => {}
-            }
-        }
-        for &i in &self.graph.topological {
-            let parent_moves = self.graph.parent[i].is_some_and(|p| self.moves[p]);
-            self.moves[i] = moved[i] || parent_moves;
-        }
-        let rest = self.pose(None);
-        let mut cache: HashMap<StaticKey, (u32, DVec3, bool)> = HashMap::new();
-        for &ni in &self.order.clone() {
-            let Some(mi) = self.graph.nodes[ni].mesh.map(|m| self.geometry_of(ni, m)) else {
-                continue;
-            };
-            let node = &self.graph.nodes[ni];
-            let Some(lm) = self.meshes.get(&mi) else {
-                continue;
-            };
-            let skin = node.skin.filter(|_| lm.influences.is_some());
-            let skin_moves = skin.and_then(|s| self.skins.get(s)).is_some_and(|s| {
-                s.joints
-                    .iter()
-                    .any(|&j| self.moves.get(j).copied().unwrap_or(false))
-            });
-            let morph_moves = !lm.targets.is_empty()
-                && (weights_animated[ni]
-                    || (node.weights.is_none() && mesh_weights_animated.contains(&mi)));
-            if skin_moves || morph_moves {
-                self.shapes.insert(ni, Shape::Deforming);
-                continue;
-            }
-            let weights = rest.weights(ni, mi, node, lm);
-            let key = (
-                mi,
-                skin,
-                if lm.targets.is_empty() {
-                    Vec::new()
-                } else {
-                    weights.iter().map(|w| w.to_bits()).collect()
-                },
-            );
-            let (mesh, offset, world_space) = match cache.get(&key) {
-                Some(&v) => v,
-                None => {
-                    let (mut m, centre) = self.deform(ni, mi, &rest)?;
-                    let (offset, world_space) = match centre {
-                        Some(c) => (c, true),
-                        None => (recentre(&mut m), false),
-                    };
-                    self.static_meshes.push(m);
-                    let v = ((self.static_meshes.len() - 1) as u32, offset, world_space);
-                    cache.insert(key, v);
-                    v
-                }
-            };
-            self.shapes.insert(
-                ni,
-                Shape::Static {
-                    mesh,
-                    offset,
-                    world_space,
-                },
-            );
-        }
-        Ok(())
-    }
-
     /// The glTF mesh whose geometry node `ni` draws for its mesh `mi` (`mi` unless it shares
     /// another's accessors), noting the node's materials when they are not that mesh's.
     fn geometry_of(&mut self, ni: usize, mi: usize) -> usize {
@@ -449,36 +369,6 @@ impl Animated {
             };
         }
         pose
-    }
-
-    /// The mesh of node `ni` at `pose`: morphed and skinned. For a skinned mesh, also the world
-    /// centre its positions are relative to.
-    fn deform(&self, ni: usize, mi: usize, pose: &Pose) -> Result<(Mesh, Option<DVec3>), Error> {
-        let node = &self.graph.nodes[ni];
-        let lm = &self.meshes[&mi];
-        let mut m = lm.mesh.clone();
-        let at = format!("meshes[{mi}]");
-        if !lm.targets.is_empty() {
-            let w = pose.weights(ni, mi, node, lm);
-            morph::apply(&mut m, &lm.targets, &w);
-        }
-        let skin = node.skin.and_then(|s| self.skins.get(s).map(|k| (s, k)));
-        let centre = match (skin, &lm.influences) {
-            (Some((s, skin)), Some(inf)) => {
-                let mut joints = Vec::with_capacity(skin.joints.len());
-                for (k, &j) in skin.joints.iter().enumerate() {
-                    let world = pose.world.get(j).ok_or_else(|| Error::Invalid {
-                        at: format!("skins[{s}].joints[{k}]"),
-                        reason: format!("node {j} does not exist"),
-                    })?;
-                    joints.push(*world * skin.inverse_bind[k]);
-                }
-                Some(skin::apply(&mut m, inf, &joints, pose.world[ni], &at)?)
-            }
-            _ => None,
-        };
-        skin::refresh_flat_normals(&mut m, &lm.flat);
-        Ok((m, centre))
     }
 }
 

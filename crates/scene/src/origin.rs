@@ -39,7 +39,7 @@ pub(crate) fn recentre(mesh: &mut crate::types::Mesh) -> DVec3 {
 /// The geometry's centre, rather than a camera's position, because a file has any number of
 /// cameras (or none) and the bounds are what every camera looks at.
 pub(crate) fn world_origin(
-    meshes: &[crate::types::Mesh],
+    meshes: &[std::sync::Arc<crate::types::Mesh>],
     placed: &[(u32, DAffine3, u32)],
     stats: &mut SceneStats,
 ) -> DVec3 {

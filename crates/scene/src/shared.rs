@@ -4,6 +4,7 @@
 //! instances name their materials in [`crate::Scene::material_sets`].
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
 use crate::accessor::Buffers;
 use crate::error::Error;
@@ -171,7 +172,11 @@ fn generate_tangents(meshes: &mut HashMap<usize, LoadedMesh>, materials: &[Mater
     let mut tmp = Scene {
         meshes: keys
             .iter()
-            .filter_map(|k| meshes.get_mut(k).map(|m| std::mem::take(&mut m.mesh)))
+            .filter_map(|k| {
+                meshes
+                    .get_mut(k)
+                    .map(|m| Arc::new(std::mem::take(&mut m.mesh)))
+            })
             .collect(),
         materials: materials.to_vec(),
         ..Scene::default()
@@ -179,7 +184,7 @@ fn generate_tangents(meshes: &mut HashMap<usize, LoadedMesh>, materials: &[Mater
     crate::tangents::generate_missing_tangents(&mut tmp);
     for (k, m) in keys.iter().zip(tmp.meshes) {
         if let Some(l) = meshes.get_mut(k) {
-            l.mesh = m;
+            l.mesh = Arc::unwrap_or_clone(m);
         }
     }
 }

@@ -111,7 +111,7 @@ pub fn generate_missing_tangents(scene: &mut Scene) {
                 continue;
             }
             let Faces { faces, out, .. } = g;
-            assign(mesh, &faces, &out);
+            assign(std::sync::Arc::make_mut(mesh), &faces, &out);
         }
     }
 }
@@ -208,7 +208,7 @@ mod tests {
     fn tangent_follows_u_and_bitangent_points_up_the_image() {
         for mirrored in [false, true] {
             let mut s = Scene {
-                meshes: vec![quad(mirrored)],
+                meshes: vec![quad(mirrored).into()],
                 materials: vec![normal_mapped()],
                 ..Scene::default()
             };
@@ -230,11 +230,11 @@ mod tests {
         let mut given = quad(false);
         given.tangents = vec![Vec4::new(0.0, 1.0, 0.0, -1.0); 4];
         let mut s = Scene {
-            meshes: vec![given, quad(false)],
+            meshes: vec![given.into(), quad(false).into()],
             materials: vec![normal_mapped(), Material::default()],
             ..Scene::default()
         };
-        s.meshes[1].material_ids = vec![1, 1];
+        std::sync::Arc::make_mut(&mut s.meshes[1]).material_ids = vec![1, 1];
         generate_missing_tangents(&mut s);
         assert!(s.meshes[0]
             .tangents
@@ -251,7 +251,7 @@ mod tests {
         let mut m = quad(false);
         m.uv0[3] = Vec2::new(-1.0, 0.0);
         let mut s = Scene {
-            meshes: vec![m],
+            meshes: vec![m.into()],
             materials: vec![normal_mapped()],
             ..Scene::default()
         };

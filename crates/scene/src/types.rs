@@ -10,13 +10,15 @@ use glam::{Affine3A, DVec3, Vec2, Vec3, Vec4};
 pub use crate::prepass::ExtensionStatus;
 pub use lens::*;
 pub use material::*;
+use std::sync::Arc;
 pub use texture_ref::*;
 
 /// A scene ready to render: unique meshes, the instances that draw them, and what shades them.
 #[derive(Debug, Clone, Default)]
 pub struct Scene {
-    /// Unique geometry, each in its own object space. A glTF mesh used by many nodes is stored once.
-    pub meshes: Vec<Mesh>,
+    /// Unique geometry, each in its own object space. A glTF mesh used by many nodes is stored once,
+    /// and shared (not copied) by every scene posed from one load ([`crate::Animated::scene_at`]).
+    pub meshes: Vec<Arc<Mesh>>,
     /// Placements of meshes in the world (one per drawing node, or per `EXT_mesh_gpu_instancing` instance).
     pub instances: Vec<Instance>,
     /// Materials; `Mesh::material_ids` and [`Scene::material_sets`] index into this list.

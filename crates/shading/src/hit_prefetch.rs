@@ -42,7 +42,7 @@ impl Geometry<'_> {
 
     fn mesh_of(&self, instance: u32) -> Option<&Mesh> {
         let inst = self.scene.instances.get(instance as usize)?;
-        self.scene.meshes.get(inst.mesh as usize)
+        self.scene.meshes.get(inst.mesh as usize).map(|m| &**m)
     }
 }
 
@@ -80,7 +80,7 @@ mod tests {
             g.prefetch(instance, triangle);
         }
         let mut big = small.clone();
-        let mesh = &mut big.meshes[0];
+        let mesh = std::sync::Arc::make_mut(&mut big.meshes[0]);
         let n = PREFETCH_ABOVE / std::mem::size_of_val(&mesh.positions[0]) + 1;
         mesh.positions.resize(n, glam::Vec3::ZERO);
         mesh.indices.push([u32::MAX, 0, (n - 1) as u32]);

@@ -8,7 +8,7 @@
 //! // An emissive ball above a plane: its triangles become lights.
 //! let mut scene = test_scenes::lit_plane(1.0);
 //! scene.materials.push(test_scenes::emitter(glam::Vec3::ONE));
-//! scene.meshes.push(test_scenes::icosphere(1, 1));
+//! scene.meshes.push(test_scenes::icosphere(1, 1).into());
 //! scene.instances.push(aperture_scene::Instance {
 //!     mesh: 1,
 //!     world_from_object: glam::Affine3A::IDENTITY,

@@ -154,7 +154,7 @@ mod tests {
         lit.materials.push(crate::test_scenes::emitter(Vec3::ONE));
         // A material that nothing uses builds nothing either.
         assert!(EmissiveLights::build(&Geometry::new(&lit, MaterialOverride::None)).is_none());
-        lit.meshes[0].material_ids[1] = 1;
+        std::sync::Arc::make_mut(&mut lit.meshes[0]).material_ids[1] = 1;
         let em = EmissiveLights::build(&Geometry::new(&lit, MaterialOverride::None)).unwrap();
         assert_eq!(em.triangles.len(), 1);
         assert_eq!(em.pick_probability(0, 1), 1.0);
@@ -176,7 +176,8 @@ mod tests {
         });
         s.materials.push(m);
         let mid = (s.materials.len() - 1) as u32;
-        s.meshes[0].material_ids = vec![mid; s.meshes[0].indices.len()];
+        let n = s.meshes[0].indices.len();
+        std::sync::Arc::make_mut(&mut s.meshes[0]).material_ids = vec![mid; n];
         // The texture is white left of u = 0.5 and black right of it.
         s.textures.push(Texture {
             name: None,
@@ -192,7 +193,7 @@ mod tests {
         });
         // Two triangles of the same area with their own corners: triangle 0 samples the white
         // texel, triangle 1 the black one.
-        let mesh = &mut s.meshes[0];
+        let mesh = std::sync::Arc::make_mut(&mut s.meshes[0]);
         let p = [mesh.positions[0], mesh.positions[1], mesh.positions[2]];
         mesh.positions = [p, p.map(|v| v + Vec3::X)].concat();
         mesh.normals = vec![Vec3::Y; 6];

@@ -183,7 +183,7 @@ pub fn scene(meshes: Vec<(Mesh, Affine3A)>, materials: Vec<Material>, camera: Ca
         ..Scene::default()
     };
     for (i, (m, xf)) in meshes.into_iter().enumerate() {
-        s.meshes.push(m);
+        s.meshes.push(m.into());
         s.instances.push(Instance {
             mesh: i as u32,
             world_from_object: xf,

@@ -300,7 +300,7 @@ fn tree_does_not_depend_on_the_thread_count() {
 fn instanced_emitters_are_leaves_per_instance() {
     let mut scene = test_scenes::lit_plane(1.0);
     scene.materials.push(test_scenes::emitter(Vec3::ONE));
-    scene.meshes.push(test_scenes::icosphere(1, 1));
+    scene.meshes.push(test_scenes::icosphere(1, 1).into());
     let per_mesh = scene.meshes[1].indices.len();
     for k in 0..50 {
         scene.instances.push(Instance {
@@ -388,7 +388,7 @@ fn the_tree_is_wanted_from_the_punctual_threshold() {
     // One emissive ball of 1,280 triangles and one point light: no tree.
     let mut scene = test_scenes::lit_plane(1.0);
     scene.materials.push(test_scenes::emitter(Vec3::ONE));
-    scene.meshes.push(test_scenes::icosphere(3, 1));
+    scene.meshes.push(test_scenes::icosphere(3, 1).into());
     scene.instances.push(Instance {
         mesh: 1,
         world_from_object: Affine3A::from_translation(Vec3::new(0.0, 2.0, 0.0)),
@@ -413,7 +413,9 @@ fn culled_emitters_light_only_their_front() {
         ..test_scenes::emitter(Vec3::ONE)
     });
     let material = scene.materials.len() as u32 - 1;
-    scene.meshes.push(test_scenes::icosphere(1, material));
+    scene
+        .meshes
+        .push(test_scenes::icosphere(1, material).into());
     let centre = Vec3::new(0.0, 3.0, 0.0);
     scene.instances.push(Instance {
         mesh: 1,

@@ -13,7 +13,7 @@ fn bytes<T>(n: usize) -> u64 {
 /// The scene's meshes, attribute by attribute (the lengths stored, not the capacities), and
 /// the per-triangle materials of instances that draw a mesh with other materials.
 fn meshes_json(s: &Scene) -> Value {
-    let sum = |f: &dyn Fn(&aperture_scene::Mesh) -> u64| s.meshes.iter().map(f).sum::<u64>();
+    let sum = |f: &dyn Fn(&aperture_scene::Mesh) -> u64| s.meshes.iter().map(|m| f(m)).sum::<u64>();
     let positions = sum(&|m| bytes::<glam::Vec3>(m.positions.len()));
     let normals = sum(&|m| bytes::<glam::Vec3>(m.normals.len()));
     let tangents = sum(&|m| bytes::<glam::Vec4>(m.tangents.len()));

@@ -25,7 +25,7 @@ fn scene() -> Scene {
         intensity: Vec3::ONE,
     };
     Scene {
-        meshes: vec![mesh],
+        meshes: vec![mesh.into()],
         instances: vec![
             Instance {
                 mesh: 0,

@@ -106,7 +106,10 @@ impl StepShapes {
             return;
         }
         for (keys, mesh) in self.positions.iter_mut().zip(deformed) {
-            keys.push(std::mem::take(&mut mesh.positions));
+            // Deformed meshes are this step's own (not shared): no copy is made.
+            keys.push(std::mem::take(
+                &mut std::sync::Arc::make_mut(mesh).positions,
+            ));
         }
     }
 

@@ -139,7 +139,7 @@ pub fn pose_neighbours(
         let may_deform = scene.meshes.iter_mut().skip(first);
         positions.push(
             may_deform
-                .map(|m| std::mem::take(&mut m.positions))
+                .map(|m| std::mem::take(&mut Arc::make_mut(m).positions))
                 .collect(),
         );
         let offset = Vec3A::from((scene.world_origin - frame.world_origin).as_vec3());
@@ -194,7 +194,7 @@ pub fn pose_neighbours(
 /// Per mesh of the frame, its positions at the previous and next frames (`prev`, `next`: of
 /// the meshes from `first` on) when either differs from the frame's (with as many vertices).
 fn deformed(
-    meshes: &[Mesh],
+    meshes: &[Arc<Mesh>],
     first: usize,
     prev: Vec<Vec<Vec3>>,
     next: Vec<Vec<Vec3>>,

@@ -31,7 +31,7 @@ fn busy_scene() -> Scene {
     s.cameras[0].dof.focus_distance = 5.0;
     s.materials
         .push(test_scenes::emitter(Vec3::new(4.0, 2.0, 1.0)));
-    s.meshes.push(test_scenes::icosphere(1, 1));
+    s.meshes.push(test_scenes::icosphere(1, 1).into());
     s.instances.push(aperture_scene::Instance {
         mesh: 1,
         world_from_object: Affine3A::from_translation(Vec3::new(1.0, 0.5, 1.0)),

@@ -12,6 +12,7 @@ use crate::nodes::{finite_world, to_f32, NodeData};
 use crate::origin::world_origin;
 use crate::pointer::{self, CameraProperty, Pointer};
 use crate::types::{Instance, Light, Material, Mesh, Projection, Scene, Texture};
+use std::sync::Arc;
 
 /// The stored lights, cameras and materials with a pose's pointer channels applied
 /// ([`Animated::pointed`]).
@@ -33,7 +34,7 @@ impl Animated {
     pub(super) fn build(
         &self,
         time: Option<f32>,
-        static_meshes: Vec<Mesh>,
+        static_meshes: Vec<Arc<Mesh>>,
         textures: Vec<Texture>,
     ) -> Result<Scene, Error> {
         let pose = self.pose(time);
@@ -97,7 +98,7 @@ impl Animated {
         ni: usize,
         mi: usize,
         pose: &Pose,
-        meshes: &mut Vec<Mesh>,
+        meshes: &mut Vec<Arc<Mesh>>,
         placed: &mut Vec<(u32, DAffine3, u32)>,
     ) -> Result<bool, Error> {
         let node = &self.graph.nodes[ni];
@@ -117,7 +118,7 @@ impl Animated {
             ),
             Some(Shape::Deforming) => {
                 let (m, centre) = self.deform(ni, mi, pose)?;
-                meshes.push(m);
+                meshes.push(Arc::new(m));
                 let i = (meshes.len() - 1) as u32;
                 (
                     i,
