@@ -11,7 +11,8 @@
 #    from PyPI's `ziglang` wheel as its C and C++ compiler (tools/cross/zig_cc.py);
 # 3. builds `aperture` (debug) for aarch64 and for Windows, renders the demo with each, under
 #    qemu-aarch64 and wine, and compares the pixels bit for bit with the x86-64 build's
-#    (target/debug/aperture, built here when missing).
+#    (target/debug/aperture, built here when missing); runs the aarch64 unit tests of budget,
+#    denoise and accel (there the NEON kernels against the scalar ones) under qemu-aarch64.
 #
 # Cross builds compile dependencies at opt-level 0 and without debug info (the dev profile's
 # opt-level 3 is for tests): half the build time, and the same images, as Rust's float
@@ -87,11 +88,14 @@ cargo build --quiet -p aperture-cli
 "$target_dir/debug/aperture" "${args[@]}" -o "$out/x86_64.png"
 
 if want aarch64; then
-    step "build aperture for $ARM (debug); the budget and denoise unit tests under qemu-aarch64"
+    step "build aperture for $ARM (debug); the budget, denoise and accel unit tests under qemu-aarch64"
     cargo build --quiet "${cross[@]}" -p aperture-cli --target "$ARM"
     # denoise's tests/library.rs loads OIDN, which exists here for x86-64 only (and under
-    # CI=true a missing library fails): its unit tests (names, places, errors) run.
-    cargo test --quiet "${cross[@]}" --target "$ARM" -p aperture-budget -p aperture-denoise --lib
+    # CI=true a missing library fails): its unit tests (names, places, errors) run. accel's
+    # unit tests check the NEON kernels (node box test, sheared vertices, spawn offset) against
+    # the scalar ones bit for bit.
+    cargo test --quiet "${cross[@]}" --target "$ARM" -p aperture-budget -p aperture-denoise \
+        -p aperture-accel --lib
     step "render the demo under qemu-aarch64"
     qemu-aarch64 -L /usr/aarch64-linux-gnu "$target_dir/$ARM/debug/aperture" "${args[@]}" \
         -o "$out/aarch64.png"

@@ -28,11 +28,13 @@
 //! the tree's extent (a margin kept from obvhs' quantised boxes), every bounce and shadow ray
 //! from a floor did.
 //!
-//! Every path (AVX2, SSE2, scalar) computes the same operations in the same order: the same bits.
+//! Every path (AVX2, SSE2, NEON, scalar) computes the same operations in the same order: the same bits.
 
 use glam::{Vec3, Vec3A};
 
 pub(crate) mod layout;
+#[cfg(target_arch = "aarch64")]
+pub(crate) mod neon;
 
 pub(crate) use layout::{child_index, Node};
 

@@ -29,6 +29,11 @@ impl Accel {
             // SAFETY: `avx2` is set only when `detect_avx2` found every feature it enables.
             return unsafe { self.intersect_avx2(ray) };
         }
+        #[cfg(target_arch = "aarch64")]
+        if self.avx2 {
+            // The NEON kernels (`detect_avx2`).
+            return self.intersect_impl::<true>(ray);
+        }
         self.intersect_impl::<false>(ray)
     }
 
@@ -38,6 +43,11 @@ impl Accel {
         if self.avx2 {
             // SAFETY: as in `intersect`.
             return unsafe { self.occluded_avx2(ray) };
+        }
+        #[cfg(target_arch = "aarch64")]
+        if self.avx2 {
+            // The NEON kernels (`detect_avx2`).
+            return self.occluded_impl::<true>(ray);
         }
         self.occluded_impl::<false>(ray)
     }
@@ -50,6 +60,11 @@ impl Accel {
         if self.avx2 {
             // SAFETY: as in `intersect`.
             return unsafe { self.occluder_avx2(ray) };
+        }
+        #[cfg(target_arch = "aarch64")]
+        if self.avx2 {
+            // The NEON kernels (`detect_avx2`).
+            return self.occluder_impl::<true>(ray);
         }
         self.occluder_impl::<false>(ray)
     }
@@ -189,6 +204,11 @@ impl Accel {
             // SAFETY: `avx2` is set only when `detect_avx2` found every feature it enables.
             return unsafe { self.intersect_batch_avx2(rays, out) };
         }
+        #[cfg(target_arch = "aarch64")]
+        if self.avx2 {
+            // The NEON kernels (`detect_avx2`).
+            return self.batch_impl::<true, ClosestLeaf<true>>(rays, out);
+        }
         self.batch_impl::<false, ClosestLeaf<false>>(rays, out)
     }
 
@@ -199,6 +219,11 @@ impl Accel {
         if self.avx2 {
             // SAFETY: as in `intersect_batch`.
             return unsafe { self.occluded_batch_avx2(rays, out) };
+        }
+        #[cfg(target_arch = "aarch64")]
+        if self.avx2 {
+            // The NEON kernels (`detect_avx2`).
+            return self.batch_impl::<true, AnyLeaf<true>>(rays, out);
         }
         self.batch_impl::<false, AnyLeaf<false>>(rays, out)
     }

@@ -96,8 +96,8 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
 /// comes from larger magnitudes elsewhere.
 ///
 /// The three coordinates at once in SSE2, branch-free: the same bits as the per-coordinate
-/// form ([`offset_ulps_scalar`], which other targets take), at about a third of its
-/// instructions (it runs at every path vertex).
+/// form ([`offset_ulps_scalar`], which targets other than x86-64 and aarch64 take), at about a
+/// third of its instructions (it runs at every path vertex).
 #[cfg(target_arch = "x86_64")]
 #[inline]
 fn offset_ulps(p: Vec3, n: Vec3, float_scale: f32) -> Vec3 {
@@ -129,7 +129,31 @@ fn offset_ulps(p: Vec3, n: Vec3, float_scale: f32) -> Vec3 {
     }
 }
 
-#[cfg(not(target_arch = "x86_64"))]
+/// [`offset_ulps`] with NEON (aarch64): `fcvtzs` saturates and takes NaN to 0 as `as i32`
+/// does, so the conversion needs no fix-up.
+#[cfg(target_arch = "aarch64")]
+#[inline]
+fn offset_ulps(p: Vec3, n: Vec3, float_scale: f32) -> Vec3 {
+    use std::arch::aarch64::*;
+    // SAFETY: NEON is baseline on aarch64 (every intrinsic needs it); the loads read the four
+    // floats of `pa` and `na`, the store writes the four of `out`.
+    unsafe {
+        let (pa, na) = ([p.x, p.y, p.z, 0.0], [n.x, n.y, n.z, 0.0]);
+        let (pv, nv) = (vld1q_f32(pa.as_ptr()), vld1q_f32(na.as_ptr()));
+        let of_i = vcvtq_s32_f32(vmulq_f32(vdupq_n_f32(INT_SCALE), nv));
+        // Negative coordinates step by −of_i (wrapping): (x ^ −1) − (−1) = −x.
+        let neg = vreinterpretq_s32_u32(vcltq_f32(pv, vdupq_n_f32(0.0)));
+        let step = vsubq_s32(veorq_s32(of_i, neg), neg);
+        let moved = vreinterpretq_f32_s32(vaddq_s32(vreinterpretq_s32_f32(pv), step));
+        let small = vcltq_f32(vabsq_f32(pv), vdupq_n_f32(ORIGIN));
+        let near = vaddq_f32(pv, vmulq_f32(vdupq_n_f32(float_scale), nv));
+        let mut out = [0.0f32; 4];
+        vst1q_f32(out.as_mut_ptr(), vbslq_f32(small, near, moved));
+        Vec3::new(out[0], out[1], out[2])
+    }
+}
+
+#[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
 #[inline]
 fn offset_ulps(p: Vec3, n: Vec3, float_scale: f32) -> Vec3 {
     offset_ulps_scalar(p, n, float_scale)
@@ -141,7 +165,7 @@ const ORIGIN: f32 = 1.0 / 32.0;
 const INT_SCALE: f32 = 256.0;
 
 /// [`offset_ulps`] coordinate by coordinate, as the paper writes it.
-#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+#[cfg_attr(any(target_arch = "x86_64", target_arch = "aarch64"), allow(dead_code))]
 fn offset_ulps_scalar(p: Vec3, n: Vec3, float_scale: f32) -> Vec3 {
     let of_i = (INT_SCALE * n).to_array().map(|x| x as i32);
     let pa = p.to_array();

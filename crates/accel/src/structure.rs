@@ -63,9 +63,12 @@ pub struct Accel {
     /// and world space (`|T| + |M| max|p_obj|`), for [`Accel::spawn_point`].
     pub(crate) instance_magnitude: Vec<f32>,
     /// Node tests take the 8-wide AVX2 path (detected at build time; the x86_64 baseline is SSE2,
-    /// 4 wide). Both compute the same operations: the same node masks, the same hits. Read only
-    /// by the x86-64 kernels: other architectures (no NEON kernels yet) take the scalar walk.
-    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    /// 4 wide). Both compute the same operations: the same node masks, the same hits. On aarch64
+    /// it selects the NEON kernels (else the scalar walk, which other architectures take).
+    #[cfg_attr(
+        not(any(target_arch = "x86_64", target_arch = "aarch64")),
+        allow(dead_code)
+    )]
     pub(crate) avx2: bool,
     pub(crate) stats: AccelStats,
     /// Per input mesh: its bottom-level BVH in `blases`, or `u32::MAX` (flattened, or not drawn).

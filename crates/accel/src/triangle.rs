@@ -13,6 +13,10 @@ use glam::{Vec3, Vec3A};
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod lanes;
+#[cfg(all(test, target_arch = "aarch64"))]
+mod neon_tests;
+#[cfg(target_arch = "aarch64")]
+mod sheared_neon;
 
 /// A triangle in BVH order: its vertices exactly as given (shared vertices stay bitwise equal,
 /// which the watertight test relies on) and its index in the mesh's original `indices`.
@@ -40,8 +44,11 @@ pub(crate) struct TriRay {
     /// product with the matrix of rows `e_kx + sx e_kz`, `e_ky + sy e_kz`, `e_kz` ([`sheared`];
     /// the packets' lanes build that matrix, `lanes::TriLanes`).
     pub perm: [i32; 4],
-    /// The origin's components in that order (read by the x86-64 kernels only).
-    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    /// The origin's components in that order (read by the x86-64 and aarch64 kernels only).
+    #[cfg_attr(
+        not(any(target_arch = "x86_64", target_arch = "aarch64")),
+        allow(dead_code)
+    )]
     pub origin_k: Vec3A,
     /// `(sx, sy, 1)`: `sx = -dir[kx] / dir[kz]`, `sy = -dir[ky] / dir[kz]` (only the first two
     /// lanes are used).
@@ -208,6 +215,11 @@ fn sheared<const AVX: bool>(r: &TriRay, tri: &Tri, k: usize) -> Vec3A {
             let x = _mm_add_ps(d, _mm_mul_ps(r.s.into(), z));
             return _mm_blend_ps::<0b1100>(x, d).into();
         }
+    }
+    #[cfg(target_arch = "aarch64")]
+    if AVX {
+        // `AVX` on aarch64: the NEON path (`walk::detect_avx2`).
+        return sheared_neon::sheared_neon(tri.p[k].into(), &r.perm, r.origin_k, r.s);
     }
     let d = (Vec3A::from(tri.p[k]) - r.origin).to_array();
     let [kx, ky, kz] = r.axes();

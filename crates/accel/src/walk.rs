@@ -154,6 +154,10 @@ pub(crate) fn interleave<const AVX2: bool, L: Leaf + Copy>(
 
 /// Whether this CPU can take the AVX2 (+ FMA) traversal. `APERTURE_NO_AVX2` forces the SSE2 path (to
 /// compare the two, or to rule the AVX2 path out when debugging).
+///
+/// On aarch64 the same flag selects the NEON kernels (baseline there, so always available):
+/// `APERTURE_NO_AVX2` forces the scalar path, the one other targets take (to measure NEON
+/// against it on one binary, or to rule NEON out when debugging).
 pub(crate) fn detect_avx2() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
@@ -165,7 +169,11 @@ pub(crate) fn detect_avx2() -> bool {
             && std::arch::is_x86_feature_detected!("bmi1")
             && std::arch::is_x86_feature_detected!("bmi2")
     }
-    #[cfg(not(target_arch = "x86_64"))]
+    #[cfg(target_arch = "aarch64")]
+    {
+        std::env::var_os("APERTURE_NO_AVX2").is_none()
+    }
+    #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
     {
         false
     }

@@ -71,6 +71,13 @@ fn simd_matches_scalar_reference() {
                 assert_eq!((ordered.hits, bits(ordered.enter)), (a, bits(enter)));
                 assert_eq!(ordered.prims, mask & 0x00ff_ffff);
             }
+            #[cfg(target_arch = "aarch64")]
+            {
+                assert_eq!(neon::intersect_node_neon(node, &r, tmax), mask);
+                let ordered = neon::child_hits_enter_neon(node, &r, tmax);
+                assert_eq!((ordered.hits, bits(ordered.enter)), (a, bits(enter)));
+                assert_eq!(ordered.prims, mask & 0x00ff_ffff);
+            }
             nonzero += (a != 0) as usize;
         }
     }
@@ -392,4 +399,51 @@ fn least_growth(
         }
     }
     above
+}
+
+/// Rays with NaN, infinite and zero components (and a NaN `tmax`): every path takes NaN slabs
+/// as SSE's `maxps`/`minps` do (the second operand), so the same hits and entries bit for bit.
+#[test]
+fn nan_rays_match_the_scalar_reference() {
+    let mut s = 11u64;
+    let boxes: Vec<Aabb> = (0..200)
+        .map(|_| {
+            let c = Vec3A::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 10.0;
+            Aabb::new(c - 0.5, c + 0.5)
+        })
+        .collect();
+    let nodes = tree(&boxes);
+    let odd = [
+        0.0,
+        -0.0,
+        1.0,
+        -2.0,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NAN,
+    ];
+    let bits = |e: [f32; 8]| e.map(f32::to_bits);
+    let mut nan_enters = 0;
+    for (i, &a) in odd.iter().enumerate() {
+        for &b in &odd {
+            let o = Vec3::new(a, 5.0, b);
+            let d = Vec3::new(b, a, 0.5);
+            let tmax = [f32::INFINITY, 7.0, f32::NAN][i % 3];
+            let r = BoxRay::new(o, d, 0.0, (Vec3::ZERO, Vec3::splat(10.0)));
+            for node in &nodes {
+                let (want, enter) = child_hits_scalar(node, &r, tmax);
+                nan_enters += enter.iter().filter(|e| e.is_nan()).count();
+                let (got, got_enter) = child_hits(node, &r, tmax);
+                assert_eq!((got, bits(got_enter)), (want, bits(enter)), "{o} {d}");
+                #[cfg(target_arch = "aarch64")]
+                {
+                    let mask = hitmask_from_children(node, r.oct_inv4, want);
+                    assert_eq!(neon::intersect_node_neon(node, &r, tmax), mask, "{o} {d}");
+                    let n = neon::child_hits_enter_neon(node, &r, tmax);
+                    assert_eq!((n.hits, bits(n.enter)), (want, bits(enter)), "{o} {d}");
+                }
+            }
+        }
+    }
+    assert!(nan_enters > 0, "no NaN slab was exercised");
 }

@@ -63,17 +63,7 @@ impl GroupWalk {
                 self.current.1 = 0;
                 return None;
             };
-            let mask = if AVX2 {
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: `AVX2` is true only when `detect_avx2` found AVX2 on this CPU.
-                unsafe {
-                    crate::node::intersect_node_avx2(node, r, *tmax)
-                }
-                #[cfg(not(target_arch = "x86_64"))]
-                crate::node::intersect_node(node, r, *tmax)
-            } else {
-                crate::node::intersect_node(node, r, *tmax)
-            };
+            let mask = node_mask::<AVX2>(node, r, *tmax);
             self.current = (
                 node.child_base_idx,
                 (mask & 0xff00_0000) | node.imask as u32,
@@ -93,6 +83,23 @@ impl GroupWalk {
         }
         None
     }
+}
+
+/// The node test of the group walk: AVX2 (x86-64) or NEON (aarch64) with `AVX2`, else SSE2 or
+/// scalar.
+#[inline(always)]
+fn node_mask<const AVX2: bool>(node: &Node, r: &BoxRay, tmax: f32) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    if AVX2 {
+        // SAFETY: `AVX2` is true only when `detect_avx2` found AVX2 on this CPU.
+        return unsafe { crate::node::intersect_node_avx2(node, r, tmax) };
+    }
+    #[cfg(target_arch = "aarch64")]
+    if AVX2 {
+        // NEON is baseline on aarch64; `AVX2` there means the SIMD path (`detect_avx2`).
+        return crate::node::neon::intersect_node_neon(node, r, tmax);
+    }
+    crate::node::intersect_node(node, r, tmax)
 }
 
 /// Takes the next internal child of the node group `current` (obvhs' priority order for the

@@ -197,13 +197,18 @@ fn pop<L: Leaf>(stack: &[MaybeUninit<Group>], sp: &mut usize, tmax: f32) -> Opti
     None
 }
 
-/// The node test of the walk: AVX2 or SSE2.
+/// The node test of the walk: AVX2 or SSE2 (x86-64), NEON or scalar (aarch64).
 #[inline(always)]
 fn child_hits<const AVX2: bool>(node: &Node, r: &BoxRay, tmax: f32) -> ChildHits {
     #[cfg(target_arch = "x86_64")]
     if AVX2 {
         // SAFETY: `AVX2` is true only when `detect_avx2` found AVX2 and FMA on this CPU.
         return unsafe { crate::node::child_hits_enter_avx2(node, r, tmax) };
+    }
+    #[cfg(target_arch = "aarch64")]
+    if AVX2 {
+        // NEON is baseline on aarch64; `AVX2` there means the SIMD path (`detect_avx2`).
+        return crate::node::neon::child_hits_enter_neon(node, r, tmax);
     }
     crate::node::child_hits_enter(node, r, tmax)
 }

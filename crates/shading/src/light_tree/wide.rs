@@ -145,7 +145,13 @@ fn sqrt4(v: Vec4) -> Vec4 {
     unsafe {
         std::arch::x86_64::_mm_sqrt_ps(v.into()).into()
     }
-    #[cfg(not(target_arch = "x86_64"))]
+    #[cfg(target_arch = "aarch64")]
+    // SAFETY: NEON is baseline on aarch64, so the instruction exists; it reads and writes
+    // registers only.
+    unsafe {
+        std::arch::aarch64::vsqrtq_f32(v.into()).into()
+    }
+    #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
     {
         v.sqrt()
     }
