@@ -72,14 +72,12 @@ fn a_lens_file_beside_the_gltf_and_inline_rows_read_alike() {
         ..LoadOptions::default()
     };
     let s = load_bytes(
-        &glb(json!({ "lens_prescription": [[1, 1, 1, 1]] })),
+        &glb(json!({ "lens_prescription": [[50, 1, 1.5, 9], [0, 5, 0, 5]] })),
         &dir,
         &opts,
     );
-    assert_eq!(
-        s.unwrap().cameras[0].dof.prescription.unwrap().surfaces,
-        p.surfaces
-    );
+    let cli = s.unwrap().cameras[0].dof.prescription.clone().unwrap();
+    assert_eq!(cli.surfaces, p.surfaces);
     // No key: the thin lens.
     assert!(load(json!({}), &dir).unwrap().cameras[0]
         .dof
