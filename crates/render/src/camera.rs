@@ -164,7 +164,7 @@ pub struct Camera {
     /// thin lens), or why it cannot image. `model` and `aperture` then describe the thin lens
     /// of the same field of view and entrance pupil (for the passes' projections and bounds).
     /// Shared by every camera of the same prescription, focus and film (interned: see
-    /// [`crate::realistic::interned`]).
+    /// [`crate::realistic::intern::interned`]).
     pub realistic: Option<&'static Result<RealisticLens, String>>,
 }
 

@@ -17,7 +17,7 @@ impl Camera {
         let Some(p) = &cam.dof.prescription else {
             return self;
         };
-        let lens = crate::realistic::interned(p, &cam.dof, width, height);
+        let lens = crate::realistic::intern::interned(p, &cam.dof, width, height);
         if let Ok(r) = lens {
             let film = crate::realistic::film_size(&cam.dof, width, height);
             let (fig, half) = (&r.figures, 0.5 * film);

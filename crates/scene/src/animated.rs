@@ -221,7 +221,6 @@ impl Animated {
         let skins = skin::read_skins(&doc, &buffers)?;
         let cameras = camera::read_cameras(&doc)?;
         let lights = read_lights(&doc)?;
-
         let animated = Animated {
             moves: vec![false; graph.nodes.len()],
             toggles,

@@ -6,6 +6,8 @@ import struct
 
 import bpy
 
+from .prescription_export import prescription_extras
+
 # Camera data paths a focus pull keys, and the extras key each is exported to.
 ANIMATED_KEYS = {"dof.focus_distance": "focus_distance", "dof.aperture_fstop": "aperture_fstop"}
 
@@ -114,7 +116,10 @@ def lens_extras(camera):
     if lens is None:
         return {}
     values = {key: _f32(getattr(lens, name)) for key, name in LENS_KEYS.items()}
-    return {key: value for key, value in values.items() if value != 0.0}
+    extras = {key: value for key, value in values.items() if value != 0.0}
+    # The prescription (a file's rows, inline) when its path is set.
+    extras.update(prescription_extras(lens))
+    return extras
 
 
 def _warn(export_settings, message):

@@ -17,7 +17,7 @@ pub fn json(d: &Dof) -> Value {
     };
     let height = ((WIDTH as f32 * d.sensor_height / d.sensor_width).round() as u32).max(1);
     let round = |x: f64| (x * 1e4).round() / 1e4;
-    let figures = match crate::realistic::interned(p, d, WIDTH, height) {
+    let figures = match crate::realistic::intern::interned(p, d, WIDTH, height) {
         Ok(lens) => {
             let f = &lens.figures;
             json!({

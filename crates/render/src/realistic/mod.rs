@@ -10,11 +10,10 @@
 //! `focus.rs` the thick-lens focusing and the f-number.
 
 mod focus;
-mod intern;
+pub mod intern;
 mod pupil;
 mod trace;
 
-pub use intern::interned;
 pub use pupil::BINS as PUPIL_BINS;
 
 use aperture_scene::{Dof, LensPrescription, SensorFit};
@@ -217,7 +216,7 @@ impl RealisticLens {
                 pupil::sample(bounds, film, u)
             }
             PupilSampling::RearElement => {
-                let d = crate::camera::concentric_disc(u.as_vec2()).as_dvec2();
+                let d = aperture_shading::warp::concentric_disc(u.as_vec2()).as_dvec2();
                 let r = pupil::REAR_REACH * rear.half_aperture;
                 (d * r, std::f64::consts::PI * r * r)
             }

@@ -130,7 +130,10 @@ pub(crate) fn parse_extras(extras: Option<&Value>, ctx: &Ctx<'_>) -> Result<Laye
                 l.vignetting = Some(x);
             }
             "lens_prescription" => {
-                l.prescription = Some(super::prescription::from_value(key, v, ctx, ctx.base_dir)?);
+                l.prescription = Some(
+                    super::prescription::from_value(key, v, ctx.base_dir)
+                        .map_err(|(shown, why)| ctx.err(key, shown, &why))?,
+                );
             }
             k => {
                 if let Some(i) = DISTORTION_KEYS.iter().position(|d| *d == k) {
@@ -208,12 +211,10 @@ pub(crate) fn parse_overrides(o: &DofOverrides, ctx: &Ctx<'_>) -> Result<Layer, 
     }
     if let Some(path) = &o.lens_prescription {
         let shown = format!("{:?}", path.display().to_string());
-        l.prescription = Some(super::prescription::from_file(
-            "lens_prescription",
-            path,
-            &shown,
-            ctx,
-        )?);
+        l.prescription = Some(
+            super::prescription::from_file(path, &shown)
+                .map_err(|(shown, why)| ctx.err("lens_prescription", shown, &why))?,
+        );
     }
     if l.use_dof.is_none() && (l.aperture_radius.is_some() || l.aperture_fstop.is_some()) {
         l.use_dof = Some(true);

@@ -8,8 +8,6 @@ use std::path::Path;
 
 use serde_json::Value;
 
-use super::layer::Ctx;
-use crate::error::Error;
 use crate::types::LensSurface;
 
 /// The most surfaces a prescription may have (real lenses have fewer than 40).
@@ -20,24 +18,22 @@ const MAX_FILE_BYTES: u64 = 1 << 20;
 /// A prescription's rows and where they came from.
 pub(crate) type Rows = (String, Vec<LensSurface>);
 
+/// What is wrong with a value: the value as shown, and why.
+pub(crate) type Bad = (String, String);
+
 /// The value of a `lens_prescription` key: a path relative to `base_dir` (the glTF file's
 /// folder) or inline rows.
-pub(crate) fn from_value(
-    key: &str,
-    v: &Value,
-    ctx: &Ctx<'_>,
-    base_dir: &Path,
-) -> Result<Rows, Error> {
+pub(crate) fn from_value(key: &str, v: &Value, base_dir: &Path) -> Result<Rows, Bad> {
     match v {
         Value::String(s) => {
             let path = crate::uri::resolve_path(base_dir, s, key)
-                .map_err(|e| ctx.err(key, format!("{s:?}"), &e.to_string()))?;
-            from_file(key, &path, &format!("{s:?}"), ctx)
+                .map_err(|e| (format!("{s:?}"), e.to_string()))?;
+            from_file(&path, &format!("{s:?}"))
         }
         Value::Array(rows) => {
             let mut numbers = Vec::with_capacity(rows.len());
             for (i, row) in rows.iter().enumerate() {
-                let bad = || ctx.err(key, row, &format!("row {i}: {}", ROW_SHAPE));
+                let bad = || (row.to_string(), format!("row {i}: {ROW_SHAPE}"));
                 let r = row.as_array().filter(|r| r.len() == 4).ok_or_else(bad)?;
                 let mut out = [0.0; 4];
                 for (o, x) in out.iter_mut().zip(r) {
@@ -45,13 +41,13 @@ pub(crate) fn from_value(
                 }
                 numbers.push(out);
             }
-            let surfaces = check(&numbers).map_err(|reason| ctx.err(key, "[...]", &reason))?;
+            let surfaces = check(&numbers).map_err(|reason| ("[...]".to_owned(), reason))?;
             Ok(("inline".into(), surfaces))
         }
-        _ => Err(ctx.err(
-            key,
-            v,
-            "expected a lens file's path or an array of [radius, thickness, IOR, aperture] rows",
+        _ => Err((
+            v.to_string(),
+            "expected a lens file's path or an array of [radius, thickness, IOR, aperture] rows"
+                .to_owned(),
         )),
     }
 }
@@ -59,16 +55,17 @@ pub(crate) fn from_value(
 const ROW_SHAPE: &str = "expected 4 numbers: radius, thickness, IOR, aperture diameter (mm)";
 
 /// The lens file at `path` (`shown` as the user wrote it).
-pub(crate) fn from_file(key: &str, path: &Path, shown: &str, ctx: &Ctx<'_>) -> Result<Rows, Error> {
+pub(crate) fn from_file(path: &Path, shown: &str) -> Result<Rows, Bad> {
+    let bad = |reason: String| (shown.to_owned(), reason);
     let mut text = String::new();
     std::fs::File::open(path)
         .and_then(|f| f.take(MAX_FILE_BYTES + 1).read_to_string(&mut text))
-        .map_err(|e| ctx.err(key, shown, &format!("cannot read the lens file: {e}")))?;
+        .map_err(|e| bad(format!("cannot read the lens file: {e}")))?;
     if text.len() as u64 > MAX_FILE_BYTES {
-        return Err(ctx.err(key, shown, "the lens file is larger than 1 MiB"));
+        return Err(bad("the lens file is larger than 1 MiB".into()));
     }
-    let rows = parse_text(&text).map_err(|reason| ctx.err(key, shown, &reason))?;
-    let surfaces = check(&rows).map_err(|reason| ctx.err(key, shown, &reason))?;
+    let rows = parse_text(&text).map_err(bad)?;
+    let surfaces = check(&rows).map_err(bad)?;
     Ok((shown.trim_matches('"').to_owned(), surfaces))
 }
 
