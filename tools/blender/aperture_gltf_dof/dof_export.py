@@ -33,6 +33,10 @@ KEYS = (
     "distortion_p2",
 )
 
+# Written at export only, not sent by the viewport session's camera edits (``set_camera`` takes
+# no arrays): the prescription's rows (issue 61).
+EXPORT_ONLY_KEYS = ("lens_prescription",)
+
 # The lens keys and the ``camera.aperture_lens`` property each comes from.
 LENS_KEYS = {
     "aperture_vignetting": "vignetting",
@@ -180,7 +184,7 @@ class glTF2ExportUserExtension:
             extras[key] = value
             written.add(key)
 
-        for key in KEYS:
+        for key in KEYS + EXPORT_ONLY_KEYS:
             if key in native:
                 put(key, native[key])
 
