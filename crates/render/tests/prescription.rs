@@ -175,7 +175,7 @@ impl Pcg {
 /// Radiance along a camera-space ray: a checkerboard of 1 and 0.1 on the plane `z = -1.5`.
 fn radiance(o: Vec3, d: Vec3) -> f32 {
     let t = (-1.5 - o.z) / d.z;
-    if !(t > 0.0) {
+    if t.is_nan() || t <= 0.0 {
         return 0.0;
     }
     let p = o + t * d;

@@ -98,7 +98,7 @@ pub(crate) fn stop_for_fstop(
         (DVec3::new(h, 0.0, front - 1.0), DVec3::Z),
         Some(&mut at_stop),
     )?;
-    if !(at_stop > 0.0) {
+    if at_stop.is_nan() || at_stop <= 0.0 {
         return None;
     }
     let full = surfaces[stop].half_aperture;

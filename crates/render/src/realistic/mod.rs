@@ -162,7 +162,7 @@ impl RealisticLens {
             figures,
         };
         let e0 = lens.centre_irradiance();
-        if !(e0 > 0.0) {
+        if e0.is_nan() || e0 <= 0.0 {
             return Err("no light reaches the film's centre through the lens".into());
         }
         lens.norm = 1.0 / e0;

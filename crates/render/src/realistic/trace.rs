@@ -61,7 +61,7 @@ fn hit(s: &Surface, (o, d): Ray) -> Option<(f64, Option<DVec3>)> {
     // centre's side of the vertex.
     let closer = (d.z > 0.0) ^ (s.radius < 0.0);
     let t = if closer { t0 } else { t1 };
-    if !(t >= 0.0) {
+    if t.is_nan() || t < 0.0 {
         return None;
     }
     let n = (oc + t * d).normalize();
