@@ -1,5 +1,5 @@
-import hashlib, struct, sys
 """Hash of an EXR's pixel data (its chunks after the header and offset table), single part."""
+import hashlib, struct, sys
 def pixels(path):
     b = open(path, 'rb').read()
     i = 8
