@@ -52,6 +52,7 @@ import cycles_settings
 from checks import check, record, summary
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.dirname(os.path.dirname(HERE))
 ADDON = "aperture_gltf_dof"
 
 ARGS = None
@@ -222,6 +223,8 @@ def add_rule_cameras():
     lensed.data.aperture_lens.vignetting = 0.3
     lensed.data.aperture_lens.k1 = -0.1
     lensed.data.aperture_lens.p2 = 0.01
+    lensed.data.aperture_lens.prescription = os.path.join(REPO, "assets", "lenses",
+                                                          "dgauss-50mm.dat")
     made["lens"] = lensed
 
     hidden_target = bpy.data.objects.new("NotExported", None)
@@ -362,6 +365,13 @@ def test_extras_rules(cams, binary):
           f"CamLens: {lens_keys} (vignetting 0.3, k1 -0.1, p2 0.01 set; the zeros left out); "
           f"CamOff (no lens settings): {[k for k in off if k.startswith('distortion_')]}")
 
+    rows = lens.get("lens_prescription")
+    check("a.lens-prescription", isinstance(rows, list) and len(rows) == 11
+          and rows[0] == [29.475, 3.76, 1.67, 25.2] and rows[5][0] == 0.0
+          and "lens_prescription" not in off,
+          f"CamLens: lens_prescription {rows if not isinstance(rows, list) else f'{len(rows)} rows, first {rows[0]}'} "
+          f"(the shipped double Gauss inline: 11 rows); CamOff has none")
+
     orth = ex["ortho"]
     check("a.orthographic", orth.get("use_dof") is True and close(orth.get("aperture_radius"), 0.25)
           and "orthographic" in next(c for c in doc["cameras"] if c["name"] == "CamOrtho"),
@@ -465,6 +475,10 @@ def test_info_rules(binary, scene_path, cams):
     check("b.lens-options", close(lens.get("vignetting"), 0.3, 1e-6) and close(k.get("k1"), -0.1, 1e-6)
           and close(k.get("p2"), 0.01, 1e-6) and k.get("k2") == 0.0,
           f"CamLens: vignetting = {lens.get('vignetting')}, distortion = {k}")
+    pres = (lens.get("prescription") or {}).get("lens") or {}
+    check("b.lens-prescription", close(pres.get("focal_length_mm"), 50.3582, 1e-3),
+          f"CamLens: the inline double Gauss's focal length = {pres.get('focal_length_mm')} mm "
+          f"(50.3582)")
     off = info_camera(info, "CamOff")
     check("b.dof-off", off.get("enabled") is False, f"CamOff: enabled = {off.get('enabled')}")
     hidden = info_camera(info, "CamHiddenFocus")

@@ -209,6 +209,7 @@ fn print_cameras(r: &Value) {
                 d["vignetting"], k["k1"], k["k2"], k["k3"], k["p1"], k["p2"]
             );
         }
+        crate::info_prescription::print(&d["prescription"]);
     }
 }
 

@@ -14,6 +14,7 @@ mod info;
 mod info_materials;
 mod info_memory;
 mod info_motion;
+mod info_prescription;
 mod interrupt;
 mod load_warnings;
 mod material_args;

@@ -133,6 +133,10 @@ pub struct RenderArgs {
     /// file's, else none].
     #[arg(long, value_name = "K1,K2,K3,P1,P2", value_parser = crate::number_args::distortion, allow_hyphen_values = true)]
     pub distortion: Option<[f32; 5]>,
+    /// A real lens traced surface by surface: a lens file in pbrt-v4's format (the file's
+    /// `lens_prescription`; docs/lenses.md) [default: the file's, else the thin lens].
+    #[arg(long, value_name = "PATH")]
+    pub lens_prescription: Option<std::path::PathBuf>,
     /// Pinhole camera whatever the file says.
     #[arg(long)]
     pub no_dof: bool,

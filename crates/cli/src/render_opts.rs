@@ -234,6 +234,7 @@ fn load_options(args: &RenderArgs, memory: aperture_budget::MemoryBudget) -> Loa
             focus_object: args.focus_object.clone(),
             vignetting: args.aperture_vignetting,
             distortion: args.distortion,
+            lens_prescription: args.lens_prescription.clone(),
         },
         skip_textures: false,
         variant: args.materials.variant.clone(),

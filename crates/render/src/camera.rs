@@ -5,6 +5,7 @@
 //! pinhole (`R = 0`) ignores the lens numbers entirely.
 
 use crate::lens::Lens;
+use crate::realistic::RealisticLens;
 use aperture_scene::Projection;
 pub use aperture_shading::warp::{concentric_disc, polygon_corner, uniform_polygon};
 use aperture_shading::warp_lens::{clipped_by_disc, disc_in_disc};
@@ -159,6 +160,12 @@ pub struct Camera {
     pub height: u32,
     /// Vignetting and distortion ([`Lens::IDEAL`]: none).
     pub lens: Lens,
+    /// A lens prescription traced surface by surface instead of the thin lens (`None`: the
+    /// thin lens), or why it cannot image. `model` and `aperture` then describe the thin lens
+    /// of the same field of view and entrance pupil (for the passes' projections and bounds).
+    /// Shared by every camera of the same prescription, focus and film (interned: see
+    /// [`crate::realistic::intern::interned`]).
+    pub realistic: Option<&'static Result<RealisticLens, String>>,
 }
 
 /// Perspective or orthographic, with the half-extents of the image plane at distance `d = 1`.
@@ -232,7 +239,9 @@ impl Camera {
             focus_distance: cam.dof.focus_distance,
             width,
             height,
+            realistic: None,
         }
+        .with_prescription(cam, width, height)
     }
 
     /// The point of the image plane (at `d = 1` for perspective, in scene units for
@@ -284,6 +293,9 @@ impl Camera {
     /// The primary ray for one sample, in world space.
     #[inline(always)]
     pub fn generate_ray(&self, s: &CameraSample) -> Option<CameraRay> {
+        if self.realistic.is_some() {
+            return self.generate_ray_weighted(s).map(|(r, _)| r);
+        }
         let r = self.generate_ray_camera_space(s)?;
         let dir = self.world_from_camera.transform_vector3(r.dir).normalize();
         Some(CameraRay {
@@ -295,10 +307,9 @@ impl Camera {
     /// The ray through raster position `p_film` and the lens centre, in world space: a pinhole
     /// camera's ray, the one the Depth and Position passes trace.
     pub fn centre_ray(&self, p_film: Vec2) -> Option<CameraRay> {
-        let ps = self.lens.undistort(self.screen_point(p_film))?;
-        let (origin, dir) = match self.model {
-            CameraModel::ThinLens { .. } => (Vec3::ZERO, Vec3::new(ps.x, ps.y, -1.0)),
-            CameraModel::Orthographic { .. } => (ps.extend(0.0), Vec3::NEG_Z),
+        let (origin, dir) = match self.realistic_lens() {
+            Some(r) => r.centre_ray(p_film)?,
+            None => self.thin_centre_ray(p_film)?,
         };
         let dir = self
             .world_from_camera
@@ -307,6 +318,15 @@ impl Camera {
         dir.is_finite().then(|| CameraRay {
             origin: self.world_from_camera.transform_point3(origin),
             dir,
+        })
+    }
+
+    /// [`Camera::centre_ray`] of the thin lens, in camera space.
+    fn thin_centre_ray(&self, p_film: Vec2) -> Option<(Vec3, Vec3)> {
+        let ps = self.lens.undistort(self.screen_point(p_film))?;
+        Some(match self.model {
+            CameraModel::ThinLens { .. } => (Vec3::ZERO, Vec3::new(ps.x, ps.y, -1.0)),
+            CameraModel::Orthographic { .. } => (ps.extend(0.0), Vec3::NEG_Z),
         })
     }
 

@@ -35,14 +35,14 @@ pub(crate) struct LensLanes {
 
 impl LensLanes {
     /// The lanes of `camera`, or `None` for the cameras they do not cover (orthographic, a
-    /// polygonal aperture, a lens with vignetting or distortion), which make their rays one at
-    /// a time.
+    /// polygonal aperture, a lens with vignetting or distortion, a lens prescription), which
+    /// make their rays one at a time.
     ///
     /// A lens with vignetting or distortion (issue 61) also falls back to the scalar path: its
     /// per-sample Newton solves (the clipped aperture's chord, the inverse distortion) branch
     /// and iterate a data-dependent number of times, so lanes would gain nothing over them.
     pub fn new(camera: &Camera) -> Option<Self> {
-        if !camera.lens.is_ideal() {
+        if !camera.lens.is_ideal() || camera.realistic.is_some() {
             return None;
         }
         let (tan_half_x, tan_half_y) = camera.model.tan_half()?;

@@ -116,6 +116,16 @@ pub enum RenderError {
         /// What is allowed.
         why: &'static str,
     },
+    /// The camera's `lens_prescription` cannot image (issue 61).
+    #[error("camera {camera:?}: lens_prescription = {source_name:?}: {reason}")]
+    Lens {
+        /// Camera name.
+        camera: String,
+        /// The prescription's file as written, or `inline`.
+        source_name: String,
+        /// Why.
+        reason: String,
+    },
 }
 
 pub(crate) fn check(opts: &RenderOptions) -> Result<(), RenderError> {

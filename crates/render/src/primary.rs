@@ -39,15 +39,21 @@ pub(crate) struct PrimarySamples<'a> {
     /// The frame's motion, when something in it moves (motion blur on): each sample draws its
     /// time, and a moving camera makes its rays one at a time at that time.
     motion: Option<&'a FrameMotion>,
+    /// The weight of each traced sample of the last [`PrimarySamples::fill`]s, in the order of
+    /// their `starts`, for a camera whose rays carry one (a lens prescription); empty for the
+    /// others (weight 1).
+    weights: Vec<f32>,
 }
 
 /// What a sample's camera gave: a traced ray, no ray, or a ray that provably leaves the scene
-/// at once (its pixel lies outside [`PrimarySamples::with_scene`]'s pixels; not traced).
+/// at once (its pixel lies outside [`PrimarySamples::with_scene`]'s pixels; not traced), or a
+/// ray a lens prescription blocks (a black sample, counted).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Start {
     Traced,
     NoRay,
     Background,
+    Black,
 }
 
 impl<'a> PrimarySamples<'a> {
@@ -73,6 +79,7 @@ impl<'a> PrimarySamples<'a> {
             run: PixelRun::new(kind, 0, 0),
             scene: None,
             motion: None,
+            weights: Vec::new(),
         }
     }
 
@@ -125,6 +132,9 @@ impl<'a> PrimarySamples<'a> {
         run: &mut Vec<(K, Start)>,
         starts: &mut Vec<(Vec3, Vec3, SampleStream, f32)>,
     ) {
+        if self.camera.realistic.is_some() {
+            return self.fill_weighted(items, n, run, starts);
+        }
         let Some(lanes) = self.lanes else {
             for _ in 0..n {
                 let Some((key, x, y, i)) = self.next_in_scene(items, run) else {
@@ -179,6 +189,49 @@ impl<'a> PrimarySamples<'a> {
                 return;
             }
         }
+    }
+
+    /// [`PrimarySamples::fill`] for a camera whose rays carry a weight (a lens prescription):
+    /// one at a time, each traced sample's weight into [`PrimarySamples::weights`], a blocked
+    /// ray a [`Start::Black`] sample.
+    fn fill_weighted<K: Copy>(
+        &mut self,
+        items: &mut impl Iterator<Item = (K, u32, u32, u32)>,
+        n: usize,
+        run: &mut Vec<(K, Start)>,
+        starts: &mut Vec<(Vec3, Vec3, SampleStream, f32)>,
+    ) {
+        self.weights.truncate(starts.len());
+        for _ in 0..n {
+            let Some((key, x, y, i)) = self.next_in_scene(items, run) else {
+                return;
+            };
+            let (stream, p_film, p_lens) = self.numbers(x, y, i);
+            let time = self.time_of(&stream, p_film.y);
+            let sample = CameraSample {
+                p_film,
+                p_lens,
+                time,
+            };
+            let ray = match self.motion.and_then(|m| m.camera.as_ref()) {
+                Some(path) => path.camera_at(time).generate_ray_weighted(&sample),
+                None => self.camera.generate_ray_weighted(&sample),
+            };
+            let start = match ray {
+                Some((r, w)) => {
+                    starts.push((r.origin, r.dir, stream, time));
+                    self.weights.push(w);
+                    Start::Traced
+                }
+                None => Start::Black,
+            };
+            run.push((key, start));
+        }
+    }
+
+    /// The weights of the traced samples of the last fills (see the field); empty: all 1.
+    pub fn weights(&self) -> &[f32] {
+        &self.weights
     }
 
     /// Sample `i` of pixel `(x, y)`: its stream and its camera ray (`None` when the camera

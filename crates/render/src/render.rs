@@ -56,7 +56,19 @@ pub fn scene_camera(scene: &Scene, opts: &RenderOptions) -> Result<Camera, Rende
             index: opts.camera,
             count: scene.cameras.len(),
         })?;
-    Ok(Camera::new(cam, opts.width, opts.height))
+    let camera = Camera::new(cam, opts.width, opts.height);
+    if let Some(reason) = camera.lens_error() {
+        return Err(RenderError::Lens {
+            camera: cam.name.clone(),
+            source_name: cam
+                .dof
+                .prescription
+                .as_ref()
+                .map_or_else(String::new, |p| p.source.clone()),
+            reason: reason.to_owned(),
+        });
+    }
+    Ok(camera)
 }
 
 /// [`render`] of the pixels of `window` only, through `camera`.

@@ -112,6 +112,8 @@ pub struct Animated {
     framing: Option<crate::auto_camera::Framing>,
     /// `content_hash` of the file's bytes.
     source_hash: u64,
+    /// The file's folder, where a `lens_prescription` path starts.
+    base_dir: std::path::PathBuf,
 }
 
 /// Node transforms and morph weights at one time, plus the pointer values.
@@ -216,7 +218,6 @@ impl Animated {
         let skins = skin::read_skins(&doc, &buffers)?;
         let cameras = camera::read_cameras(&doc)?;
         let lights = read_lights(&doc)?;
-
         let animated = Animated {
             moves: vec![false; graph.nodes.len()],
             toggles,
@@ -241,6 +242,7 @@ impl Animated {
             draws_nothing: doc.meshes().len() > 0,
             framing: None,
             source_hash: crate::hash::content_hash(bytes),
+            base_dir: base_dir.to_path_buf(),
         };
         // The typed document and the kept JSON are done with: freed before posing, which
         // holds every node's world transform (for two million nodes, 0.5 GB less at the peak).

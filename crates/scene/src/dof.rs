@@ -14,6 +14,7 @@
 //! user asked for it explicitly.
 
 mod layer;
+mod prescription;
 
 use glam::{Affine3A, Vec3};
 use serde_json::Value;
@@ -31,6 +32,8 @@ pub(crate) struct NodeInfo<'a> {
     pub names: &'a [Option<String>],
     /// World-space origin of every node.
     pub origins: &'a [Vec3],
+    /// The glTF file's folder, where a `lens_prescription` path starts.
+    pub base_dir: &'a std::path::Path,
 }
 
 /// The inputs for one camera.
@@ -75,6 +78,7 @@ pub(crate) fn resolve(
     let ctx = |prefix| Ctx {
         camera: cam.name,
         prefix,
+        base_dir: nodes.base_dir,
     };
     let layers = [
         parse_physical(cam.physical, &ctx(PREFIXES[0]))?,
@@ -121,7 +125,24 @@ pub(crate) fn resolve(
         ratio: last(&|l| l.ratio).unwrap_or(d.ratio),
         focus_object,
         lens_options: lens_options(&layers),
+        prescription: prescription(&layers),
     })
+}
+
+/// The highest source's `lens_prescription`, with the f-number of the source that decided the
+/// aperture when it gave `aperture_fstop` (its `aperture_radius` leaves the stop as written).
+fn prescription(layers: &[Layer; 4]) -> Option<std::sync::Arc<crate::types::LensPrescription>> {
+    let (source, surfaces) = layers.iter().rev().find_map(|l| l.prescription.clone())?;
+    let fstop = layers
+        .iter()
+        .rev()
+        .find(|l| l.aperture_radius.is_some() || l.aperture_fstop.is_some())
+        .and_then(|l| l.aperture_radius.is_none().then_some(l.aperture_fstop)?);
+    Some(std::sync::Arc::new(crate::types::LensPrescription {
+        source,
+        surfaces,
+        fstop,
+    }))
 }
 
 /// Vignetting and distortion, key by key from the highest source giving each.
@@ -192,6 +213,7 @@ fn focus(
                 let c = Ctx {
                     camera: cam.name,
                     prefix: PREFIXES[i],
+                    base_dir: nodes.base_dir,
                 };
                 let (depth, name) = focus_on_node(cam, target, nodes, &c)?;
                 (depth, Some(name))

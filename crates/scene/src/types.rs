@@ -3,6 +3,7 @@
 
 pub(crate) mod lens;
 pub(crate) mod material;
+pub(crate) mod prescription;
 pub(crate) mod texture_ref;
 
 use glam::{Affine3A, DVec3, Vec2, Vec3, Vec4};
@@ -10,6 +11,7 @@ use glam::{Affine3A, DVec3, Vec2, Vec3, Vec4};
 pub use crate::prepass::ExtensionStatus;
 pub use lens::*;
 pub use material::*;
+pub use prescription::*;
 use std::sync::Arc;
 pub use texture_ref::*;
 
@@ -243,6 +245,9 @@ pub struct Dof {
     pub focus_object: Option<String>,
     /// Vignetting and distortion (issue 61); the default is the ideal thin lens.
     pub lens_options: LensOptions,
+    /// `lens_prescription` (issue 61): a real lens traced surface by surface instead of the
+    /// thin lens; `None` for the thin lens.
+    pub prescription: Option<std::sync::Arc<LensPrescription>>,
 }
 
 impl Dof {
@@ -272,6 +277,7 @@ impl Default for Dof {
             ratio: 1.0,
             focus_object: None,
             lens_options: LensOptions::default(),
+            prescription: None,
         }
     }
 }
@@ -313,6 +319,8 @@ pub struct DofOverrides {
     pub vignetting: Option<f32>,
     /// `--distortion`: `k1, k2, k3, p1, p2`.
     pub distortion: Option<[f32; 5]>,
+    /// `--lens-prescription`: a lens file, relative to the working directory.
+    pub lens_prescription: Option<std::path::PathBuf>,
 }
 
 /// What to load and how.

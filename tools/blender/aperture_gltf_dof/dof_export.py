@@ -6,6 +6,8 @@ import struct
 
 import bpy
 
+from .prescription_export import prescription_extras
+
 # Camera data paths a focus pull keys, and the extras key each is exported to.
 ANIMATED_KEYS = {"dof.focus_distance": "focus_distance", "dof.aperture_fstop": "aperture_fstop"}
 
@@ -30,6 +32,10 @@ KEYS = (
     "distortion_p1",
     "distortion_p2",
 )
+
+# Written at export only, not sent by the viewport session's camera edits (``set_camera`` takes
+# no arrays): the prescription's rows (issue 61).
+EXPORT_ONLY_KEYS = ("lens_prescription",)
 
 # The lens keys and the ``camera.aperture_lens`` property each comes from.
 LENS_KEYS = {
@@ -114,7 +120,10 @@ def lens_extras(camera):
     if lens is None:
         return {}
     values = {key: _f32(getattr(lens, name)) for key, name in LENS_KEYS.items()}
-    return {key: value for key, value in values.items() if value != 0.0}
+    extras = {key: value for key, value in values.items() if value != 0.0}
+    # The prescription (a file's rows, inline) when its path is set.
+    extras.update(prescription_extras(lens))
+    return extras
 
 
 def _warn(export_settings, message):
@@ -175,7 +184,7 @@ class glTF2ExportUserExtension:
             extras[key] = value
             written.add(key)
 
-        for key in KEYS:
+        for key in KEYS + EXPORT_ONLY_KEYS:
             if key in native:
                 put(key, native[key])
 

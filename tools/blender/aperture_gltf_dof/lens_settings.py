@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: MIT OR Apache-2.0
 """The thin lens's imperfections on a camera (``camera.aperture_lens``, issue 61) and their panel
 in Camera Properties: exported as the extras keys ``aperture_vignetting`` and ``distortion_*``
-(docs/lenses.md) by the exporter hook (``dof_export.lens_extras``)."""
+(docs/lenses.md) by the exporter hook (``dof_export.lens_extras``), and a lens prescription file
+whose rows are exported inline as ``lens_prescription`` (``prescription_export``)."""
 
 import bpy
 
@@ -25,6 +26,13 @@ class ApertureLens(bpy.types.PropertyGroup):
                                 default=0.0, precision=4)
     p2: bpy.props.FloatProperty(name="P2", description="Tangential distortion",
                                 default=0.0, precision=4)
+    prescription: bpy.props.StringProperty(
+        name="Prescription",
+        description="A real lens traced surface by surface: a lens file in pbrt-v4's format "
+        "(radius, thickness, IOR, aperture diameter in mm per surface); its rows are exported "
+        "inline as lens_prescription. Empty: the thin lens",
+        default="", subtype="FILE_PATH",
+    )
 
 
 class DATA_PT_aperture_lens(bpy.types.Panel):
@@ -48,6 +56,7 @@ class DATA_PT_aperture_lens(bpy.types.Panel):
         column = layout.column(heading="Distortion")
         for name in ("k1", "k2", "k3", "p1", "p2"):
             column.prop(lens, name)
+        layout.prop(lens, "prescription")
 
 
 CLASSES = (ApertureLens, DATA_PT_aperture_lens)

@@ -60,6 +60,7 @@ fn camera(rng: &mut Rng, aperture: Aperture, width: u32, height: u32) -> Camera 
         width,
         height,
         lens: crate::lens::Lens::IDEAL,
+        realistic: None,
     }
 }
 
@@ -257,6 +258,7 @@ fn grounds_and_walls_through_the_lens_plane() {
             width,
             height,
             lens: crate::lens::Lens::IDEAL,
+            realistic: None,
         };
         let extent = rng.range(5.0, 60.0);
         let (lo, hi) = if case % 4 == 3 {
@@ -367,6 +369,7 @@ fn cut_camera(rng: &mut Rng, case: usize) -> Camera {
         width,
         height,
         lens: crate::lens::Lens::IDEAL,
+        realistic: None,
     }
 }
 

@@ -4,6 +4,7 @@
 pub mod materials;
 pub mod memory;
 pub mod motion;
+pub mod prescription;
 #[cfg(test)]
 mod tests;
 
@@ -118,6 +119,7 @@ fn camera_json(s: &Scene, i: usize) -> Value {
                 "p1": f(d.lens_options.distortion.p1),
                 "p2": f(d.lens_options.distortion.p2),
             },
+            "prescription": prescription::json(d),
         },
     })
 }

@@ -47,6 +47,7 @@ impl CameraPath {
                 barrel_shift: lerp(a.lens.barrel_shift, b.lens.barrel_shift),
                 ..a.lens
             },
+            realistic: a.realistic,
         }
     }
 

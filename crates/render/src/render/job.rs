@@ -107,14 +107,20 @@ impl Job<'_> {
             }
             wavefront.run(self.integrator, &starts);
             let mut results = wavefront.results();
+            // A lens prescription's weights (none for the thin lens: its radiance as traced).
+            let mut weights = primary.weights().iter();
             for &(key, start) in &run {
                 match start {
                     Start::Traced => match results.next() {
-                        Some((l, covered, record)) => f(key, Some((l, covered)), record),
+                        Some((l, covered, record)) => {
+                            let l = weights.next().map_or(l, |&w| l * w);
+                            f(key, Some((l, covered)), record)
+                        }
                         None => f(key, None, &none),
                     },
                     Start::NoRay => f(key, None, &none),
                     Start::Background => f(key, background.0, background.1),
+                    Start::Black => f(key, Some((Vec3::ZERO, false)), &none),
                 }
             }
         }

@@ -75,6 +75,7 @@ impl Animated {
             let info = NodeInfo {
                 names: &self.graph.names,
                 origins: &origins,
+                base_dir: &self.base_dir,
             };
             out.cameras
                 .push(self.automatic_camera(&out, origin, &info)?);
@@ -206,6 +207,7 @@ impl Animated {
         let info = NodeInfo {
             names: &self.graph.names,
             origins: &origins,
+            base_dir: &self.base_dir,
         };
         let mut cameras = Vec::new();
         for &ni in &self.order {

@@ -33,6 +33,8 @@ pub(crate) struct Layer {
     pub vignetting: Option<f32>,
     /// `distortion_k1`, `_k2`, `_k3`, `_p1`, `_p2`.
     pub distortion: [Option<f32>; 5],
+    /// `lens_prescription`, read and checked.
+    pub prescription: Option<super::prescription::Rows>,
 }
 
 /// The distortion keys, in the order of [`Layer::distortion`].
@@ -48,6 +50,8 @@ const DISTORTION_KEYS: [&str; 5] = [
 pub(crate) struct Ctx<'a> {
     pub camera: &'a str,
     pub prefix: &'a str,
+    /// The glTF file's folder: where a lens file's path starts.
+    pub base_dir: &'a std::path::Path,
 }
 
 impl Ctx<'_> {
@@ -125,6 +129,12 @@ pub(crate) fn parse_extras(extras: Option<&Value>, ctx: &Ctx<'_>) -> Result<Laye
                 }
                 l.vignetting = Some(x);
             }
+            "lens_prescription" => {
+                l.prescription = Some(
+                    super::prescription::from_value(key, v, ctx.base_dir)
+                        .map_err(|(shown, why)| ctx.err(key, shown, &why))?,
+                );
+            }
             k => {
                 if let Some(i) = DISTORTION_KEYS.iter().position(|d| *d == k) {
                     l.distortion[i] = Some(ctx.number(key, v)?);
@@ -198,6 +208,13 @@ pub(crate) fn parse_overrides(o: &DofOverrides, ctx: &Ctx<'_>) -> Result<Layer, 
             }
             *slot = Some(c);
         }
+    }
+    if let Some(path) = &o.lens_prescription {
+        let shown = format!("{:?}", path.display().to_string());
+        l.prescription = Some(
+            super::prescription::from_file(path, &shown)
+                .map_err(|(shown, why)| ctx.err("lens_prescription", shown, &why))?,
+        );
     }
     if l.use_dof.is_none() && (l.aperture_radius.is_some() || l.aperture_fstop.is_some()) {
         l.use_dof = Some(true);
