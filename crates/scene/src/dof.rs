@@ -13,13 +13,14 @@
 //! line turns depth of field on even if the file says `use_dof: false` (unless `--no-dof`): the
 //! user asked for it explicitly.
 
+pub(crate) mod image;
 mod layer;
 
 use glam::{Affine3A, Vec3};
 use serde_json::Value;
 
 use crate::error::Error;
-use crate::types::{Distortion, Dof, DofOverrides, LensOptions, Projection, SensorFit};
+use crate::types::{Chromatic, Distortion, Dof, DofOverrides, LensOptions, Projection, SensorFit};
 use layer::{parse_extras, parse_overrides, parse_physical, Ctx, FocusTarget, Layer};
 
 /// Blender's default image aspect (36 × 24 mm sensor) when a camera has no `aspectRatio`.
@@ -31,6 +32,8 @@ pub(crate) struct NodeInfo<'a> {
     pub names: &'a [Option<String>],
     /// World-space origin of every node.
     pub origins: &'a [Vec3],
+    /// The bokeh images loaded with the file (`aperture_image`).
+    pub images: &'a image::ApertureImages,
 }
 
 /// The inputs for one camera.
@@ -120,14 +123,43 @@ pub(crate) fn resolve(
         rotation: last(&|l| l.rotation).unwrap_or(d.rotation),
         ratio: last(&|l| l.ratio).unwrap_or(d.ratio),
         focus_object,
-        lens_options: lens_options(&layers),
+        lens_options: lens_options(&layers, cam.name, nodes.images)?,
     })
 }
 
-/// Vignetting and distortion, key by key from the highest source giving each.
-fn lens_options(layers: &[Layer; 4]) -> LensOptions {
+/// The lens options, key by key from the highest source giving each.
+fn lens_options(
+    layers: &[Layer; 4],
+    camera: &str,
+    images: &image::ApertureImages,
+) -> Result<LensOptions, Error> {
     let last = |f: &dyn Fn(&Layer) -> Option<f32>| layers.iter().rev().find_map(f).unwrap_or(0.0);
-    LensOptions {
+    let image = layers
+        .iter()
+        .enumerate()
+        .rev()
+        .find_map(|(i, l)| Some((i, l.aperture_image.as_ref()?)));
+    let aperture_image = match image {
+        None => None,
+        Some((i, r)) => Some(images.get(r).cloned().ok_or_else(|| {
+            let ctx = Ctx {
+                camera,
+                prefix: PREFIXES[i],
+            };
+            ctx.err(
+                "aperture_image",
+                r,
+                "not loaded with the file: a bokeh image can only be set in the file or on the \
+                 command line",
+            )
+        })?),
+    };
+    Ok(LensOptions {
+        aperture_image,
+        chromatic: Chromatic {
+            lateral: last(&|l| l.chromatic[0]),
+            longitudinal: last(&|l| l.chromatic[1]),
+        },
         vignetting: last(&|l| l.vignetting),
         distortion: Distortion {
             k1: last(&|l| l.distortion[0]),
@@ -136,7 +168,7 @@ fn lens_options(layers: &[Layer; 4]) -> LensOptions {
             p1: last(&|l| l.distortion[3]),
             p2: last(&|l| l.distortion[4]),
         },
-    }
+    })
 }
 
 /// The key prefixes of the four sources, in precedence order (lowest first).

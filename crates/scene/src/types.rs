@@ -311,6 +311,12 @@ pub struct DofOverrides {
     pub vignetting: Option<f32>,
     /// `--distortion`: `k1, k2, k3, p1, p2`.
     pub distortion: Option<[f32; 5]>,
+    /// `--aperture-image` (a path relative to the working directory).
+    pub aperture_image: Option<std::path::PathBuf>,
+    /// `--chromatic-lateral`.
+    pub chromatic_lateral: Option<f32>,
+    /// `--chromatic-longitudinal`.
+    pub chromatic_longitudinal: Option<f32>,
 }
 
 /// What to load and how.

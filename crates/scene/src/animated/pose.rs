@@ -74,6 +74,7 @@ impl Animated {
             let info = NodeInfo {
                 names: &self.graph.names,
                 origins: &origins,
+                images: &self.aperture_images,
             };
             out.cameras
                 .push(self.automatic_camera(&out, origin, &info)?);
@@ -205,6 +206,7 @@ impl Animated {
         let info = NodeInfo {
             names: &self.graph.names,
             origins: &origins,
+            images: &self.aperture_images,
         };
         let mut cameras = Vec::new();
         for &ni in &self.order {

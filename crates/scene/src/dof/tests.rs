@@ -64,6 +64,7 @@ fn run(c: &Case) -> Result<Dof, Error> {
         &NodeInfo {
             names: &names,
             origins: &origins,
+            images: &Default::default(),
         },
     )
 }
