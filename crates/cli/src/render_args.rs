@@ -133,6 +133,19 @@ pub struct RenderArgs {
     /// file's, else none].
     #[arg(long, value_name = "K1,K2,K3,P1,P2", value_parser = crate::number_args::distortion, allow_hyphen_values = true)]
     pub distortion: Option<[f32; 5]>,
+    /// Bokeh image: the aperture's shape and transmission as a greyscale image (the file's
+    /// `aperture_image`; docs/lenses.md) [default: the file's, else the plain aperture].
+    #[arg(long, value_name = "PATH")]
+    pub aperture_image: Option<std::path::PathBuf>,
+    /// Lateral chromatic aberration: red's image is 1 + this times green's size, blue's 1 − this,
+    /// −0.5 to 0.5 (the file's `chromatic_lateral`; docs/lenses.md) [default: the file's, else 0].
+    #[arg(long, value_parser = crate::number_args::chromatic_f32, allow_hyphen_values = true)]
+    pub chromatic_lateral: Option<f32>,
+    /// Longitudinal chromatic aberration: red focuses at 1 + this times green's focus distance,
+    /// blue at 1 − this, −0.5 to 0.5 (the file's `chromatic_longitudinal`) [default: the
+    /// file's, else 0].
+    #[arg(long, value_parser = crate::number_args::chromatic_f32, allow_hyphen_values = true)]
+    pub chromatic_longitudinal: Option<f32>,
     /// Pinhole camera whatever the file says.
     #[arg(long)]
     pub no_dof: bool,
