@@ -94,7 +94,7 @@ impl ImageDistribution {
 /// The `n + 1` CDF values of `n` weights summing to `sum`; uniform when `sum` is 0.
 fn cdf(weights: impl Iterator<Item = f64>, sum: f64, n: usize) -> impl Iterator<Item = f32> {
     let mut acc = 0.0f64;
-    let uniform = !(sum > 0.0);
+    let uniform = sum.is_nan() || sum <= 0.0;
     std::iter::once(0.0).chain(weights.enumerate().map(move |(i, x)| {
         if i + 1 == n {
             return 1.0;

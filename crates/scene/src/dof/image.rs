@@ -41,9 +41,10 @@ pub(crate) fn load_all(
         for (camera, extras) in list {
             let ctx = Ctx { camera, prefix };
             if let Some(r) = parse_extras(*extras, &ctx)?.aperture_image {
-                if !out.contains_key(&r) {
-                    let image = load(src, &r).map_err(|e| image_error(&ctx, &r, e))?;
-                    out.insert(r, Arc::new(image));
+                if let std::collections::hash_map::Entry::Vacant(slot) = out.entry(r) {
+                    let image =
+                        load(src, slot.key()).map_err(|e| image_error(&ctx, slot.key(), e))?;
+                    slot.insert(Arc::new(image));
                 }
             }
         }
