@@ -148,6 +148,8 @@ class Scene:
         distortion_k3: float | None = ...,
         distortion_p1: float | None = ...,
         distortion_p2: float | None = ...,
+        chromatic_lateral: float | None = ...,
+        chromatic_longitudinal: float | None = ...,
     ) -> None:
         """Moves the camera's node and sets its depth-of-field and lens keys (None removes a
         key; the lens keys are docs/lenses.md's)."""

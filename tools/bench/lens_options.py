@@ -30,6 +30,12 @@ VARIANTS = {
     "round, vignetting 1 + distortion": {
         "aperture_blades": 0, "aperture_vignetting": 1.0, "distortion_k1": -0.2,
         "distortion_k2": 0.05, "distortion_p1": 0.001},
+    # The bokeh image (a 128² star, `tools/lens/bokeh_image.py`, written beside the copies) and
+    # chromatic aberration.
+    "round, bokeh image (star)": {"aperture_blades": 0, "aperture_image": "lens_bench_star.png"},
+    "bokeh image (star, 6 blades)": {"aperture_image": "lens_bench_star.png"},
+    "chromatic lateral 0.003, longitudinal 0.02 (6 blades)": {
+        "chromatic_lateral": 0.003, "chromatic_longitudinal": 0.02},
 }
 
 
@@ -68,8 +74,20 @@ def main():
                    "plain lenses too")
     args = p.parse_args()
     if args.write_only:
+        keys = json.loads(args.write_only[1])
+        if keys.get("aperture_image") == "lens_bench_star.png":
+            sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..",
+                                            "lens"))
+            import bokeh_image  # noqa: E402
+
+            out_dir = os.path.dirname(os.path.abspath(args.write_only[0]))
+            bokeh_image.png(os.path.join(out_dir, "lens_bench_star.png"), 128, bokeh_image.star)
         with_extras(args.scene, args.write_only[0], json.loads(args.write_only[1]))
         return
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "lens"))
+    import bokeh_image  # noqa: E402
+
+    bokeh_image.png("/tmp/lens_bench_star.png", 128, bokeh_image.star)
     paths = {}
     for i, (name, keys) in enumerate(VARIANTS.items()):
         paths[name] = f"/tmp/lens_bench_{i}.glb"

@@ -225,6 +225,10 @@ def add_rule_cameras():
     lensed.data.aperture_lens.p2 = 0.01
     lensed.data.aperture_lens.prescription = os.path.join(REPO, "assets", "lenses",
                                                           "dgauss-50mm.dat")
+    lensed.data.aperture_lens.chromatic_lateral = 0.002
+    bokeh_dir = os.path.join(WORK, "bokeh-source")
+    os.makedirs(bokeh_dir, exist_ok=True)
+    lensed.data.aperture_lens.aperture_image = write_grey_png(os.path.join(bokeh_dir, "bokeh.png"))
     made["lens"] = lensed
 
     hidden_target = bpy.data.objects.new("NotExported", None)
@@ -235,6 +239,26 @@ def add_rule_cameras():
     hidden.data.dof.focus_object = hidden_target
     made["hidden"] = hidden
     return made
+
+
+def write_grey_png(path, size=8):
+    """A small greyscale PNG (a bright disc on black), written without any imaging library."""
+    import struct
+    import zlib
+
+    rows = b"".join(
+        b"\x00" + bytes(255 if (x - 3.5) ** 2 + (y - 3.5) ** 2 < 9 else 0 for x in range(size))
+        for y in range(size))
+
+    def chunk(kind, data):
+        body = kind + data
+        return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body))
+
+    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", size, size, 8, 0, 0, 0, 0))
+           + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+    with open(path, "wb") as f:
+        f.write(png)
+    return path
 
 
 class LogCapture(logging.Handler):
@@ -364,6 +388,14 @@ def test_extras_rules(cams, binary):
           and not any(k.startswith(("aperture_vign", "distortion_")) for k in off),
           f"CamLens: {lens_keys} (vignetting 0.3, k1 -0.1, p2 0.01 set; the zeros left out); "
           f"CamOff (no lens settings): {[k for k in off if k.startswith('distortion_')]}")
+    copied = os.path.join(WORK, "bokeh.png")
+    check("a.bokeh-chromatic-keys", lens.get("chromatic_lateral") == 0.002
+          and "chromatic_longitudinal" not in lens and lens.get("aperture_image") == "bokeh.png"
+          and os.path.isfile(copied) and "aperture_image" not in off
+          and not any(k.startswith("chromatic_") for k in off),
+          f"CamLens: chromatic_lateral = {lens.get('chromatic_lateral')} (0.002 set), "
+          f"aperture_image = {lens.get('aperture_image')!r} (copied beside the export: "
+          f"{os.path.isfile(copied)}); CamOff: none of them")
 
     rows = lens.get("lens_prescription")
     check("a.lens-prescription", isinstance(rows, list) and len(rows) == 11

@@ -158,6 +158,20 @@ fn print_time(r: &Value) {
 }
 
 /// Each camera: its projection and depth of field.
+/// The `lens:` line of the bokeh image and chromatic aberration, when either is set.
+fn print_bokeh_chromatic(d: &Value) {
+    let (lat, lon) = (&d["chromatic_lateral"], &d["chromatic_longitudinal"]);
+    let chromatic = [lat, lon]
+        .iter()
+        .any(|v| v.as_f64().is_some_and(|v| v != 0.0));
+    if let Some(image) = d["aperture_image"].as_str() {
+        println!("      lens: aperture image {image:?}");
+    }
+    if chromatic {
+        println!("      lens: chromatic lateral {lat}, longitudinal {lon}");
+    }
+}
+
 fn print_cameras(r: &Value) {
     let cams = r["cameras"].as_array().cloned().unwrap_or_default();
     println!("  cameras: {}", cams.len());
@@ -210,6 +224,7 @@ fn print_cameras(r: &Value) {
             );
         }
         crate::info_prescription::print(&d["prescription"]);
+        print_bokeh_chromatic(d);
     }
 }
 

@@ -28,6 +28,11 @@ pub(crate) fn unit_f32(s: &str) -> Result<f32, String> {
     checked(s, " from 0 to 1", |v| (0.0..=1.0).contains(&v))
 }
 
+/// A chromatic aberration number: finite, from −0.5 to 0.5.
+pub(crate) fn chromatic_f32(s: &str) -> Result<f32, String> {
+    checked(s, " from -0.5 to 0.5", |v| (-0.5..=0.5).contains(&v))
+}
+
 /// Brown–Conrady coefficients `K1[,K2[,K3[,P1[,P2]]]]` (OpenCV's, in this order; the ones left
 /// out are 0), each a finite number.
 pub(crate) fn distortion(s: &str) -> Result<[f32; 5], String> {
@@ -59,6 +64,8 @@ mod tests {
         assert_eq!(finite_f32("-3"), Ok(-3.0));
         assert_eq!(unit_f32("1"), Ok(1.0));
         assert!(unit_f32("1.01").is_err() && unit_f32("-0.1").is_err());
+        assert_eq!(chromatic_f32("-0.01"), Ok(-0.01));
+        assert!(chromatic_f32("0.6").is_err() && chromatic_f32("nan").is_err());
     }
 
     #[test]

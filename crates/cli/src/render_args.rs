@@ -137,6 +137,19 @@ pub struct RenderArgs {
     /// `lens_prescription`; docs/lenses.md) [default: the file's, else the thin lens].
     #[arg(long, value_name = "PATH")]
     pub lens_prescription: Option<std::path::PathBuf>,
+    /// Bokeh image: the aperture's shape and transmission as a greyscale image (the file's
+    /// `aperture_image`; docs/lenses.md) [default: the file's, else the plain aperture].
+    #[arg(long, value_name = "PATH")]
+    pub aperture_image: Option<std::path::PathBuf>,
+    /// Lateral chromatic aberration: red's image is 1 + this times green's size, blue's 1 − this,
+    /// −0.5 to 0.5 (the file's `chromatic_lateral`; docs/lenses.md) [default: the file's, else 0].
+    #[arg(long, value_parser = crate::number_args::chromatic_f32, allow_hyphen_values = true)]
+    pub chromatic_lateral: Option<f32>,
+    /// Longitudinal chromatic aberration: red focuses at 1 + this times green's focus distance,
+    /// blue at 1 − this, −0.5 to 0.5 (the file's `chromatic_longitudinal`) [default: the
+    /// file's, else 0].
+    #[arg(long, value_parser = crate::number_args::chromatic_f32, allow_hyphen_values = true)]
+    pub chromatic_longitudinal: Option<f32>,
     /// Pinhole camera whatever the file says.
     #[arg(long)]
     pub no_dof: bool,

@@ -230,6 +230,8 @@ const CAMERA_KEYS: &[(&str, &str)] = &[
     ("distortion_k3", "distortion_k3"),
     ("distortion_p1", "distortion_p1"),
     ("distortion_p2", "distortion_p2"),
+    ("chromatic_lateral", "chromatic_lateral"),
+    ("chromatic_longitudinal", "chromatic_longitudinal"),
 ];
 
 /// A camera key's value as JSON: a bool, a finite number, a string, or `None` (removes it).
@@ -259,6 +261,12 @@ pub(crate) fn camera_keys(keys: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(Str
     let mut out = Vec::new();
     for (k, v) in keys.into_iter().flat_map(|d| d.iter()) {
         let key: String = k.extract()?;
+        if key == "aperture_image" {
+            return Err(value_error(
+                "set_camera() cannot set aperture_image: a bokeh image is loaded with the file; \
+                 set the camera's aperture_image key in the file and load it again",
+            ));
+        }
         let Some((_, spec_key)) = CAMERA_KEYS.iter().find(|(n, _)| *n == key) else {
             return Err(PyTypeError::new_err(format!(
                 "set_camera() got an unexpected option {key:?}"

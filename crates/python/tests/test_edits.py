@@ -95,6 +95,11 @@ def edit_lens_options(scene, doc):
                                        distortion_p2=0.01)
 
 
+def edit_chromatic(scene, doc):
+    scene.set_camera(chromatic_lateral=0.01, chromatic_longitudinal=-0.05)
+    doc["cameras"][0]["extras"].update(chromatic_lateral=0.01, chromatic_longitudinal=-0.05)
+
+
 def edit_camera_matrix(scene, doc):
     m = look_at([0.6, 0.5, 0.4], [0.0, 0.1, -1.8])
     scene.set_camera(matrix=m, focus_distance=2.0)
@@ -108,7 +113,8 @@ def edit_camera_matrix(scene, doc):
 
 EDITS = [edit_transform, edit_transform_by_name, edit_translation_and_rotation, edit_visible,
          edit_material,
-         edit_material_by_name, edit_light, edit_camera_keys, edit_lens_options, edit_camera_matrix]
+         edit_material_by_name, edit_light, edit_camera_keys, edit_lens_options, edit_chromatic,
+         edit_camera_matrix]
 
 
 @pytest.mark.parametrize("edit", EDITS, ids=lambda f: f.__name__)

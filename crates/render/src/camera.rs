@@ -134,6 +134,14 @@ impl Aperture {
         Vec2::new(d.x / ratio, d.y)
     }
 
+    /// `aperture_ratio` (1 for a pinhole).
+    pub fn ratio(&self) -> f32 {
+        match *self {
+            Self::Pinhole => 1.0,
+            Self::Disc { ratio, .. } | Self::Polygon { ratio, .. } => ratio,
+        }
+    }
+
     /// The lens radius, 0 for a pinhole.
     pub fn radius(&self) -> f32 {
         match *self {
@@ -230,12 +238,15 @@ impl Camera {
             world_from_camera: cam.world_from_camera,
             model,
             aperture,
-            lens: Lens::new(
-                &cam.dof.lens_options,
-                corner,
-                aperture.radius(),
-                perspective,
-            ),
+            lens: Lens {
+                bokeh: crate::lens::Bokeh::of(&cam.dof),
+                ..Lens::new(
+                    &cam.dof.lens_options,
+                    corner,
+                    aperture.radius(),
+                    perspective,
+                )
+            },
             focus_distance: cam.dof.focus_distance,
             width,
             height,
@@ -264,24 +275,34 @@ impl Camera {
     /// The primary ray for one sample, in camera space (the camera looks down −Z).
     #[inline(always)]
     pub fn generate_ray_camera_space(&self, s: &CameraSample) -> Option<CameraRay> {
+        self.generate_ray_camera_space_channel(s, 1)
+    }
+
+    /// [`Camera::generate_ray_camera_space`] for channel `channel` (0 R, 1 G, 2 B) of a lens
+    /// with chromatic aberration; green's is the plain ray.
+    #[inline(always)]
+    pub fn generate_ray_camera_space_channel(
+        &self,
+        s: &CameraSample,
+        channel: usize,
+    ) -> Option<CameraRay> {
         let ps = self.lens.undistort(self.screen_point(s.p_film))?;
+        let (ps, f) = self.lens.for_channel(ps, self.focus_distance, channel);
         let barrel = self.lens.barrel(ps);
         let (origin, dir) = match (self.model, self.aperture) {
             (CameraModel::ThinLens { .. }, Aperture::Pinhole) => {
                 (Vec3::ZERO, Vec3::new(ps.x, ps.y, -1.0))
             }
             (CameraModel::ThinLens { .. }, aperture) => {
-                let f = self.focus_distance;
                 // Similar triangles: the centre ray through (ps, −1) meets z = −f here.
                 let focus = Vec3::new(ps.x * f, ps.y * f, -f);
-                let lens = aperture.sample_clipped(s.p_lens, barrel).extend(0.0);
+                let lens = self.lens_point(aperture, s.p_lens, barrel).extend(0.0);
                 (lens, focus - lens)
             }
             (CameraModel::Orthographic { .. }, Aperture::Pinhole) => (ps.extend(0.0), Vec3::NEG_Z),
             (CameraModel::Orthographic { .. }, aperture) => {
-                let f = self.focus_distance;
                 let focus = Vec3::new(ps.x, ps.y, -f);
-                let lens = aperture.sample_clipped(s.p_lens, barrel).extend(0.0);
+                let lens = self.lens_point(aperture, s.p_lens, barrel).extend(0.0);
                 let origin = focus.with_z(0.0) + lens;
                 (origin, focus - origin)
             }
@@ -290,13 +311,34 @@ impl Camera {
         dir.is_finite().then_some(CameraRay { origin, dir })
     }
 
+    /// The lens point of `aperture` for `u`: the bokeh image's when there is one, else the
+    /// plain (barrel-clipped) aperture's.
+    #[inline(always)]
+    fn lens_point(&self, aperture: Aperture, u: Vec2, barrel: Option<Vec2>) -> Vec2 {
+        match self.lens.bokeh {
+            None => aperture.sample_clipped(u, barrel),
+            Some(b) => {
+                let d = b.sample(u, barrel) * aperture.radius();
+                Vec2::new(d.x / aperture.ratio(), d.y)
+            }
+        }
+    }
+
     /// The primary ray for one sample, in world space.
     #[inline(always)]
     pub fn generate_ray(&self, s: &CameraSample) -> Option<CameraRay> {
+        self.generate_ray_channel(s, 1)
+    }
+
+    /// [`Camera::generate_ray`] of channel `channel` (0 R, 1 G, 2 B) of a lens with chromatic
+    /// aberration ([`crate::lens::channel_of`] picks it); green's is the plain ray. A lens
+    /// prescription traces its own glass (no channel).
+    #[inline(always)]
+    pub fn generate_ray_channel(&self, s: &CameraSample, channel: usize) -> Option<CameraRay> {
         if self.realistic.is_some() {
             return self.generate_ray_weighted(s).map(|(r, _)| r);
         }
-        let r = self.generate_ray_camera_space(s)?;
+        let r = self.generate_ray_camera_space_channel(s, channel)?;
         let dir = self.world_from_camera.transform_vector3(r.dir).normalize();
         Some(CameraRay {
             origin: self.world_from_camera.transform_point3(r.origin),

@@ -254,9 +254,19 @@ impl<'a> PrimarySamples<'a> {
             p_lens,
             time,
         };
-        let ray = match self.motion.and_then(|m| m.camera.as_ref()) {
-            Some(path) => path.generate_ray(&sample),
-            None => self.camera.generate_ray(&sample),
+        let path = self.motion.and_then(|m| m.camera.as_ref());
+        let ray = if self.camera.lens.chromatic.is_some() {
+            // Chromatic aberration: the channel this path carries (the integrator weighs it).
+            let (c, _) = crate::lens::channel_of(stream.wavelength(0));
+            match path {
+                Some(path) => path.generate_ray_channel(&sample, c),
+                None => self.camera.generate_ray_channel(&sample, c),
+            }
+        } else {
+            match path {
+                Some(path) => path.generate_ray(&sample),
+                None => self.camera.generate_ray(&sample),
+            }
         };
         (stream, ray, time)
     }

@@ -123,7 +123,8 @@ pub(crate) fn render_in(
         });
     }
     let scene = posed.scene;
-    let integrator = integrator(geometry(scene, opts), posed.accel, posed.lights, opts);
+    let mut integrator = integrator(geometry(scene, opts), posed.accel, posed.lights, opts);
+    integrator.chromatic = camera.lens.chromatic.is_some();
     let filter = Filter::new(opts.filter);
     let job = Job {
         integrator: &integrator,

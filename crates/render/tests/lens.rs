@@ -79,6 +79,7 @@ fn neutral_lens_options_render_the_plain_thin_lens_bit_for_bit() {
     let neutral = render(LensOptions {
         vignetting: 0.0,
         distortion: zero,
+        ..LensOptions::default()
     });
     let bits = |v: &[[f32; 4]]| -> Vec<u32> { v.iter().flatten().map(|x| x.to_bits()).collect() };
     assert_eq!(bits(&plain), bits(&neutral));
@@ -86,6 +87,7 @@ fn neutral_lens_options_render_the_plain_thin_lens_bit_for_bit() {
     let strong = render(LensOptions {
         vignetting: 1.0,
         distortion: Distortion { k1: -0.2, ..zero },
+        ..LensOptions::default()
     });
     assert_ne!(bits(&plain), bits(&strong));
 }
@@ -154,6 +156,7 @@ fn distorted_camera() -> (Camera, f64, f64) {
         lens_options: LensOptions {
             vignetting: 0.0,
             distortion: d,
+            ..LensOptions::default()
         },
         ..Dof::default()
     };
@@ -233,6 +236,7 @@ fn zero_distortion_is_the_identity_exactly() {
                 k2: -0.0,
                 ..Distortion::default()
             },
+            ..LensOptions::default()
         },
         ..Dof::default()
     };

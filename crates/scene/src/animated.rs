@@ -9,6 +9,7 @@
 
 mod edit;
 mod framing;
+mod lens_images;
 mod pose;
 mod shapes;
 mod variants;
@@ -93,6 +94,8 @@ pub struct Animated {
     environment: Option<std::sync::Arc<crate::types::ImageEnvironment>>,
     skins: Vec<Skin>,
     cameras: Vec<CameraData>,
+    /// The cameras' bokeh images (`aperture_image`), loaded once.
+    aperture_images: std::sync::Arc<crate::dof::image::ApertureImages>,
     lights: Vec<LightData>,
     materials: Vec<Material>,
     material_index: HashMap<usize, u32>,
@@ -217,8 +220,9 @@ impl Animated {
         let environment = crate::ibl::scene_environment(&doc, &root, options, &buffers, base_dir)?;
         let skins = skin::read_skins(&doc, &buffers)?;
         let cameras = camera::read_cameras(&doc)?;
-        let lights = read_lights(&doc)?;
+        let images = lens_images::load(&doc, &buffers, base_dir, &cameras, &graph, options)?;
         let animated = Animated {
+            aperture_images: images,
             moves: vec![false; graph.nodes.len()],
             toggles,
             graph,
@@ -230,7 +234,7 @@ impl Animated {
             environment,
             skins,
             cameras,
-            lights,
+            lights: read_lights(&doc)?,
             materials: material_list,
             material_index,
             textures,

@@ -13,6 +13,7 @@
 //! line turns depth of field on even if the file says `use_dof: false` (unless `--no-dof`): the
 //! user asked for it explicitly.
 
+pub(crate) mod image;
 mod layer;
 mod prescription;
 
@@ -20,7 +21,7 @@ use glam::{Affine3A, Vec3};
 use serde_json::Value;
 
 use crate::error::Error;
-use crate::types::{Distortion, Dof, DofOverrides, LensOptions, Projection, SensorFit};
+use crate::types::{Chromatic, Distortion, Dof, DofOverrides, LensOptions, Projection, SensorFit};
 use layer::{parse_extras, parse_overrides, parse_physical, Ctx, FocusTarget, Layer};
 
 /// Blender's default image aspect (36 × 24 mm sensor) when a camera has no `aspectRatio`.
@@ -34,6 +35,8 @@ pub(crate) struct NodeInfo<'a> {
     pub origins: &'a [Vec3],
     /// The glTF file's folder, where a `lens_prescription` path starts.
     pub base_dir: &'a std::path::Path,
+    /// The bokeh images loaded with the file (`aperture_image`).
+    pub images: &'a image::ApertureImages,
 }
 
 /// The inputs for one camera.
@@ -124,7 +127,7 @@ pub(crate) fn resolve(
         rotation: last(&|l| l.rotation).unwrap_or(d.rotation),
         ratio: last(&|l| l.ratio).unwrap_or(d.ratio),
         focus_object,
-        lens_options: lens_options(&layers),
+        lens_options: lens_options(&layers, cam.name, nodes.images)?,
         prescription: prescription(&layers),
     })
 }
@@ -145,10 +148,41 @@ fn prescription(layers: &[Layer; 4]) -> Option<std::sync::Arc<crate::types::Lens
     }))
 }
 
-/// Vignetting and distortion, key by key from the highest source giving each.
-fn lens_options(layers: &[Layer; 4]) -> LensOptions {
+/// The lens options, key by key from the highest source giving each.
+fn lens_options(
+    layers: &[Layer; 4],
+    camera: &str,
+    images: &image::ApertureImages,
+) -> Result<LensOptions, Error> {
     let last = |f: &dyn Fn(&Layer) -> Option<f32>| layers.iter().rev().find_map(f).unwrap_or(0.0);
-    LensOptions {
+    let image = layers
+        .iter()
+        .enumerate()
+        .rev()
+        .find_map(|(i, l)| Some((i, l.aperture_image.as_ref()?)));
+    let aperture_image = match image {
+        None => None,
+        Some((i, r)) => Some(images.get(r).cloned().ok_or_else(|| {
+            let ctx = Ctx {
+                camera,
+                prefix: PREFIXES[i],
+                // Only names the error: the images were read at load.
+                base_dir: std::path::Path::new(""),
+            };
+            ctx.err(
+                "aperture_image",
+                r,
+                "not loaded with the file: a bokeh image can only be set in the file or on the \
+                 command line",
+            )
+        })?),
+    };
+    Ok(LensOptions {
+        aperture_image,
+        chromatic: Chromatic {
+            lateral: last(&|l| l.chromatic[0]),
+            longitudinal: last(&|l| l.chromatic[1]),
+        },
         vignetting: last(&|l| l.vignetting),
         distortion: Distortion {
             k1: last(&|l| l.distortion[0]),
@@ -157,7 +191,7 @@ fn lens_options(layers: &[Layer; 4]) -> LensOptions {
             p1: last(&|l| l.distortion[3]),
             p2: last(&|l| l.distortion[4]),
         },
-    }
+    })
 }
 
 /// The key prefixes of the four sources, in precedence order (lowest first).

@@ -221,7 +221,7 @@ fn decode_unguarded(bytes: &[u8], image: usize, h: Header) -> Result<(u32, u32, 
 }
 
 /// The bytes of image `index`: its file, data URI or buffer view.
-fn image_bytes<'a>(
+pub(crate) fn image_bytes<'a>(
     doc: &gltf::Document,
     buffers: &'a Buffers,
     base_dir: &Path,

@@ -321,6 +321,12 @@ pub struct DofOverrides {
     pub distortion: Option<[f32; 5]>,
     /// `--lens-prescription`: a lens file, relative to the working directory.
     pub lens_prescription: Option<std::path::PathBuf>,
+    /// `--aperture-image` (a path relative to the working directory).
+    pub aperture_image: Option<std::path::PathBuf>,
+    /// `--chromatic-lateral`.
+    pub chromatic_lateral: Option<f32>,
+    /// `--chromatic-longitudinal`.
+    pub chromatic_longitudinal: Option<f32>,
 }
 
 /// What to load and how.

@@ -43,6 +43,7 @@ pub mod test_scenes;
 pub mod texture;
 pub mod transmission;
 pub mod warp;
+pub mod warp_image;
 pub mod warp_lens;
 
 pub use bsdf::{

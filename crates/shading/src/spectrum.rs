@@ -63,6 +63,57 @@ pub fn sample(u: f32) -> (f32, Vec3) {
     (lambda, rgb(lambda) / normalisation())
 }
 
+/// Bins of [`sample_in_channel`]'s tables over the range.
+const CHANNEL_BINS: usize = 1024;
+
+/// Per Rec.709 channel (R, G, B), the CDF of that channel's colour-matching weight over the
+/// range's bins (`CHANNEL_BINS + 1` values from 0 to 1).
+fn channel_cdfs() -> &'static [Vec<f32>; 3] {
+    static T: OnceLock<[Vec<f32>; 3]> = OnceLock::new();
+    T.get_or_init(|| {
+        std::array::from_fn(|c| {
+            let w: Vec<f64> = (0..CHANNEL_BINS)
+                .map(|i| {
+                    let t = (i as f32 + 0.5) / CHANNEL_BINS as f32;
+                    f64::from(rgb(LAMBDA_MIN + (LAMBDA_MAX - LAMBDA_MIN) * t)[c])
+                })
+                .collect();
+            let total: f64 = w.iter().sum();
+            let mut acc = 0.0;
+            std::iter::once(0.0)
+                .chain(w.iter().map(|x| {
+                    acc += x;
+                    (acc / total) as f32
+                }))
+                .collect()
+        })
+    })
+}
+
+/// A wavelength (nm) for a path that carries only Rec.709 channel `channel` (0 R, 1 G, 2 B,
+/// chosen by the camera for chromatic aberration), drawn in proportion to that channel's
+/// colour-matching weight, and the factor on the path's weight that keeps the channel's
+/// estimate what [`sample`] gives it in expectation (1 up to the tabulation; exact with it).
+pub fn sample_in_channel(channel: usize, u: f32) -> (f32, f32) {
+    let c = channel.min(2);
+    let cdf = &channel_cdfs()[c];
+    let u = u.clamp(0.0, 1.0 - f32::EPSILON / 2.0);
+    let i = cdf[1..CHANNEL_BINS].partition_point(|&v| v <= u);
+    let (lo, hi) = (cdf[i], cdf[i + 1]);
+    let f = if hi > lo { (u - lo) / (hi - lo) } else { 0.5 };
+    let t = (i as f32 + f.clamp(0.0, 1.0)) / CHANNEL_BINS as f32;
+    let lambda = LAMBDA_MIN + (LAMBDA_MAX - LAMBDA_MIN) * t;
+    // The density of λ over the range (per unit of t) is the bin's probability × bins; the
+    // uniform draw of [`sample`] weighs rgb(λ)[c] / normalisation[c] against density 1.
+    let pdf = (hi - lo) * CHANNEL_BINS as f32;
+    let weight = if pdf > 0.0 {
+        rgb(lambda)[c] / normalisation()[c] / pdf
+    } else {
+        0.0
+    };
+    (lambda, weight)
+}
+
 /// The IOR at `lambda` of a material of IOR `ior` (at 587.6 nm) and dispersion `20 / V`
 /// (`KHR_materials_dispersion`'s Cauchy form).
 pub fn dispersed_ior(ior: f32, dispersion: f32, lambda: f32) -> f32 {
@@ -102,5 +153,22 @@ mod tests {
         // V = (n_d − 1) / (n_F − n_C) = 20.
         assert!(((1.5 - 1.0) / (f - c) - 20.0).abs() < 0.1, "{f} {c}");
         assert_eq!(dispersed_ior(1.5, 0.0, 400.0), 1.5);
+    }
+
+    #[test]
+    fn channel_wavelengths_follow_their_channel() {
+        // Red paths take long wavelengths, blue short ones; the weights average to 1.
+        let n = 4000;
+        for (c, lo, hi) in [(0, 560.0, 720.0), (2, 380.0, 520.0)] {
+            let mut mean_w = 0.0;
+            let mut mean_l = 0.0;
+            for i in 0..n {
+                let (l, w) = sample_in_channel(c, (i as f32 + 0.5) / n as f32);
+                mean_w += w / n as f32;
+                mean_l += l / n as f32;
+            }
+            assert!((mean_w - 1.0).abs() < 0.01, "{c}: {mean_w}");
+            assert!(mean_l > lo && mean_l < hi, "{c}: {mean_l}");
+        }
     }
 }

@@ -155,27 +155,37 @@ fn segment(rho: f64, x: f64) -> f64 {
 /// warp (the blade polygon). After 64 misses (when the two barely meet) the last point is pulled
 /// into the disc.
 pub fn clipped_by_disc(u: Vec2, sample: impl Fn(Vec2) -> Vec2, centre: Vec2, radius: f32) -> Vec2 {
-    let mut h = u64::from(u.x.to_bits()) | (u64::from(u.y.to_bits()) << 32);
-    let mut v = u;
-    let mut p = sample(v);
     // A relative 1e-6 of slack: a point of a shape inscribed in the disc stays itself.
     let r2 = radius * radius * (1.0 + 2e-6);
-    for _ in 0..63 {
-        if (p - centre).length_squared() <= r2 {
-            return p;
-        }
-        h = splitmix64(h);
-        let unit = |b: u64| (b >> 40) as f32 * (1.0 / (1u64 << 24) as f32);
-        v = Vec2::new(unit(h), unit(h << 24));
-        p = sample(v);
-    }
+    let (p, inside) = first_inside(u, sample, |p| (p - centre).length_squared() <= r2);
     let off = p - centre;
     let len = off.length();
-    if len > radius {
+    if !inside && len > radius {
         centre + off * (radius / len)
     } else {
         p
     }
+}
+
+/// Rejection deterministic in `u`: the point `sample` makes of the first of `u` and up to 63
+/// numbers hashed from it (SplitMix64) that `inside` accepts, and `true`; after 63 misses the
+/// 64th point, untested, and `false`. Every sample stays a pure function of its numbers.
+pub fn first_inside(
+    u: Vec2,
+    sample: impl Fn(Vec2) -> Vec2,
+    inside: impl Fn(Vec2) -> bool,
+) -> (Vec2, bool) {
+    let mut h = u64::from(u.x.to_bits()) | (u64::from(u.y.to_bits()) << 32);
+    let mut p = sample(u);
+    for _ in 0..63 {
+        if inside(p) {
+            return (p, true);
+        }
+        h = splitmix64(h);
+        let unit = |b: u64| (b >> 40) as f32 * (1.0 / (1u64 << 24) as f32);
+        p = sample(Vec2::new(unit(h), unit(h << 24)));
+    }
+    (p, false)
 }
 
 /// SplitMix64's step: a well-mixed 64-bit hash of `x`.

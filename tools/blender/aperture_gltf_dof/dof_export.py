@@ -31,6 +31,8 @@ KEYS = (
     "distortion_k3",
     "distortion_p1",
     "distortion_p2",
+    "chromatic_lateral",
+    "chromatic_longitudinal",
 )
 
 # Written at export only, not sent by the viewport session's camera edits (``set_camera`` takes
@@ -45,7 +47,13 @@ LENS_KEYS = {
     "distortion_k3": "k3",
     "distortion_p1": "p1",
     "distortion_p2": "p2",
+    "chromatic_lateral": "chromatic_lateral",
+    "chromatic_longitudinal": "chromatic_longitudinal",
 }
+
+# The bokeh image key: a file, copied beside the export (not a set_camera key: the image is
+# loaded with the file, so the viewport re-exports when it changes).
+IMAGE_KEY = "aperture_image"
 
 # Written for orthographic cameras only (Cycles' radius for them).
 ORTHO_RADIUS_KEY = "aperture_radius"
@@ -126,6 +134,30 @@ def lens_extras(camera):
     return extras
 
 
+def aperture_image_extra(camera, export_settings):
+    """The camera's bokeh image as ``(file name, warning)``: the file copied into the folder of
+    the glTF file being written (aperture reads paths relative to it, never outside it), or
+    ``(None, None)`` without an image."""
+    import os
+    import shutil
+
+    lens = getattr(camera, "aperture_lens", None)
+    path = getattr(lens, "aperture_image", "") if lens is not None else ""
+    if not path:
+        return None, None
+    source = bpy.path.abspath(path)
+    target = export_settings.get("gltf_filepath", "") if hasattr(export_settings, "get") else ""
+    if not os.path.isfile(source):
+        return None, f"camera '{camera.name}': bokeh image '{path}' not found; not exported"
+    if not target:
+        return None, f"camera '{camera.name}': no export folder known for the bokeh image"
+    name = os.path.basename(source)
+    folder = os.path.dirname(os.path.abspath(target))
+    if os.path.abspath(os.path.join(folder, name)) != os.path.abspath(source):
+        shutil.copyfile(source, os.path.join(folder, name))
+    return name, None
+
+
 def _warn(export_settings, message):
     log = export_settings.get("log") if hasattr(export_settings, "get") else None
     if log is not None and hasattr(log, "warning"):
@@ -187,6 +219,11 @@ class glTF2ExportUserExtension:
         for key in KEYS + EXPORT_ONLY_KEYS:
             if key in native:
                 put(key, native[key])
+        image, problem = aperture_image_extra(blender_camera, export_settings)
+        if problem:
+            _warn(export_settings, problem)
+        if image:
+            put(IMAGE_KEY, image)
 
         if blender_camera.type == "ORTHO":
             fstop = extras.get("aperture_fstop")

@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: MIT OR Apache-2.0
 """The thin lens's imperfections on a camera (``camera.aperture_lens``, issue 61) and their panel
-in Camera Properties: exported as the extras keys ``aperture_vignetting`` and ``distortion_*``
-(docs/lenses.md) by the exporter hook (``dof_export.lens_extras``), and a lens prescription file
+in Camera Properties: exported as the extras keys ``aperture_vignetting``, ``distortion_*``,
+``chromatic_*`` and ``aperture_image`` (docs/lenses.md) by the exporter hook
+(``dof_export.lens_extras``, ``dof_export.aperture_image_extra``), and a lens prescription file
 whose rows are exported inline as ``lens_prescription`` (``prescription_export``)."""
 
 import bpy
@@ -33,6 +34,24 @@ class ApertureLens(bpy.types.PropertyGroup):
         "inline as lens_prescription. Empty: the thin lens",
         default="", subtype="FILE_PATH",
     )
+    chromatic_lateral: bpy.props.FloatProperty(
+        name="Lateral",
+        description="Lateral chromatic aberration: red's image is 1 + this times green's size, "
+        "blue's 1 - this (typical 0.001-0.005)",
+        default=0.0, min=-0.5, max=0.5, precision=4, step=0.01,
+    )
+    chromatic_longitudinal: bpy.props.FloatProperty(
+        name="Longitudinal",
+        description="Longitudinal chromatic aberration: red focuses at 1 + this times the focus "
+        "distance, blue at 1 - this (typical 0.005-0.03)",
+        default=0.0, min=-0.5, max=0.5, precision=4, step=0.01,
+    )
+    aperture_image: bpy.props.StringProperty(
+        name="Bokeh Image",
+        description="Greyscale image of the aperture's shape and transmission (bokeh image); "
+        "copied beside the exported glTF file. Empty: the plain aperture",
+        default="", subtype="FILE_PATH",
+    )
 
 
 class DATA_PT_aperture_lens(bpy.types.Panel):
@@ -57,6 +76,10 @@ class DATA_PT_aperture_lens(bpy.types.Panel):
         for name in ("k1", "k2", "k3", "p1", "p2"):
             column.prop(lens, name)
         layout.prop(lens, "prescription")
+        column = layout.column(heading="Chromatic Aberration")
+        column.prop(lens, "chromatic_lateral")
+        column.prop(lens, "chromatic_longitudinal")
+        layout.prop(lens, "aperture_image")
 
 
 CLASSES = (ApertureLens, DATA_PT_aperture_lens)

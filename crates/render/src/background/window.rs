@@ -75,10 +75,14 @@ pub(crate) struct LensView {
 
 impl LensView {
     /// The view of `camera`, a pixel's samples reaching `filter_half` pixels from its centre.
-    /// Vignetting only shrinks the aperture, so the bound holds; distortion bends the rays
-    /// off the thin lens's, so a distorted camera gets no bound (nor does a lens prescription).
+    /// Vignetting and a bokeh image only shrink the aperture, so the bound holds; distortion
+    /// and chromatic aberration bend the rays off the thin lens's, so they get no bound (nor
+    /// does a lens prescription).
     pub fn new(camera: &Camera, filter_half: f32) -> Option<Self> {
-        if camera.lens.distortion.is_some() || camera.realistic.is_some() {
+        if camera.lens.distortion.is_some()
+            || camera.lens.chromatic.is_some()
+            || camera.realistic.is_some()
+        {
             return None;
         }
         let (tan_half_x, tan_half_y) = camera.model.tan_half()?;

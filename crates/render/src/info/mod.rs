@@ -120,6 +120,9 @@ fn camera_json(s: &Scene, i: usize) -> Value {
                 "p2": f(d.lens_options.distortion.p2),
             },
             "prescription": prescription::json(d),
+            "aperture_image": d.lens_options.aperture_image.as_ref().map(|i| i.source.clone()),
+            "chromatic_lateral": f(d.lens_options.chromatic.lateral),
+            "chromatic_longitudinal": f(d.lens_options.chromatic.longitudinal),
         },
     })
 }

@@ -62,6 +62,9 @@ pub(crate) struct Integrator<'a> {
     /// Per mesh, its vertices over the shutter when it deforms within it (empty: none does):
     /// a surface found on it is the triangle at the ray's time.
     pub deforming: &'a [Option<aperture_accel::VertexMotion>],
+    /// The camera has chromatic aberration: each path carries the one colour channel its
+    /// camera ray was made for ([`Integrator::channel_weight`]).
+    pub chromatic: bool,
 }
 
 impl Integrator<'_> {
@@ -76,6 +79,7 @@ impl Integrator<'_> {
         stream: &SampleStream,
     ) -> (Vec3, bool, SampleAov) {
         let mut p = self.start_path::<AOV>(origin, dir, false);
+        self.choose_channel(&mut p, stream);
         while let Some(ray) = p.ray() {
             let hit = self.accel.intersect(&ray);
             self.advance(&mut p, stream, hit);
@@ -148,6 +152,34 @@ impl Integrator<'_> {
         p.w = Walk::start(origin, dir);
         p.covered = false;
         p.live = true;
+    }
+
+    /// The channel a path of a camera with chromatic aberration carries (the one its camera
+    /// ray was made for, [`crate::lens::channel_of`] of its wavelength dimension) and the
+    /// weight that keeps its estimate unbiased: 3 on that channel, 0 on the others. `None`
+    /// without chromatic aberration.
+    #[inline]
+    pub(crate) fn channel_weight(&self, stream: &SampleStream) -> Option<(u8, Vec3)> {
+        if !self.chromatic {
+            return None;
+        }
+        let (c, _) = crate::lens::channel_of(stream.wavelength(0));
+        let mut weight = Vec3::ZERO;
+        weight[c] = 3.0;
+        Some((c as u8, weight))
+    }
+
+    /// Makes a just-started path `p` carry its channel ([`Integrator::channel_weight`]).
+    #[inline]
+    pub(crate) fn choose_channel<const AOV: bool>(
+        &self,
+        p: &mut PathInFlight<AOV>,
+        stream: &SampleStream,
+    ) {
+        if let Some((c, weight)) = self.channel_weight(stream) {
+            p.w.channel = Some(c);
+            p.w.beta *= weight;
+        }
     }
 
     /// One vertex of path `p`: `hit` is the closest hit of its ray ([`PathInFlight::ray`]).
@@ -411,10 +443,19 @@ impl Integrator<'_> {
                 let info = self.geom.info(material);
                 let mut medium = info.medium;
                 if info.dispersion > 0.0 {
-                    let lambda = *w.wavelength.get_or_insert_with(|| {
-                        let (lambda, weight) = spectrum::sample(stream.wavelength(w.vertex));
-                        w.beta *= weight;
-                        lambda
+                    let lambda = *w.wavelength.get_or_insert_with(|| match w.channel {
+                        // The camera's channel (chromatic aberration): a wavelength of it.
+                        Some(c) => {
+                            let (_, u) = crate::lens::channel_of(stream.wavelength(0));
+                            let (lambda, weight) = spectrum::sample_in_channel(c.into(), u);
+                            w.beta *= weight;
+                            lambda
+                        }
+                        None => {
+                            let (lambda, weight) = spectrum::sample(stream.wavelength(w.vertex));
+                            w.beta *= weight;
+                            lambda
+                        }
                     });
                     medium.ior = spectrum::dispersed_ior(medium.ior, info.dispersion, lambda);
                 }

@@ -86,6 +86,8 @@ pub(super) struct Walk {
     pub(super) media: MediumStack,
     /// The wavelength a dispersive refraction chose (nm), once chosen.
     pub(super) wavelength: Option<f32>,
+    /// The colour channel the camera chose (chromatic aberration; 0 R, 1 G, 2 B), if it did.
+    pub(super) channel: Option<u8>,
     /// Total internal reflections so far.
     pub(super) internal: u32,
 }
@@ -108,6 +110,7 @@ impl Walk {
             scatter: 0,
             media: MediumStack::default(),
             wavelength: None,
+            channel: None,
             internal: 0,
         }
     }

@@ -103,7 +103,9 @@ impl<const AOV: bool> Wavefront<AOV> {
         // Slots are re-initialised in place: their pending lists keep their capacity.
         self.paths.truncate(starts.len());
         self.live.clear();
-        for (k, (&(origin, dir, _, time), hit)) in starts.iter().zip(&self.hits).enumerate() {
+        for (k, (&(origin, dir, ref stream, time), hit)) in
+            starts.iter().zip(&self.hits).enumerate()
+        {
             if self.paths.len() == k {
                 let fresh = integrator.start_path::<AOV>(origin, dir, true);
                 self.paths.push(fresh);
@@ -111,11 +113,15 @@ impl<const AOV: bool> Wavefront<AOV> {
             let p = &mut self.paths[k];
             if !AOV && hit.is_none() {
                 // A path ended by its camera ray: its slot only holds the result.
-                p.path.l = integrator.background(dir);
+                p.path.l = match integrator.channel_weight(stream) {
+                    Some((_, weight)) => integrator.background(dir) * weight,
+                    None => integrator.background(dir),
+                };
                 p.path.pending.clear();
                 (p.covered, p.live) = (false, false);
             } else {
                 integrator.restart_path(p, origin, dir, true);
+                integrator.choose_channel(p, stream);
                 p.w.ray.time = time;
                 self.live.push(k);
             }

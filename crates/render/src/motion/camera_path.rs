@@ -55,6 +55,11 @@ impl CameraPath {
     pub fn generate_ray(&self, s: &CameraSample) -> Option<CameraRay> {
         self.camera_at(s.time).generate_ray(s)
     }
+
+    /// [`CameraPath::generate_ray`] of one channel (chromatic aberration).
+    pub fn generate_ray_channel(&self, s: &CameraSample, channel: usize) -> Option<CameraRay> {
+        self.camera_at(s.time).generate_ray_channel(s, channel)
+    }
 }
 
 /// The projection between two keys; a change of kind (never keyed by glTF) steps at the middle.

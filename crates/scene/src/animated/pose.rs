@@ -76,6 +76,7 @@ impl Animated {
                 names: &self.graph.names,
                 origins: &origins,
                 base_dir: &self.base_dir,
+                images: &self.aperture_images,
             };
             out.cameras
                 .push(self.automatic_camera(&out, origin, &info)?);
@@ -208,6 +209,7 @@ impl Animated {
             names: &self.graph.names,
             origins: &origins,
             base_dir: &self.base_dir,
+            images: &self.aperture_images,
         };
         let mut cameras = Vec::new();
         for &ni in &self.order {

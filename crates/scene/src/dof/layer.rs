@@ -7,6 +7,27 @@ use serde_json::Value;
 use crate::error::Error;
 use crate::types::{DofOverrides, SensorFit};
 
+/// What an `aperture_image` value names.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub(crate) enum ImageRef {
+    /// A path relative to the glTF file (a URI as the file's images take).
+    Uri(String),
+    /// `textures[i]` of the file.
+    Texture(usize),
+    /// A command-line path (relative to the working directory).
+    File(std::path::PathBuf),
+}
+
+impl std::fmt::Display for ImageRef {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Uri(u) => write!(f, "{u:?}"),
+            Self::Texture(i) => write!(f, "{i}"),
+            Self::File(p) => write!(f, "{:?}", p.display().to_string()),
+        }
+    }
+}
+
 /// The node a `focus_object` names.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum FocusTarget {
@@ -35,7 +56,14 @@ pub(crate) struct Layer {
     pub distortion: [Option<f32>; 5],
     /// `lens_prescription`, read and checked.
     pub prescription: Option<super::prescription::Rows>,
+    /// `aperture_image`.
+    pub aperture_image: Option<ImageRef>,
+    /// `chromatic_lateral`, `chromatic_longitudinal`.
+    pub chromatic: [Option<f32>; 2],
 }
+
+/// The chromatic aberration keys, in the order of [`Layer::chromatic`].
+pub(crate) const CHROMATIC_KEYS: [&str; 2] = ["chromatic_lateral", "chromatic_longitudinal"];
 
 /// The distortion keys, in the order of [`Layer::distortion`].
 const DISTORTION_KEYS: [&str; 5] = [
@@ -135,9 +163,13 @@ pub(crate) fn parse_extras(extras: Option<&Value>, ctx: &Ctx<'_>) -> Result<Laye
                         .map_err(|(shown, why)| ctx.err(key, shown, &why))?,
                 );
             }
+            "aperture_image" => l.aperture_image = Some(aperture_image(key, v, ctx)?),
             k => {
                 if let Some(i) = DISTORTION_KEYS.iter().position(|d| *d == k) {
                     l.distortion[i] = Some(ctx.number(key, v)?);
+                }
+                if let Some(i) = CHROMATIC_KEYS.iter().position(|d| *d == k) {
+                    l.chromatic[i] = Some(chromatic(ctx, key, ctx.number(key, v)?)?);
                 }
             }
         }
@@ -216,6 +248,20 @@ pub(crate) fn parse_overrides(o: &DofOverrides, ctx: &Ctx<'_>) -> Result<Layer, 
                 .map_err(|(shown, why)| ctx.err("lens_prescription", shown, &why))?,
         );
     }
+    if let Some(p) = &o.aperture_image {
+        if p.as_os_str().is_empty() {
+            return Err(ctx.err("aperture_image", "\"\"", "expected an image path"));
+        }
+        l.aperture_image = Some(ImageRef::File(p.clone()));
+    }
+    for (i, c) in [o.chromatic_lateral, o.chromatic_longitudinal]
+        .into_iter()
+        .enumerate()
+    {
+        if let Some(c) = c {
+            l.chromatic[i] = Some(chromatic(ctx, CHROMATIC_KEYS[i], c)?);
+        }
+    }
     if l.use_dof.is_none() && (l.aperture_radius.is_some() || l.aperture_fstop.is_some()) {
         l.use_dof = Some(true);
     }
@@ -269,4 +315,26 @@ fn blades(key: &str, v: &Value, ctx: &Ctx<'_>) -> Result<u32, Error> {
         return Err(ctx.err(key, v, "a polygon needs at least 3 blades (0 = round)"));
     }
     Ok(n)
+}
+
+/// A chromatic aberration value: finite and between −0.5 and 0.5 (a channel's image or focus
+/// distance stays between half and one and a half times green's).
+fn chromatic(ctx: &Ctx<'_>, key: &str, x: f32) -> Result<f32, Error> {
+    if !x.is_finite() || !(-0.5..=0.5).contains(&x) {
+        return Err(ctx.err(key, x, "must be between -0.5 and 0.5"));
+    }
+    Ok(x)
+}
+
+/// `aperture_image`: a non-empty path relative to the glTF file, or a texture index.
+fn aperture_image(key: &str, v: &Value, ctx: &Ctx<'_>) -> Result<ImageRef, Error> {
+    Ok(match v {
+        Value::String(s) if !s.is_empty() => ImageRef::Uri(s.clone()),
+        Value::Number(n) => ImageRef::Texture(
+            n.as_u64()
+                .and_then(|i| usize::try_from(i).ok())
+                .ok_or_else(|| ctx.err(key, v, "a texture index must be an integer >= 0"))?,
+        ),
+        _ => return Err(ctx.err(key, v, "expected an image path or a texture index")),
+    })
 }

@@ -65,6 +65,7 @@ fn run(c: &Case) -> Result<Dof, Error> {
             names: &names,
             origins: &origins,
             base_dir: std::path::Path::new("."),
+            images: &Default::default(),
         },
     )
 }
