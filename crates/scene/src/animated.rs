@@ -206,7 +206,6 @@ impl Animated {
             variant,
             &mut materials,
         )?;
-        let (meshes, aliases) = (read.meshes, read.aliases);
         let material_index = materials.gltf_indices();
         let material_list = std::mem::take(&mut materials.materials);
         stats.warnings.append(&mut materials.warnings);
@@ -227,8 +226,8 @@ impl Animated {
             toggles,
             graph,
             order,
-            meshes,
-            aliases,
+            meshes: read.meshes,
+            aliases: read.aliases,
             material_sets: Vec::new(),
             node_materials: HashMap::new(),
             environment,
