@@ -206,13 +206,8 @@ impl<'a> PrimarySamples<'a> {
             let Some((key, x, y, i)) = self.next_in_scene(items, run) else {
                 return;
             };
-            let (stream, p_film, p_lens) = self.numbers(x, y, i);
-            let time = self.time_of(&stream, p_film.y);
-            let sample = CameraSample {
-                p_film,
-                p_lens,
-                time,
-            };
+            let (stream, sample) = self.camera_sample(x, y, i);
+            let time = sample.time;
             let ray = match self.motion.and_then(|m| m.camera.as_ref()) {
                 Some(path) => path.camera_at(time).generate_ray_weighted(&sample),
                 None => self.camera.generate_ray_weighted(&sample),
@@ -247,6 +242,24 @@ impl<'a> PrimarySamples<'a> {
     /// motion blur).
     #[inline(always)]
     fn sample_timed(&mut self, x: u32, y: u32, i: u32) -> (SampleStream, Option<CameraRay>, f32) {
+        let (stream, sample) = self.camera_sample(x, y, i);
+        // Chromatic aberration: the channel this path carries (the integrator weighs it);
+        // green's ray is the plain one.
+        let channel = match self.camera.lens.chromatic {
+            Some(_) => crate::lens::channel_of(stream.wavelength(0)).0,
+            None => 1,
+        };
+        let ray = match self.motion.and_then(|m| m.camera.as_ref()) {
+            Some(path) => path.generate_ray_channel(&sample, channel),
+            None => self.camera.generate_ray_channel(&sample, channel),
+        };
+        (stream, ray, sample.time)
+    }
+
+    /// The numbers of sample `i` of pixel `(x, y)`: its stream, and its film point, lens point
+    /// and normalised shutter time for the camera.
+    #[inline(always)]
+    fn camera_sample(&mut self, x: u32, y: u32, i: u32) -> (SampleStream, CameraSample) {
         let (stream, p_film, p_lens) = self.numbers(x, y, i);
         let time = self.time_of(&stream, p_film.y);
         let sample = CameraSample {
@@ -254,21 +267,7 @@ impl<'a> PrimarySamples<'a> {
             p_lens,
             time,
         };
-        let path = self.motion.and_then(|m| m.camera.as_ref());
-        let ray = if self.camera.lens.chromatic.is_some() {
-            // Chromatic aberration: the channel this path carries (the integrator weighs it).
-            let (c, _) = crate::lens::channel_of(stream.wavelength(0));
-            match path {
-                Some(path) => path.generate_ray_channel(&sample, c),
-                None => self.camera.generate_ray_channel(&sample, c),
-            }
-        } else {
-            match path {
-                Some(path) => path.generate_ray(&sample),
-                None => self.camera.generate_ray(&sample),
-            }
-        };
-        (stream, ray, time)
+        (stream, sample)
     }
 
     /// The normalised shutter time of a sample at film row `row` (0 without motion blur: the
