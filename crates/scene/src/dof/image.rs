@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use serde_json::Value;
 
-use super::layer::{parse_extras, Ctx, ImageRef};
+use super::layer::{aperture_image, Ctx, ImageRef};
 use crate::error::Error;
 use crate::types::{ApertureImage, Texels};
 
@@ -44,7 +44,12 @@ pub(crate) fn load_all(
                 prefix,
                 base_dir: src.base_dir,
             };
-            if let Some(r) = parse_extras(*extras, &ctx)?.aperture_image {
+            // Only this key: the others (a lens file among them) are read when posing.
+            let value = extras.and_then(|e| e.get("aperture_image"));
+            if let Some(r) = value
+                .map(|v| aperture_image("aperture_image", v, &ctx))
+                .transpose()?
+            {
                 if let std::collections::hash_map::Entry::Vacant(slot) = out.entry(r) {
                     let image =
                         load(src, slot.key()).map_err(|e| image_error(&ctx, slot.key(), e))?;

@@ -327,7 +327,7 @@ fn chromatic(ctx: &Ctx<'_>, key: &str, x: f32) -> Result<f32, Error> {
 }
 
 /// `aperture_image`: a non-empty path relative to the glTF file, or a texture index.
-fn aperture_image(key: &str, v: &Value, ctx: &Ctx<'_>) -> Result<ImageRef, Error> {
+pub(crate) fn aperture_image(key: &str, v: &Value, ctx: &Ctx<'_>) -> Result<ImageRef, Error> {
     Ok(match v {
         Value::String(s) if !s.is_empty() => ImageRef::Uri(s.clone()),
         Value::Number(n) => ImageRef::Texture(
