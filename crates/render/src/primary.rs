@@ -9,6 +9,7 @@ use crate::background::PixelMask;
 use crate::camera::{Camera, CameraRay, CameraSample};
 use crate::camera_lanes::{LensLanes, LANES};
 use crate::filter::Filter;
+use crate::integrator::wavefront::CameraStart;
 use crate::motion::FrameMotion;
 use crate::sampler::pixel_run::PixelRun;
 use crate::sampler::{pixel_seed_in_row, row_seed, SampleStream, SamplerKind};
@@ -130,7 +131,7 @@ impl<'a> PrimarySamples<'a> {
         items: &mut impl Iterator<Item = (K, u32, u32, u32)>,
         n: usize,
         run: &mut Vec<(K, Start)>,
-        starts: &mut Vec<(Vec3, Vec3, SampleStream, f32)>,
+        starts: &mut Vec<CameraStart>,
     ) {
         if self.camera.realistic.is_some() {
             return self.fill_weighted(items, n, run, starts);
@@ -140,10 +141,16 @@ impl<'a> PrimarySamples<'a> {
                 let Some((key, x, y, i)) = self.next_in_scene(items, run) else {
                     return;
                 };
-                let (stream, ray, time) = self.sample_timed(x, y, i);
+                let (stream, ray, time, channel) = self.sample_timed(x, y, i);
                 let start = match &ray {
                     Some(r) => {
-                        starts.push((r.origin, r.dir, stream, time));
+                        starts.push(CameraStart {
+                            origin: r.origin,
+                            dir: r.dir,
+                            stream,
+                            time,
+                            channel,
+                        });
                         Start::Traced
                     }
                     None => Start::NoRay,
@@ -180,7 +187,14 @@ impl<'a> PrimarySamples<'a> {
                 if rays.made[l] {
                     let origin = Vec3::new(o[0][l], o[1][l], o[2][l]);
                     let time = self.time_of(&stream, film[1][l]);
-                    starts.push((origin, Vec3::new(d[0][l], d[1][l], d[2][l]), stream, time));
+                    // The lanes make an ideal lens's rays: no channel.
+                    starts.push(CameraStart {
+                        origin,
+                        dir: Vec3::new(d[0][l], d[1][l], d[2][l]),
+                        stream,
+                        time,
+                        channel: None,
+                    });
                 } else {
                     run[at].1 = Start::NoRay;
                 }
@@ -199,7 +213,7 @@ impl<'a> PrimarySamples<'a> {
         items: &mut impl Iterator<Item = (K, u32, u32, u32)>,
         n: usize,
         run: &mut Vec<(K, Start)>,
-        starts: &mut Vec<(Vec3, Vec3, SampleStream, f32)>,
+        starts: &mut Vec<CameraStart>,
     ) {
         self.weights.truncate(starts.len());
         for _ in 0..n {
@@ -214,7 +228,14 @@ impl<'a> PrimarySamples<'a> {
             };
             let start = match ray {
                 Some((r, w)) => {
-                    starts.push((r.origin, r.dir, stream, time));
+                    // A prescription traces its own glass: no channel.
+                    starts.push(CameraStart {
+                        origin: r.origin,
+                        dir: r.dir,
+                        stream,
+                        time,
+                        channel: None,
+                    });
                     self.weights.push(w);
                     Start::Traced
                 }
@@ -234,26 +255,34 @@ impl<'a> PrimarySamples<'a> {
     #[inline(always)]
     #[cfg(test)]
     pub fn sample(&mut self, x: u32, y: u32, i: u32) -> (SampleStream, Option<CameraRay>) {
-        let (stream, ray, _) = self.sample_timed(x, y, i);
+        let (stream, ray, _, _) = self.sample_timed(x, y, i);
         (stream, ray)
     }
 
     /// [`PrimarySamples::sample`] with the sample's normalised time in the shutter (0 without
-    /// motion blur).
+    /// motion blur) and, under chromatic aberration, the colour channel its ray was made for.
     #[inline(always)]
-    fn sample_timed(&mut self, x: u32, y: u32, i: u32) -> (SampleStream, Option<CameraRay>, f32) {
+    fn sample_timed(
+        &mut self,
+        x: u32,
+        y: u32,
+        i: u32,
+    ) -> (SampleStream, Option<CameraRay>, f32, Option<u8>) {
         let (stream, sample) = self.camera_sample(x, y, i);
-        // Chromatic aberration: the channel this path carries (the integrator weighs it);
-        // green's ray is the plain one.
-        let channel = match self.camera.lens.chromatic {
-            Some(_) => crate::lens::channel_of(stream.wavelength(0)).0,
-            None => 1,
-        };
+        // Chromatic aberration: the channel this path carries (the integrator weighs it),
+        // drawn once here; green's ray is the plain one.
+        let channel = self
+            .camera
+            .lens
+            .chromatic
+            .map(|_| crate::lens::channel_of(stream.wavelength(0)).0);
         let ray = match self.motion.and_then(|m| m.camera.as_ref()) {
-            Some(path) => path.generate_ray_channel(&sample, channel),
-            None => self.camera.generate_ray_channel(&sample, channel),
+            Some(path) => path.generate_ray_channel(&sample, channel.unwrap_or(1)),
+            None => self
+                .camera
+                .generate_ray_channel(&sample, channel.unwrap_or(1)),
         };
-        (stream, ray, sample.time)
+        (stream, ray, sample.time, channel.map(|c| c as u8))
     }
 
     /// The numbers of sample `i` of pixel `(x, y)`: its stream, and its film point, lens point

@@ -95,6 +95,21 @@ impl SamplerKind {
         }
     }
 
+    /// The first dimension of [`SamplerKind::sample_4d`], computing nothing else: a path's
+    /// wavelength value and a sample's time (each one number of its own set).
+    pub fn sample_1d(self, pixel_seed: u32, index: u32, set: u32) -> f32 {
+        match self {
+            Self::Sobol => {
+                let (set, seed) = sobol_set(pixel_seed, set);
+                sobol_burley::sample(index, 4 * set, seed)
+            }
+            Self::Random => {
+                let (a, _) = random_words(pixel_seed, index, set);
+                u32_to_unit(a as u32)
+            }
+        }
+    }
+
     /// The first two dimensions of [`SamplerKind::sample_4d`], computing nothing else: what a
     /// pinhole camera draws.
     pub fn sample_2d(self, pixel_seed: u32, index: u32, set: u32) -> [f32; 2] {
@@ -332,7 +347,7 @@ impl SampleStream {
     /// `2^21 + k`, far above every other set.
     pub fn wavelength(&self, k: u32) -> f32 {
         self.kind
-            .sample_2d(self.pixel_seed, self.index, (1 << 21) + k)[0]
+            .sample_1d(self.pixel_seed, self.index, (1 << 21) + k)
     }
 
     /// The sample's time in the shutter, normalised to `[0, 1)` (motion blur, SPEC §7):
@@ -340,7 +355,7 @@ impl SampleStream {
     /// come from another seed than the camera set's, so time is stratified on its own and
     /// independent of the pixel and lens dimensions.
     pub fn time(&self) -> f32 {
-        self.kind.sample_2d(self.pixel_seed, self.index, TIME_SET)[0]
+        self.kind.sample_1d(self.pixel_seed, self.index, TIME_SET)
     }
 
     /// An extra value for the `n`-th repeated decision at vertex `k` (alpha pass-through after
@@ -379,11 +394,14 @@ mod tests {
     }
 
     #[test]
-    fn two_d_values_are_the_first_two_of_four() {
+    fn one_and_two_d_values_are_the_first_of_four() {
         for kind in [SamplerKind::Sobol, SamplerKind::Random] {
-            for set in [0, 3, 70] {
-                let a = kind.sample_4d(99, 7, set);
-                assert_eq!(kind.sample_2d(99, 7, set), [a[0], a[1]]);
+            for set in [0, 3, 70, TIME_SET, (1 << 21) + 2] {
+                for index in [0, 7, 1000] {
+                    let a = kind.sample_4d(99, index, set);
+                    assert_eq!(kind.sample_2d(99, index, set), [a[0], a[1]]);
+                    assert_eq!(kind.sample_1d(99, index, set).to_bits(), a[0].to_bits());
+                }
             }
         }
     }

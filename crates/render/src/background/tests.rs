@@ -108,6 +108,47 @@ fn rays_of_pixels_outside_never_meet_the_box() {
 }
 
 #[test]
+fn chromatic_channels_stay_inside_the_union_of_their_windows() {
+    // Each channel is a thin lens of its own (image scaled by 1 ± lateral, focus by
+    // 1 ± longitudinal): no channel's ray of a pixel outside meets the box.
+    let mut rng = Rng(0x51_7cc1_b727_220a);
+    let (mut culled, mut kept) = (0usize, 0usize);
+    for case in 0..240 {
+        let radius = [0.0, 0.05, 0.4][case % 3];
+        let aperture = match radius {
+            0.0 => Aperture::Pinhole,
+            _ => Aperture::Disc { radius, ratio: 1.0 },
+        };
+        let mut cam = camera(&mut rng, aperture, 24, 18);
+        let lateral = [0.004, -0.02, 0.3, 0.0][case % 4];
+        let longitudinal = [0.03, 0.0, -0.45, 0.2][(case / 4) % 4];
+        cam.lens.chromatic = Some(crate::lens::Chromatic {
+            lateral,
+            longitudinal,
+        })
+        .filter(|c| !c.is_zero());
+        let at = cam.world_from_camera.transform_point3(Vec3::new(
+            rng.range(-4.0, 4.0),
+            rng.range(-3.0, 3.0),
+            rng.range(-12.0, 1.0),
+        ));
+        let half = Vec3::new(
+            rng.range(0.05, 1.5),
+            rng.range(0.05, 1.5),
+            rng.range(0.05, 1.5),
+        );
+        let (lo, hi) = (at - half, at + half);
+        let rect = box_pixels(&cam, lo, hi, 0.5);
+        let (k, c) = check_left_out(&mut rng, &cam, rect, (lo, hi), 0.5, 24, case);
+        (kept, culled) = (kept + k, culled + c);
+    }
+    assert!(
+        culled > 10_000 && kept > 5_000,
+        "culled {culled}, kept {kept}"
+    );
+}
+
+#[test]
 fn the_rectangle_holds_the_pixels_that_see_the_box() {
     // Pixels whose centre ray meets the box are all inside, however the rectangle is cut.
     let mut rng = Rng(7);
@@ -205,8 +246,13 @@ fn check_left_out(
             }
             culled += 1;
             for _ in 0..rays {
+                // Under chromatic aberration, any channel's ray.
+                let channel = match cam.lens.chromatic {
+                    Some(_) => ((rng.f() * 3.0) as usize).min(2),
+                    None => 1,
+                };
                 let r = cam
-                    .generate_ray(&sample_in(rng, x, y, filter_half))
+                    .generate_ray_channel(&sample_in(rng, x, y, filter_half), channel)
                     .expect("a perspective camera makes rays");
                 assert!(
                     !meets(r.origin, r.dir, lo, hi),

@@ -63,7 +63,9 @@ pub(crate) struct LensView {
     /// Lens half-extents (an anamorphic aperture is squeezed in x by its ratio).
     rx: f64,
     ry: f64,
-    inv_f: f64,
+    /// Each colour channel's thin lens (one, or three under chromatic aberration): its image's
+    /// scale against green's and its `1 / focus distance`.
+    channels: Vec<(f64, f64)>,
     /// Screen half-extents at distance 1.
     tx: f64,
     ty: f64,
@@ -75,13 +77,30 @@ pub(crate) struct LensView {
 
 impl LensView {
     /// The view of `camera`, a pixel's samples reaching `filter_half` pixels from its centre.
-    /// Vignetting and a bokeh image only shrink the aperture, so the bound holds; distortion
-    /// and chromatic aberration bend the rays off the thin lens's, so they get no bound (nor
-    /// does a lens prescription).
+    /// Vignetting and a bokeh image only shrink the aperture, so the bound holds. Under
+    /// chromatic aberration each channel is a thin lens of its own (its image scaled by
+    /// `1 ± lateral`, its focus by `1 ± longitudinal`), and the window is the union of the
+    /// three. Distortion bends the rays off the thin lens's, so it gets no bound (nor does a
+    /// lens prescription).
     pub fn new(camera: &Camera, filter_half: f32) -> Option<Self> {
-        if camera.lens.distortion.is_some()
-            || camera.lens.chromatic.is_some()
-            || camera.realistic.is_some()
+        if camera.lens.distortion.is_some() || camera.realistic.is_some() {
+            return None;
+        }
+        let f = f64::from(camera.focus_distance);
+        let channels: Vec<(f64, f64)> = match camera.lens.chromatic {
+            None => vec![(1.0, 1.0 / f)],
+            Some(c) => crate::lens::CHANNEL_SIGN
+                .iter()
+                .map(|&k| {
+                    let k = f64::from(k);
+                    let scale = 1.0 + k * f64::from(c.lateral);
+                    (scale, 1.0 / (f * (1.0 + k * f64::from(c.longitudinal))))
+                })
+                .collect(),
+        };
+        if channels
+            .iter()
+            .any(|&(s, inv_f)| s.is_nan() || s <= 0.0 || inv_f.is_nan())
         {
             return None;
         }
@@ -95,7 +114,7 @@ impl LensView {
             camera_from_world: dmat(camera).inverse(),
             rx,
             ry,
-            inv_f: 1.0 / f64::from(camera.focus_distance),
+            channels,
             tx,
             ty,
             width: camera.width,
@@ -150,13 +169,12 @@ impl LensView {
 
     /// The window of the image plane (at distance 1: `[x_min, x_max, y_min, y_max]`, infinite
     /// where unbounded, empty when the box lies behind the lens) whose screen points' rays may
-    /// meet the box `lo..hi` (padded by [`PAD`]), lens spread included; `None` when a value is
-    /// NaN.
+    /// meet the box `lo..hi` (padded by [`PAD`]), lens spread included, in any channel; `None`
+    /// when a value is NaN.
     fn screen_window(&self, lo: Vec3, hi: Vec3) -> Option<[f64; 4]> {
         let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
         let pad = PAD * ((hi - lo).max_element() + lo.abs().max(hi.abs()).max_element());
         let (lo, hi) = (lo - DVec3::splat(pad), hi + DVec3::splat(pad));
-        let (rx, ry) = (self.rx, self.ry);
         let corners: [DVec3; 8] = std::array::from_fn(|k| {
             self.camera_from_world.transform_point3(DVec3::new(
                 if k & 1 == 0 { lo.x } else { hi.x },
@@ -164,16 +182,39 @@ impl LensView {
                 if k & 4 == 0 { lo.z } else { hi.z },
             ))
         });
+        let mut union = [
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for &(scale, inv_f) in &self.channels {
+            // A channel's film point is its direction's screen point times `scale` (> 0).
+            let w = self.channel_window(&corners, inv_f)?;
+            union = [
+                union[0].min(w[0] * scale),
+                union[1].max(w[1] * scale),
+                union[2].min(w[2] * scale),
+                union[3].max(w[3] * scale),
+            ];
+        }
+        Some(union)
+    }
+
+    /// [`LensView::screen_window`] of one thin lens focused at `1 / inv_f`, from the padded
+    /// box's corners in camera space.
+    fn channel_window(&self, corners: &[DVec3; 8], inv_f: f64) -> Option<[f64; 4]> {
+        let (rx, ry) = (self.rx, self.ry);
         let mut window = [
             f64::INFINITY,
             f64::NEG_INFINITY,
             f64::INFINITY,
             f64::NEG_INFINITY,
         ];
-        for q in &corners {
+        for q in corners {
             let s = -q.z;
             if s > 0.0 {
-                let spread = (1.0 / s - self.inv_f).abs();
+                let spread = (1.0 / s - inv_f).abs();
                 let (x, y) = (q.x / s, q.y / s);
                 window = [
                     window[0].min(x - rx * spread),

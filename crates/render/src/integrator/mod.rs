@@ -79,7 +79,7 @@ impl Integrator<'_> {
         stream: &SampleStream,
     ) -> (Vec3, bool, SampleAov) {
         let mut p = self.start_path::<AOV>(origin, dir, false);
-        self.choose_channel(&mut p, stream);
+        self.choose_channel(&mut p, self.channel_of_stream(stream));
         while let Some(ray) = p.ray() {
             let hit = self.accel.intersect(&ray);
             self.advance(&mut p, stream, hit);
@@ -154,31 +154,36 @@ impl Integrator<'_> {
         p.live = true;
     }
 
-    /// The channel a path of a camera with chromatic aberration carries (the one its camera
-    /// ray was made for, [`crate::lens::channel_of`] of its wavelength dimension) and the
-    /// weight that keeps its estimate unbiased: 3 on that channel, 0 on the others. `None`
-    /// without chromatic aberration.
-    #[inline]
-    pub(crate) fn channel_weight(&self, stream: &SampleStream) -> Option<(u8, Vec3)> {
-        if !self.chromatic {
-            return None;
-        }
-        let (c, _) = crate::lens::channel_of(stream.wavelength(0));
-        let mut weight = Vec3::ZERO;
-        weight[c] = 3.0;
-        Some((c as u8, weight))
+    /// The channel a path of a camera with chromatic aberration carries, for its stream: the
+    /// one its camera ray was made for ([`crate::lens::channel_of`] of its wavelength
+    /// dimension). `None` without chromatic aberration. The render's paths get it from their
+    /// [`wavefront::CameraStart`], drawn once by the camera.
+    #[cfg(test)]
+    pub(crate) fn channel_of_stream(&self, stream: &SampleStream) -> Option<u8> {
+        self.chromatic
+            .then(|| crate::lens::channel_of(stream.wavelength(0)).0 as u8)
     }
 
-    /// Makes a just-started path `p` carry its channel ([`Integrator::channel_weight`]).
+    /// The weight that keeps a path of channel `c`'s estimate unbiased: 3 on that channel, 0
+    /// on the others.
+    #[inline]
+    pub(crate) fn channel_weight(c: u8) -> Vec3 {
+        let mut weight = Vec3::ZERO;
+        weight[usize::from(c.min(2))] = 3.0;
+        weight
+    }
+
+    /// Makes a just-started path `p` carry channel `channel` ([`Integrator::channel_weight`]);
+    /// `None`: all three.
     #[inline]
     pub(crate) fn choose_channel<const AOV: bool>(
         &self,
         p: &mut PathInFlight<AOV>,
-        stream: &SampleStream,
+        channel: Option<u8>,
     ) {
-        if let Some((c, weight)) = self.channel_weight(stream) {
+        if let Some(c) = channel {
             p.w.channel = Some(c);
-            p.w.beta *= weight;
+            p.w.beta *= Self::channel_weight(c);
         }
     }
 

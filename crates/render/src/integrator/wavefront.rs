@@ -17,6 +17,18 @@ use crate::sampler::SampleStream;
 use aperture_accel::{Hit, Ray};
 use glam::Vec3;
 
+/// A camera ray as the camera made it, ready to start a path: origin, unit direction, the
+/// sample's stream, its normalised time in the shutter, and the colour channel it was made for
+/// under chromatic aberration (`None`: all three).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct CameraStart {
+    pub origin: Vec3,
+    pub dir: Vec3,
+    pub stream: SampleStream,
+    pub time: f32,
+    pub channel: Option<u8>,
+}
+
 /// Paths between asking for a hit's vertex data and shading it.
 const AHEAD: usize = 4;
 
@@ -33,10 +45,10 @@ pub(crate) struct Wavefront<const AOV: bool> {
 }
 
 impl<const AOV: bool> Wavefront<AOV> {
-    /// Traces the paths of primary rays `starts` (origin, unit direction, sample stream) to
+    /// Traces the paths of primary rays `starts` to
     /// their ends; [`Wavefront::results`] then gives each one's radiance, coverage and pass
     /// values, in order.
-    pub fn run(&mut self, integrator: &Integrator<'_>, starts: &[(Vec3, Vec3, SampleStream, f32)]) {
+    pub fn run(&mut self, integrator: &Integrator<'_>, starts: &[CameraStart]) {
         let accel = integrator.accel;
         self.start_paths(integrator, starts);
         let mut camera_rays = true;
@@ -73,7 +85,7 @@ impl<const AOV: bool> Wavefront<AOV> {
                     }
                 }
                 let p = &mut self.paths[i];
-                integrator.advance(p, &starts[i].2, hit);
+                integrator.advance(p, &starts[i].stream, hit);
                 self.shadows.extend(p.shadow_rays());
             }
             self.resolve_shadows(integrator);
@@ -85,16 +97,12 @@ impl<const AOV: bool> Wavefront<AOV> {
     /// Traces the camera rays of `starts` (a pixel's lens samples are coherent: packets) and
     /// sets up a path for each; a sample whose ray meets nothing is answered at once, without a
     /// path, where no pass needs one. The live paths' camera hits are left in `hits`.
-    fn start_paths(
-        &mut self,
-        integrator: &Integrator<'_>,
-        starts: &[(Vec3, Vec3, SampleStream, f32)],
-    ) {
+    fn start_paths(&mut self, integrator: &Integrator<'_>, starts: &[CameraStart]) {
         let accel = integrator.accel;
         self.rays.clear();
-        let camera_rays = starts.iter().map(|&(o, d, _, time)| Ray {
-            time,
-            ..Ray::new(o, d)
+        let camera_rays = starts.iter().map(|s| Ray {
+            time: s.time,
+            ..Ray::new(s.origin, s.dir)
         });
         self.rays.extend(camera_rays);
         self.hits.clear();
@@ -103,9 +111,8 @@ impl<const AOV: bool> Wavefront<AOV> {
         // Slots are re-initialised in place: their pending lists keep their capacity.
         self.paths.truncate(starts.len());
         self.live.clear();
-        for (k, (&(origin, dir, ref stream, time), hit)) in
-            starts.iter().zip(&self.hits).enumerate()
-        {
+        for (k, (s, hit)) in starts.iter().zip(&self.hits).enumerate() {
+            let (origin, dir) = (s.origin, s.dir);
             if self.paths.len() == k {
                 let fresh = integrator.start_path::<AOV>(origin, dir, true);
                 self.paths.push(fresh);
@@ -113,16 +120,16 @@ impl<const AOV: bool> Wavefront<AOV> {
             let p = &mut self.paths[k];
             if !AOV && hit.is_none() {
                 // A path ended by its camera ray: its slot only holds the result.
-                p.path.l = match integrator.channel_weight(stream) {
-                    Some((_, weight)) => integrator.background(dir) * weight,
+                p.path.l = match s.channel {
+                    Some(c) => integrator.background(dir) * Integrator::channel_weight(c),
                     None => integrator.background(dir),
                 };
                 p.path.pending.clear();
                 (p.covered, p.live) = (false, false);
             } else {
                 integrator.restart_path(p, origin, dir, true);
-                integrator.choose_channel(p, stream);
-                p.w.ray.time = time;
+                integrator.choose_channel(p, s.channel);
+                p.w.ray.time = s.time;
                 self.live.push(k);
             }
         }

@@ -111,13 +111,19 @@ fn for_each_setup(mut f: impl FnMut(&Setup)) {
 /// ray (with the stream drawn alone, which `fill` does not keep).
 fn filled(
     start: Start,
-    traced: &mut std::slice::Iter<(Vec3, Vec3, SampleStream, f32)>,
+    traced: &mut std::slice::Iter<crate::integrator::wavefront::CameraStart>,
     want: &Drawn,
 ) -> Drawn {
     let got = (start == Start::Traced)
         .then(|| traced.next())
         .flatten()
-        .map(|&(o, d, s, _)| (s, Some(CameraRay { origin: o, dir: d })));
+        .map(|s| {
+            let ray = CameraRay {
+                origin: s.origin,
+                dir: s.dir,
+            };
+            (s.stream, Some(ray))
+        });
     got.unwrap_or((want.0, None))
 }
 
@@ -202,4 +208,50 @@ fn samples_outside_the_scene_pixels_are_background() {
         }
         assert!(traced.next().is_none());
     });
+}
+
+/// Under chromatic aberration each traced sample carries the channel its stream picks, drawn
+/// once by the camera, and its ray is that channel's.
+#[test]
+fn filled_samples_carry_their_channel() {
+    let mut cam = cameras()[2];
+    cam.lens.chromatic = Some(crate::lens::Chromatic {
+        lateral: 0.05,
+        longitudinal: 0.2,
+    });
+    let filter = Filter::new(FilterKind::Box);
+    let mut primary = PrimarySamples::new(&cam, &filter, SamplerKind::Sobol, 3, 0);
+    let items = items();
+    let mut it = items.iter().enumerate().map(|(k, &(x, y, i))| (k, x, y, i));
+    let (mut run, mut starts) = (Vec::new(), Vec::new());
+    while it.len() > 0 {
+        primary.fill(&mut it, 5, &mut run, &mut starts);
+    }
+    assert_eq!(starts.len(), items.len());
+    let rays = |r: Option<CameraRay>| r.map(|r| (r.origin.to_array(), r.dir.to_array()));
+    let mut seen = [0usize; 3];
+    for (s, &(k, start)) in starts.iter().zip(run.iter()) {
+        assert_eq!(start, Start::Traced);
+        let want = crate::lens::channel_of(s.stream.wavelength(0)).0;
+        assert_eq!(s.channel, Some(want as u8), "item {k}");
+        seen[want] += 1;
+        // The sample as drawn alone, its ray made for that channel.
+        let (x, y, _) = items[k];
+        let c = s.stream.camera();
+        let offset = filter.sample([c[0], c[1]]);
+        let sample = CameraSample {
+            p_film: Vec2::new(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y),
+            p_lens: Vec2::new(c[2], c[3]),
+            time: 0.0,
+        };
+        let got = rays(Some(CameraRay {
+            origin: s.origin,
+            dir: s.dir,
+        }));
+        assert_eq!(got, rays(cam.generate_ray_channel(&sample, want)));
+        if want != 1 {
+            assert_ne!(got, rays(cam.generate_ray(&sample)), "item {k}");
+        }
+    }
+    assert!(seen.iter().all(|&n| n > 3), "{seen:?}");
 }
