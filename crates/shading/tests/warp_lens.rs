@@ -123,3 +123,47 @@ fn a_clipped_polygon_stays_in_both_shapes_and_is_deterministic() {
         assert_eq!(p, clipped_by_disc(u, hexagon, c, r));
     }
 }
+
+/// The area left of a chord of the two discs' intersection, in `f64`, from the formula of a
+/// circle's segment (independent of the warp's code): the unit disc, and the disc of radius `r`
+/// at distance `d` along +s.
+fn area_left(s: f64, d: f64, r: f64) -> f64 {
+    let seg = |rho: f64, x: f64| {
+        let q = (x / rho).clamp(-1.0, 1.0);
+        rho * rho * (q.asin() + q * (1.0 - q * q).sqrt() + std::f64::consts::FRAC_PI_2)
+    };
+    let chord = (d * d + 1.0 - r * r) / (2.0 * d);
+    if s <= chord {
+        seg(r, s - d)
+    } else {
+        seg(r, chord - d) + seg(1.0, s) - seg(1.0, chord)
+    }
+}
+
+/// The warp inverts the area exactly (to the `f32` result's resolution): a point's chord
+/// coordinate along the line of centres has `u.x` of the intersection's area to its left.
+#[test]
+fn the_chord_splits_the_area_as_u_says() {
+    for (c, r) in CASES {
+        let c = Vec2::from(c);
+        let (d, r64) = (f64::from(c.length()), f64::from(r));
+        let e = (c / c.length()).as_dvec2();
+        let total = area_left(1.0, d, r64);
+        let mut worst = 0f64;
+        for u in numbers(9, 20_000) {
+            let p = disc_in_disc(u, c, r).unwrap().as_dvec2();
+            let s = p.dot(e);
+            // The area's derivative is the chord's length: compare in `s`, where `f32`
+            // rounding of the point (about 6e-8) is the scale.
+            let err = (area_left(s, d, r64) / total - f64::from(u.x)).abs() * total;
+            let h = {
+                let a = 1.0 - s * s;
+                let b = r64 * r64 - (s - d) * (s - d);
+                a.min(b).max(0.0).sqrt()
+            };
+            worst = worst.max(err / (2.0 * h).max(1e-3));
+        }
+        println!("({c}, {r}): worst chord error {worst:e}");
+        assert!(worst < 4e-7, "({c}, {r}): worst chord error {worst:e}");
+    }
+}
