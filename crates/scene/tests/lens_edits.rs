@@ -81,7 +81,8 @@ fn edited(base: &Path, edit: &Edit) -> (Touched, Scene) {
     match touched {
         Touched::Cameras => doc.refresh(&mut scene, touched).unwrap(),
         _ => {
-            let again = Animated::load_edited(base, &LoadOptions::default(), &[edit.clone()]);
+            let again =
+                Animated::load_edited(base, &LoadOptions::default(), std::slice::from_ref(edit));
             scene = again.unwrap().scene_at(None).unwrap();
         }
     }
