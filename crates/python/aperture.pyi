@@ -150,9 +150,15 @@ class Scene:
         distortion_p2: float | None = ...,
         chromatic_lateral: float | None = ...,
         chromatic_longitudinal: float | None = ...,
+        aperture_image: str | int | None = ...,
+        lens_prescription: str | Sequence[Sequence[float]] | None = ...,
     ) -> None:
         """Moves the camera's node and sets its depth-of-field and lens keys (None removes a
-        key; the lens keys are docs/lenses.md's)."""
+        key; the lens keys are docs/lenses.md's). `aperture_image` (a path relative to the glTF
+        file's folder, or a texture index) is read and decoded by the edit;
+        `lens_prescription` is a lens file's path there or rows of [radius, thickness, IOR,
+        aperture diameter] in mm. A bad value, or a file that cannot be read, raises
+        ValueError naming the camera and the key, and changes nothing."""
     def set_transform(
         self,
         node: int | str,

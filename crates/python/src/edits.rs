@@ -232,9 +232,14 @@ const CAMERA_KEYS: &[(&str, &str)] = &[
     ("distortion_p2", "distortion_p2"),
     ("chromatic_lateral", "chromatic_lateral"),
     ("chromatic_longitudinal", "chromatic_longitudinal"),
+    // A bokeh image (a path relative to the glTF file's folder, or a texture index), read by
+    // the edit; a lens prescription (a lens file's path there, or rows of 4 numbers).
+    ("aperture_image", "aperture_image"),
+    ("lens_prescription", "lens_prescription"),
 ];
 
-/// A camera key's value as JSON: a bool, a finite number, a string, or `None` (removes it).
+/// A camera key's value as JSON: a bool, a finite number, a string, rows of finite numbers
+/// (a list of lists: a lens prescription's), or `None` (removes it).
 fn json_value(key: &str, v: &Bound<'_, PyAny>) -> PyResult<Value> {
     if v.is_none() {
         return Ok(Value::Null);
@@ -248,12 +253,24 @@ fn json_value(key: &str, v: &Bound<'_, PyAny>) -> PyResult<Value> {
     if let Ok(i) = v.extract::<i64>() {
         return Ok(Value::from(i));
     }
-    match v.extract::<f64>() {
-        Ok(x) if x.is_finite() => Ok(Value::from(x)),
-        _ => Err(value_error(format!(
-            "invalid {key} = {v}: a finite number, a bool, a string or None"
-        ))),
+    let bad = || {
+        value_error(format!(
+            "invalid {key} = {v}: a finite number, a bool, a string, a list of lists of finite \
+             numbers (rows) or None"
+        ))
+    };
+    if let Ok(x) = v.extract::<f64>() {
+        return x.is_finite().then(|| Value::from(x)).ok_or_else(bad);
     }
+    let rows: Vec<Vec<f64>> = v.extract().map_err(|_| bad())?;
+    if rows.iter().flatten().any(|x| !x.is_finite()) {
+        return Err(bad());
+    }
+    Ok(Value::Array(
+        rows.into_iter()
+            .map(|r| Value::Array(r.into_iter().map(Value::from).collect()))
+            .collect(),
+    ))
 }
 
 /// The camera keys of `set_camera(**keys)`, as SPEC §3 names them.
@@ -261,12 +278,6 @@ pub(crate) fn camera_keys(keys: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(Str
     let mut out = Vec::new();
     for (k, v) in keys.into_iter().flat_map(|d| d.iter()) {
         let key: String = k.extract()?;
-        if key == "aperture_image" {
-            return Err(value_error(
-                "set_camera() cannot set aperture_image: a bokeh image is loaded with the file; \
-                 set the camera's aperture_image key in the file and load it again",
-            ));
-        }
         let Some((_, spec_key)) = CAMERA_KEYS.iter().find(|(n, _)| *n == key) else {
             return Err(PyTypeError::new_err(format!(
                 "set_camera() got an unexpected option {key:?}"

@@ -131,7 +131,11 @@ impl Scene {
     }
 
     /// Moves the camera (`matrix`: its 4×4 world transform, as math writes it) and sets its
-    /// depth-of-field keys (`fstop`, `focus_distance`, `aperture_radius`, `focus_object`, …).
+    /// depth-of-field and lens keys (`fstop`, `focus_distance`, `aperture_radius`,
+    /// `focus_object`, …, `aperture_image`: a path relative to the glTF file's folder or a
+    /// texture index, read by the edit; `lens_prescription`: a lens file's path there or rows
+    /// of 4 numbers). `None` removes a key. A bad value or a file that cannot be read raises
+    /// `ValueError` naming the camera and the key, and changes nothing.
     #[pyo3(signature = (camera=None, matrix=None, **keys))]
     fn set_camera(
         &self,

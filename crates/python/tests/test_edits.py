@@ -2,12 +2,15 @@
 (the demo's JSON chunk), written as a new .glb and loaded cold; both render bit for bit alike."""
 
 import copy
+import shutil
+import struct
+import zlib
 
 import numpy as np
 import pytest
 
 import aperture
-from conftest import bits, read_glb, write_glb
+from conftest import ROOT, bits, read_glb, write_glb
 
 OPTS = dict(width=40, height=24, spp=2, seed=1, passes=["Depth", "Normal", "CryptoObject"])
 
@@ -146,3 +149,104 @@ def test_edits_in_sequence_equal_a_cold_load(demo, tmp_path):
     warm = scene.render(**OPTS)
     cold = aperture.load(tmp_path / "all.glb").render(**OPTS)
     assert np.array_equal(bits(warm[0]), bits(cold[0]))
+
+
+# Issue 61: the bokeh image and the lens prescription as edits. The scene is the demo copied
+# into tmp_path with a texture (a ring) added, beside a bokeh image (a triangle), a black image
+# and the shipped double Gauss, so that the session and the cold load of the edited file (also
+# in tmp_path) read the same relative paths.
+LENS = ROOT / "assets" / "lenses" / "dgauss-50mm.dat"
+
+
+def write_png(path, grey):
+    """An 8-bit greyscale PNG of the H×W uint8 array `grey` (no imaging library)."""
+    grey = np.asarray(grey, np.uint8)
+    h, w = grey.shape
+    raw = b"".join(b"\0" + row.tobytes() for row in grey)
+
+    def chunk(kind, data):
+        return (struct.pack(">I", len(data)) + kind + data
+                + struct.pack(">I", zlib.crc32(kind + data)))
+
+    header = struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0)
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header)
+                     + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+def lens_rows():
+    """The double Gauss's rows, as a list of [radius, thickness, IOR, aperture] lists."""
+    lines = (line.split("#")[0].split() for line in LENS.read_text().splitlines())
+    return [[float(x) for x in row] for row in lines if row]
+
+
+@pytest.fixture
+def lens_scene(demo, tmp_path):
+    """(folder, document, binary chunk, base .glb) of the demo with a texture, and its images."""
+    y, x = np.mgrid[0:32, 0:32]
+    write_png(tmp_path / "triangle.png", np.where(abs(x - 15.5) * 2 < y, 255, 0))
+    ring = abs(np.hypot(x - 15.5, y - 15.5) - 11) < 4
+    write_png(tmp_path / "ring.png", np.where(ring, 230, 0))
+    write_png(tmp_path / "black.png", np.zeros((4, 4)))
+    (tmp_path / "lenses").mkdir()
+    shutil.copy(LENS, tmp_path / "lenses" / LENS.name)
+    doc, binary = read_glb(demo)
+    doc["images"] = [{"uri": "ring.png"}]
+    doc["textures"] = [{"source": 0}]
+    base = tmp_path / "base.glb"
+    write_glb(base, doc, binary)
+    return tmp_path, doc, binary, base
+
+
+LENS_EDITS = [
+    ("aperture_image", "triangle.png"),
+    ("aperture_image", 0),  # a texture no camera named: the session loads the file again
+    ("lens_prescription", "lenses/dgauss-50mm.dat"),
+    ("lens_prescription", lens_rows()),
+]
+
+
+def same_render(a, b):
+    assert np.array_equal(bits(a[0]), bits(b[0]))
+    assert a[1].keys() == b[1].keys()
+    for k in b[1]:
+        assert np.array_equal(bits(a[1][k]), bits(b[1][k])), k
+
+
+@pytest.mark.parametrize("key,value", LENS_EDITS, ids=lambda v: str(v)[:24])
+def test_lens_edit_equals_a_cold_load(lens_scene, key, value):
+    folder, doc, binary, base = lens_scene
+    scene = aperture.load(base)
+    before = scene.render(**OPTS)
+    scene.set_camera(**{key: value})
+    edited = copy.deepcopy(doc)
+    edited["cameras"][0]["extras"][key] = value
+    write_glb(folder / "edited.glb", edited, binary)
+    warm = scene.render(**OPTS)
+    cold = aperture.load(folder / "edited.glb").render(**OPTS)
+    same_render(warm, cold)
+    assert not np.array_equal(bits(before[0]), bits(warm[0]))
+    # None removes the key: the image as loaded again.
+    scene.set_camera(**{key: None})
+    same_render(scene.render(**OPTS), before)
+
+
+def test_bad_lens_edits_raise_and_change_nothing(lens_scene):
+    _, _, _, base = lens_scene
+    scene = aperture.load(base)
+    before = scene.render(**OPTS)
+    image = 'camera "Camera": cameras.extras.aperture_image'
+    lens = 'camera "Camera": cameras.extras.lens_prescription'
+    for value, match in [("missing.png", "missing.png"), ("black.png", "black"),
+                         ("../triangle.png", "triangle.png"), (7, r"textures\[7\]"),
+                         (-1, "texture index"), ("", "expected an image path")]:
+        with pytest.raises(ValueError, match=f"{image}.*{match}"):
+            scene.set_camera(aperture_image=value)
+    for value, match in [("nowhere.dat", "nowhere.dat"), ([[30, 4, 1.6]], "row 0"),
+                         ([[0, 4, 0, 12], [0, 4, 0, 12]], "stop")]:
+        with pytest.raises(ValueError, match=f"{lens}.*{match}"):
+            scene.set_camera(lens_prescription=value)
+    # Shapes Python cannot pass as JSON name the key.
+    for value in ([30, 4, 1.6, 20], [[30, 4, float("nan"), 20]], [["a", 4, 1.6, 20]], {"r": 1}):
+        with pytest.raises(ValueError, match="lens_prescription"):
+            scene.set_camera(lens_prescription=value)
+    same_render(scene.render(**OPTS), before)

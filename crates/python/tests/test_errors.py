@@ -171,8 +171,10 @@ def test_bad_edits(demo):
         scene.set_camera(fstop=float("nan"))
     with pytest.raises(ValueError):
         scene.set_camera(camera="nope", fstop=2)
-    with pytest.raises(ValueError, match="cannot set aperture_image"):
-        scene.set_camera(aperture_image="star.png")
+    with pytest.raises(ValueError, match="Camera.*aperture_image.*no-such-star.png"):
+        scene.set_camera(aperture_image="no-such-star.png")
+    with pytest.raises(ValueError, match="lens_prescription"):
+        scene.set_camera(lens_prescription=[[1.0, 2.0], 3.0])
     with pytest.raises(TypeError):
         scene.set_transform(1.5, np.eye(4))
     # After all that the scene still renders as loaded.

@@ -26,7 +26,7 @@ use glam::{DAffine3, DQuat, DVec3, Vec3};
 use crate::animation::{self, AnimationInfo, Animations, NodeProperty, Target};
 use crate::buffers::load_buffers;
 use crate::camera::{self, CameraData};
-use crate::edit::{apply_graph_edits, Edit};
+use crate::edit::{apply_graph_edits, apply_loaded_keys, Edit};
 use crate::error::Error;
 use crate::material::Materials;
 use crate::mesh::LoadedMesh;
@@ -133,7 +133,8 @@ impl Animated {
         Self::load_path(path, options, &[])
     }
 
-    /// [`Animated::load`] with node edits applied to the graph before anything is decoded.
+    /// [`Animated::load`] with node edits applied to the graph before anything is decoded, and
+    /// the camera keys read with the file set before they are read (`crate::edit::load_edit`).
     fn load_path(path: &Path, options: &LoadOptions, graph_edits: &[Edit]) -> Result<Self, Error> {
         let bytes = std::fs::read(path).map_err(|source| Error::Io {
             path: path.to_path_buf(),
@@ -186,7 +187,7 @@ impl Animated {
             first_stats(prepared.skipped, prepared.extensions, &doc, &root, options)?;
         let mut buffers = load_buffers(&doc, &root, bin, base_dir, &options.memory)?;
         crate::meshopt::decode_views(&root, &mut buffers)?;
-        let graph = apply_graph_edits(node_graph(&doc, &buffers)?, graph_edits)?;
+        let mut graph = apply_graph_edits(node_graph(&doc, &buffers)?, graph_edits)?;
         let order = drawn_order(&doc, options, &graph, &mut stats)?;
         stats.nodes = order.len();
 
@@ -218,7 +219,8 @@ impl Animated {
         )?;
         let environment = crate::ibl::scene_environment(&doc, &root, options, &buffers, base_dir)?;
         let skins = skin::read_skins(&doc, &buffers)?;
-        let cameras = camera::read_cameras(&doc)?;
+        let mut cameras = camera::read_cameras(&doc)?;
+        apply_loaded_keys(&mut cameras, &mut graph, graph_edits)?;
         let images = lens_images::load(&doc, &buffers, base_dir, &cameras, &graph, options)?;
         let animated = Animated {
             aperture_images: images,
@@ -249,8 +251,7 @@ impl Animated {
         };
         // The typed document and the kept JSON are done with: freed before posing, which
         // holds every node's world transform (for two million nodes, 0.5 GB less at the peak).
-        drop(doc);
-        drop(root);
+        drop((doc, root));
         animated.prepare()
     }
 

@@ -132,6 +132,21 @@ pub(crate) fn resolve(
     })
 }
 
+/// Checks camera keys as posing reads them from `cameras[i].extras` (`extras`: the keys to
+/// check): a bad value, or a lens file that cannot be read, is the error posing would give.
+pub(crate) fn check_extras(
+    camera: &str,
+    extras: &Value,
+    base_dir: &std::path::Path,
+) -> Result<(), Error> {
+    let ctx = Ctx {
+        camera,
+        prefix: PREFIXES[1],
+        base_dir,
+    };
+    parse_extras(Some(extras), &ctx).map(drop)
+}
+
 /// The highest source's `lens_prescription`, with the f-number of the source that decided the
 /// aperture when it gave `aperture_fstop` (its `aperture_radius` leaves the stop as written).
 fn prescription(layers: &[Layer; 4]) -> Option<std::sync::Arc<crate::types::LensPrescription>> {
@@ -166,14 +181,13 @@ fn lens_options(
             let ctx = Ctx {
                 camera,
                 prefix: PREFIXES[i],
-                // Only names the error: the images were read at load.
+                // Only names the error: the images were read at load or by an edit.
                 base_dir: std::path::Path::new(""),
             };
             ctx.err(
                 "aperture_image",
                 r,
-                "not loaded with the file: a bokeh image can only be set in the file or on the \
-                 command line",
+                "not loaded: a bokeh image is read with the file, or by the edit that sets it",
             )
         })?),
     };

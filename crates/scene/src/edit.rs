@@ -35,9 +35,11 @@ pub enum Edit {
         /// Its value: as many numbers as the property has.
         value: Vec<f64>,
     },
-    /// A depth-of-field key of SPEC §3 in `cameras[camera].extras`, any JSON value (`Null`
-    /// removes it). The key is also removed from the extras of the nodes carrying the camera,
-    /// which would otherwise take precedence over it.
+    /// A depth-of-field key of SPEC §3 or docs/lenses.md in `cameras[camera].extras`, any
+    /// JSON value (`Null` removes it). The key is also removed from the extras of the nodes
+    /// carrying the camera, which would otherwise take precedence over it. The value is
+    /// checked as posing reads it (a lens file read, a bokeh image read and decoded): a bad
+    /// one is refused and changes nothing.
     CameraKey {
         /// The glTF camera index.
         camera: usize,
@@ -61,7 +63,8 @@ pub enum Touched {
     Placements,
     /// What the loader decoded: the file must be loaded again with every edit so far
     /// ([`Animated::load_edited`]): visibility (hidden nodes' meshes are never decoded),
-    /// morph weights, and transforms of skin joints (static skins are posed at load).
+    /// morph weights, transforms of skin joints (static skins are posed at load), and a
+    /// bokeh image naming a texture whose image was not loaded with the file.
     Reload,
 }
 
@@ -71,6 +74,64 @@ pub(crate) fn graph_edit(e: &Edit) -> bool {
         Edit::NodeMatrix { .. } | Edit::NodeVisible { .. } => true,
         Edit::Pointer { path, .. } => path.starts_with("/nodes/"),
         Edit::CameraKey { .. } => false,
+    }
+}
+
+/// The key whose value is read with the file (the bokeh image), not when posing.
+pub(crate) const LOADED_KEY: &str = "aperture_image";
+
+/// Edits a reload applies while loading: the node edits ([`graph_edit`]) and the camera keys
+/// read with the file ([`LOADED_KEY`], by [`apply_loaded_keys`]).
+pub(crate) fn load_edit(e: &Edit) -> bool {
+    graph_edit(e) || matches!(e, Edit::CameraKey { key, .. } if key == LOADED_KEY)
+}
+
+/// Applies the [`LOADED_KEY`] edits of `edits` to freshly read cameras and their nodes, before
+/// the loader reads what they name.
+pub(crate) fn apply_loaded_keys(
+    cameras: &mut [crate::camera::CameraData],
+    graph: &mut NodeGraph,
+    edits: &[Edit],
+) -> Result<(), Error> {
+    for e in edits {
+        if let Edit::CameraKey { camera, key, value } = e {
+            if key != LOADED_KEY {
+                continue;
+            }
+            let count = cameras.len();
+            let data = cameras.get_mut(*camera).ok_or_else(|| Error::Invalid {
+                at: format!("cameras[{camera}]"),
+                reason: format!("no such camera (the file has {count})"),
+            })?;
+            set_extra(&mut data.extras, key, value.clone());
+            clear_node_key(graph, *camera, key);
+        }
+    }
+    Ok(())
+}
+
+/// Sets `key` of a JSON object (creating it), or removes it when `value` is `Null`.
+pub(crate) fn set_extra(extras: &mut Option<Value>, key: &str, value: Value) {
+    if !matches!(extras, Some(Value::Object(_))) {
+        *extras = Some(Value::Object(serde_json::Map::new()));
+    }
+    if let Some(Value::Object(map)) = extras {
+        match value {
+            Value::Null => map.remove(key),
+            v => map.insert(key.to_owned(), v),
+        };
+    }
+}
+
+/// Removes `key` from the extras of the nodes carrying camera `camera` (they take precedence
+/// over the camera's own, SPEC §3).
+pub(crate) fn clear_node_key(graph: &mut NodeGraph, camera: usize, key: &str) {
+    for node in &mut graph.nodes {
+        if node.camera == Some(camera) {
+            if let Some(Value::Object(map)) = &mut node.extras {
+                map.remove(key);
+            }
+        }
     }
 }
 

@@ -4,9 +4,11 @@
 use glam::Vec3;
 use serde_json::Value;
 
-use super::{Animated, LightData};
+use super::{lens_images, Animated, LightData};
 use crate::camera;
-use crate::edit::{graph_edit, with_component, Edit, Touched};
+use crate::edit::{
+    clear_node_key, load_edit, set_extra, with_component, Edit, Touched, LOADED_KEY,
+};
 use crate::error::Error;
 use crate::nodes::{finite, inherited, LocalTransform};
 use crate::pointer::{self, CameraProperty, LightProperty, NodeProperty, Pointer};
@@ -20,9 +22,9 @@ impl Animated {
         options: &crate::types::LoadOptions,
         edits: &[Edit],
     ) -> Result<Self, Error> {
-        let graph: Vec<Edit> = edits.iter().filter(|e| graph_edit(e)).cloned().collect();
-        let mut animated = Self::load_path(path, options, &graph)?;
-        for e in edits.iter().filter(|e| !graph_edit(e)) {
+        let at_load: Vec<Edit> = edits.iter().filter(|e| load_edit(e)).cloned().collect();
+        let mut animated = Self::load_path(path, options, &at_load)?;
+        for e in edits.iter().filter(|e| !load_edit(e)) {
             animated.edit(e)?;
         }
         Ok(animated)
@@ -43,20 +45,61 @@ impl Animated {
                 Ok(Touched::Reload)
             }
             Edit::Pointer { path, value } => self.edit_pointer(path, value),
-            Edit::CameraKey { camera, key, value } => {
-                let count = self.cameras.len();
-                let data = self
-                    .cameras
-                    .get_mut(*camera)
-                    .ok_or_else(|| Error::Invalid {
-                        at: format!("cameras[{camera}]"),
-                        reason: format!("no such camera (the file has {count})"),
-                    })?;
-                set_extra(&mut data.extras, key, value.clone());
-                self.clear_node_key(*camera, key);
-                Ok(Touched::Cameras)
-            }
+            Edit::CameraKey { camera, key, value } => self.edit_camera_key(*camera, key, value),
         }
+    }
+
+    /// Sets a depth-of-field key of camera `camera`, checked first as posing reads it: a bad
+    /// value, or a lens file or bokeh image that cannot be read, is an error that changes
+    /// nothing. A bokeh image is read now; one naming a texture not loaded with the file needs
+    /// the file loaded again ([`Touched::Reload`]).
+    fn edit_camera_key(
+        &mut self,
+        camera: usize,
+        key: &str,
+        value: &Value,
+    ) -> Result<Touched, Error> {
+        let count = self.cameras.len();
+        let data = self.cameras.get(camera).ok_or_else(|| Error::Invalid {
+            at: format!("cameras[{camera}]"),
+            reason: format!("no such camera (the file has {count})"),
+        })?;
+        if !value.is_null() {
+            let one = serde_json::json!({ key: value });
+            crate::dof::check_extras(&self.camera_name(camera), &one, &self.base_dir)?;
+        }
+        let mut extras = data.extras.clone();
+        set_extra(&mut extras, key, value.clone());
+        if key == LOADED_KEY {
+            let images = lens_images::edited(
+                &self.base_dir,
+                &self.cameras,
+                &self.graph,
+                &self.options,
+                &self.aperture_images,
+                (camera, extras.as_ref()),
+            )?;
+            let Some(images) = images else {
+                return Ok(Touched::Reload);
+            };
+            self.aperture_images = images;
+        }
+        self.cameras[camera].extras = extras;
+        clear_node_key(&mut self.graph, camera, key);
+        Ok(Touched::Cameras)
+    }
+
+    /// Camera `camera`'s name for messages, as posing names it: its own, its first node's, or
+    /// its index.
+    fn camera_name(&self, camera: usize) -> String {
+        let node = || {
+            let carries = |n: &usize| self.graph.nodes[*n].camera == Some(camera);
+            let first = (0..self.graph.nodes.len()).find(carries)?;
+            self.graph.names[first].clone()
+        };
+        (self.cameras.get(camera).and_then(|c| c.name.clone()))
+            .or_else(node)
+            .unwrap_or_else(|| format!("camera {camera}"))
     }
 
     /// Recomputes `what` of `scene` (posed from this document at `scene.stats.time`) after an
@@ -173,7 +216,7 @@ impl Animated {
             }
             Pointer::CameraExtra(i, key) => {
                 pointer::apply_camera_extra(&mut self.cameras[i].extras, key, v[0]);
-                self.clear_node_key(i, key);
+                clear_node_key(&mut self.graph, i, key);
                 Ok(Touched::Cameras)
             }
             Pointer::Light(i, prop) => {
@@ -200,31 +243,6 @@ impl Animated {
             "meshes": n(0),
             "extensions": {"KHR_lights_punctual": {"lights": n(self.lights.len())}},
         })
-    }
-
-    /// Removes `key` from the extras of the nodes carrying camera `camera` (they take
-    /// precedence over the camera's own, SPEC §3).
-    fn clear_node_key(&mut self, camera: usize, key: &str) {
-        for node in &mut self.graph.nodes {
-            if node.camera == Some(camera) {
-                if let Some(Value::Object(map)) = &mut node.extras {
-                    map.remove(key);
-                }
-            }
-        }
-    }
-}
-
-/// Sets `key` of a JSON object (creating it), or removes it when `value` is `Null`.
-fn set_extra(extras: &mut Option<Value>, key: &str, value: Value) {
-    if !matches!(extras, Some(Value::Object(_))) {
-        *extras = Some(Value::Object(serde_json::Map::new()));
-    }
-    if let Some(Value::Object(map)) = extras {
-        match value {
-            Value::Null => map.remove(key),
-            v => map.insert(key.to_owned(), v),
-        };
     }
 }
 

@@ -1,6 +1,7 @@
-//! The bokeh images (`aperture_image`) of a file's cameras, loaded once with the file: a path
+//! The bokeh images (`aperture_image`) of a file's cameras, loaded with the file: a path
 //! relative to the glTF file (as its images' URIs, never outside its folder), a texture index of
-//! the file, or a command-line path. Posing looks them up by reference; nothing is read then.
+//! the file, or a command-line path; and again after an edit of the key, which reads only the
+//! image it names (the others are kept). Posing looks them up by reference; nothing is read then.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -17,23 +18,26 @@ pub(crate) type ApertureImages = HashMap<ImageRef, Arc<ApertureImage>>;
 
 /// Where the file's images come from, for [`load_all`].
 pub(crate) struct Sources<'a> {
-    pub doc: &'a gltf::Document,
-    pub buffers: &'a crate::accessor::Buffers,
+    /// The document and its buffers, for a texture index: only while the file is loaded (an
+    /// edit naming a texture not loaded then loads the file again, [`needs_file`]).
+    pub file: Option<(&'a gltf::Document, &'a crate::accessor::Buffers)>,
     pub base_dir: &'a Path,
     /// Skip decoding (`info`): each image is a 1×1 white placeholder.
     pub skip: bool,
     pub budget: &'a aperture_budget::MemoryBudget,
 }
 
-/// Loads every image a camera's `extras`, its node's `extras` or the command line names.
-/// `cameras`: per glTF camera, its name for messages and its `extras`; `nodes`: per camera
-/// node, the camera's name and the node's `extras`. A bad value or an unreadable image is an
-/// error naming the camera, the key and the value.
+/// Every image a camera's `extras`, its node's `extras` or the command line names: taken from
+/// `kept` (the images loaded before) when there, else loaded. `cameras`: per glTF camera, its
+/// name for messages and its `extras`; `nodes`: per camera node, the camera's name and the
+/// node's `extras`. A bad value or an unreadable image is an error naming the camera, the key
+/// and the value.
 pub(crate) fn load_all(
     src: &Sources<'_>,
     cameras: &[(String, Option<&Value>)],
     nodes: &[(String, Option<&Value>)],
     command_line: Option<&Path>,
+    kept: &ApertureImages,
 ) -> Result<ApertureImages, Error> {
     let mut out = ApertureImages::new();
     let sources = [(cameras, "cameras.extras."), (nodes, "nodes.extras.")];
@@ -51,9 +55,13 @@ pub(crate) fn load_all(
                 .transpose()?
             {
                 if let std::collections::hash_map::Entry::Vacant(slot) = out.entry(r) {
-                    let image =
-                        load(src, slot.key()).map_err(|e| image_error(&ctx, slot.key(), e))?;
-                    slot.insert(Arc::new(image));
+                    let image = match kept.get(slot.key()) {
+                        Some(image) => Arc::clone(image),
+                        None => Arc::new(
+                            load(src, slot.key()).map_err(|e| image_error(&ctx, slot.key(), e))?,
+                        ),
+                    };
+                    slot.insert(image);
                 }
             }
         }
@@ -65,10 +73,30 @@ pub(crate) fn load_all(
             prefix: "command line ",
             base_dir: src.base_dir,
         };
-        let image = load(src, &r).map_err(|e| image_error(&ctx, &r, e))?;
-        out.insert(r, Arc::new(image));
+        let image = match kept.get(&r) {
+            Some(image) => Arc::clone(image),
+            None => Arc::new(load(src, &r).map_err(|e| image_error(&ctx, &r, e))?),
+        };
+        out.insert(r, image);
     }
     Ok(out)
+}
+
+/// True when an `aperture_image` value names a texture of the file that `kept` lacks: only a
+/// load of the file can read it (a path is read from the file's folder at any time).
+pub(crate) fn needs_file(value: &Value, kept: &ApertureImages) -> bool {
+    let texture = value.as_u64().and_then(|i| usize::try_from(i).ok());
+    texture.is_some_and(|i| !kept.contains_key(&ImageRef::Texture(i)))
+}
+
+/// What an edit setting an `aperture_image` to `value` keeps of `kept`: all but the image a
+/// path names, which the edit reads again (the file may have changed since it was read).
+pub(crate) fn kept_for_edit(value: &Value, kept: &ApertureImages) -> ApertureImages {
+    let mut out = kept.clone();
+    if let Value::String(path) = value {
+        out.remove(&ImageRef::Uri(path.clone()));
+    }
+    out
 }
 
 /// An image's error as the key's.
@@ -91,15 +119,16 @@ fn load(src: &Sources<'_>, r: &ImageRef) -> Result<ApertureImage, Error> {
             source,
         })?,
         ImageRef::Texture(i) => {
-            let tex = src.doc.textures().nth(*i).ok_or_else(|| Error::Invalid {
+            let (doc, buffers) = src.file.ok_or_else(|| Error::Invalid {
                 at: "aperture_image".into(),
-                reason: format!(
-                    "no textures[{i}] (the file has {})",
-                    src.doc.textures().len()
-                ),
+                reason: "a texture's image is read with the file: load the file again".into(),
+            })?;
+            let tex = doc.textures().nth(*i).ok_or_else(|| Error::Invalid {
+                at: "aperture_image".into(),
+                reason: format!("no textures[{i}] (the file has {})", doc.textures().len()),
             })?;
             let image = tex.source().index();
-            crate::texels::image_bytes(src.doc, src.buffers, src.base_dir, image)?.into_owned()
+            crate::texels::image_bytes(doc, buffers, src.base_dir, image)?.into_owned()
         }
     };
     if src.skip {
