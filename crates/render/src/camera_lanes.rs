@@ -1,10 +1,11 @@
 //! The camera rays of [`LANES`] samples at once, lane by lane, for the usual camera: a thin lens
 //! (perspective) with a pinhole or round aperture, the round one clipped by the lens barrel
-//! (optical vignetting) or not. Each lane does the IEEE operations of
+//! (optical vignetting) or shaped by a bokeh image or neither. Each lane does the IEEE operations of
 //! [`Camera::generate_ray`] in the same order (no fused multiply-add, no reassociation), so its
 //! ray has the same bits; on `Vec4`s, whose operations are SIMD instructions.
 
 use crate::camera::{Aperture, Camera};
+use crate::lens::BokehRef;
 use aperture_shading::warp::concentric_disc_lanes;
 use aperture_shading::warp_lens::disc_in_disc;
 use glam::{Affine3A, Vec2, Vec4};
@@ -34,21 +35,25 @@ pub(crate) struct LensLanes {
     disc: Option<(f32, f32)>,
     /// The lens barrel's offset per unit of screen position (`Lens::barrel_shift`); 0: none.
     barrel_shift: f32,
+    /// The bokeh image (`Lens::bokeh`), sampled lane by lane.
+    bokeh: Option<BokehRef>,
     world_from_camera: Affine3A,
 }
 
 impl LensLanes {
     /// The lanes of `camera`, or `None` for the cameras they do not cover (orthographic, a
-    /// polygonal aperture, a lens with distortion, a bokeh image or chromatic aberration, a
-    /// lens prescription), which make their rays one at a time.
+    /// polygonal aperture, a lens with distortion or chromatic aberration, a lens
+    /// prescription), which make their rays one at a time.
     ///
-    /// Vignetting's clipped disc (issue 61) is solved lane by lane in scalar code (a
-    /// data-dependent number of Halley steps), the rest of the ray in the lanes. Distortion's
-    /// inverse iterates too, before the screen point the lanes start from: no lanes for it.
+    /// Vignetting's clipped disc and the bokeh image's point (issue 61) are found lane by lane
+    /// in scalar code (Halley steps, rejection: a data-dependent amount of work), the rest of
+    /// the ray in the lanes. Distortion's inverse iterates too, before the screen point the
+    /// lanes start from: no lanes for it.
     pub fn new(camera: &Camera) -> Option<Self> {
-        let barrel_shift = camera.lens.barrel_shift;
+        let (barrel_shift, bokeh) = (camera.lens.barrel_shift, camera.lens.bokeh);
         let others = crate::lens::Lens {
             barrel_shift: 0.0,
+            bokeh: None,
             ..camera.lens
         };
         if !others.is_ideal() || camera.realistic.is_some() {
@@ -67,6 +72,7 @@ impl LensLanes {
             focus_distance: camera.focus_distance,
             disc,
             barrel_shift,
+            bokeh,
             world_from_camera: camera.world_from_camera,
         })
     }
@@ -84,9 +90,9 @@ impl LensLanes {
         let (lens_x, lens_y, dir) = match self.disc {
             None => (Vec4::ZERO, Vec4::ZERO, [ps_x, ps_y, Vec4::splat(-1.0)]),
             Some((radius, ratio)) => {
-                let (dx, dy) = match self.barrel_shift > 0.0 {
+                let (dx, dy) = match self.barrel_shift > 0.0 || self.bokeh.is_some() {
                     false => concentric_disc_lanes(lens.map(Vec4::from_array)),
-                    true => self.clipped_discs((ps_x, ps_y), lens),
+                    true => self.lens_points((ps_x, ps_y), lens),
                 };
                 let (lx, ly) = (dx * radius / ratio, dy * radius);
                 let f = self.focus_distance;
@@ -123,17 +129,23 @@ impl LensLanes {
 }
 
 impl LensLanes {
-    /// Each lane's point of the unit disc clipped by the lens barrel around
-    /// `−barrel_shift · ps` (`Aperture::sample_clipped` of a disc, before its radius). Out of
-    /// line, so the plain disc's lanes stay as lean as they were.
+    /// Each lane's lens point in aperture radii, before the squeeze (`Camera::lens_point`
+    /// before its radius): the bokeh image's, or the unit disc's clipped by the lens barrel
+    /// around `−barrel_shift · ps`. Out of line, so the plain disc's lanes stay as lean as they
+    /// were.
     #[inline(never)]
-    fn clipped_discs(&self, (ps_x, ps_y): (Vec4, Vec4), lens: [[f32; LANES]; 2]) -> (Vec4, Vec4) {
+    fn lens_points(&self, (ps_x, ps_y): (Vec4, Vec4), lens: [[f32; LANES]; 2]) -> (Vec4, Vec4) {
         let (px, py) = (ps_x.to_array(), ps_y.to_array());
         let (mut dx, mut dy) = ([0.0; LANES], [0.0; LANES]);
         for l in 0..LANES {
-            let c = -Vec2::new(px[l], py[l]) * self.barrel_shift;
+            let ps = Vec2::new(px[l], py[l]);
+            let barrel = (self.barrel_shift > 0.0).then(|| -ps * self.barrel_shift);
             let u = Vec2::new(lens[0][l], lens[1][l]);
-            let d = disc_in_disc(u, c, 1.0).unwrap_or(0.5 * c);
+            let d = match (self.bokeh, barrel) {
+                (Some(b), barrel) => b.sample(u, barrel),
+                (None, Some(c)) => disc_in_disc(u, c, 1.0).unwrap_or(0.5 * c),
+                (None, None) => aperture_shading::warp::concentric_disc(u),
+            };
             (dx[l], dy[l]) = (d.x, d.y);
         }
         (Vec4::from_array(dx), Vec4::from_array(dy))
@@ -157,11 +169,17 @@ mod tests {
     use glam::{Vec2, Vec3};
 
     fn camera(radius: f32, ratio: f32) -> Camera {
+        camera_with(radius, ratio, aperture_scene::LensOptions::default())
+    }
+
+    /// A round-aperture camera with lens options `lens`.
+    fn camera_with(radius: f32, ratio: f32, lens: aperture_scene::LensOptions) -> Camera {
         let mut sc = crate::camera::test_scene_camera(Dof {
             enabled: true,
             aperture_radius: radius,
             focus_distance: 4.0,
             ratio,
+            lens_options: lens,
             ..Dof::default()
         });
         // Tilted as well, so that every matrix entry takes part.
@@ -195,12 +213,33 @@ mod tests {
             cam.lens.barrel_shift = shift;
             cam
         };
+        // A bokeh image: a ring brighter on one side, 16×16.
+        let ring: Vec<f32> = (0..256)
+            .map(|i| {
+                let (x, y) = ((i % 16) as f32 - 7.5, (i / 16) as f32 - 7.5);
+                let r = (x * x + y * y).sqrt();
+                if (4.0..7.5).contains(&r) {
+                    0.3 + 0.7 * (x + 8.0) / 16.0
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let image = aperture_scene::ApertureImage::new("ring".into(), 16, 16, ring);
+        let bokeh = aperture_scene::LensOptions {
+            aperture_image: Some(std::sync::Arc::new(image.expect("an image"))),
+            ..Default::default()
+        };
+        let imaged = camera_with(0.2, 1.3, bokeh.clone());
+        assert!(imaged.lens.bokeh.is_some());
         for cam in [
             camera(0.0, 1.0),
             camera(0.1, 1.0),
             camera(0.3, 1.7),
             vignetted(camera(0.1, 1.0), 0.7),
             vignetted(camera(0.3, 1.7), 1.6),
+            imaged,
+            vignetted(camera_with(0.2, 1.0, bokeh), 0.9),
         ] {
             let lanes_of = LensLanes::new(&cam).unwrap();
             for _ in 0..400 {
