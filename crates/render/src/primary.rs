@@ -187,7 +187,7 @@ impl<'a> PrimarySamples<'a> {
                 if rays.made[l] {
                     let origin = Vec3::new(o[0][l], o[1][l], o[2][l]);
                     let time = self.time_of(&stream, film[1][l]);
-                    // The lanes make an ideal lens's rays: no channel.
+                    // The lanes never take a lens with chromatic aberration: no channel.
                     starts.push(CameraStart {
                         origin,
                         dir: Vec3::new(d[0][l], d[1][l], d[2][l]),

@@ -123,8 +123,7 @@ pub(crate) fn render_in(
         });
     }
     let scene = posed.scene;
-    let mut integrator = integrator(geometry(scene, opts), posed.accel, posed.lights, opts);
-    integrator.chromatic = camera.lens.chromatic.is_some();
+    let integrator = integrator(geometry(scene, opts), posed.accel, posed.lights, opts);
     let filter = Filter::new(opts.filter);
     let job = Job {
         integrator: &integrator,

@@ -62,9 +62,6 @@ pub(crate) struct Integrator<'a> {
     /// Per mesh, its vertices over the shutter when it deforms within it (empty: none does):
     /// a surface found on it is the triangle at the ray's time.
     pub deforming: &'a [Option<aperture_accel::VertexMotion>],
-    /// The camera has chromatic aberration: each path carries the one colour channel its
-    /// camera ray was made for ([`Integrator::channel_weight`]).
-    pub chromatic: bool,
 }
 
 impl Integrator<'_> {
@@ -79,7 +76,6 @@ impl Integrator<'_> {
         stream: &SampleStream,
     ) -> (Vec3, bool, SampleAov) {
         let mut p = self.start_path::<AOV>(origin, dir, false);
-        self.choose_channel(&mut p, self.channel_of_stream(stream));
         while let Some(ray) = p.ray() {
             let hit = self.accel.intersect(&ray);
             self.advance(&mut p, stream, hit);
@@ -152,16 +148,6 @@ impl Integrator<'_> {
         p.w = Walk::start(origin, dir);
         p.covered = false;
         p.live = true;
-    }
-
-    /// The channel a path of a camera with chromatic aberration carries, for its stream: the
-    /// one its camera ray was made for ([`crate::lens::channel_of`] of its wavelength
-    /// dimension). `None` without chromatic aberration. The render's paths get it from their
-    /// [`wavefront::CameraStart`], drawn once by the camera.
-    #[cfg(test)]
-    pub(crate) fn channel_of_stream(&self, stream: &SampleStream) -> Option<u8> {
-        self.chromatic
-            .then(|| crate::lens::channel_of(stream.wavelength(0)).0 as u8)
     }
 
     /// The weight that keeps a path of channel `c`'s estimate unbiased: 3 on that channel, 0

@@ -155,7 +155,6 @@ pub(crate) fn integrator<'a>(
         pick_light: false,
         moving: opts.motion.as_deref().map_or(&[], |m| &m.instances),
         deforming: opts.motion.as_deref().map_or(&[], |m| &m.meshes),
-        chromatic: false,
     };
     integrator.pick_light = integrator.light_tree.is_some() || integrator.candidates().choose();
     integrator
