@@ -12,8 +12,10 @@ use gltf::accessor::{DataType, Dimensions};
 use crate::error::Error;
 
 /// Bytes of every buffer, each cut to its `byteLength`.
-pub(crate) struct Buffers {
-    pub data: Vec<Vec<u8>>,
+pub(crate) struct Buffers<'f> {
+    /// Per buffer, its bytes: the GLB BIN chunk borrowed from the file's bytes (not copied),
+    /// others owned.
+    pub data: Vec<std::borrow::Cow<'f, [u8]>>,
     /// Sum of all buffer lengths: the budget for accessors with no bytes behind them.
     pub total: u64,
     /// Bytes of meshopt-compressed buffer views, decoded, by view index: read instead of
@@ -26,7 +28,7 @@ pub(crate) struct Buffers {
     pub budget: aperture_budget::MemoryBudget,
 }
 
-impl Buffers {
+impl Buffers<'_> {
     /// Counts `bytes` more of decoded data read at `at`, refusing them past the budget.
     pub(crate) fn charge(&self, at: &str, bytes: u64) -> Result<(), Error> {
         use std::sync::atomic::Ordering;
@@ -61,7 +63,7 @@ fn dimension_count(d: Dimensions) -> usize {
 /// The bytes of a buffer view, checked against its buffer (decoded, for a compressed view).
 pub(crate) fn view_bytes<'a>(
     view: &gltf::buffer::View<'_>,
-    buffers: &'a Buffers,
+    buffers: &'a Buffers<'a>,
 ) -> Result<&'a [u8], Error> {
     if let Some(bytes) = buffers.decoded.get(&view.index()) {
         return Ok(bytes);
@@ -326,7 +328,7 @@ fn apply_sparse<T>(
 /// The bytes of a sparse accessor's indices or values view, checked to hold `needed` bytes.
 fn sparse_bytes<'a>(
     view: &gltf::buffer::View<'_>,
-    buffers: &'a Buffers,
+    buffers: &'a Buffers<'a>,
     needed: u64,
     at: impl FnOnce() -> String,
 ) -> Result<&'a [u8], Error> {
@@ -450,7 +452,7 @@ mod tests {
         bytes: &[u8],
         stride: Option<u64>,
         accessors: serde_json::Value,
-    ) -> (gltf::Document, Buffers) {
+    ) -> (gltf::Document, Buffers<'static>) {
         let mut view = json!({"buffer": 0, "byteLength": bytes.len()});
         if let Some(s) = stride {
             view["byteStride"] = json!(s);
@@ -463,7 +465,7 @@ mod tests {
             "accessors": accessors,
         });
         let p = crate::prepass::prepare(&serde_json::to_vec(&j).unwrap()).unwrap();
-        let data = vec![bytes.to_vec()];
+        let data = vec![bytes.to_vec().into()];
         (
             p.document,
             Buffers {

@@ -127,6 +127,16 @@ struct Pose {
     pointers: Vec<(Pointer, Vec<f64>)>,
 }
 
+/// Runs a step of the loader. The parsing crates keep overflow checks in release builds
+/// (Cargo.toml): a size from a hostile header that wraps, or any other panic of the loader, is
+/// an error here.
+fn guard(step: impl FnOnce() -> Result<Animated, Error>) -> Result<Animated, Error> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(step)).unwrap_or_else(|panic| {
+        let message = crate::error::panic_message(&*panic);
+        Err(Error::Panicked { message })
+    })
+}
+
 impl Animated {
     /// Loads and decodes a `.gltf` or `.glb` file once.
     pub fn load(path: &Path, options: &LoadOptions) -> Result<Self, Error> {
@@ -151,29 +161,19 @@ impl Animated {
             // A .glb without the magic is a damaged container, not JSON: say so.
             glb::parse(&bytes)?;
         }
-        Self::guarded(&bytes, base_dir, options, graph_edits)
+        let read = guard(|| Self::unguarded(&bytes, base_dir, options, graph_edits))?;
+        // Everything is decoded: the file's bytes go before the static shapes are built
+        // (for a big scene, as many bytes again as its meshes; issue 59).
+        drop(bytes);
+        guard(|| read.prepare())
     }
 
     /// Loads from the bytes of a `.gltf` or `.glb` file; external URIs resolve inside `base_dir`.
     pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Result<Self, Error> {
-        Self::guarded(bytes, base_dir, options, &[])
+        guard(|| Self::unguarded(bytes, base_dir, options, &[])?.prepare())
     }
 
-    fn guarded(
-        bytes: &[u8],
-        base_dir: &Path,
-        options: &LoadOptions,
-        graph_edits: &[Edit],
-    ) -> Result<Self, Error> {
-        // The parsing crates keep overflow checks in release builds (Cargo.toml): a size from
-        // a hostile header that wraps, or any other panic of the loader, is an error here.
-        let load = || Self::unguarded(bytes, base_dir, options, graph_edits);
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(load)).unwrap_or_else(|panic| {
-            let message = crate::error::panic_message(&*panic);
-            Err(Error::Panicked { message })
-        })
-    }
-
+    /// Reads and decodes the file: an [`Animated`] not yet prepared ([`Animated::prepare`]).
     fn unguarded(
         bytes: &[u8],
         base_dir: &Path,
@@ -249,13 +249,12 @@ impl Animated {
             source_hash: crate::hash::content_hash(bytes),
             base_dir: base_dir.to_path_buf(),
         };
-        // The typed document and the kept JSON are done with: freed before posing, which
-        // holds every node's world transform (for two million nodes, 0.5 GB less at the peak).
-        drop((doc, root));
-        animated.prepare()
+        // Done with: freed before posing (with two million nodes, 0.5 GB less at the peak).
+        drop((doc, root, buffers));
+        Ok(animated)
     }
 
-    /// What loading does once the document is read: classifies the meshes (building the
+    /// What loading does once the document is read and its buffers are freed: classifies the meshes (building the
     /// static ones), then frames the automatic camera on the stored pose.
     fn prepare(mut self) -> Result<Self, Error> {
         self.classify()?;

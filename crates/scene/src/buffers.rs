@@ -1,6 +1,7 @@
 //! Every buffer of a file read into memory: the GLB BIN chunk, `data:` URIs or files beside the
 //! scene.
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -11,29 +12,28 @@ use crate::error::Error;
 use crate::uri;
 
 /// Reads every buffer: the GLB BIN chunk, `data:` URIs or files beside the scene.
-pub(crate) fn load_buffers(
+pub(crate) fn load_buffers<'f>(
     doc: &gltf::Document,
     root: &Value,
-    bin: Option<&[u8]>,
+    bin: Option<&'f [u8]>,
     base_dir: &Path,
     budget: &aperture_budget::MemoryBudget,
-) -> Result<Buffers, Error> {
+) -> Result<Buffers<'f>, Error> {
     let mut data = Vec::with_capacity(doc.buffers().len());
     for b in doc.buffers() {
         let at = format!("buffers[{}]", b.index());
         if crate::meshopt::is_fallback(root, b.index()) {
             // The meshopt extension's placeholder: no bytes; its views are decoded instead.
-            data.push(Vec::new());
+            data.push(Cow::Borrowed(&[][..]));
             continue;
         }
-        let mut bytes = match b.source() {
-            gltf::buffer::Source::Bin => bin
-                .ok_or_else(|| Error::Invalid {
-                    at: at.clone(),
-                    reason: "refers to the GLB BIN chunk, which is missing".into(),
-                })?
-                .to_vec(),
-            gltf::buffer::Source::Uri(u) => uri::load(base_dir, u, &format!("{at}.uri"))?,
+        let bytes: Cow<'f, [u8]> = match b.source() {
+            // Borrowed: a copy of the chunk was the load's largest temporary (issue 59).
+            gltf::buffer::Source::Bin => Cow::Borrowed(bin.ok_or_else(|| Error::Invalid {
+                at: at.clone(),
+                reason: "refers to the GLB BIN chunk, which is missing".into(),
+            })?),
+            gltf::buffer::Source::Uri(u) => uri::load(base_dir, u, &format!("{at}.uri"))?.into(),
         };
         let claimed = b.length() as u64;
         if (bytes.len() as u64) < claimed {
@@ -44,8 +44,13 @@ pub(crate) fn load_buffers(
             });
         }
         // Padding past byteLength is not part of the buffer.
-        bytes.truncate(b.length());
-        data.push(bytes);
+        data.push(match bytes {
+            Cow::Borrowed(s) => Cow::Borrowed(&s[..b.length()]),
+            Cow::Owned(mut v) => {
+                v.truncate(b.length());
+                Cow::Owned(v)
+            }
+        });
     }
     let total = data.iter().map(|d| d.len() as u64).sum();
     Ok(Buffers {

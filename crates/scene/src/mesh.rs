@@ -126,6 +126,14 @@ pub(crate) fn variant_material(prim: &gltf::Primitive<'_>, variant: usize) -> Op
     })
 }
 
+/// True for the primitive modes that draw no triangles (points and lines), which are skipped.
+pub(crate) fn is_not_triangles(mode: Mode) -> bool {
+    matches!(
+        mode,
+        Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip
+    )
+}
+
 /// Reads a glTF mesh: triangle primitives merged, points and lines skipped with a warning.
 /// `material_of` maps a primitive's material index (None = the default material) to ours;
 /// `variant` selects `KHR_materials_variants` mappings (the default material where a primitive
@@ -141,10 +149,7 @@ pub(crate) fn load_mesh(
     let mut parts = Vec::new();
     for prim in mesh.primitives() {
         let at = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
-        if matches!(
-            prim.mode(),
-            Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip
-        ) {
+        if is_not_triangles(prim.mode()) {
             stats.skipped_primitives += 1;
             stats.warnings.push(format!(
                 "{at}: {:?} primitive skipped (not triangles)",
@@ -161,6 +166,17 @@ pub(crate) fn load_mesh(
         stats.primitives += 1;
     }
     merge_parts(mesh, parts)
+}
+
+/// `src` appended to `dst`, which ends up holding `total` values: the first part's vector is
+/// taken over, not copied (a mesh of one primitive is never held twice).
+fn append<T>(dst: &mut Vec<T>, src: Vec<T>, total: usize) {
+    if dst.is_empty() {
+        *dst = src;
+        dst.reserve_exact(total.saturating_sub(dst.len()));
+    } else {
+        dst.extend(src);
+    }
 }
 
 /// The primitives of `mesh` merged into one mesh: attributes any primitive has are filled
@@ -193,9 +209,6 @@ fn merge_parts(mesh: &gltf::Mesh<'_>, parts: Vec<Part>) -> Result<LoadedMesh, Er
     let influences = merge_influences(&parts);
     let mut m = Mesh {
         name: mesh.name().map(str::to_owned),
-        positions: Vec::with_capacity(vertices),
-        normals: Vec::with_capacity(vertices),
-        indices: Vec::with_capacity(triangles),
         material_ids: Vec::with_capacity(triangles),
         uv_more: vec![Vec::new(); more_sets],
         ..Mesh::default()
@@ -211,8 +224,8 @@ fn merge_parts(mesh: &gltf::Mesh<'_>, parts: Vec<Part>) -> Result<LoadedMesh, Er
         if p.flat {
             flat.push(base..base + count as u32);
         }
-        m.positions.extend(p.positions);
-        m.normals.extend(p.normals);
+        append(&mut m.positions, p.positions, vertices);
+        append(&mut m.normals, p.normals, vertices);
         fill(&mut m.tangents, has_t, p.tangents, count, Vec4::ZERO);
         fill(&mut m.uv0, has_uv0, p.uv0, count, Vec2::ZERO);
         fill(&mut m.uv1, has_uv1, p.uv1, count, Vec2::ZERO);
@@ -222,10 +235,14 @@ fn merge_parts(mesh: &gltf::Mesh<'_>, parts: Vec<Part>) -> Result<LoadedMesh, Er
             fill(dst, *has, src, count, Vec2::ZERO);
         }
         fill(&mut m.colors, has_c, p.colors, count, Vec4::ONE);
-        m.indices
-            .extend(p.triangles.iter().map(|t| t.map(|i| i + base)));
-        m.material_ids
-            .extend(std::iter::repeat_n(p.material, p.triangles.len()));
+        let n = p.triangles.len();
+        if base == 0 {
+            append(&mut m.indices, p.triangles, triangles);
+        } else {
+            m.indices
+                .extend(p.triangles.iter().map(|t| t.map(|i| i + base)));
+        }
+        m.material_ids.extend(std::iter::repeat_n(p.material, n));
     }
     Ok(LoadedMesh {
         mesh: m,

@@ -11,7 +11,7 @@ use crate::error::Error;
 use crate::material::Materials;
 use crate::mesh::{self, LoadedMesh};
 use crate::types::{Material, Scene, SceneStats};
-use gltf::mesh::Mode;
+use rayon::prelude::*;
 
 /// What a primitive's geometry is read from: its mode, indices accessor and attribute
 /// accessors by name (sorted).
@@ -31,10 +31,7 @@ pub(crate) struct ReadMeshes {
 fn geometry_key(mesh: &gltf::Mesh<'_>) -> Option<Vec<PrimitiveKey>> {
     mesh.primitives()
         .map(|p| {
-            let not_triangles = matches!(
-                p.mode(),
-                Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip
-            );
+            let not_triangles = mesh::is_not_triangles(p.mode());
             let deforms = p.morph_targets().next().is_some()
                 || p.attributes()
                     .any(|(s, _)| s.to_string().starts_with("JOINTS"));
@@ -74,9 +71,17 @@ pub(crate) fn read_shown(
     Ok(read)
 }
 
+/// A mesh [`read_meshes`] decodes: its glTF index, and our material of each of its triangle
+/// primitives, in order (resolved before decoding, in the order a one-by-one read asks).
+struct ToRead<'d> {
+    mesh: gltf::Mesh<'d>,
+    materials: Vec<u32>,
+}
+
 /// Every mesh the nodes in `order` use, read once each (by glTF mesh index), its materials
 /// gathered into `materials`; a mesh with the geometry key of one read before is an alias of
-/// it (when its materials need the same tangents).
+/// it (when its materials need the same tangents). The meshes are decoded in parallel (issue
+/// 59); materials are numbered, and errors and warnings reported, as a read in `order` does.
 fn read_meshes(
     doc: &gltf::Document,
     order: &[usize],
@@ -89,31 +94,69 @@ fn read_meshes(
         meshes: HashMap::new(),
         aliases: HashMap::new(),
     };
+    // Which meshes to decode, and which may alias one of them (with their own materials).
     let mut by_key: HashMap<Vec<PrimitiveKey>, usize> = HashMap::new();
+    let mut seen = std::collections::HashSet::new();
+    let mut to_read: Vec<ToRead<'_>> = Vec::new();
+    let mut alias_candidates: Vec<(gltf::Mesh<'_>, usize, Vec<u32>)> = Vec::new();
     for &ni in order {
         let Some(m) = doc.nodes().nth(ni).and_then(|n| n.mesh()) else {
             continue;
         };
-        let mi = m.index();
-        if out.meshes.contains_key(&mi) || out.aliases.contains_key(&mi) {
+        if !seen.insert(m.index()) {
             continue;
         }
         let key = geometry_key(&m);
         if let Some(&canon) = key.as_ref().and_then(|k| by_key.get(k)) {
             let own = primitive_materials(doc, &m, variant, materials);
-            if let Some(set) = alias_materials(&out.meshes[&canon], &own, materials) {
-                stats.primitives += own.len();
-                out.aliases.insert(mi, (canon, set));
-                continue;
-            }
+            alias_candidates.push((m, canon, own));
+            continue;
+        }
+        if let Some(k) = key {
+            by_key.insert(k, m.index());
+        }
+        let own = m
+            .primitives()
+            .filter(|p| !mesh::is_not_triangles(p.mode()))
+            .map(|p| {
+                let index = variant
+                    .and_then(|v| mesh::variant_material(&p, v))
+                    .or(p.material().index());
+                materials.get(doc, index)
+            })
+            .collect();
+        to_read.push(ToRead {
+            mesh: m,
+            materials: own,
+        });
+    }
+    let read: Vec<(Result<LoadedMesh, Error>, SceneStats)> = to_read
+        .par_iter()
+        .map(|r| {
+            let mut local = SceneStats::default();
+            let mut next = r.materials.iter().copied();
+            let mut material_of = |_: Option<usize>| next.next().unwrap_or(0);
+            let loaded =
+                mesh::load_mesh(doc, &r.mesh, buffers, &mut local, variant, &mut material_of);
+            (loaded, local)
+        })
+        .collect();
+    for (r, (loaded, local)) in to_read.iter().zip(read) {
+        stats.primitives += local.primitives;
+        stats.skipped_primitives += local.skipped_primitives;
+        stats.warnings.extend(local.warnings);
+        out.meshes.insert(r.mesh.index(), loaded?);
+    }
+    for (m, canon, own) in alias_candidates {
+        if let Some(set) = alias_materials(&out.meshes[&canon], &own, materials) {
+            stats.primitives += own.len();
+            out.aliases.insert(m.index(), (canon, set));
+            continue;
         }
         let loaded = mesh::load_mesh(doc, &m, buffers, stats, variant, &mut |i| {
             materials.get(doc, i)
         })?;
-        if let Some(k) = key {
-            by_key.entry(k).or_insert(mi);
-        }
-        out.meshes.insert(mi, loaded);
+        out.meshes.insert(m.index(), loaded);
     }
     Ok(out)
 }

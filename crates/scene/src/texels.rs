@@ -223,7 +223,7 @@ fn decode_unguarded(bytes: &[u8], image: usize, h: Header) -> Result<(u32, u32, 
 /// The bytes of image `index`: its file, data URI or buffer view.
 pub(crate) fn image_bytes<'a>(
     doc: &gltf::Document,
-    buffers: &'a Buffers,
+    buffers: &'a Buffers<'a>,
     base_dir: &Path,
     index: usize,
 ) -> Result<std::borrow::Cow<'a, [u8]>, Error> {

@@ -55,7 +55,7 @@ pub(super) fn edited(
 }
 
 fn sources<'a>(
-    file: Option<(&'a gltf::Document, &'a crate::accessor::Buffers)>,
+    file: Option<(&'a gltf::Document, &'a crate::accessor::Buffers<'a>)>,
     base_dir: &'a std::path::Path,
     options: &'a LoadOptions,
 ) -> Sources<'a> {

@@ -20,7 +20,7 @@ pub(crate) type ApertureImages = HashMap<ImageRef, Arc<ApertureImage>>;
 pub(crate) struct Sources<'a> {
     /// The document and its buffers, for a texture index: only while the file is loaded (an
     /// edit naming a texture not loaded then loads the file again, [`needs_file`]).
-    pub file: Option<(&'a gltf::Document, &'a crate::accessor::Buffers)>,
+    pub file: Option<(&'a gltf::Document, &'a crate::accessor::Buffers<'a>)>,
     pub base_dir: &'a Path,
     /// Skip decoding (`info`): each image is a 1×1 white placeholder.
     pub skip: bool,

@@ -38,7 +38,7 @@ pub(crate) struct Part {
 /// compresses.
 struct Source<'a, 'b> {
     prim: &'a gltf::Primitive<'b>,
-    buffers: &'a Buffers,
+    buffers: &'a Buffers<'a>,
     draco: Option<Decoded>,
 }
 
