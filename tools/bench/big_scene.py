@@ -4,7 +4,11 @@ in a square, every triangle with vertices of its own (positions and normals, no 
 shared: the worst case for memory), under a sun, seen by a thin-lens camera (f/2.8, focused
 on the middle) whose depth-of-field keys sit in its extras as Blender writes them.
 
-    python3 tools/bench/big_scene.py TRIANGLES OUT.glb [MESHES]
+    python3 tools/bench/big_scene.py TRIANGLES OUT.glb [MESHES] [--interleaved]
+
+--interleaved: the same square and triangles, but mesh m holds every MESHES-th row of one
+big grid (rows m, m + MESHES, ...), so every mesh's box spans the whole square: the worst case
+for a tree over the meshes' boxes (issue 59's joined builds).
 
 Standard library only; deterministic bytes for a given argument list."""
 
@@ -15,8 +19,9 @@ import sys
 from array import array
 
 
-def grid(cells, x0, z0, size, seed):
-    """Positions and normals of a displaced grid of cells x cells quads, 6 vertices a quad."""
+def grid(cells, x0, z0, size, seed, rows=None, width=None):
+    """Positions and normals of a displaced grid of cells x cells quads, 6 vertices a quad
+    (only rows `rows` of a grid `width` cells wide, when given)."""
     def height(i, j):
         x, z = i / cells, j / cells
         return 0.08 * size * (math.sin(7.0 * x + seed) * math.cos(5.0 * z + 0.7 * seed)
@@ -24,8 +29,8 @@ def grid(cells, x0, z0, size, seed):
 
     pos, nrm = array("f"), array("f")
     step = size / cells
-    for j in range(cells):
-        for i in range(cells):
+    for j in (range(cells) if rows is None else rows):
+        for i in range(cells if width is None else width):
             corners = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)]
             p = [(x0 + a * step, height(a, b), z0 + b * step) for a, b in corners]
             for tri in ((0, 2, 1), (0, 3, 2)):
@@ -44,8 +49,10 @@ def grid(cells, x0, z0, size, seed):
 def main():
     if len(sys.argv) < 3:
         sys.exit(__doc__)
-    triangles, out = int(sys.argv[1]), sys.argv[2]
-    meshes = int(sys.argv[3]) if len(sys.argv) > 3 else 64
+    interleaved = "--interleaved" in sys.argv
+    args = [a for a in sys.argv[1:] if a != "--interleaved"]
+    triangles, out = int(args[0]), args[1]
+    meshes = int(args[2]) if len(args) > 2 else 64
     side = math.ceil(math.sqrt(meshes))
     cells = max(1, round(math.sqrt(triangles / meshes / 2)))
     size = 2.0
@@ -54,7 +61,12 @@ def main():
     for m in range(meshes):
         gx, gz = m % side, m // side
         x0, z0 = (gx - side / 2) * size, -(gz + 1) * size
-        pos, nrm = grid(cells, x0, z0, size, m * 0.37)
+        if interleaved:
+            # One grid of side x side tiles' cells; this mesh's rows of it.
+            n = side * cells
+            pos, nrm = grid(n, -side / 2 * size, -side * size, side * size, 0.0, range(m, n, meshes), n)
+        else:
+            pos, nrm = grid(cells, x0, z0, size, m * 0.37)
         count = len(pos) // 3
         lo = [min(pos[k::3]) for k in range(3)]
         hi = [max(pos[k::3]) for k in range(3)]

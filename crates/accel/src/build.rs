@@ -2,8 +2,10 @@
 //! meshes drawn once, a top-level BVH over them, and, for animation, reusing the bottom-level
 //! BVHs of meshes that did not change since the previous frame.
 
+mod bounds;
 mod check;
 mod counts;
+mod join;
 mod placement;
 mod tree;
 
@@ -15,37 +17,15 @@ use crate::structure::{Accel, Blas, Entry, FLATTENED, NO_MOTION};
 use crate::triangle::Tri;
 use crate::types::{AccelStats, BvhQuality, InstanceInput, MeshInput};
 use crate::walk::detect_avx2;
+use bounds::world_bounds;
 use check::{check_mesh, flatten, Checked};
 use glam::{Affine3A, Vec3};
+use join::build_joined;
 use obvhs::aabb::Aabb;
 use placement::{deform_of, flat_key, placement, Placement};
-pub use placement::{FrameHints, FLATTEN_SHARED_LIMIT};
+pub use placement::{FrameHints, FLATTEN_SHARED_LIMIT, JOIN_FROM};
 use rayon::prelude::*;
 use tree::{build_blas, build_cwbvh, tree_depth};
-
-/// World bounds of an object-space box, widened by a relative margin so that rounding in the
-/// transform (of the box here, of the ray at query time) cannot make the box miss a hit.
-fn world_bounds(world_from_object: &Affine3A, (lo, hi): (Vec3, Vec3)) -> Aabb {
-    let mut wlo = Vec3::splat(f32::INFINITY);
-    let mut whi = Vec3::splat(f32::NEG_INFINITY);
-    for k in 0..8 {
-        let c = Vec3::new(
-            if k & 1 == 0 { lo.x } else { hi.x },
-            if k & 2 == 0 { lo.y } else { hi.y },
-            if k & 4 == 0 { lo.z } else { hi.z },
-        );
-        let w = world_from_object.transform_point3(c);
-        wlo = wlo.min(w);
-        whi = whi.max(w);
-    }
-    let margin = 1e-5
-        * wlo
-            .abs()
-            .max(whi.abs())
-            .max_element()
-            .max(f32::MIN_POSITIVE);
-    Aabb::new((wlo - margin).into(), (whi + margin).into())
-}
 
 /// Structures built by [`Accel::build_frame`] in this process ([`builds`]).
 static BUILDS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
@@ -121,6 +101,8 @@ fn instance_magnitudes(
 /// A bottom-level BVH to make: built from triangles, or taken from the previous frame.
 enum BlasJob {
     Build(Vec<(Tri, u32)>, bool, Option<Deform>),
+    /// Built already (the world-space BVH of a large set, built in pieces in parallel).
+    Built(Blas),
     Reuse(Blas),
 }
 
@@ -231,7 +213,7 @@ struct BlasJobs {
 /// The world-space BVH's job (taken from `flat_taken` or built from `flat`), then one per
 /// mesh with a BVH of its own (taken from `taken` or built from its checked triangles).
 fn blas_jobs(
-    (meshes, hints): (&[MeshInput<'_>], &FrameHints<'_>),
+    (meshes, hints, quality): (&[MeshInput<'_>], &FrameHints<'_>, BvhQuality),
     flat: &[(u32, InstanceInput)],
     flat_taken: Option<(Blas, usize)>,
     checked: Vec<Checked>,
@@ -246,11 +228,17 @@ fn blas_jobs(
                 flat_degenerate = degenerate;
                 BlasJob::Reuse(blas)
             }
-            None => {
-                let (tris, degenerate) = flatten(meshes, flat);
-                flat_degenerate = degenerate;
-                BlasJob::Build(tris, true, None)
-            }
+            None => match build_joined(meshes, flat, quality, hints.join_from) {
+                Some((blas, degenerate)) => {
+                    flat_degenerate = degenerate;
+                    BlasJob::Built(blas)
+                }
+                None => {
+                    let (tris, degenerate) = flatten(meshes, flat);
+                    flat_degenerate = degenerate;
+                    BlasJob::Build(tris, true, None)
+                }
+            },
         });
     }
     let has_flat = !jobs.is_empty();
@@ -335,7 +323,7 @@ impl Accel {
         count_checked(&mut stats, &checked, &uses);
 
         let jobs = blas_jobs(
-            (meshes, &hints),
+            (meshes, &hints, quality),
             &flat,
             flat_taken,
             checked,
@@ -355,7 +343,7 @@ impl Accel {
                 BlasJob::Build(tris, keep_instance, deform) => {
                     build_blas(tris, quality, keep_instance, deform)
                 }
-                BlasJob::Reuse(blas) => blas,
+                BlasJob::Built(blas) | BlasJob::Reuse(blas) => blas,
             })
             .collect();
         let has_flat = jobs.has_flat;
@@ -384,6 +372,7 @@ impl Accel {
         stats.bvh_nodes =
             self.tlas.len() + self.blases.iter().map(|b| b.nodes.len()).sum::<usize>();
         stats.max_blas_depth = self.max_blas_depth;
+        stats.joined_pieces = self.blases.iter().map(|b| b.pieces).sum();
         let blases = self.blases.iter();
         stats.node_bytes = (self.tlas.len() + blases.clone().map(|b| b.nodes.len()).sum::<usize>())
             * size_of::<Node>();
@@ -450,7 +439,7 @@ impl Accel {
             });
         }
         let (tlas, order) = if entries.len() > 1 {
-            build_cwbvh(&bounds, quality)
+            build_cwbvh(&bounds, quality, 3)
         } else {
             (Vec::new(), (0..entries.len() as u32).collect())
         };

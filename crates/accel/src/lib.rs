@@ -5,7 +5,10 @@
 //!   by several instances gets one bottom-level BVH in object space, stored once; meshes drawn
 //!   once are flattened into one world-space BVH (and shared meshes too, in scenes drawing at
 //!   most [`FLATTEN_SHARED_LIMIT`] triangles); a top-level obvhs BVH over instance bounds
-//!   joins them. Triangles are stored in BVH order with their original index.
+//!   joins them. Triangles are stored in BVH order with their original index. A world-space
+//!   set of at least [`JOIN_FROM`] triangles whose instances barely overlap is built per
+//!   instance in parallel and joined under a tree over their boxes (one tree to walk; a
+//!   fraction of one build's temporaries).
 //! - **Traversal** is ours: the box test honours `tmin`/`tmax` and is
 //!   widened by a bound on every rounding error involved, and the stack is sized from the
 //!   measured tree depth. Closest hits visit children nearest entry first and skip those a hit
@@ -62,7 +65,7 @@ mod triangle;
 mod types;
 mod walk;
 
-pub use build::{builds, FrameHints, FLATTEN_SHARED_LIMIT};
+pub use build::{builds, FrameHints, FLATTEN_SHARED_LIMIT, JOIN_FROM};
 pub use deform::{lerp_point, VertexMotion};
 pub use motion::MotionTransform;
 pub use packet::{PACKET_CONE_COS, PACKET_LANES};

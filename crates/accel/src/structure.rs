@@ -22,6 +22,8 @@ pub(crate) struct Blas {
     /// For a mesh deforming within the shutter: its triangles keyed over it (the nodes then
     /// bound the swept triangles, and `tris` holds the frame's, for lookups only).
     pub(crate) deform: Option<Box<Deform>>,
+    /// How many pieces it was joined from (`build::join`; 0: built as one tree).
+    pub(crate) pieces: usize,
 }
 
 /// One leaf of the top-level BVH: a BVH placed in the world.

@@ -168,6 +168,10 @@ pub struct AccelStats {
     pub instance_bytes: usize,
     /// Wall time of [`Accel::build`](crate::Accel::build).
     pub build_time: std::time::Duration,
+    /// Pieces the world-space BVH was built in, one per instance in parallel, and joined under
+    /// a tree over their boxes (0: built as one tree; see
+    /// [`FrameHints::join_from`](crate::FrameHints::join_from)).
+    pub joined_pieces: usize,
     /// Bottom-level BVHs taken from the previous frame instead of built
     /// ([`Accel::build_frame`](crate::Accel::build_frame)).
     pub reused_blases: usize,

@@ -7,6 +7,34 @@ use glam::{Affine3A, Quat, Vec3};
 mod common;
 use common::grid;
 
+/// The structures a scene may get: flattened, instanced, joined pieces, moving instances.
+fn layouts(moving: &[bool]) -> [(&'static str, FrameHints<'_>); 4] {
+    [
+        ("flattened", FrameHints::STILL),
+        (
+            "instanced",
+            FrameHints {
+                flatten_shared_up_to: 0,
+                ..FrameHints::STILL
+            },
+        ),
+        (
+            "joined pieces",
+            FrameHints {
+                join_from: 0,
+                ..FrameHints::STILL
+            },
+        ),
+        (
+            "moving instances",
+            FrameHints {
+                moving,
+                ..FrameHints::STILL
+            },
+        ),
+    ]
+}
+
 #[test]
 fn the_cut_holds_every_triangle() {
     let meshes = [grid(9, 0.2), grid(4, 0.2), grid(1, 0.2)];
@@ -34,23 +62,7 @@ fn the_cut_holds_every_triangle() {
         place(2, 0.3, 0.0, Vec3::new(1e3, 5.0, 0.0)),
     ];
     let moving = [false, true, true, false, false];
-    let layouts = [
-        ("flattened", FrameHints::STILL),
-        (
-            "instanced",
-            FrameHints {
-                flatten_shared_up_to: 0,
-                ..FrameHints::STILL
-            },
-        ),
-        (
-            "moving instances",
-            FrameHints {
-                moving: &moving,
-                ..FrameHints::STILL
-            },
-        ),
-    ];
+    let layouts = layouts(&moving);
     for (name, hints) in layouts {
         let accel = Accel::build_frame(&inputs, &instances, BvhQuality::Medium, hints, None);
         let root = accel.bounds().expect("geometry");

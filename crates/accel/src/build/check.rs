@@ -67,6 +67,38 @@ pub(super) fn check_mesh(mesh: &MeshInput<'_>, keep: bool) -> Checked {
     c
 }
 
+/// One placed instance's kept triangles in world space, and how many of its triangles only
+/// become degenerate there (rounding).
+pub(super) struct Kept {
+    pub(super) tris: Vec<Tri>,
+    pub(super) degenerate: usize,
+}
+
+/// The triangles of `mesh` placed by `inst` and checked in world space ([`Kept`]).
+pub(super) fn world_triangles(mesh: &MeshInput<'_>, inst: &InstanceInput) -> Kept {
+    let world: Vec<Vec3> = mesh
+        .positions
+        .iter()
+        .map(|p| inst.world_from_object.transform_point3(*p))
+        .collect();
+    let mut kept = Kept {
+        tris: Vec::new(),
+        degenerate: 0,
+    };
+    for (i, tri) in mesh.indices.iter().enumerate() {
+        match check_triangle(&world, *tri) {
+            TriCheck::Ok(p) => kept.tris.push(Tri { p, prim: i as u32 }),
+            TriCheck::Degenerate
+                if check_triangle(mesh.positions, *tri) != TriCheck::Degenerate =>
+            {
+                kept.degenerate += 1
+            }
+            _ => {}
+        }
+    }
+    kept
+}
+
 /// The flattened instances' triangles in world space, tagged with the instance, and how many
 /// triangles only become degenerate there (rounding).
 pub(super) fn flatten(
@@ -76,23 +108,9 @@ pub(super) fn flatten(
     let mut tris: Vec<(Tri, u32)> = Vec::new();
     let mut degenerate = 0;
     for (id, inst) in flat {
-        let mesh = &meshes[inst.mesh as usize];
-        let world: Vec<Vec3> = mesh
-            .positions
-            .iter()
-            .map(|p| inst.world_from_object.transform_point3(*p))
-            .collect();
-        for (i, tri) in mesh.indices.iter().enumerate() {
-            match check_triangle(&world, *tri) {
-                TriCheck::Ok(p) => tris.push((Tri { p, prim: i as u32 }, *id)),
-                TriCheck::Degenerate
-                    if check_triangle(mesh.positions, *tri) != TriCheck::Degenerate =>
-                {
-                    degenerate += 1
-                }
-                _ => {}
-            }
-        }
+        let kept = world_triangles(&meshes[inst.mesh as usize], inst);
+        tris.extend(kept.tris.into_iter().map(|t| (t, *id)));
+        degenerate += kept.degenerate;
     }
     (tris, degenerate)
 }

@@ -40,6 +40,10 @@ pub struct FrameHints<'a> {
     /// mesh drawn more than once keeps one object-space BVH (memory bounded by the unique
     /// triangles). [`FLATTEN_SHARED_LIMIT`] by default; 0 keeps every shared mesh instanced.
     pub flatten_shared_up_to: usize,
+    /// When the world-space BVH's instances draw at least this many triangles (before
+    /// checks), it is built per instance in parallel and joined under a tree over their boxes
+    /// ([`JOIN_FROM`](crate::JOIN_FROM) by default; `usize::MAX`: always one build).
+    pub join_from: usize,
     /// Per instance: how it moves within the shutter (`None`: it stays at
     /// `world_from_object`); empty: nothing moves. A moving instance is walked at each ray's
     /// [`Ray::time`](crate::Ray::time) and bounded over its whole interval.
@@ -55,12 +59,18 @@ pub struct FrameHints<'a> {
 /// costs at most about 60 MB (a triangle takes about 60 bytes with its share of the nodes).
 pub const FLATTEN_SHARED_LIMIT: usize = 1 << 20;
 
+/// The default of [`FrameHints::join_from`]: world-space sets drawing at least 2^20 triangles
+/// (before checks) are built per instance and joined, unless the instances' boxes overlap much;
+/// smaller ones are built as one tree (whose temporaries stay under about 300 MB).
+pub const JOIN_FROM: usize = 1 << 20;
+
 impl FrameHints<'_> {
     /// A still scene: no instance moves, no mesh deforms (what [`Accel::build`](crate::Accel::build) assumes).
     pub const STILL: FrameHints<'static> = FrameHints {
         moving: &[],
         deforming_from: usize::MAX,
         flatten_shared_up_to: FLATTEN_SHARED_LIMIT,
+        join_from: JOIN_FROM,
         motion: &[],
         deforming: &[],
     };

@@ -69,16 +69,21 @@ fn build_params(quality: BvhQuality) -> BvhBuildParams {
         p.search_depth_threshold = 0;
     }
     p.pre_split = false;
-    p.max_prims_per_leaf = 3;
     p
 }
 
-/// A CWBVH over `aabbs`: its nodes and the primitive order of its leaves.
-pub(super) fn build_cwbvh(aabbs: &[Aabb], quality: BvhQuality) -> (Vec<Node>, Vec<u32>) {
+/// A CWBVH over `aabbs` with at most `leaf_size` primitives a leaf (1 to 3): its nodes and
+/// the primitive order of its leaves.
+pub(super) fn build_cwbvh(
+    aabbs: &[Aabb],
+    quality: BvhQuality,
+    leaf_size: u32,
+) -> (Vec<Node>, Vec<u32>) {
     if aabbs.is_empty() {
         return (Vec::new(), Vec::new());
     }
-    let p = build_params(quality);
+    let mut p = build_params(quality);
+    p.max_prims_per_leaf = leaf_size;
     let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
         p.ploc_search_distance,
         aabbs,
@@ -92,7 +97,21 @@ pub(super) fn build_cwbvh(aabbs: &[Aabb], quality: BvhQuality) -> (Vec<Node>, Ve
     (nodes, cw.primitive_indices)
 }
 
-fn aabb_of(p: &[Vec3; 3]) -> Aabb {
+/// [`build_cwbvh`] with leaves of up to three primitives, and the union of `aabbs`.
+pub(super) fn build_ordered(
+    aabbs: &[Aabb],
+    quality: BvhQuality,
+) -> (Vec<Node>, Vec<u32>, Option<(Vec3, Vec3)>) {
+    let (nodes, order) = build_cwbvh(aabbs, quality, 3);
+    let bounds = aabbs.iter().fold(None, |acc: Option<(Vec3, Vec3)>, b| {
+        let (lo, hi) = (Vec3::from(b.min), Vec3::from(b.max));
+        Some(acc.map_or((lo, hi), |(a, b)| (a.min(lo), b.max(hi))))
+    });
+    (nodes, order, bounds)
+}
+
+/// A triangle's box.
+pub(super) fn aabb_of(p: &[Vec3; 3]) -> Aabb {
     let lo = p[0].min(p[1]).min(p[2]);
     let hi = p[0].max(p[1]).max(p[2]);
     Aabb::new(lo.into(), hi.into())
@@ -116,11 +135,7 @@ pub(super) fn build_blas(
             })
             .collect(),
     };
-    let (nodes, order) = build_cwbvh(&aabbs, quality);
-    let bounds = aabbs.iter().fold(None, |acc: Option<(Vec3, Vec3)>, b| {
-        let (lo, hi) = (Vec3::from(b.min), Vec3::from(b.max));
-        Some(acc.map_or((lo, hi), |(a, b)| (a.min(lo), b.max(hi))))
-    });
+    let (nodes, order, bounds) = build_ordered(&aabbs, quality);
     drop(aabbs);
     let ordered: Vec<Tri> = order.iter().map(|&i| tris[i as usize].0).collect();
     let tri_instance = if keep_instance {
@@ -138,5 +153,6 @@ pub(super) fn build_blas(
         bounds,
         box_bounds,
         deform: deform.map(|d| Box::new(d.reorder(&order))),
+        pieces: 0,
     }
 }

@@ -1,0 +1,231 @@
+//! The world-space BVH of many triangles built in pieces: one tree per flattened instance, built
+//! in parallel, joined under a tree over their boxes into one node array that traversal walks as
+//! any other (issue 59).
+//!
+//! Why: one PLOC build over every triangle holds, at its peak, the world-space triangles, their
+//! boxes, obvhs' binary tree and its CWBVH converter's tables (about 300 bytes a triangle beside
+//! the result), and its conversion runs on one thread. Built per instance, those temporaries
+//! are a piece's, and two pieces build at once. The joined tree is the same kind of tree: each
+//! piece's root becomes an internal child of the node over it, so no level of the walk changes.
+//! The price is a top that cannot split an instance, which costs nothing when instances do not
+//! overlap much (an export of separate objects) and some box overlap when they do; small sets
+//! (below [`JOIN_FROM`](crate::JOIN_FROM) triangles) keep the one build, and with it their exact trees.
+
+use super::bounds::world_bounds;
+use super::check::{world_triangles, Kept};
+use super::tree::{aabb_of, build_cwbvh, build_ordered, tree_depth};
+use crate::node::{child_index, Node};
+use crate::structure::Blas;
+use crate::triangle::Tri;
+use crate::types::{BvhQuality, InstanceInput, MeshInput};
+use glam::Vec3;
+use obvhs::aabb::Aabb;
+use rayon::prelude::*;
+
+/// The most [`overlap`] a set may have to be joined: a ray through the set enters at most
+/// about two pieces on average. Tiles of a terrain or a city measure 1.1 to 1.4; meshes whose
+/// boxes all span the scene (rows of one grid dealt round 64 meshes) measure 59, and their
+/// joined tree took 4.5 times as long a sample as one build's (`big_scene.py --interleaved`).
+const OVERLAP_LIMIT: f32 = 2.0;
+
+/// How much the instances' world boxes overlap: the sum of their surface areas over the
+/// surface area of their union (the number of boxes a random ray through the union enters, on
+/// average; 1 for tiles that touch edge to edge).
+fn overlap(meshes: &[MeshInput<'_>], flat: &[(u32, InstanceInput)]) -> f32 {
+    let area = |b: &Aabb| {
+        let e = b.max - b.min;
+        2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+    };
+    let boxes: Vec<Aabb> = flat
+        .par_iter()
+        .filter_map(|(_, inst)| {
+            let finite = meshes[inst.mesh as usize]
+                .positions
+                .iter()
+                .filter(|p| p.is_finite());
+            let (lo, hi) = finite.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(*p), hi.max(*p))
+            });
+            (lo.cmple(hi).all()).then(|| world_bounds(&inst.world_from_object, (lo, hi)))
+        })
+        .collect();
+    let all = boxes.iter().fold(Aabb::empty(), |a, b| a.union(b));
+    let sum: f32 = boxes.iter().map(area).sum();
+    // A union of no area (everything on one point) is no reason to join.
+    sum / area(&all).max(f32::MIN_POSITIVE)
+}
+
+/// One instance's piece: its tree (nodes over its primitive order) and, per position of that
+/// order, the mesh triangle it holds.
+struct Piece {
+    nodes: Vec<Node>,
+    prims: Vec<u32>,
+    bounds: Option<(Vec3, Vec3)>,
+    degenerate: usize,
+}
+
+/// The piece of flattened instance `inst`: its world triangles checked, its tree built.
+fn piece(meshes: &[MeshInput<'_>], inst: &InstanceInput, quality: BvhQuality) -> Piece {
+    let Kept { tris, degenerate } = world_triangles(&meshes[inst.mesh as usize], inst);
+    let aabbs: Vec<Aabb> = tris.iter().map(|t| aabb_of(&t.p)).collect();
+    let (nodes, order, bounds) = build_ordered(&aabbs, quality);
+    drop(aabbs);
+    let prims = order.iter().map(|&i| tris[i as usize].prim).collect();
+    Piece {
+        nodes,
+        prims,
+        bounds,
+        degenerate,
+    }
+}
+
+/// The world-space BVH of `flat` built per instance and joined, with how many triangles only
+/// became degenerate in world space; `None` when the set draws fewer than `join_from`
+/// triangles (one build serves it).
+pub(super) fn build_joined(
+    meshes: &[MeshInput<'_>],
+    flat: &[(u32, InstanceInput)],
+    quality: BvhQuality,
+    join_from: usize,
+) -> Option<(Blas, usize)> {
+    let drawn: usize = flat
+        .iter()
+        .map(|(_, i)| meshes[i.mesh as usize].indices.len())
+        .sum();
+    if flat.len() < 2 || drawn < join_from || overlap(meshes, flat) > OVERLAP_LIMIT {
+        return None;
+    }
+    let pieces: Vec<Piece> = flat
+        .par_iter()
+        .map(|(_, inst)| piece(meshes, inst, quality))
+        .collect();
+    let degenerate = pieces.iter().map(|p| p.degenerate).sum();
+    Some((join(meshes, flat, pieces, quality)?, degenerate))
+}
+
+/// Joins `pieces` (one per entry of `flat`, in its order) under a tree over their boxes;
+/// `None` if the top tree has a leaf of more than one piece (never so with one per leaf).
+fn join(
+    meshes: &[MeshInput<'_>],
+    flat: &[(u32, InstanceInput)],
+    pieces: Vec<Piece>,
+    quality: BvhQuality,
+) -> Option<Blas> {
+    // The pieces with triangles, and their boxes.
+    let used: Vec<usize> = (0..pieces.len())
+        .filter(|&k| pieces[k].bounds.is_some())
+        .collect();
+    let boxes: Vec<Aabb> = used
+        .iter()
+        .filter_map(|&k| pieces[k].bounds)
+        .map(|(lo, hi)| Aabb::new(lo.into(), hi.into()))
+        .collect();
+    let (top, top_order) = build_cwbvh(&boxes, quality, 1);
+    let mut nodes = top_layout(&top, &top_order, &used)?;
+    // Each slot that holds a piece: (its node, the piece), in the order of the nodes; the
+    // pieces' triangles follow in that order too.
+    let roots: Vec<(usize, usize)> = nodes
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| n.primitive_base_idx == PIECE)
+        .map(|(i, n)| (i, n.child_base_idx as usize))
+        .collect();
+    let total: usize = used.iter().map(|&k| pieces[k].prims.len()).sum();
+    let piece_nodes: usize = used.iter().map(|&k| pieces[k].nodes.len() - 1).sum();
+    nodes.reserve_exact(piece_nodes);
+    let mut tris = Vec::with_capacity(total);
+    let mut tri_instance = Vec::with_capacity(total);
+    let mut pieces: Vec<Option<Piece>> = pieces.into_iter().map(Some).collect();
+    for (at, k) in roots {
+        let piece = pieces.get_mut(k)?.take()?;
+        let base = nodes.len() as u32;
+        let first_tri = tris.len() as u32;
+        let (root, rest) = piece.nodes.split_first()?;
+        nodes[at] = moved(root, base, first_tri);
+        nodes.extend(rest.iter().map(|n| moved(n, base, first_tri)));
+        let (id, inst) = &flat[k];
+        let mesh = &meshes[inst.mesh as usize];
+        tris.extend(piece.prims.iter().map(|&prim| {
+            let t = mesh.indices[prim as usize];
+            let p = t.map(|v| {
+                inst.world_from_object
+                    .transform_point3(mesh.positions[v as usize])
+            });
+            Tri { p, prim }
+        }));
+        tri_instance.extend(std::iter::repeat_n(*id, piece.prims.len()));
+    }
+    let bounds = boxes
+        .iter()
+        .map(|b| (Vec3::from(b.min), Vec3::from(b.max)))
+        .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)));
+    Some(Blas {
+        depth: tree_depth(&nodes),
+        nodes,
+        tris,
+        tri_instance,
+        bounds,
+        box_bounds: bounds.unwrap_or((Vec3::ZERO, Vec3::ZERO)),
+        deform: None,
+        pieces: used.len(),
+    })
+}
+
+/// Node `n` of a piece whose nodes 1.. go to `base` on and whose triangles to `first_tri` on.
+fn moved(n: &Node, base: u32, first_tri: u32) -> Node {
+    let mut n = *n;
+    if n.imask != 0 {
+        // The piece's node j >= 1 goes to base + j - 1.
+        n.child_base_idx = base.wrapping_add(n.child_base_idx).wrapping_sub(1);
+    }
+    n.primitive_base_idx = n.primitive_base_idx.wrapping_add(first_tri);
+    n
+}
+
+/// Marks a placeholder node that a piece's root replaces (its `child_base_idx` names the piece).
+const PIECE: u32 = u32::MAX;
+
+/// The top tree laid out again so that each node's children (its internal nodes and the
+/// pieces in its leaves, which become internal children) sit together in slot order; the
+/// pieces' roots are placeholders ([`PIECE`]). `None` if a leaf holds other than one piece.
+fn top_layout(top: &[Node], top_order: &[u32], used: &[usize]) -> Option<Vec<Node>> {
+    let first = top.first()?;
+    let placeholder = |k: usize| Node {
+        child_base_idx: k as u32,
+        primitive_base_idx: PIECE,
+        ..*first
+    };
+    let mut out = vec![*first];
+    let mut queue = std::collections::VecDeque::from([(0usize, 0usize)]);
+    while let Some((t, at)) = queue.pop_front() {
+        let mut node = top[t];
+        let base = out.len();
+        let mut rank = 0;
+        for slot in 0..8u32 {
+            let meta = node.child_meta[slot as usize];
+            if meta == 0 {
+                continue;
+            }
+            if top[t].imask & (1 << slot) != 0 {
+                let child = child_index(top[t].child_base_idx, u32::from(top[t].imask), slot);
+                queue.push_back((child as usize, base + rank));
+                out.push(top[child as usize]);
+            } else {
+                let leaf = top[t].leaf(slot as usize);
+                if leaf.len() != 1 {
+                    return None;
+                }
+                let k = used[*top_order.get(leaf.start as usize)? as usize];
+                out.push(placeholder(k));
+            }
+            // An internal child: the top bits 001 and 24 + its slot (obvhs' encoding).
+            node.child_meta[slot as usize] = (1 << 5) | (24 + slot as u8);
+            node.imask |= 1 << slot;
+            rank += 1;
+        }
+        node.child_base_idx = base as u32;
+        node.primitive_base_idx = 0;
+        out[at] = node;
+    }
+    Some(out)
+}
