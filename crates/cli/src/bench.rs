@@ -41,6 +41,9 @@ pub enum Config {
     /// Sobol, every pixel at the budget, then denoised (Open Image Denoise with the Denoising
     /// passes, as `render --denoise`); the time includes the denoising.
     Denoised,
+    /// No sampler: `--repeats` fresh loads of the file, each timed to its BVH and its first
+    /// samples (one a pixel), with the peak memory; measured first, written to `DIR/load.csv`.
+    Load,
 }
 
 impl Config {
@@ -50,6 +53,7 @@ impl Config {
             Self::Random => "random",
             Self::Adaptive => "adaptive",
             Self::Denoised => "denoised",
+            Self::Load => "load",
         }
     }
 }
@@ -153,6 +157,15 @@ fn positive_f64(s: &str) -> Result<f64, String> {
 
 /// Runs `aperture bench`.
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
+    if args.configs.contains(&Config::Load) {
+        std::fs::create_dir_all(&args.output)
+            .with_context(|| format!("creating {}", args.output.display()))?;
+        let pool = crate::workers::worker_pool(args.threads)?;
+        pool.install(|| load::run_loads(&args))?;
+        if args.configs.iter().all(|&c| c == Config::Load) {
+            return Ok(());
+        }
+    }
     let mut session = aperture_render::Session::load(&args.scene, &LoadOptions::default())
         .with_context(|| format!("loading {}", args.scene.display()))?;
     let scene = session.pose(None)?;
@@ -203,7 +216,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             None => render_reference(&args, frame, &base)?,
         };
         let mut rows = Vec::new();
-        for &config in &args.configs {
+        for &config in args.configs.iter().filter(|&&c| c != Config::Load) {
             for &spp in &args.spp {
                 let opts = config_options(&base, config, spp, args.adaptive_scale);
                 let denoise = denoiser.as_ref().filter(|_| config == Config::Denoised);
@@ -287,7 +300,9 @@ fn config_options(
         spp,
         sampler: match config {
             Config::Random => SamplerKind::Random,
-            Config::Sobol | Config::Adaptive | Config::Denoised => SamplerKind::Sobol,
+            Config::Sobol | Config::Adaptive | Config::Denoised | Config::Load => {
+                SamplerKind::Sobol
+            }
         },
         passes: match config {
             Config::Denoised => aperture_render::PassSet::NONE
@@ -429,5 +444,6 @@ fn median(v: &mut [f64]) -> f64 {
     }
 }
 
+mod load;
 #[cfg(test)]
 mod tests;
