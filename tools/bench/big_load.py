@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Peak memory and times of `aperture info` and `aperture render` on big scenes (issue 59),
-for binaries A and B run in turn (A, B, A, B, ...), the median of ROUNDS each:
+for binaries A and B run in turn (A, B, A, B, ...), the median of ROUNDS each (A = B: one binary):
 
     python3 tools/bench/big_load.py A B ROUNDS FILE.glb...
 
@@ -63,14 +63,15 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "out.exr")
         for scene in scenes:
-            rows = {a: [], b: []}
+            binaries = list(dict.fromkeys((a, b)))  # A = B: one binary, measured once a round
+            rows = {x: [] for x in binaries}
             for _ in range(rounds):
-                for binary in (a, b):
+                for binary in binaries:
                     rows[binary].append(measure(binary, scene, out))
             print(f"\n{os.path.basename(scene)}, median of {rounds}")
             print("| binary | " + " | ".join(keys) + " |")
             print("|---" * (len(keys) + 1) + "|")
-            for binary in (a, b):
+            for binary in binaries:
                 cells = [median(rows[binary], k) for k in keys]
                 text = ["–" if c is None else f"{c:.2f}" if c < 100 else f"{c:.0f}" for c in cells]
                 print(f"| {binary} | " + " | ".join(text) + " |")
