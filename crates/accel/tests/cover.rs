@@ -1,11 +1,11 @@
 //! `Accel::cover`: the boxes of the cut hold every triangle, whatever the scene's layout
 //! (flattened, instanced, both), and stay within the budget.
 
-use aperture_accel::{Accel, BvhQuality, FrameHints, InstanceInput, MeshInput};
+use aperture_accel::{Accel, BvhQuality, FrameHints, InstanceInput};
 use glam::{Affine3A, Quat, Vec3};
 
 mod common;
-use common::grid;
+use common::{grid, mesh_inputs};
 
 /// The structures a scene may get: flattened, instanced, joined pieces, moving instances.
 fn layouts(moving: &[bool]) -> [(&'static str, FrameHints<'_>); 4] {
@@ -38,13 +38,7 @@ fn layouts(moving: &[bool]) -> [(&'static str, FrameHints<'_>); 4] {
 #[test]
 fn the_cut_holds_every_triangle() {
     let meshes = [grid(9, 0.2), grid(4, 0.2), grid(1, 0.2)];
-    let inputs: Vec<MeshInput> = meshes
-        .iter()
-        .map(|(p, t)| MeshInput {
-            positions: p,
-            indices: t,
-        })
-        .collect();
+    let inputs = mesh_inputs(&meshes);
     // A ground-like plate far larger than the rest, mesh 0 drawn three times, a lone quad.
     let place = |mesh: u32, scale: f32, angle: f32, at: Vec3| InstanceInput {
         mesh,

@@ -7,7 +7,7 @@ use aperture_accel::{Accel, BvhQuality, FrameHints, Hit, InstanceInput, MeshInpu
 use glam::{Affine3A, Quat, Vec3};
 
 mod common;
-use common::grid;
+use common::{grid, mesh_inputs};
 
 /// A few meshes drawn once each, overlapping (a floor under tilted plates, one plate through
 /// another), a lone triangle and a mesh whose triangles are all degenerate.
@@ -77,6 +77,20 @@ fn rays() -> Vec<Ray> {
     out
 }
 
+/// The structure over `inputs` placed by `instances`, joined from `join_from` triangles.
+fn build(
+    inputs: &[MeshInput],
+    instances: &[InstanceInput],
+    quality: BvhQuality,
+    join_from: usize,
+) -> Accel {
+    let hints = FrameHints {
+        join_from,
+        ..FrameHints::STILL
+    };
+    Accel::build_frame(inputs, instances, quality, hints, None)
+}
+
 fn key(h: &Option<Hit>) -> Option<(u32, u32, u32, u32, u32)> {
     h.map(|h| {
         (
@@ -92,20 +106,8 @@ fn key(h: &Option<Hit>) -> Option<(u32, u32, u32, u32, u32)> {
 #[test]
 fn joined_pieces_answer_as_one_build() {
     let (meshes, instances) = scene();
-    let inputs: Vec<MeshInput> = meshes
-        .iter()
-        .map(|(p, t)| MeshInput {
-            positions: p,
-            indices: t,
-        })
-        .collect();
-    let with = |join_from| {
-        let hints = FrameHints {
-            join_from,
-            ..FrameHints::STILL
-        };
-        Accel::build_frame(&inputs, &instances, BvhQuality::Medium, hints, None)
-    };
+    let inputs = mesh_inputs(&meshes);
+    let with = |join_from| build(&inputs, &instances, BvhQuality::Medium, join_from);
     let (one, joined) = (with(usize::MAX), with(0));
     let rays = rays();
     let mut hits = 0;
@@ -156,24 +158,12 @@ fn joined_pieces_answer_as_one_build() {
 #[test]
 fn small_sets_keep_one_build() {
     let (meshes, instances) = scene();
-    let inputs: Vec<MeshInput> = meshes
-        .iter()
-        .map(|(p, t)| MeshInput {
-            positions: p,
-            indices: t,
-        })
-        .collect();
+    let inputs = mesh_inputs(&meshes);
     let drawn: usize = instances
         .iter()
         .map(|i| meshes[i.mesh as usize].1.len())
         .sum();
-    let build = |join_from| {
-        let hints = FrameHints {
-            join_from,
-            ..FrameHints::STILL
-        };
-        Accel::build_frame(&inputs, &instances, BvhQuality::Fast, hints, None).stats()
-    };
+    let build = |join_from| build(&inputs, &instances, BvhQuality::Fast, join_from).stats();
     // One more triangle than the set draws: one build, the same tree as never joining.
     let (below, never, at) = (build(drawn + 1), build(usize::MAX), build(drawn));
     assert_eq!((below.joined_pieces, never.joined_pieces), (0, 0));
@@ -188,24 +178,14 @@ fn overlapping_pieces_keep_one_build() {
     // Eight plates over the same square, a hair apart: every ray through one enters all, so
     // a tree over their boxes would walk all eight (`OVERLAP_LIMIT`).
     let meshes: Vec<common::Geometry> = (0..8).map(|k| grid(6, 0.1 + 0.01 * k as f32)).collect();
-    let inputs: Vec<MeshInput> = meshes
-        .iter()
-        .map(|(p, t)| MeshInput {
-            positions: p,
-            indices: t,
-        })
-        .collect();
+    let inputs = mesh_inputs(&meshes);
     let instances: Vec<InstanceInput> = (0..8)
         .map(|k| InstanceInput {
             mesh: k,
             world_from_object: Affine3A::from_translation(Vec3::Z * 0.001 * k as f32),
         })
         .collect();
-    let hints = FrameHints {
-        join_from: 0,
-        ..FrameHints::STILL
-    };
-    let stats = Accel::build_frame(&inputs, &instances, BvhQuality::Medium, hints, None).stats();
+    let stats = build(&inputs, &instances, BvhQuality::Medium, 0).stats();
     assert_eq!(stats.joined_pieces, 0);
     assert_eq!(stats.unique_triangles, 8 * 6 * 6 * 2);
     // Spread out side by side, the same plates are joined.
@@ -215,6 +195,6 @@ fn overlapping_pieces_keep_one_build() {
             world_from_object: Affine3A::from_translation(Vec3::X * 2.0 * k as f32),
         })
         .collect();
-    let stats = Accel::build_frame(&inputs, &apart, BvhQuality::Medium, hints, None).stats();
+    let stats = build(&inputs, &apart, BvhQuality::Medium, 0).stats();
     assert_eq!(stats.joined_pieces, 8);
 }

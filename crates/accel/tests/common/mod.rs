@@ -2,11 +2,22 @@
 // Each test binary uses its own part of these.
 #![allow(dead_code)]
 
-use aperture_accel::Ray;
+use aperture_accel::{MeshInput, Ray};
 use glam::Vec3;
 
 /// Positions and triangles of one mesh.
 pub type Geometry = (Vec<Vec3>, Vec<[u32; 3]>);
+
+/// The accel's view of `meshes`.
+pub fn mesh_inputs(meshes: &[Geometry]) -> Vec<MeshInput<'_>> {
+    meshes
+        .iter()
+        .map(|(p, t)| MeshInput {
+            positions: p,
+            indices: t,
+        })
+        .collect()
+}
 
 /// A grid of `n × n` quads in the plane z = 0, spanning [-1, 1]², bumped by `bump`.
 pub fn grid(n: u32, bump: f32) -> Geometry {
