@@ -7,9 +7,10 @@
 //! the result), and its conversion runs on one thread. Built per instance, those temporaries
 //! are a piece's, and two pieces build at once. The joined tree is the same kind of tree: each
 //! piece's root becomes an internal child of the node over it, so no level of the walk changes.
-//! The price is a top that cannot split an instance, which costs nothing when instances do not
-//! overlap much (an export of separate objects) and some box overlap when they do; small sets
-//! (below [`JOIN_FROM`](crate::JOIN_FROM) triangles) keep the one build, and with it their exact trees.
+//! The price is a top that cannot split an instance: nothing when the instances' boxes barely
+//! overlap (tiles, an export of separate objects), a walk of every piece a ray enters when they
+//! do, so a set whose [`overlap`] passes [`OVERLAP_LIMIT`] keeps the one build, as do small sets
+//! (below [`JOIN_FROM`](crate::JOIN_FROM) triangles), with their exact trees.
 
 use super::bounds::world_bounds;
 use super::check::{world_triangles, Kept};
