@@ -20,7 +20,7 @@ mod sheared_neon;
 
 /// A triangle in BVH order: its vertices exactly as given (shared vertices stay bitwise equal,
 /// which the watertight test relies on) and its index in the mesh's original `indices`.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, bytemuck::Zeroable)]
 #[repr(C)]
 pub(crate) struct Tri {
     pub(crate) p: [Vec3; 3],

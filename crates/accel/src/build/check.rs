@@ -82,7 +82,7 @@ pub(super) fn world_triangles(mesh: &MeshInput<'_>, inst: &InstanceInput) -> Kep
         .map(|p| inst.world_from_object.transform_point3(*p))
         .collect();
     let mut kept = Kept {
-        tris: Vec::new(),
+        tris: Vec::with_capacity(mesh.indices.len()),
         degenerate: 0,
     };
     for (i, tri) in mesh.indices.iter().enumerate() {

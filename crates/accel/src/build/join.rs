@@ -14,7 +14,7 @@
 
 use super::bounds::world_bounds;
 use super::check::{world_triangles, Kept};
-use super::tree::{aabb_of, build_cwbvh, build_ordered, tree_depth};
+use super::tree::{aabb_of, build_cwbvh, build_ordered, tree_depth, Scratch};
 use crate::node::{child_index, Node};
 use crate::structure::Blas;
 use crate::triangle::Tri;
@@ -62,19 +62,27 @@ fn overlap(meshes: &[MeshInput<'_>], flat: &[(u32, InstanceInput)]) -> f32 {
 /// order, the mesh triangle it holds.
 struct Piece {
     nodes: Vec<Node>,
+    /// Levels of `nodes`.
+    depth: usize,
     prims: Vec<u32>,
     bounds: Option<(Vec3, Vec3)>,
     degenerate: usize,
 }
 
 /// The piece of flattened instance `inst`: its world triangles checked, its tree built.
-fn piece(meshes: &[MeshInput<'_>], inst: &InstanceInput, quality: BvhQuality) -> Piece {
+fn piece(
+    meshes: &[MeshInput<'_>],
+    inst: &InstanceInput,
+    quality: BvhQuality,
+    scratch: &Scratch,
+) -> Piece {
     let Kept { tris, degenerate } = world_triangles(&meshes[inst.mesh as usize], inst);
     let aabbs: Vec<Aabb> = tris.iter().map(|t| aabb_of(&t.p)).collect();
-    let (nodes, order, bounds) = build_ordered(&aabbs, quality);
+    let (nodes, order, bounds) = build_ordered(&aabbs, quality, scratch);
     drop(aabbs);
     let prims = order.iter().map(|&i| tris[i as usize].prim).collect();
     Piece {
+        depth: tree_depth(&nodes),
         nodes,
         prims,
         bounds,
@@ -98,10 +106,12 @@ pub(super) fn build_joined(
     if flat.len() < 2 || drawn < join_from || overlap(meshes, flat) > OVERLAP_LIMIT {
         return None;
     }
+    let scratch = Scratch::default();
     let pieces: Vec<Piece> = flat
         .par_iter()
-        .map(|(_, inst)| piece(meshes, inst, quality))
+        .map(|(_, inst)| piece(meshes, inst, quality, &scratch))
         .collect();
+    drop(scratch);
     let degenerate = pieces.iter().map(|p| p.degenerate).sum();
     Some((join(meshes, flat, pieces, quality)?, degenerate))
 }
@@ -124,46 +134,43 @@ fn join(
         .map(|(lo, hi)| Aabb::new(lo.into(), hi.into()))
         .collect();
     let (top, top_order) = build_cwbvh(&boxes, quality, 1);
-    let mut nodes = top_layout(&top, &top_order, &used)?;
+    let top_nodes = top_layout(&top, &top_order, &used)?;
     // Each slot that holds a piece: (its node, the piece), in the order of the nodes; the
-    // pieces' triangles follow in that order too.
-    let roots: Vec<(usize, usize)> = nodes
+    // pieces' nodes and triangles follow in that order too.
+    let roots: Vec<(usize, usize)> = top_nodes
         .iter()
         .enumerate()
         .filter(|(_, n)| n.primitive_base_idx == PIECE)
         .map(|(i, n)| (i, n.child_base_idx as usize))
         .collect();
-    let total: usize = used.iter().map(|&k| pieces[k].prims.len()).sum();
-    let piece_nodes: usize = used.iter().map(|&k| pieces[k].nodes.len() - 1).sum();
-    nodes.reserve_exact(piece_nodes);
-    let mut tris = Vec::with_capacity(total);
-    let mut tri_instance = Vec::with_capacity(total);
+    // A piece's node j at level i of the top tree lands at level i + j (counted from 1).
+    let depth = tree_depth(&top) + used.iter().map(|&k| pieces[k].depth).max().unwrap_or(0);
     let mut pieces: Vec<Option<Piece>> = pieces.into_iter().map(Some).collect();
+    let mut placed = Vec::with_capacity(roots.len());
+    let (mut base, mut first_tri) = (top_nodes.len(), 0usize);
     for (at, k) in roots {
         let piece = pieces.get_mut(k)?.take()?;
-        let base = nodes.len() as u32;
-        let first_tri = tris.len() as u32;
-        let (root, rest) = piece.nodes.split_first()?;
-        nodes[at] = moved(root, base, first_tri);
-        nodes.extend(rest.iter().map(|n| moved(n, base, first_tri)));
-        let (id, inst) = &flat[k];
-        let mesh = &meshes[inst.mesh as usize];
-        tris.extend(piece.prims.iter().map(|&prim| {
-            let t = mesh.indices[prim as usize];
-            let p = t.map(|v| {
-                inst.world_from_object
-                    .transform_point3(mesh.positions[v as usize])
-            });
-            Tri { p, prim }
-        }));
-        tri_instance.extend(std::iter::repeat_n(*id, piece.prims.len()));
+        let (nodes_after, tris_after) = (
+            base + piece.nodes.len().saturating_sub(1),
+            first_tri + piece.prims.len(),
+        );
+        placed.push(Placed {
+            k,
+            at,
+            base,
+            first_tri,
+            piece,
+        });
+        (base, first_tri) = (nodes_after, tris_after);
     }
+    let nodes = piece_nodes(top_nodes, &placed, base);
+    let (tris, tri_instance) = piece_triangles(meshes, flat, &placed, first_tri);
     let bounds = boxes
         .iter()
         .map(|b| (Vec3::from(b.min), Vec3::from(b.max)))
         .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)));
     Some(Blas {
-        depth: tree_depth(&nodes),
+        depth,
         nodes,
         tris,
         tri_instance,
@@ -174,14 +181,92 @@ fn join(
     })
 }
 
+/// A piece and where it goes in the joined tree.
+struct Placed {
+    /// Its entry in the flattened set.
+    k: usize,
+    /// The node its root replaces (a placeholder of the top).
+    at: usize,
+    /// Where its nodes 1.. start.
+    base: usize,
+    /// Where its triangles start.
+    first_tri: usize,
+    piece: Piece,
+}
+
+/// The joined tree's nodes, `total` in all: `top` (the top laid out with placeholders), each
+/// placeholder replaced by its piece's root and the pieces' other nodes after it, copied in
+/// parallel, a piece at a time.
+fn piece_nodes(top: Vec<Node>, placed: &[Placed], total: usize) -> Vec<Node> {
+    // Zeroed: its pages are first touched by the threads that fill them.
+    let mut nodes: Vec<Node> = bytemuck::zeroed_vec(total);
+    let (head, mut rest) = nodes.split_at_mut(top.len());
+    head.copy_from_slice(&top);
+    for p in placed {
+        if let Some(root) = p.piece.nodes.first() {
+            head[p.at] = moved(root, p.base, p.first_tri);
+        }
+    }
+    let mut jobs = Vec::with_capacity(placed.len());
+    for p in placed {
+        let body = p.piece.nodes.get(1..).unwrap_or_default();
+        let (mine, after) = std::mem::take(&mut rest).split_at_mut(body.len());
+        rest = after;
+        jobs.push((p, body, mine));
+    }
+    jobs.into_par_iter().for_each(|(p, body, mine)| {
+        for (slot, n) in mine.iter_mut().zip(body) {
+            *slot = moved(n, p.base, p.first_tri);
+        }
+    });
+    nodes
+}
+
+/// The joined tree's triangle store and the instance of each triangle: the pieces' triangles
+/// in world space, in the order of `placed`, `total` in all; filled in parallel, a piece at a
+/// time.
+fn piece_triangles(
+    meshes: &[MeshInput<'_>],
+    flat: &[(u32, InstanceInput)],
+    placed: &[Placed],
+    total: usize,
+) -> (Vec<Tri>, Vec<u32>) {
+    // Zeroed allocations: their pages are first touched by the threads that fill them.
+    let mut tris: Vec<Tri> = bytemuck::zeroed_vec(total);
+    let mut tri_instance = vec![0u32; total];
+    let mut jobs = Vec::with_capacity(placed.len());
+    let (mut rest_t, mut rest_i) = (&mut tris[..], &mut tri_instance[..]);
+    for p in placed {
+        let n = p.piece.prims.len();
+        let (t, rt) = std::mem::take(&mut rest_t).split_at_mut(n);
+        let (i, ri) = std::mem::take(&mut rest_i).split_at_mut(n);
+        (rest_t, rest_i) = (rt, ri);
+        jobs.push((p.k, &p.piece.prims, t, i));
+    }
+    jobs.into_par_iter().for_each(|(k, prims, t, i)| {
+        let (id, inst) = &flat[k];
+        let mesh = &meshes[inst.mesh as usize];
+        for (slot, &prim) in t.iter_mut().zip(prims) {
+            let v = mesh.indices[prim as usize];
+            let p = v.map(|v| {
+                inst.world_from_object
+                    .transform_point3(mesh.positions[v as usize])
+            });
+            *slot = Tri { p, prim };
+        }
+        i.fill(*id);
+    });
+    (tris, tri_instance)
+}
+
 /// Node `n` of a piece whose nodes 1.. go to `base` on and whose triangles to `first_tri` on.
-fn moved(n: &Node, base: u32, first_tri: u32) -> Node {
+fn moved(n: &Node, base: usize, first_tri: usize) -> Node {
     let mut n = *n;
     if n.imask != 0 {
         // The piece's node j >= 1 goes to base + j - 1.
-        n.child_base_idx = base.wrapping_add(n.child_base_idx).wrapping_sub(1);
+        n.child_base_idx = (base as u32).wrapping_add(n.child_base_idx).wrapping_sub(1);
     }
-    n.primitive_base_idx = n.primitive_base_idx.wrapping_add(first_tri);
+    n.primitive_base_idx = n.primitive_base_idx.wrapping_add(first_tri as u32);
     n
 }
 

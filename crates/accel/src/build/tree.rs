@@ -8,9 +8,13 @@ use crate::triangle::Tri;
 use crate::types::BvhQuality;
 use glam::Vec3;
 use obvhs::{
-    aabb::Aabb, bvh2::reinsertion::ReinsertionOptimizer, cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh,
-    ploc::PlocBuilder, BvhBuildParams,
+    aabb::Aabb,
+    bvh2::{reinsertion::ReinsertionOptimizer, Bvh2},
+    cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh,
+    ploc::PlocBuilder,
+    BvhBuildParams,
 };
+use std::sync::Mutex;
 
 /// Depth (levels of nodes) of a tree; children always follow their parent in `nodes`.
 pub(super) fn tree_depth(nodes: &[Node]) -> usize {
@@ -72,6 +76,25 @@ fn build_params(quality: BvhQuality) -> BvhBuildParams {
     p
 }
 
+/// obvhs' builder and binary tree, kept between builds so that many small builds (the pieces
+/// of a joined tree) reuse their allocations instead of faulting fresh pages in each time;
+/// lent to one build at a time. Dropping it frees them.
+#[derive(Default)]
+pub(super) struct Scratch(Mutex<Vec<(PlocBuilder, Bvh2)>>);
+
+impl Scratch {
+    fn take(&self) -> (PlocBuilder, Bvh2) {
+        let kept = self.0.lock().ok().and_then(|mut v| v.pop());
+        kept.unwrap_or_else(|| (PlocBuilder::new(), Bvh2::default()))
+    }
+
+    fn give(&self, kept: (PlocBuilder, Bvh2)) {
+        if let Ok(mut v) = self.0.lock() {
+            v.push(kept);
+        }
+    }
+}
+
 /// A CWBVH over `aabbs` with at most `leaf_size` primitives a leaf (1 to 3): its nodes and
 /// the primitive order of its leaves.
 pub(super) fn build_cwbvh(
@@ -79,12 +102,24 @@ pub(super) fn build_cwbvh(
     quality: BvhQuality,
     leaf_size: u32,
 ) -> (Vec<Node>, Vec<u32>) {
+    build_cwbvh_in(aabbs, quality, leaf_size, &Scratch::default())
+}
+
+/// [`build_cwbvh`] with obvhs' allocations taken from `scratch` (the same tree).
+pub(super) fn build_cwbvh_in(
+    aabbs: &[Aabb],
+    quality: BvhQuality,
+    leaf_size: u32,
+    scratch: &Scratch,
+) -> (Vec<Node>, Vec<u32>) {
     if aabbs.is_empty() {
         return (Vec::new(), Vec::new());
     }
     let mut p = build_params(quality);
     p.max_prims_per_leaf = leaf_size;
-    let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
+    let (mut builder, mut bvh2) = scratch.take();
+    builder.build_with_bvh(
+        &mut bvh2,
         p.ploc_search_distance,
         aabbs,
         (0..aabbs.len() as u32).collect(),
@@ -93,16 +128,18 @@ pub(super) fn build_cwbvh(
     );
     ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
     let cw = bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf, true, false);
+    scratch.give((builder, bvh2));
     let nodes = nodes_from_cwbvh(&cw.nodes, &cw.primitive_indices, aabbs);
     (nodes, cw.primitive_indices)
 }
 
-/// [`build_cwbvh`] with leaves of up to three primitives, and the union of `aabbs`.
+/// [`build_cwbvh_in`] with leaves of up to three primitives, and the union of `aabbs`.
 pub(super) fn build_ordered(
     aabbs: &[Aabb],
     quality: BvhQuality,
+    scratch: &Scratch,
 ) -> (Vec<Node>, Vec<u32>, Option<(Vec3, Vec3)>) {
-    let (nodes, order) = build_cwbvh(aabbs, quality, 3);
+    let (nodes, order) = build_cwbvh_in(aabbs, quality, 3, scratch);
     let bounds = aabbs.iter().fold(None, |acc: Option<(Vec3, Vec3)>, b| {
         let (lo, hi) = (Vec3::from(b.min), Vec3::from(b.max));
         Some(acc.map_or((lo, hi), |(a, b)| (a.min(lo), b.max(hi))))
@@ -135,7 +172,7 @@ pub(super) fn build_blas(
             })
             .collect(),
     };
-    let (nodes, order, bounds) = build_ordered(&aabbs, quality);
+    let (nodes, order, bounds) = build_ordered(&aabbs, quality, &Scratch::default());
     drop(aabbs);
     let ordered: Vec<Tri> = order.iter().map(|&i| tris[i as usize].0).collect();
     let tri_instance = if keep_instance {
@@ -154,5 +191,48 @@ pub(super) fn build_blas(
         box_bounds,
         deform: deform.map(|d| Box::new(d.reorder(&order))),
         pieces: 0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `n` scattered boxes from `seed`.
+    fn boxes(n: usize, seed: u32) -> Vec<Aabb> {
+        let mut s = seed;
+        let mut next = || {
+            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (s >> 8) as f32 / (1u32 << 24) as f32
+        };
+        (0..n)
+            .map(|_| {
+                let c = Vec3::new(next(), next(), next()) * 40.0;
+                let h = Vec3::new(next(), next(), next()) * 0.5;
+                Aabb::new((c - h).into(), (c + h).into())
+            })
+            .collect()
+    }
+
+    /// A build with obvhs' allocations reused from bigger and smaller builds before it makes
+    /// the tree a fresh build makes.
+    #[test]
+    fn scratch_reuse_builds_the_same_trees() {
+        let scratch = Scratch::default();
+        for (n, seed) in [(3000, 1), (40, 2), (700, 3), (1, 4), (2500, 5)] {
+            let b = boxes(n, seed);
+            let (fresh, fresh_order) = build_cwbvh(&b, BvhQuality::Medium, 3);
+            let (reused, reused_order) = build_cwbvh_in(&b, BvhQuality::Medium, 3, &scratch);
+            assert_eq!(fresh_order, reused_order, "{n} boxes");
+            assert_eq!(fresh.len(), reused.len(), "{n} boxes");
+            let key = |n: &Node| {
+                let links = (n.child_base_idx, n.primitive_base_idx, n.imask);
+                (n.child_meta, links, n.bounds)
+            };
+            for (a, r) in fresh.iter().zip(&reused) {
+                assert_eq!(key(a), key(r), "{n} boxes");
+            }
+        }
+        assert_eq!(scratch.0.lock().map(|v| v.len()).unwrap_or(0), 1);
     }
 }

@@ -12,7 +12,7 @@ use obvhs::{aabb::Aabb, cwbvh::node::CwBvhNode};
 /// One node of the tree: up to eight children, each an internal node or a leaf of up to three
 /// primitives, in obvhs' CWBVH encoding (`child_meta`, `imask`, the two base indices), with each
 /// child's box in floats.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::Zeroable)]
 #[repr(C, align(64))]
 pub(crate) struct Node {
     /// Rows `2a` and `2a + 1`: the children's box minimum and maximum along axis `a`, by slot.
