@@ -163,7 +163,7 @@ fn join(
         });
         (base, first_tri) = (nodes_after, tris_after);
     }
-    let nodes = piece_nodes(top_nodes, &placed, base);
+    let nodes = piece_nodes(top_nodes, &mut placed, base);
     let (tris, tri_instance) = piece_triangles(meshes, flat, &placed, first_tri);
     let bounds = boxes
         .iter()
@@ -195,30 +195,31 @@ struct Placed {
 }
 
 /// The joined tree's nodes, `total` in all: `top` (the top laid out with placeholders), each
-/// placeholder replaced by its piece's root and the pieces' other nodes after it, copied in
-/// parallel, a piece at a time.
-fn piece_nodes(top: Vec<Node>, placed: &[Placed], total: usize) -> Vec<Node> {
+/// placeholder replaced by its piece's root and the pieces' other nodes after it, moved in
+/// parallel, a piece at a time (each piece's own nodes freed once copied).
+fn piece_nodes(top: Vec<Node>, placed: &mut [Placed], total: usize) -> Vec<Node> {
     // Zeroed: its pages are first touched by the threads that fill them.
     let mut nodes: Vec<Node> = bytemuck::zeroed_vec(total);
     let (head, mut rest) = nodes.split_at_mut(top.len());
     head.copy_from_slice(&top);
-    for p in placed {
+    for p in placed.iter() {
         if let Some(root) = p.piece.nodes.first() {
             head[p.at] = moved(root, p.base, p.first_tri);
         }
     }
     let mut jobs = Vec::with_capacity(placed.len());
-    for p in placed {
-        let body = p.piece.nodes.get(1..).unwrap_or_default();
-        let (mine, after) = std::mem::take(&mut rest).split_at_mut(body.len());
+    for p in placed.iter_mut() {
+        let own = std::mem::take(&mut p.piece.nodes);
+        let (mine, after) = std::mem::take(&mut rest).split_at_mut(own.len().saturating_sub(1));
         rest = after;
-        jobs.push((p, body, mine));
+        jobs.push(((p.base, p.first_tri), own, mine));
     }
-    jobs.into_par_iter().for_each(|(p, body, mine)| {
-        for (slot, n) in mine.iter_mut().zip(body) {
-            *slot = moved(n, p.base, p.first_tri);
-        }
-    });
+    jobs.into_par_iter()
+        .for_each(|((base, first_tri), own, mine)| {
+            for (slot, n) in mine.iter_mut().zip(own.iter().skip(1)) {
+                *slot = moved(n, base, first_tri);
+            }
+        });
     nodes
 }
 
