@@ -179,22 +179,19 @@ fn overlapping_pieces_keep_one_build() {
     // a tree over their boxes would walk all eight (`OVERLAP_LIMIT`).
     let meshes: Vec<common::Geometry> = (0..8).map(|k| grid(6, 0.1 + 0.01 * k as f32)).collect();
     let inputs = mesh_inputs(&meshes);
-    let instances: Vec<InstanceInput> = (0..8)
-        .map(|k| InstanceInput {
-            mesh: k,
-            world_from_object: Affine3A::from_translation(Vec3::Z * 0.001 * k as f32),
-        })
-        .collect();
-    let stats = build(&inputs, &instances, BvhQuality::Medium, 0).stats();
+    // Plate k moved by k steps.
+    let row = |step: Vec3| -> Vec<InstanceInput> {
+        (0..8)
+            .map(|k| InstanceInput {
+                mesh: k,
+                world_from_object: Affine3A::from_translation(step * k as f32),
+            })
+            .collect()
+    };
+    let stats = build(&inputs, &row(Vec3::Z * 0.001), BvhQuality::Medium, 0).stats();
     assert_eq!(stats.joined_pieces, 0);
     assert_eq!(stats.unique_triangles, 8 * 6 * 6 * 2);
     // Spread out side by side, the same plates are joined.
-    let apart: Vec<InstanceInput> = (0..8)
-        .map(|k| InstanceInput {
-            mesh: k,
-            world_from_object: Affine3A::from_translation(Vec3::X * 2.0 * k as f32),
-        })
-        .collect();
-    let stats = build(&inputs, &apart, BvhQuality::Medium, 0).stats();
+    let stats = build(&inputs, &row(Vec3::X * 2.0), BvhQuality::Medium, 0).stats();
     assert_eq!(stats.joined_pieces, 8);
 }

@@ -254,8 +254,8 @@ impl Animated {
         Ok(animated)
     }
 
-    /// What loading does once the document is read and its buffers are freed: classifies the meshes (building the
-    /// static ones), then frames the automatic camera on the stored pose.
+    /// What loading does once the document is read and its buffers are freed: classifies the
+    /// meshes (building the static ones), then frames the automatic camera on the stored pose.
     fn prepare(mut self) -> Result<Self, Error> {
         self.classify()?;
         self.frame_stored_pose()?;

@@ -118,12 +118,7 @@ fn read_meshes(
         let own = m
             .primitives()
             .filter(|p| !mesh::is_not_triangles(p.mode()))
-            .map(|p| {
-                let index = variant
-                    .and_then(|v| mesh::variant_material(&p, v))
-                    .or(p.material().index());
-                materials.get(doc, index)
-            })
+            .map(|p| primitive_material(doc, &p, variant, materials))
             .collect();
         to_read.push(ToRead {
             mesh: m,
@@ -161,7 +156,20 @@ fn read_meshes(
     Ok(out)
 }
 
-/// Our material of each primitive of `mesh` (its variant's, else its own).
+/// Our material of `prim` (its variant's, else its own), numbered on first use.
+fn primitive_material(
+    doc: &gltf::Document,
+    prim: &gltf::Primitive<'_>,
+    variant: Option<usize>,
+    materials: &mut Materials,
+) -> u32 {
+    let index = variant
+        .and_then(|v| mesh::variant_material(prim, v))
+        .or(prim.material().index());
+    materials.get(doc, index)
+}
+
+/// Our material of each primitive of `mesh` ([`primitive_material`]).
 fn primitive_materials(
     doc: &gltf::Document,
     mesh: &gltf::Mesh<'_>,
@@ -169,12 +177,7 @@ fn primitive_materials(
     materials: &mut Materials,
 ) -> Vec<u32> {
     mesh.primitives()
-        .map(|p| {
-            let index = variant
-                .and_then(|v| mesh::variant_material(&p, v))
-                .or(p.material().index());
-            materials.get(doc, index)
-        })
+        .map(|p| primitive_material(doc, &p, variant, materials))
         .collect()
 }
 

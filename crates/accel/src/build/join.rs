@@ -59,7 +59,9 @@ fn overlap(meshes: &[MeshInput<'_>], flat: &[(u32, InstanceInput)]) -> f32 {
 }
 
 /// One instance's piece: its tree (nodes over its primitive order) and, per position of that
-/// order, the mesh triangle it holds.
+/// order, the mesh triangle it holds. Its world triangles are not kept: [`piece_triangles`]
+/// transforms them again when the pieces are joined (keeping them would hold 40 bytes a
+/// triangle for every piece at once, where this holds 4).
 struct Piece {
     nodes: Vec<Node>,
     /// Levels of `nodes`.
@@ -143,7 +145,8 @@ fn join(
         .filter(|(_, n)| n.primitive_base_idx == PIECE)
         .map(|(i, n)| (i, n.child_base_idx as usize))
         .collect();
-    // A piece's node j at level i of the top tree lands at level i + j (counted from 1).
+    // A piece under a top node at level i has its node at level j land at level i + j (from
+    // 1): at most the top's depth plus the deepest piece's (the walk's stack is sized by it).
     let depth = tree_depth(&top) + used.iter().map(|&k| pieces[k].depth).max().unwrap_or(0);
     let mut pieces: Vec<Option<Piece>> = pieces.into_iter().map(Some).collect();
     let mut placed = Vec::with_capacity(roots.len());
@@ -200,20 +203,24 @@ struct Placed {
 fn piece_nodes(top: Vec<Node>, placed: &mut [Placed], total: usize) -> Vec<Node> {
     // Zeroed: its pages are first touched by the threads that fill them.
     let mut nodes: Vec<Node> = bytemuck::zeroed_vec(total);
-    let (head, mut rest) = nodes.split_at_mut(top.len());
+    let (head, rest) = nodes.split_at_mut(top.len());
     head.copy_from_slice(&top);
     for p in placed.iter() {
         if let Some(root) = p.piece.nodes.first() {
             head[p.at] = moved(root, p.base, p.first_tri);
         }
     }
-    let mut jobs = Vec::with_capacity(placed.len());
-    for p in placed.iter_mut() {
-        let own = std::mem::take(&mut p.piece.nodes);
-        let (mine, after) = std::mem::take(&mut rest).split_at_mut(own.len().saturating_sub(1));
-        rest = after;
-        jobs.push(((p.base, p.first_tri), own, mine));
-    }
+    let owned: Vec<Vec<Node>> = placed
+        .iter_mut()
+        .map(|p| std::mem::take(&mut p.piece.nodes))
+        .collect();
+    let slots = split_lengths(rest, owned.iter().map(|n| n.len().saturating_sub(1)));
+    let places = placed.iter().map(|p| (p.base, p.first_tri));
+    let jobs: Vec<_> = places
+        .zip(owned)
+        .zip(slots)
+        .map(|((a, b), c)| (a, b, c))
+        .collect();
     jobs.into_par_iter()
         .for_each(|((base, first_tri), own, mine)| {
             for (slot, n) in mine.iter_mut().zip(own.iter().skip(1)) {
@@ -235,16 +242,12 @@ fn piece_triangles(
     // Zeroed allocations: their pages are first touched by the threads that fill them.
     let mut tris: Vec<Tri> = bytemuck::zeroed_vec(total);
     let mut tri_instance = vec![0u32; total];
-    let mut jobs = Vec::with_capacity(placed.len());
-    let (mut rest_t, mut rest_i) = (&mut tris[..], &mut tri_instance[..]);
-    for p in placed {
-        let n = p.piece.prims.len();
-        let (t, rt) = std::mem::take(&mut rest_t).split_at_mut(n);
-        let (i, ri) = std::mem::take(&mut rest_i).split_at_mut(n);
-        (rest_t, rest_i) = (rt, ri);
-        jobs.push((p.k, &p.piece.prims, t, i));
-    }
-    jobs.into_par_iter().for_each(|(k, prims, t, i)| {
+    let lengths = || placed.iter().map(|p| p.piece.prims.len());
+    let t_slots = split_lengths(&mut tris, lengths());
+    let i_slots = split_lengths(&mut tri_instance, lengths());
+    let jobs: Vec<_> = placed.iter().zip(t_slots).zip(i_slots).collect();
+    jobs.into_par_iter().for_each(|((p, t), i)| {
+        let (k, prims) = (p.k, &p.piece.prims);
         let (id, inst) = &flat[k];
         let mesh = &meshes[inst.mesh as usize];
         for (slot, &prim) in t.iter_mut().zip(prims) {
@@ -258,6 +261,20 @@ fn piece_triangles(
         i.fill(*id);
     });
     (tris, tri_instance)
+}
+
+/// `buf` cut into consecutive slices of `lengths` (the rest of it, if any, left out), for
+/// pieces to fill in parallel.
+fn split_lengths<T>(buf: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut rest = buf;
+    lengths
+        .map(|n| {
+            let n = n.min(rest.len());
+            let (mine, after) = std::mem::take(&mut rest).split_at_mut(n);
+            rest = after;
+            mine
+        })
+        .collect()
 }
 
 /// Node `n` of a piece whose nodes 1.. go to `base` on and whose triangles to `first_tri` on.

@@ -214,14 +214,32 @@ mod tests {
             .collect()
     }
 
+    /// obvhs' own one-shot build (`PlocBuilder::with_capacity(..).build`, as trees were
+    /// built before the scratch pool).
+    fn one_shot(aabbs: &[Aabb], quality: BvhQuality) -> (Vec<Node>, Vec<u32>) {
+        let mut p = build_params(quality);
+        p.max_prims_per_leaf = 3;
+        let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
+            p.ploc_search_distance,
+            aabbs,
+            (0..aabbs.len() as u32).collect(),
+            p.sort_precision,
+            p.search_depth_threshold,
+        );
+        ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
+        let cw = bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf, true, false);
+        let nodes = nodes_from_cwbvh(&cw.nodes, &cw.primitive_indices, aabbs);
+        (nodes, cw.primitive_indices)
+    }
+
     /// A build with obvhs' allocations reused from bigger and smaller builds before it makes
-    /// the tree a fresh build makes.
+    /// the tree obvhs' one-shot build makes.
     #[test]
     fn scratch_reuse_builds_the_same_trees() {
         let scratch = Scratch::default();
         for (n, seed) in [(3000, 1), (40, 2), (700, 3), (1, 4), (2500, 5)] {
             let b = boxes(n, seed);
-            let (fresh, fresh_order) = build_cwbvh(&b, BvhQuality::Medium, 3);
+            let (fresh, fresh_order) = one_shot(&b, BvhQuality::Medium);
             let (reused, reused_order) = build_cwbvh_in(&b, BvhQuality::Medium, 3, &scratch);
             assert_eq!(fresh_order, reused_order, "{n} boxes");
             assert_eq!(fresh.len(), reused.len(), "{n} boxes");

@@ -2,7 +2,7 @@
 //! over `--repeats` fresh loads (issue 59), and the process's peak memory. Nothing is kept
 //! from one load to the next; no error is measured.
 
-use super::{median, BenchArgs};
+use super::{image_size, median, BenchArgs};
 use crate::bench_results::write_atomic;
 use anyhow::Context as _;
 use aperture_render::{FrameSpec, RenderOptions, Session};
@@ -21,8 +21,7 @@ pub(super) struct LoadTimes {
 }
 
 /// Loads `args.scene` `--repeats` times (each load dropped before the next), rendering one
-/// sample a pixel after each, `--width` wide (320 by default) and `--height` high (by default
-/// from the camera's aspect).
+/// sample a pixel after each at the size the other configurations render.
 pub(super) fn measure_loads(args: &BenchArgs) -> anyhow::Result<Vec<LoadTimes>> {
     let mut out = Vec::new();
     for _ in 0..args.repeats {
@@ -30,11 +29,8 @@ pub(super) fn measure_loads(args: &BenchArgs) -> anyhow::Result<Vec<LoadTimes>> 
         let mut session = Session::load(&args.scene, &LoadOptions::default())
             .with_context(|| format!("loading {}", args.scene.display()))?;
         let scene = session.pose(None)?;
-        let width = args.width.unwrap_or(320);
-        let height = args.height.unwrap_or_else(|| match scene.cameras.first() {
-            Some(cam) => aperture_render::default_height(cam, width),
-            None => width * 3 / 4,
-        });
+        let cam = scene.cameras.first().context("the scene has no camera")?;
+        let (width, height) = image_size(args, cam, None)?;
         let opts = RenderOptions {
             width,
             height,
