@@ -14,9 +14,11 @@
 //! ```
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
+mod allocator;
 mod parse;
 mod system;
 
+pub use allocator::keep_freed_memory;
 pub use parse::parse_bytes;
 pub use system::{free_disk_bytes, peak_resident_bytes, system_memory, SystemMemory};
 

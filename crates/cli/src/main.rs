@@ -58,6 +58,8 @@ pub(crate) enum Command {
 }
 
 fn main() -> std::process::ExitCode {
+    // Before the first big allocation: freed buffers are reused, not faulted in again.
+    aperture_budget::keep_freed_memory();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Info(args) => interrupt::end_on_broken_pipe().and_then(|()| info::run(args)),
