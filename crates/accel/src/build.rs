@@ -4,6 +4,7 @@
 
 mod bounds;
 mod check;
+mod collapse;
 mod counts;
 mod join;
 mod placement;

@@ -1,8 +1,9 @@
-//! One BVH from boxes with obvhs (PLOC, reinsertion, CWBVH conversion), and a bottom-level
-//! BVH from triangles.
+//! One BVH from boxes with obvhs (PLOC, reinsertion) collapsed to our nodes, and a
+//! bottom-level BVH from triangles.
 
+use super::collapse::{collapse, Decisions};
 use crate::deform::Deform;
-use crate::node::{layout::nodes_from_cwbvh, Node};
+use crate::node::Node;
 use crate::structure::Blas;
 use crate::triangle::Tri;
 use crate::types::BvhQuality;
@@ -10,7 +11,6 @@ use glam::Vec3;
 use obvhs::{
     aabb::Aabb,
     bvh2::{reinsertion::ReinsertionOptimizer, Bvh2},
-    cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh,
     ploc::PlocBuilder,
     BvhBuildParams,
 };
@@ -76,19 +76,23 @@ fn build_params(quality: BvhQuality) -> BvhBuildParams {
     p
 }
 
-/// obvhs' builder and binary tree, kept between builds so that many small builds (the pieces
+/// obvhs' builder and binary tree and the collapse's cost table, kept between builds so that many small builds (the pieces
 /// of a joined tree) reuse their allocations instead of faulting fresh pages in each time;
 /// lent to one build at a time. Dropping it frees them.
 #[derive(Default)]
-pub(super) struct Scratch(Mutex<Vec<(PlocBuilder, Bvh2)>>);
+pub(super) struct Scratch(Mutex<Vec<Kept>>);
+
+/// What one build lends from a [`Scratch`]: obvhs' builder and binary tree, and the collapse's
+/// cost table.
+type Kept = (PlocBuilder, Bvh2, Decisions);
 
 impl Scratch {
-    fn take(&self) -> (PlocBuilder, Bvh2) {
+    fn take(&self) -> Kept {
         let kept = self.0.lock().ok().and_then(|mut v| v.pop());
-        kept.unwrap_or_else(|| (PlocBuilder::new(), Bvh2::default()))
+        kept.unwrap_or_else(|| (PlocBuilder::new(), Bvh2::default(), Decisions::new()))
     }
 
-    fn give(&self, kept: (PlocBuilder, Bvh2)) {
+    fn give(&self, kept: Kept) {
         if let Ok(mut v) = self.0.lock() {
             v.push(kept);
         }
@@ -105,7 +109,7 @@ pub(super) fn build_cwbvh(
     build_cwbvh_in(aabbs, quality, leaf_size, &Scratch::default())
 }
 
-/// [`build_cwbvh`] with obvhs' allocations taken from `scratch` (the same tree).
+/// [`build_cwbvh`] with its allocations taken from `scratch` (the same tree).
 pub(super) fn build_cwbvh_in(
     aabbs: &[Aabb],
     quality: BvhQuality,
@@ -117,7 +121,7 @@ pub(super) fn build_cwbvh_in(
     }
     let mut p = build_params(quality);
     p.max_prims_per_leaf = leaf_size;
-    let (mut builder, mut bvh2) = scratch.take();
+    let (mut builder, mut bvh2, mut decisions) = scratch.take();
     builder.build_with_bvh(
         &mut bvh2,
         p.ploc_search_distance,
@@ -127,10 +131,9 @@ pub(super) fn build_cwbvh_in(
         p.search_depth_threshold,
     );
     ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
-    let cw = bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf, true, false);
-    scratch.give((builder, bvh2));
-    let nodes = nodes_from_cwbvh(&cw.nodes, &cw.primitive_indices, aabbs);
-    (nodes, cw.primitive_indices)
+    let (nodes, order) = collapse(&bvh2, p.max_prims_per_leaf, &mut decisions);
+    scratch.give((builder, bvh2, decisions));
+    (nodes, order)
 }
 
 /// [`build_cwbvh_in`] with leaves of up to three primitives, and the union of `aabbs`.
@@ -214,11 +217,12 @@ mod tests {
             .collect()
     }
 
-    /// obvhs' own one-shot build (`PlocBuilder::with_capacity(..).build`, as trees were
-    /// built before the scratch pool).
-    fn one_shot(aabbs: &[Aabb], quality: BvhQuality) -> (Vec<Node>, Vec<u32>) {
+    /// obvhs' own one-shot build and CWBVH conversion (`PlocBuilder::with_capacity(..).build`,
+    /// `bvh2_to_cwbvh`, as trees were built before the scratch pool and the collapse), with
+    /// its nodes in our layout.
+    fn one_shot(aabbs: &[Aabb], quality: BvhQuality, leaf: u32) -> (Vec<Node>, Vec<u32>) {
         let mut p = build_params(quality);
-        p.max_prims_per_leaf = 3;
+        p.max_prims_per_leaf = leaf;
         let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
             p.ploc_search_distance,
             aabbs,
@@ -227,28 +231,44 @@ mod tests {
             p.search_depth_threshold,
         );
         ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
-        let cw = bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf, true, false);
-        let nodes = nodes_from_cwbvh(&cw.nodes, &cw.primitive_indices, aabbs);
+        let cw = obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh(&bvh2, leaf, true, false);
+        let nodes = crate::node::layout::nodes_from_cwbvh(&cw.nodes, &cw.primitive_indices, aabbs);
         (nodes, cw.primitive_indices)
     }
 
-    /// A build with obvhs' allocations reused from bigger and smaller builds before it makes
-    /// the tree obvhs' one-shot build makes.
+    /// Every quality and leaf size, with allocations reused from bigger and smaller builds
+    /// before: the tree is obvhs' one-shot build and conversion, node for node.
     #[test]
-    fn scratch_reuse_builds_the_same_trees() {
+    fn collapse_with_reuse_builds_obvhs_trees() {
         let scratch = Scratch::default();
-        for (n, seed) in [(3000, 1), (40, 2), (700, 3), (1, 4), (2500, 5)] {
-            let b = boxes(n, seed);
-            let (fresh, fresh_order) = one_shot(&b, BvhQuality::Medium);
-            let (reused, reused_order) = build_cwbvh_in(&b, BvhQuality::Medium, 3, &scratch);
-            assert_eq!(fresh_order, reused_order, "{n} boxes");
-            assert_eq!(fresh.len(), reused.len(), "{n} boxes");
-            let key = |n: &Node| {
-                let links = (n.child_base_idx, n.primitive_base_idx, n.imask);
-                (n.child_meta, links, n.bounds)
-            };
-            for (a, r) in fresh.iter().zip(&reused) {
-                assert_eq!(key(a), key(r), "{n} boxes");
+        let qualities = [BvhQuality::Fast, BvhQuality::Medium, BvhQuality::High];
+        let sizes = [
+            (3000, 1),
+            (40, 2),
+            (700, 3),
+            (1, 4),
+            (2, 6),
+            (3, 7),
+            (2500, 5),
+        ];
+        for (quality, leaf) in qualities
+            .into_iter()
+            .flat_map(|q| (1..=3).map(move |l| (q, l)))
+        {
+            for (n, seed) in sizes {
+                let b = boxes(n, seed);
+                let (fresh, fresh_order) = one_shot(&b, quality, leaf);
+                let (reused, reused_order) = build_cwbvh_in(&b, quality, leaf, &scratch);
+                let at = format!("{n} boxes, {quality:?}, leaves of {leaf}");
+                assert_eq!(fresh_order, reused_order, "{at}");
+                assert_eq!(fresh.len(), reused.len(), "{at}");
+                let key = |n: &Node| {
+                    let links = (n.child_base_idx, n.primitive_base_idx, n.imask);
+                    (n.child_meta, links, n.bounds)
+                };
+                for (a, r) in fresh.iter().zip(&reused) {
+                    assert_eq!(key(a), key(r), "{at}");
+                }
             }
         }
         assert_eq!(scratch.0.lock().map(|v| v.len()).unwrap_or(0), 1);

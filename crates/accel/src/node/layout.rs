@@ -1,5 +1,5 @@
-//! [`Node`]: obvhs' CWBVH node with its children's boxes in floats, and the conversion from
-//! obvhs' nodes.
+//! [`Node`]: obvhs' CWBVH node with its children's boxes in floats, and (for tests) the
+//! conversion from obvhs' nodes.
 //!
 //! Why not obvhs' 80-byte node as it is: its boxes are quantised to 8 bits relative to the
 //! parent, so every node test first rebuilds them (a frame of nine values per ray and node, six
@@ -7,7 +7,9 @@
 //! of them are entered. The 256-byte node is Embree's BVH8 layout: six rows of eight floats, and
 //! the topology obvhs built.
 
-use obvhs::{aabb::Aabb, cwbvh::node::CwBvhNode};
+#[cfg(test)]
+use obvhs::aabb::Aabb;
+use obvhs::cwbvh::node::CwBvhNode;
 
 /// One node of the tree: up to eight children, each an internal node or a leaf of up to three
 /// primitives, in obvhs' CWBVH encoding (`child_meta`, `imask`, the two base indices), with each
@@ -30,6 +32,23 @@ pub(crate) struct Node {
 }
 
 impl Node {
+    /// A node with every slot empty: each child box empty (minimum `+inf`, maximum `-inf`),
+    /// which no ray enters.
+    pub const EMPTY: Node = Node {
+        bounds: [
+            [f32::INFINITY; 8],
+            [f32::NEG_INFINITY; 8],
+            [f32::INFINITY; 8],
+            [f32::NEG_INFINITY; 8],
+            [f32::INFINITY; 8],
+            [f32::NEG_INFINITY; 8],
+        ],
+        child_base_idx: 0,
+        primitive_base_idx: 0,
+        child_meta: [0; 8],
+        imask: 0,
+    };
+
     /// obvhs' `CwBvhNode::get_child_and_index_bits` of this node: per slot byte, the bits a hit
     /// child sets in the node hit mask and the index they are shifted to (for internal
     /// children, the slot XOR the ray's octant `oct_inv4`, biased by 24). It reads only
@@ -69,28 +88,18 @@ pub(crate) fn child_index(base: u32, imask: u32, slot: u32) -> u32 {
 }
 
 /// Our nodes for obvhs' `nodes` over primitives whose boxes are `prim_boxes`, in the order
-/// `primitive_indices` (the primitive order obvhs returns). Children follow their parent in
+/// `primitive_indices` (the primitive order obvhs returns). Builds collapse obvhs' binary
+/// trees straight to our nodes (`build::collapse`); this conversion of obvhs' own CWBVH is the
+/// reference the tests hold that to. Children follow their parent in
 /// obvhs' array, so the boxes are gathered from the last node back; an index out of range
 /// (never so for obvhs' trees) leaves that child's box empty.
+#[cfg(test)]
 pub(crate) fn nodes_from_cwbvh(
     nodes: &[CwBvhNode],
     primitive_indices: &[u32],
     prim_boxes: &[Aabb],
 ) -> Vec<Node> {
-    let empty = Node {
-        bounds: [
-            [f32::INFINITY; 8],
-            [f32::NEG_INFINITY; 8],
-            [f32::INFINITY; 8],
-            [f32::NEG_INFINITY; 8],
-            [f32::INFINITY; 8],
-            [f32::NEG_INFINITY; 8],
-        ],
-        child_base_idx: 0,
-        primitive_base_idx: 0,
-        child_meta: [0; 8],
-        imask: 0,
-    };
+    let empty = Node::EMPTY;
     let mut out = vec![empty; nodes.len()];
     // Each node's own box, as its parent's row entries need it.
     let mut own = vec![Aabb::empty(); nodes.len()];
