@@ -161,7 +161,7 @@ impl Animated {
             // A .glb without the magic is a damaged container, not JSON: say so.
             glb::parse(&bytes)?;
         }
-        let read = guard(|| Self::unguarded(&bytes, base_dir, options, graph_edits))?;
+        let read = Self::decode(&bytes, base_dir, options, graph_edits)?;
         // Everything is decoded: the file's bytes go before the static shapes are built
         // (for a big scene, as many bytes again as its meshes; issue 59).
         drop(bytes);
@@ -170,10 +170,30 @@ impl Animated {
 
     /// Loads from the bytes of a `.gltf` or `.glb` file; external URIs resolve inside `base_dir`.
     pub fn load_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Result<Self, Error> {
-        guard(|| Self::unguarded(bytes, base_dir, options, &[])?.prepare())
+        let read = Self::decode(bytes, base_dir, options, &[])?;
+        guard(|| read.prepare())
     }
 
-    /// Reads and decodes the file: an [`Animated`] not yet prepared ([`Animated::prepare`]).
+    /// [`Animated::unguarded`] under the panic guard, with the file's hash computed beside it
+    /// (the decoding leaves a thread idle at times).
+    fn decode(
+        bytes: &[u8],
+        base_dir: &Path,
+        options: &LoadOptions,
+        graph_edits: &[Edit],
+    ) -> Result<Self, Error> {
+        let (read, source_hash) = rayon::join(
+            || guard(|| Self::unguarded(bytes, base_dir, options, graph_edits)),
+            || crate::hash::content_hash(bytes),
+        );
+        Ok(Self {
+            source_hash,
+            ..read?
+        })
+    }
+
+    /// Reads and decodes the file: an [`Animated`] not yet prepared ([`Animated::prepare`]),
+    /// its `source_hash` left to [`Animated::decode`].
     fn unguarded(
         bytes: &[u8],
         base_dir: &Path,
@@ -246,7 +266,7 @@ impl Animated {
             stats,
             draws_nothing: doc.meshes().len() > 0,
             framing: None,
-            source_hash: crate::hash::content_hash(bytes),
+            source_hash: 0,
             base_dir: base_dir.to_path_buf(),
         };
         // Done with: freed before posing (with two million nodes, 0.5 GB less at the peak).

@@ -7,6 +7,7 @@
 
 use crate::types::{Mesh, Scene};
 use glam::{Vec2, Vec4};
+use rayon::prelude::*;
 
 /// The triangles of one mesh that need generated tangents, as MikkTSpace sees them.
 struct Faces<'a> {
@@ -72,7 +73,11 @@ pub(crate) fn tangent_uv_set(m: &crate::types::Material) -> Option<u32> {
 /// `tangents` stay empty).
 pub fn generate_missing_tangents(scene: &mut Scene) {
     let materials = &scene.materials;
-    for mesh in &mut scene.meshes {
+    // Most scenes have no normal map: then no triangle's material is looked at.
+    if !materials.iter().any(|m| tangent_uv_set(m).is_some()) {
+        return;
+    }
+    scene.meshes.par_iter_mut().for_each(|mesh| {
         // Triangles that need tangents, grouped by the UV set their normal map reads.
         let mut by_set: [Vec<usize>; 2] = [Vec::new(), Vec::new()];
         for (t, &mid) in mesh.material_ids.iter().enumerate() {
@@ -113,7 +118,7 @@ pub fn generate_missing_tangents(scene: &mut Scene) {
             let Faces { faces, out, .. } = g;
             assign(std::sync::Arc::make_mut(mesh), &faces, &out);
         }
-    }
+    });
 }
 
 /// Writes per-corner tangents into the mesh, splitting vertices whose corners disagree.

@@ -77,7 +77,10 @@ impl Source<'_, '_> {
         semantic: Semantic,
         vertices: usize,
         at: &str,
-    ) -> Result<Option<Vec<[f32; N]>>, Error> {
+    ) -> Result<Option<Vec<[f32; N]>>, Error>
+    where
+        [f32; N]: bytemuck::AnyBitPattern,
+    {
         let Some((flat, dims)) = self.flat(&semantic, vertices, at)? else {
             return Ok(None);
         };
@@ -87,11 +90,7 @@ impl Source<'_, '_> {
                 reason: format!("{dims} components per element, {N} expected"),
             });
         }
-        Ok(Some(
-            flat.chunks_exact(N)
-                .map(|c| std::array::from_fn(|k| c[k]))
-                .collect(),
-        ))
+        Ok(Some(vectors(flat)))
     }
 }
 
@@ -124,10 +123,26 @@ fn triangulate(mode: Mode, idx: &[u32], at: &str) -> Result<Vec<[u32; 3]>, Error
     })
 }
 
-fn gather<T: Copy>(v: &[T], remap: &Option<Vec<u32>>) -> Vec<T> {
+fn gather<T: Copy>(v: Vec<T>, remap: &Option<Vec<u32>>) -> Vec<T> {
     match remap {
         Some(r) => r.iter().map(|&i| v[i as usize]).collect(),
-        None => v.to_vec(),
+        None => v,
+    }
+}
+
+/// `flat` read as `N`-component vectors: the same allocation where its length and capacity
+/// are multiples of `N` (as a read sizes them), else a copy. A scene's attributes are most of
+/// its bytes; each copy of them was a pass over fresh memory.
+fn vectors<const N: usize>(flat: Vec<f32>) -> Vec<[f32; N]>
+where
+    [f32; N]: bytemuck::AnyBitPattern,
+{
+    match bytemuck::allocation::try_cast_vec::<f32, [f32; N]>(flat) {
+        Ok(v) => v,
+        Err((_, flat)) => flat
+            .chunks_exact(N)
+            .map(|c| std::array::from_fn(|k| c[k]))
+            .collect(),
     }
 }
 
@@ -266,7 +281,7 @@ pub(crate) fn read_part(
             (Some(remap), ns)
         }
     };
-    let v2 = |v: Vec<[f32; 2]>| gather(&v, &remap).into_iter().map(Vec2::from).collect();
+    let v2 = |v: Vec<[f32; 2]>| gather(v, &remap).into_iter().map(Vec2::from).collect();
     let per_vertex = |v: Vec<f32>| -> Vec<f32> {
         match &remap {
             Some(r) => r
@@ -277,14 +292,14 @@ pub(crate) fn read_part(
         }
     };
     Ok(Part {
-        positions: gather(&positions, &remap),
+        positions: gather(positions, &remap),
         normals,
         flat,
-        tangents: tangents.map(|t| gather(&t, &remap).into_iter().map(Vec4::from).collect()),
+        tangents: tangents.map(|t| gather(t, &remap).into_iter().map(Vec4::from).collect()),
         uv0: uv0.map(v2),
         uv1: uv1.map(v2),
         uv_more: uv_more.into_iter().map(|u| u.map(v2)).collect(),
-        colors: colors.map(|c| gather(&c, &remap)),
+        colors: colors.map(|c| gather(c, &remap)),
         triangles,
         material,
         targets: targets
@@ -398,18 +413,18 @@ fn remap_target(t: MorphTarget, remap: &Option<Vec<u32>>, flat: bool) -> MorphTa
         positions: if t.positions.is_empty() {
             t.positions
         } else {
-            gather(&t.positions, remap)
+            gather(t.positions, remap)
         },
         // Flat normals are recomputed from the morphed positions instead.
         normals: if flat || t.normals.is_empty() {
             Vec::new()
         } else {
-            gather(&t.normals, remap)
+            gather(t.normals, remap)
         },
         tangents: if t.tangents.is_empty() {
             t.tangents
         } else {
-            gather(&t.tangents, remap)
+            gather(t.tangents, remap)
         },
     }
 }
