@@ -12,7 +12,14 @@
 # 3. builds `aperture` (debug) for aarch64 and for Windows, renders the demo with each, under
 #    qemu-aarch64 and wine, and compares the pixels bit for bit with the x86-64 build's
 #    (target/debug/aperture, built here when missing); runs the aarch64 unit tests of budget,
-#    denoise and accel (there the NEON kernels against the scalar ones) under qemu-aarch64.
+#    denoise and accel (there the NEON kernels against the scalar ones) under qemu-aarch64;
+# 4. builds the Python module's abi3 wheel (maturin, debug) for both: the aarch64 wheel renders
+#    the demo in Debian's arm64 CPython 3.11 and numpy under qemu-aarch64 (their packages are
+#    downloaded with a private apt state and unpacked into a cached sysroot, nothing installed)
+#    and joins the comparison; the Windows wheel (pyo3 links python3.dll as raw-dylib, so no
+#    import library; no Windows Python here to load it) must link python3.dll and no MinGW
+#    runtime DLL. macOS: clippy only, as a wheel does not link without Apple's SDK (sysinfo
+#    links IOKit and CoreFoundation).
 #
 # Cross builds compile dependencies at opt-level 0 and without debug info (the dev profile's
 # opt-level 3 is for tests): half the build time, and the same images, as Rust's float
@@ -116,10 +123,60 @@ if want windows; then
     wine "$out/aperture.exe" "${args[@]}" -o "$out/windows.png"
 fi
 
+step "the Python wheels: maturin in $zig_venv"
+if ! "$zig_venv/bin/python" -c 'import maturin' >/dev/null 2>&1; then
+    "$zig_venv/bin/pip" install --quiet --disable-pip-version-check "maturin>=1.9,<2"
+fi
+wheel() { # TARGET DIR: the debug abi3 wheel for TARGET, unpacked into DIR
+    "$zig_venv/bin/maturin" build --quiet -m crates/python/Cargo.toml --target "$1" \
+        --out "$2/wheel" "${cross[@]}"
+    (cd "$2" && python3 -m zipfile -e wheel/*.whl .)
+}
+if want aarch64; then
+    step "the aarch64 wheel renders the demo in arm64 CPython under qemu-aarch64"
+    wheel "$ARM" "$out/arm-wheel"
+    apt_dir="${XDG_CACHE_HOME:-$HOME/.cache}/aperture/arm64-apt"
+    sysroot="$apt_dir/sysroot"
+    if [ ! -x "$sysroot/usr/bin/python3.11" ]; then
+        mkdir -p "$apt_dir/state/lists/partial" "$apt_dir/cache/archives/partial"
+        touch "$apt_dir/status"
+        apt_opts=(-o "Dir::State=$apt_dir/state" -o "Dir::State::status=$apt_dir/status"
+            -o "Dir::Cache=$apt_dir/cache" -o APT::Architecture=arm64
+            -o APT::Architectures::=arm64 -o Debug::NoLocking=1)
+        apt-get "${apt_opts[@]}" update -qq 2>&1 | grep -v "unsandboxed" || true
+        apt-get "${apt_opts[@]}" install --download-only -y -qq python3.11 python3-numpy 2>&1 |
+            grep -v "unsandboxed" || true
+        rm -rf "$sysroot" && mkdir -p "$sysroot"
+        for deb in "$apt_dir"/cache/archives/*.deb; do dpkg-deb -x "$deb" "$sysroot"; done
+    fi
+    # numpy finds BLAS and LAPACK through alternatives links that unpacking does not make.
+    libs="$sysroot/usr/lib/aarch64-linux-gnu"
+    qemu-aarch64 -L "$sysroot" -E "LD_LIBRARY_PATH=$libs/blas:$libs/lapack" \
+        "$sysroot/usr/bin/python3.11" - "$out/arm-wheel" "$out/aarch64-python.png" <<'PY'
+import sys
+sys.path.insert(0, sys.argv[1])
+import aperture
+scene = aperture.load("assets/demo.glb")
+aperture.write(sys.argv[2], scene.render(width=160, height=90, spp=4))
+PY
+fi
+if want windows; then
+    step "the Windows wheel"
+    wheel "$WIN" "$out/win-wheel"
+    pyd="$out/win-wheel/aperture/aperture.pyd"
+    dlls=$(x86_64-w64-mingw32-objdump -p "$pyd" | grep "DLL Name")
+    if grep -iE "libstdc|libgcc|libwinpthread" <<<"$dlls"; then
+        echo "error: aperture.pyd needs the MinGW runtime DLLs above" >&2
+        exit 1
+    fi
+    grep -q "python3.dll" <<<"$dlls" || { echo "error: aperture.pyd is not abi3 (no python3.dll)" >&2; exit 1; }
+fi
+
 step "compare with x86-64"
 sha256sum "$out"/*.png
 python3 tools/cross/png_pixels.py "$out"/*.png | tee "$out/pixels.txt"
-if [ "$(wc -l <"$out/pixels.txt")" != $((1 + $(wc -w <<<"$platforms"))) ]; then
+# One image per platform, and the aarch64 wheel's.
+if [ "$(wc -l <"$out/pixels.txt")" != $((1 + $(wc -w <<<"$platforms") + $(want aarch64 && echo 1 || echo 0))) ]; then
     echo "error: an image is missing" >&2
     exit 1
 fi
