@@ -148,6 +148,7 @@ def run(bpy):
     bpy.app.handlers.depsgraph_update_post.remove(handler)
     test_preview(vs, session)
     test_denoise(bpy, vs, session, aperture)
+    test_denoise_schedule(vs)
     session.free()
     test_f12(bpy, vs, aperture)
 
@@ -199,6 +200,64 @@ def test_denoise(bpy, vs, session, aperture):
           f"from sample 1 the {SPP}-spp film equals a denoised render (balanced, fast) bit for "
           f"bit: {denoised}; with the start sample past {SPP} the film is the noisy one: {late}")
     sc.aperture.viewport_denoise = False
+
+
+def test_denoise_schedule(vs):
+    """Viewport denoising keeps to its share of the worker's time (Cycles' scheduler): with a
+    fake progressive render and clock (no timing), the films shown are the noisy ones before
+    the start sample, then denoised ones only: the first from the start sample on, the last,
+    and between them only once the render time since the last denoise is (1/share - 1) times
+    its cost; with a cheap denoiser every pass is denoised."""
+
+    class Clock:
+        now = 0.0
+
+        def __call__(self):
+            return self.now
+
+    def run(denoise_seconds, passes=12, start=3, step_seconds=0.1):
+        clock, calls = Clock(), []
+
+        class Render:
+            samples, done = 0, False
+
+            def step(self):
+                clock.now += step_seconds
+                self.samples += 1
+                self.done = self.samples >= passes
+
+            def image(self, denoise):
+                clock.now += denoise_seconds if denoise else 0.001
+                calls.append((self.samples, denoise))
+                film = np.full((2, 2, 4), self.samples + (0.5 if denoise else 0.0), np.float32)
+                return type("Result", (), {"image": film})
+
+            def cancel(self):
+                pass
+
+        class Scene:
+            def start(self, **options):
+                return Render()
+
+        w = vs.Worker(Scene(), {"denoise": True}, denoise_start=start, clock=clock)
+        w.wait()
+        return calls, w
+
+    slow, w_slow = run(0.5)  # a denoise costs five passes: the share allows one in fifteen
+    fast, w_fast = run(0.01)
+    want_slow = [(1, False), (2, False), (3, True), (12, True)]
+    want_fast = [(1, False), (2, False)] + [(n, True) for n in range(3, 13)]
+    last = w_slow.latest()
+    pure = [vs.denoise_now(*a) for a in [(2, 3, True, False, 0, 0), (5, None, True, False, 0, 0),
+                                         (3, 3, False, False, 0, 0), (9, 3, True, True, 0, 9),
+                                         (9, 3, False, True, 2.9, 1), (9, 3, False, True, 3, 1)]]
+    check("viewport.denoise-schedule",
+          slow == want_slow and fast == want_fast and w_slow.denoised == 2
+          and float(last[0][0, 0, 0]) == 12.5 and last[1] == 12
+          and pure == [False, False, True, True, False, True] and w_slow.error is None,
+          f"films made with a denoise of 5 passes' cost: {slow} (want {want_slow}); with a "
+          f"cheap one: {len(fast)} of 12, all denoised from sample 3: {fast == want_fast}; "
+          f"the last film shown is the last denoised: {last[1]} spp; the rule's cases {pure}")
 
 
 def f12(bpy, name):
