@@ -47,7 +47,8 @@ fn exactly_collinear(p: [Vec3; 3]) -> bool {
 ///
 /// Each edge and product is rounded once and the difference once more, so a component is off
 /// by less than 4 units in the last place of the products' sum (2^-22 of it); 2^-16 leaves
-/// room, and the bound of 2^-100 keeps the products out of the subnormals, where that fails.
+/// room, and the floor of 1e-30 (about 2^-100) keeps the products out of the subnormals,
+/// where that bound fails.
 /// An infinite or NaN product fails the comparison, so it goes on to the exact test.
 fn clearly_not_collinear(p: [Vec3; 3]) -> bool {
     let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
