@@ -4,11 +4,12 @@ from command to first sample and peak memory of Blender Cycles and Mitsuba 3, on
 of tools/bench/big_scene.py, the median of ROUNDS fresh child processes each:
 
     python3 tools/bench/big_rivals.py [--rounds 3] [--renderers cycles,mitsuba]
-        [--work /tmp/big_rivals] [--mem-limit-gb G] [--threads 2]
+        [--work /tmp/big_rivals] [--keep-work] [--mem-limit-gb G] [--threads 2]
         [--bpy-python ~/.cache/aperture/bpy-5.0.1/bin/python]
         [--mitsuba-python /tmp/mitsuba-venv/bin/python] FILE.glb...
 
-Preparation, untimed and cached in --work (redone when the GLB is newer):
+Preparation, untimed and cached in --work (redone when the GLB is newer; about 3× the GLBs'
+size, so a file's inputs are removed once it is measured unless --keep-work):
   cycles   Blender's glTF importer (bpy.ops.import_scene.gltf, default options, so no vertex
            merging) into an empty scene, saved as an uncompressed .blend.
   mitsuba  every mesh written as a binary PLY (float32 positions and normals, uint32 faces,
@@ -46,6 +47,7 @@ import math
 import os
 import resource
 import signal
+import shutil
 import statistics
 import struct
 import subprocess
@@ -430,6 +432,8 @@ def main():
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--renderers", default="cycles,mitsuba")
     ap.add_argument("--work", default="/tmp/big_rivals")
+    ap.add_argument("--keep-work", action="store_true",
+                    help="keep the prepared inputs in --work for the next run")
     ap.add_argument("--mem-limit-gb", type=float, default=None)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--bpy-python",
@@ -481,6 +485,13 @@ def main():
                                 "bvh": res.get("bvh_s"),
                                 "render": res["render_s"], "again": res.get("again_s"),
                                 "total": res["rendered"] - launch, "rss": rss, "wall": wall})
+        if not a.keep_work:
+            for r, path in inputs.items():
+                # Mitsuba's: scene.json in a folder of PLY files; Cycles': one .blend.
+                if r == "mitsuba":
+                    shutil.rmtree(os.path.dirname(path))
+                else:
+                    os.remove(path)
         for r in renderers:
             done = [x for x in runs[r] if not x.get("killed")]
             if not done:

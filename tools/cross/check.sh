@@ -34,7 +34,10 @@ cd "$(dirname "$0")/../.."
 export CARGO_TERM_COLOR=never
 export CARGO_INCREMENTAL=0
 start=$(date +%s)
-step() { echo "== $* ($(($(date +%s) - start)) s)"; }
+step() { echo "== $* ($(($(date +%s) - start)) s; $(df -h --output=avail . | tail -1 | tr -d ' ') free)"; }
+# Under CI (a fresh clone, deleted afterwards) each target's build is removed once its last
+# step is done: the three cross builds together take about 2 GB, which a nearly full disk lacks.
+done_with() { [ "${CI:-}" != true ] || rm -rf "$target_dir/$1"; }
 
 ARM=aarch64-unknown-linux-gnu
 WIN=x86_64-pc-windows-gnu
@@ -85,6 +88,7 @@ chmod +x "$zig_bin/zig-ar"
 ZIG_PYTHON="$zig_venv/bin/python" CC_aarch64_apple_darwin="$zig_bin/zig-cc" \
     CXX_aarch64_apple_darwin="$zig_bin/zig-c++" AR_aarch64_apple_darwin="$zig_bin/zig-ar" \
     cargo clippy --workspace --all-targets --target "$MAC" -- -D warnings
+done_with "$MAC"
 
 out=$(mktemp -d)
 export WINEPREFIX="$out/wine" WINEDEBUG=-all
@@ -159,6 +163,7 @@ import aperture
 scene = aperture.load("assets/demo.glb")
 aperture.write(sys.argv[2], scene.render(width=160, height=90, spp=4))
 PY
+    done_with "$ARM"
 fi
 if want windows; then
     step "the Windows wheel"
@@ -170,6 +175,7 @@ if want windows; then
         exit 1
     fi
     grep -q "python3.dll" <<<"$dlls" || { echo "error: aperture.pyd is not abi3 (no python3.dll)" >&2; exit 1; }
+    done_with "$WIN"
 fi
 
 step "compare with x86-64"
