@@ -91,7 +91,11 @@ pub(crate) fn resolve_path(base_dir: &Path, uri: &str, at: &str) -> Result<PathB
 
 /// Loads the bytes a URI names.
 pub(crate) fn load(base_dir: &Path, uri: &str, at: &str) -> Result<Vec<u8>, Error> {
-    if uri.len() >= 5 && uri[..5].eq_ignore_ascii_case("data:") {
+    // `get`, not indexing: byte 5 may fall inside a character ("dataơ…", found by fuzzing).
+    if uri
+        .get(..5)
+        .is_some_and(|head| head.eq_ignore_ascii_case("data:"))
+    {
         return decode_data_uri(uri, at);
     }
     let path = resolve_path(base_dir, uri, at)?;

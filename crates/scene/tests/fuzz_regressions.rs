@@ -87,3 +87,33 @@ fn a_ktx2_level_0_within_2_pow_64_bytes_is_not_refused_by_a_wrapped_bound() {
     assert!(msg.contains("images[0]"), "{msg}");
     assert!(!msg.contains("at most 0"), "{msg}");
 }
+
+/// Fuzz target `load`, 16,992 executions into CI's smoke run (2026-12-07): a buffer URI whose
+/// fifth byte falls inside a character (`"dataơpplication/…"`, `ơ` at bytes 4..6). The check
+/// for a `data:` URI sliced its first five bytes and panicked; such a URI is a file name now,
+/// refused as the missing file it names, with the buffer's place.
+#[test]
+fn a_uri_whose_fifth_byte_splits_a_character_is_an_error_not_a_panic() {
+    for uri in [
+        "dataơpplication/octet-stream;base64,AAAA",
+        "é",
+        "daté",
+        "dataé:",
+    ] {
+        let gltf = format!(
+            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":3,"uri":"{uri}"}}]}}"#
+        );
+        let options = aperture_scene::LoadOptions::default();
+        let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz");
+        match aperture_scene::Animated::load_bytes(gltf.as_bytes(), &folder, &options) {
+            Ok(_) => panic!("{uri}: loaded a buffer from a file that does not exist"),
+            Err(e) => {
+                assert!(
+                    !matches!(e, aperture_scene::Error::Panicked { .. }),
+                    "{uri}: {e}"
+                );
+                assert!(e.to_string().contains("buffers[0]"), "{uri}: {e}");
+            }
+        }
+    }
+}
