@@ -2,12 +2,18 @@
 the add-on's ``viewport_sync`` on a real depsgraph, a 1920 x 1080 viewport.
 
     python viewport_blender.py [--scene demo|big] [--triangles 1000000] [--moves 7]
+        [--denoise off|schedule|every]
 
 ``demo`` imports assets/demo.glb into Blender; ``big`` is f12_blender.py's generated tiles.
 Printed: start (export + load + first image), then the medians over ``--moves`` of: a camera
 move to its first image and to 16 samples a pixel, and an object's move to its first image
 (each after Blender's own depsgraph update, which is not counted). The first image comes at the
 pixel size the last update's full pass asks for (viewport_sync.pixel_size_for).
+
+``--denoise schedule`` turns *Viewport Denoise* on (Start Sample 1, the panel's default): the
+worker denoises when ``viewport_sync.denoise_now`` says so. ``--denoise every`` puts the rule
+it replaced in its place (every film from the Start Sample denoised), to time the difference;
+each prints how many films were denoised per move.
 """
 
 import argparse
@@ -39,6 +45,7 @@ def main():
     ap.add_argument("--scene", default="demo", choices=["demo", "big"])
     ap.add_argument("--triangles", type=int, default=1_000_000)
     ap.add_argument("--moves", type=int, default=7)
+    ap.add_argument("--denoise", default="off", choices=["off", "schedule", "every"])
     a = ap.parse_args()
     work = tempfile.mkdtemp(prefix="aperture-viewport-bench-")
     os.environ["BLENDER_USER_SCRIPTS"] = os.path.join(work, "s")
@@ -59,12 +66,17 @@ def main():
     sc = bpy.context.scene
     sc.render.engine = "APERTURE"
     sc.aperture.samples, sc.aperture.denoise = SPP, False
+    sc.aperture.viewport_denoise = a.denoise != "off"
+    denoise, denoise_start = vs.viewport_denoise(sc)
+    if a.denoise == "every":
+        # The rule before the schedule: every film from the Start Sample on.
+        vs.denoise_now = lambda samples, start, *rest: start is not None and samples >= start
     tris = sum(len(o.data.polygons) for o in sc.objects if o.type == "MESH")
     dg = bpy.context.evaluated_depsgraph_get()
     t = time.perf_counter()
     s = vs.Session(dg)
     loaded = time.perf_counter() - t
-    w = s.start(width=W, height=H)
+    w = s.start(width=W, height=H, denoise_start=denoise_start, **denoise)
     start = loaded + first_image(w)
     w.wait()
     print(f"{a.scene}: {tris} polygons; start: export + load {loaded:.3f} s, to the first image "
@@ -72,26 +84,28 @@ def main():
     bpy.app.handlers.depsgraph_update_post.append(lambda scene, depsgraph: s.sync(depsgraph))
     cam = sc.camera
     mover = next(o for o in sc.objects if o.type == "MESH")
-    rows = {"camera": [], "camera16": [], "transform": [], "pixel": []}
+    rows = {"camera": [], "camera16": [], "transform": [], "pixel": [], "denoised": []}
     for k in range(a.moves):
         cam.location.x += 0.05 if k % 2 == 0 else -0.05
         bpy.context.view_layer.update()  # the handler syncs (not counted: Blender's own work)
         t = time.perf_counter()
-        w = s.start(width=W, height=H)
+        w = s.start(width=W, height=H, denoise_start=denoise_start, **denoise)
         rows["camera"].append(first_image(w) + 0.0)
         rows["pixel"].append(w.pixel_size)
         w.wait()
         rows["camera16"].append(time.perf_counter() - t)
+        rows["denoised"].append(w.denoised)
         mover.location.z += 0.01 if k % 2 == 0 else -0.01
         bpy.context.view_layer.update()
         t = time.perf_counter()
-        w = s.start(width=W, height=H)
+        w = s.start(width=W, height=H, denoise_start=denoise_start, **denoise)
         rows["transform"].append(first_image(w))
         w.wait()
     med = {k: statistics.median(v) for k, v in rows.items()}
     print(f"camera move -> first image {med['camera'] * 1e3:.1f} ms (pixel sizes {rows['pixel']}), "
           f"-> {SPP} spp {med['camera16']:.2f} s; transform -> first image "
-          f"{med['transform'] * 1e3:.1f} ms (medians of {a.moves})", flush=True)
+          f"{med['transform'] * 1e3:.1f} ms (medians of {a.moves}); denoise {a.denoise}, "
+          f"films denoised per move {rows['denoised']}", flush=True)
     s.free()
 
 

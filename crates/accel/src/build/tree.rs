@@ -76,25 +76,25 @@ fn build_params(quality: BvhQuality) -> BvhBuildParams {
     p
 }
 
-/// obvhs' builder and binary tree and the collapse's cost table, kept between builds so that many small builds (the pieces
-/// of a joined tree) reuse their allocations instead of faulting fresh pages in each time;
-/// lent to one build at a time. Dropping it frees them.
+/// obvhs' builder and binary tree and the collapse's cost table, kept between builds so that
+/// many small builds (the pieces of a joined tree) reuse their allocations instead of faulting
+/// fresh pages in each time; lent to one build at a time. Dropping it frees them.
 #[derive(Default)]
-pub(super) struct Scratch(Mutex<Vec<Kept>>);
+pub(super) struct Scratch(Mutex<Vec<Lent>>);
 
 /// What one build lends from a [`Scratch`]: obvhs' builder and binary tree, and the collapse's
 /// cost table.
-type Kept = (PlocBuilder, Bvh2, Decisions);
+type Lent = (PlocBuilder, Bvh2, Decisions);
 
 impl Scratch {
-    fn take(&self) -> Kept {
-        let kept = self.0.lock().ok().and_then(|mut v| v.pop());
-        kept.unwrap_or_else(|| (PlocBuilder::new(), Bvh2::default(), Decisions::new()))
+    fn take(&self) -> Lent {
+        let lent = self.0.lock().ok().and_then(|mut v| v.pop());
+        lent.unwrap_or_else(|| (PlocBuilder::new(), Bvh2::default(), Decisions::new()))
     }
 
-    fn give(&self, kept: Kept) {
+    fn give(&self, lent: Lent) {
         if let Ok(mut v) = self.0.lock() {
-            v.push(kept);
+            v.push(lent);
         }
     }
 }
@@ -219,7 +219,8 @@ mod tests {
 
     /// obvhs' own one-shot build and CWBVH conversion (`PlocBuilder::with_capacity(..).build`,
     /// `bvh2_to_cwbvh`, as trees were built before the scratch pool and the collapse), with
-    /// its nodes in our layout.
+    /// its nodes in our layout. It repeats `build_cwbvh_in`'s PLOC and reinsertion calls on
+    /// purpose: the reference shares no code with what it checks.
     fn one_shot(aabbs: &[Aabb], quality: BvhQuality, leaf: u32) -> (Vec<Node>, Vec<u32>) {
         let mut p = build_params(quality);
         p.max_prims_per_leaf = leaf;
