@@ -12,7 +12,8 @@
 # 3. builds `aperture` (debug) for aarch64 and for Windows, renders the demo with each, under
 #    qemu-aarch64 and wine, and compares the pixels bit for bit with the x86-64 build's
 #    (target/debug/aperture, built here when missing); runs the aarch64 unit tests of budget,
-#    denoise and accel (there the NEON kernels against the scalar ones) under qemu-aarch64;
+#    denoise and accel (there the NEON kernels against the scalar ones) and the packet
+#    queries' whole-scene tests under qemu-aarch64;
 # 4. builds the Python module's abi3 wheel (maturin, debug) for both: the aarch64 wheel renders
 #    the demo in Debian's arm64 CPython 3.11 and numpy under qemu-aarch64 (their packages are
 #    downloaded with a private apt state and unpacked into a cached sysroot, nothing installed)
@@ -103,10 +104,15 @@ if want aarch64; then
     cargo build --quiet "${cross[@]}" -p aperture-cli --target "$ARM"
     # denoise's tests/library.rs loads OIDN, which exists here for x86-64 only (and under
     # CI=true a missing library fails): its unit tests (names, places, errors) run. accel's
-    # unit tests check the NEON kernels (node box test, sheared vertices, spawn offset) against
-    # the scalar ones bit for bit.
+    # unit tests check the NEON kernels (node box test, sheared vertices, spawn offset, AVX's
+    # eight-float operations in NEON and the packet kernels built on them) against the scalar
+    # ones bit for bit; packet_blocker and three of accel_brute_force's scenes (coherent lens
+    # rays, rays grazing the bounds, instancing; the other three take minutes under qemu) check
+    # the packet queries' answers against brute force and the one-ray queries on whole scenes.
     cargo test --quiet "${cross[@]}" --target "$ARM" -p aperture-budget -p aperture-denoise \
-        -p aperture-accel --lib
+        -p aperture-accel --lib --test packet_blocker
+    cargo test --quiet "${cross[@]}" --target "$ARM" -p aperture-tests --test accel_brute_force \
+        -- thin_lens_like rays_grazing simple_instancing
     step "render the demo under qemu-aarch64"
     qemu-aarch64 -L /usr/aarch64-linux-gnu "$target_dir/$ARM/debug/aperture" "${args[@]}" \
         -o "$out/aarch64.png"

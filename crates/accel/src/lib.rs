@@ -29,8 +29,9 @@
 //!   one-ray queries but walk [`BATCH_LANES`] rays at once, interleaved, which hides much of
 //!   each walk's load-to-use latency (about 1.35× the rays per second on thin-lens primary rays).
 //! - **Packets**: [`Accel::intersect_packets`] and [`Accel::occluded_packets`] walk runs of
-//!   [`PACKET_LANES`] coherent rays (a pixel's lens samples) as one packet, one AVX2 lane per
-//!   ray, with the same per-ray answers; incoherent runs are interleaved as in the batches.
+//!   [`PACKET_LANES`] coherent rays (a pixel's lens samples) as one packet, one AVX2 (x86-64)
+//!   or NEON (aarch64) lane per ray, with the same per-ray answers; incoherent runs are
+//!   interleaved as in the batches.
 //! - **Ray files**: [`rayfile`] reads and writes the Embree anchor's raw `.rays` format.
 //! - **Cover**: [`Accel::cover`] cuts the top of the trees into a few boxes that hold every
 //!   triangle (a renderer finds from them the pixels that can only see the background).
@@ -49,6 +50,8 @@
 //! assert!((hit.t - 2.0).abs() < 1e-6);
 //! ```
 
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+mod avx;
 mod build;
 mod cover;
 mod deform;

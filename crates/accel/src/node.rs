@@ -281,7 +281,7 @@ unsafe fn node_test_avx2(
 ///
 /// # Safety
 /// The CPU must support AVX2, and the caller must be compiled for it (inlined).
-#[cfg(target_arch = "x86_64")]
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 #[inline(always)]
 pub(crate) unsafe fn slabs_avx2(
     rows: [&[f32; 8]; 6],
@@ -289,8 +289,8 @@ pub(crate) unsafe fn slabs_avx2(
     of: [f32; 3],
     ni: [f32; 3],
     [tmin, tmax]: [f32; 2],
-) -> (std::arch::x86_64::__m256, std::arch::x86_64::__m256) {
-    use std::arch::x86_64::*;
+) -> (crate::avx::__m256, crate::avx::__m256) {
+    use crate::avx::*;
     // SAFETY: AVX2 is guaranteed by the caller; each load reads one `[f32; 8]` row in full.
     unsafe {
         let [nx, ny, nz, fx, fy, fz] = rows;

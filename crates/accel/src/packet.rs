@@ -24,45 +24,45 @@
 //! Packets apply when the rays share a direction octant and lie in a narrow cone
 //! ([`PACKET_CONE_COS`]); other runs take the interleaved walk ([`Accel::intersect_batch`]).
 //!
+//! The kernels are written with AVX's eight-float intrinsics: AVX2 on x86-64 (detected at run
+//! time), and on aarch64 [`crate::avx`]'s NEON versions of the same operations, which give the
+//! same bits (NEON is baseline there). Other architectures take the interleaved walk.
+//!
 //! Occlusion keeps the triangle that blocked a whole packet and tries it first on the next one
 //! (neighbouring rays are mostly blocked by the same triangle, and any blocker gives the same
 //! answer): a packet it blocks whole needs no walk.
 
-#[cfg(target_arch = "x86_64")]
-use crate::node::Node;
 use crate::structure::Accel;
-#[cfg(target_arch = "x86_64")]
-use crate::triangle::lanes::{intersect_lanes, transpose, TriLanes};
-#[cfg(target_arch = "x86_64")]
-use crate::triangle::TriRay;
 use crate::types::{Hit, Ray};
-#[cfg(target_arch = "x86_64")]
-use crate::walk::{stack_for, take_child, BlasLeaf, Group, InlineStack, Leaf, INLINE_STACK};
-#[cfg(target_arch = "x86_64")]
-use glam::Vec3A;
-#[cfg(target_arch = "x86_64")]
-use std::arch::x86_64::__m128;
-#[cfg(target_arch = "x86_64")]
-use std::mem::MaybeUninit;
-
-#[cfg(target_arch = "x86_64")]
-mod cone;
-#[cfg(target_arch = "x86_64")]
-mod cull;
-#[cfg(target_arch = "x86_64")]
-mod node_lanes;
-#[cfg(target_arch = "x86_64")]
-mod rays;
-mod shape;
-#[cfg(target_arch = "x86_64")]
-use node_lanes::{node_lanes_avx2, node_lanes_by_ray, valid_slots};
-#[cfg(target_arch = "x86_64")]
-use rays::PacketRays;
 pub use shape::{PACKET_CONE_COS, PACKET_LANES};
+
+mod shape;
+
+// The kernels and what they use: x86-64 and aarch64 only (AVX2, or NEON through `crate::avx`).
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+mod cone;
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+mod cull;
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+mod node_lanes;
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+mod rays;
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+use {
+    crate::avx::__m128,
+    crate::node::Node,
+    crate::triangle::lanes::{intersect_lanes, transpose, TriLanes},
+    crate::triangle::TriRay,
+    crate::walk::{stack_for, take_child, BlasLeaf, Group, InlineStack, Leaf, INLINE_STACK},
+    glam::Vec3A,
+    node_lanes::{node_lanes_avx2, node_lanes_by_ray, valid_slots},
+    rays::PacketRays,
+    std::mem::MaybeUninit,
+};
 
 /// The lanes of `active` that primitive `b` stops (`leaf.visit`), trying the first active lane
 /// alone before the others: a miss there costs one triangle test for the packet.
-#[cfg(target_arch = "x86_64")]
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 #[inline(always)]
 fn try_blocker<L: Leaf>(
     leaves: &mut [L; PACKET_LANES],
@@ -88,14 +88,14 @@ fn try_blocker<L: Leaf>(
 
 /// Lanes at a leaf from which its triangles are tested for all of them at once (fewer take
 /// the one-ray test, lane by lane).
-#[cfg(target_arch = "x86_64")]
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 const MIN_LANES: u32 = 2;
 
 /// The triangle-test constants of the packet's leaves, lane by lane.
 ///
 /// # Safety
 /// As for [`node_lanes_avx2`].
-#[cfg(target_arch = "x86_64")]
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 #[inline(always)]
 unsafe fn gather_lanes<'s, L: BlasLeaf<'s>>(leaves: &[L; PACKET_LANES]) -> TriLanes {
     let mut rays = [leaves[0].triangles().1; PACKET_LANES];
@@ -116,7 +116,7 @@ unsafe fn gather_lanes<'s, L: BlasLeaf<'s>>(leaves: &[L; PACKET_LANES]) -> TriLa
 ///
 /// # Safety
 /// As for [`node_lanes_avx2`].
-#[cfg(target_arch = "x86_64")]
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 #[inline(always)]
 unsafe fn leaf_lanes<'s, L: BlasLeaf<'s>>(
     lanes: &TriLanes,
@@ -164,7 +164,7 @@ unsafe fn leaf_lanes<'s, L: BlasLeaf<'s>>(
 ///
 /// # Safety
 /// As for [`node_lanes_avx2`].
-#[cfg(target_arch = "x86_64")]
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 #[inline(always)]
 unsafe fn walk_packet<'s, L: BlasLeaf<'s>>(
     nodes: &[Node],
@@ -291,6 +291,11 @@ impl Accel {
             // SAFETY: `avx2` is set only when `detect_avx2` found every feature it enables.
             return unsafe { self.intersect_packets_avx2(rays, out) };
         }
+        #[cfg(target_arch = "aarch64")]
+        if self.avx2 {
+            // SAFETY: the NEON kernels (`detect_avx2`): NEON is baseline on aarch64.
+            return unsafe { self.packets_impl::<crate::walk::ClosestLeaf<true>>(rays, out) };
+        }
         self.intersect_batch(rays, out)
     }
 
@@ -300,6 +305,11 @@ impl Accel {
         if self.avx2 {
             // SAFETY: as in `intersect_packets`.
             return unsafe { self.occluded_packets_avx2(rays, out) };
+        }
+        #[cfg(target_arch = "aarch64")]
+        if self.avx2 {
+            // SAFETY: as in `intersect_packets`.
+            return unsafe { self.packets_impl::<crate::walk::AnyLeaf<true>>(rays, out) };
         }
         self.occluded_batch(rays, out)
     }
@@ -326,8 +336,8 @@ impl Accel {
     /// when [`cone::coherent`], else interleaved.
     ///
     /// # Safety
-    /// The CPU must support AVX2 and FMA.
-    #[cfg(target_arch = "x86_64")]
+    /// The CPU must support AVX2 and FMA (on x86-64; NEON on aarch64 is baseline).
+    #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
     #[inline(always)]
     unsafe fn packets_impl<'s, L: BlasLeaf<'s>>(&'s self, rays: &[Ray], out: &mut [L::Answer]) {
         let n = rays.len().min(out.len());
@@ -388,7 +398,11 @@ impl Accel {
             // `array::from_fn`, whose closures stayed calls.
             let (o0, d0) = Self::object_ray(entry, &run[0]);
             // SAFETY: AVX2 (and so AVX) is guaranteed by the caller.
-            let leaf0 = L::start(&blas.tris, unsafe { TriRay::new_avx(o0, d0) }, run[0].tmin);
+            let leaf0 = L::start(
+                &blas.tris,
+                unsafe { TriRay::new_for::<true>(o0, d0) },
+                run[0].tmin,
+            );
             let mut leaves = [leaf0; PACKET_LANES];
             let mut tmax = [run[0].tmax; PACKET_LANES];
             let mut tmin = [run[0].tmin; PACKET_LANES];
@@ -398,7 +412,11 @@ impl Accel {
                 let ray = &run[i.min(run.len() - 1)];
                 let (o, d) = Self::object_ray(entry, ray);
                 // SAFETY: as above.
-                leaves[i] = L::start(&blas.tris, unsafe { TriRay::new_avx(o, d) }, ray.tmin);
+                leaves[i] = L::start(
+                    &blas.tris,
+                    unsafe { TriRay::new_for::<true>(o, d) },
+                    ray.tmin,
+                );
                 (tmax[i], tmin[i]) = (ray.tmax, ray.tmin);
                 origins[i] = Vec3A::from(o).into();
                 dirs[i] = Vec3A::from(d).into();

@@ -11,7 +11,7 @@
 use glam::Mat3A;
 use glam::{Vec3, Vec3A};
 
-#[cfg(target_arch = "x86_64")]
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 pub(crate) mod lanes;
 #[cfg(all(test, target_arch = "aarch64"))]
 mod neon_tests;

@@ -11,7 +11,7 @@ mod leaf;
 mod ordered;
 mod stack;
 
-#[cfg(target_arch = "x86_64")]
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 pub(crate) use group::take_child;
 pub(crate) use leaf::{
     AnyLeaf, BlasLeaf, ClosestLeaf, EntriesAny, EntriesBlocker, EntriesClosest, Leaf,

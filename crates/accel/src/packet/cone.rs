@@ -2,8 +2,8 @@
 //! every direction within [`PACKET_CONE_COS`] of the first.
 
 use super::shape::PACKET_CONE_COS;
+use crate::avx::*;
 use crate::types::Ray;
-use std::arch::x86_64::*;
 
 /// Whether `rays` share a direction octant and lie within [`PACKET_CONE_COS`] of the first, in
 /// world space (a first test; the box test's octant is checked once the rays are set up).
@@ -87,7 +87,7 @@ mod tests {
     /// and on directions with zero, tiny, infinite or NaN components.
     #[test]
     fn lanes_decide_as_the_scalar_test() {
-        if !is_x86_feature_detected!("avx2") {
+        if !crate::test_util::lanes8() {
             return;
         }
         let (mut yes, mut no) = (0, 0);

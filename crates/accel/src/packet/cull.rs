@@ -3,11 +3,11 @@
 //! instructions a ray (most rays of a product shot miss it).
 
 use super::shape::PACKET_LANES;
+use crate::avx::*;
 use crate::structure::Accel;
 use crate::triangle::lanes::transpose;
 use crate::types::Ray;
 use glam::Vec3A;
-use std::arch::x86_64::*;
 
 impl Accel {
     /// The lanes of `run` (eight rays, their directions in lanes: [`super::rays::dir_lanes`]) that
@@ -77,7 +77,7 @@ mod tests {
     /// Eight rays at once cull exactly the rays `misses_bounds` culls, one by one.
     #[test]
     fn lanes_cull_as_misses_bounds_does() {
-        if !is_x86_feature_detected!("avx2") {
+        if !crate::test_util::lanes8() {
             return;
         }
         // Two triangles spanning [-1, 1] x [-0.5, 0.5] x [-2, 0.3].

@@ -24,7 +24,7 @@ pub(super) unsafe fn node_lanes_avx2(
     active: u32,
     mut valid: u32,
 ) -> ([u8; 8], u32) {
-    use std::arch::x86_64::*;
+    use crate::avx::*;
     // SAFETY: AVX2 is guaranteed by the caller; every load reads one `[f32; 8]` field in full,
     // or one float of a row.
     unsafe {
@@ -86,7 +86,7 @@ pub(super) unsafe fn node_lanes_by_ray(
     lanes: u32,
     valid: u32,
 ) -> ([u8; 8], u32) {
-    use std::arch::x86_64::*;
+    use crate::avx::*;
     // SAFETY: AVX2 is guaranteed by the caller; every load reads one `[f32; 8]` row in full or
     // one float of a lane.
     unsafe {
@@ -143,9 +143,9 @@ fn transpose_bits(mut x: u64) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::avx::__m128;
     use crate::triangle::lanes::transpose;
     use glam::{Vec3, Vec3A};
-    use std::arch::x86_64::__m128;
 
     /// 64 bits from the crate's test hash of a counter.
     fn mix(k: u64) -> u64 {
@@ -224,7 +224,7 @@ mod tests {
     /// whichever lanes are asked for.
     #[test]
     fn lanes_by_ray_match_lanes_by_child() {
-        if !is_x86_feature_detected!("avx2") || !is_x86_feature_detected!("fma") {
+        if !crate::test_util::lanes8() {
             return;
         }
         let bounds = (Vec3::splat(-1.0), Vec3::splat(1.0));

@@ -3,9 +3,9 @@
 //! which the bounds cull shares).
 
 use super::shape::PACKET_LANES;
+use crate::avx::*;
 #[cfg(test)]
 use crate::node::BoxRay;
-use std::arch::x86_64::*;
 
 /// Eight rays prepared for box tests, lane by lane (structure of arrays of `BoxRay`s).
 #[derive(Clone, Copy)]
@@ -189,7 +189,6 @@ mod tests {
     use crate::test_util::mix;
     use crate::triangle::lanes::transpose;
     use glam::{Vec3, Vec3A};
-    use std::arch::x86_64::__m128;
 
     /// A coordinate from a counter: uniform, exactly zero (a direction along an axis), tiny
     /// (a reciprocal past the clamp) or large.
@@ -207,7 +206,7 @@ mod tests {
     /// The lanes built at once have the bits of eight `BoxRay::new`s put in lanes.
     #[test]
     fn packet_rays_at_once_match_box_rays_lane_by_lane() {
-        if !is_x86_feature_detected!("avx2") {
+        if !crate::test_util::lanes8() {
             return;
         }
         let bounds = (Vec3::new(-3.0, -0.5, -7.0), Vec3::new(4.0, 2.5, 1.0));

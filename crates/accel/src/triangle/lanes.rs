@@ -1,5 +1,5 @@
 //! The watertight triangle test of [`super::intersect`] for the eight rays of a packet at once
-//! (AVX2): one triangle, eight lanes, the scalar test's arithmetic operation for operation, so
+//! (AVX2, or NEON through [`crate::avx`]): one triangle, eight lanes, the scalar test's arithmetic operation for operation, so
 //! each lane's answer has the bits of the scalar answer for its ray.
 //!
 //! Why: a packet's rays mostly reach the same leaves, where the scalar test ran once per ray
@@ -10,8 +10,8 @@
 //! test) — are left to the scalar test.
 
 use super::{gamma, TriRay};
+use crate::avx::*;
 use glam::Vec3;
-use std::arch::x86_64::*;
 
 /// Lanes per test: one AVX2 register of `f32`.
 pub(crate) const LANES: usize = 8;
@@ -372,7 +372,7 @@ mod tests {
 
     /// The scalar test's AVX path ([`intersect`] with `AVX`), compiled for AVX as the queries
     /// that inline it.
-    #[target_feature(enable = "avx2,fma")]
+    #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
     unsafe fn intersect_avx(
         r: &TriRay,
         tri: &Tri,
@@ -499,7 +499,7 @@ mod tests {
     /// permuted loads) must answer alike on every lane, the lanes left to them too.
     #[test]
     fn lanes_answer_as_the_scalar_test_does() {
-        if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+        if !crate::test_util::lanes8() {
             return;
         }
         let mut tally = Tally::default();
