@@ -165,13 +165,24 @@ def test_preview(vs, session):
     same = bits_equal(session.film(), plain)
     want = (-(-H // 4), -(-W // 4))
     check("viewport.preview", quick.first_shape == want and plain_shape == (H, W) and same
-          and quick.full_pass_seconds is not None,
+          and quick.full_pass_seconds is not None and quick.preview_seconds is not None
+          and quick.preview_seconds > 0 and full.preview_seconds is None,
           f"first image {quick.first_shape} (want {want}; without a preview {plain_shape}); final "
           f"film the same bits as without the preview: {same}")
     sizes = [vs.pixel_size_for(t) for t in (0.01, 0.05, 0.5, 0.6, 1000.0)]
     check("viewport.pixel-size", sizes == [1, 2, 4, 8, 16],
           f"pixel size for a full pass of 10 ms, 50 ms, 0.5 s, 0.6 s, 1000 s: {sizes} "
           "(want [1, 2, 4, 8, 16] at 1/30 s a first image)")
+    # The next preview from the last one's time: a 38 ms preview at pixel size 8 after a 1 s
+    # full pass (the 980 k-triangle tiles) asks for 16; a fast one leaves the full pass's 8;
+    # a preview alone (no full pass yet) decides; nothing measured, nothing estimated.
+    cases = [(1.0, 0.038, 8), (1.0, 0.010, 8), (None, 0.05, 4), (None, None, 4), (0.02, None, 1)]
+    estimates = [vs.pass_estimate(*c) for c in cases]
+    chosen = [None if e is None else vs.pixel_size_for(e) for e in estimates]
+    check("viewport.pixel-size-feedback", chosen == [16, 8, 8, None, 1]
+          and abs(estimates[0] - 0.038 * 64) < 1e-12,
+          f"(full pass s, preview s, pixel size) {cases} -> {estimates} -> pixel sizes {chosen} "
+          "(want [16, 8, 8, None, 1])")
 
 
 def test_denoise(bpy, vs, session, aperture):
