@@ -7,5 +7,7 @@ pub(crate) use std::arch::x86_64::*;
 
 #[cfg(target_arch = "aarch64")]
 mod neon;
+#[cfg(all(test, target_arch = "aarch64"))]
+mod neon_tests;
 #[cfg(target_arch = "aarch64")]
 pub(crate) use neon::*;
