@@ -140,10 +140,10 @@ def pass_estimate(full_pass_seconds, preview_seconds, pixel_size):
     chose pixel size 8, whose preview took 38 ms, not the 16 ms the pass predicted. So the
     next preview is chosen from what the last one took, as Cycles adapts its resolution
     divider to the last update's time. None when neither was measured."""
-    estimates = [s for s in (full_pass_seconds,) if s is not None]
-    if preview_seconds is not None:
-        estimates.append(preview_seconds * pixel_size * pixel_size)
-    return max(estimates) if estimates else None
+    scaled = None if preview_seconds is None else preview_seconds * pixel_size * pixel_size
+    if full_pass_seconds is None or scaled is None:
+        return scaled if full_pass_seconds is None else full_pass_seconds
+    return max(full_pass_seconds, scaled)
 
 
 # While samples still come, denoising may take at most this share of the worker's time (Cycles'
@@ -221,9 +221,11 @@ class Worker:
                 d = self._clock()
                 image = self.render.image(denoise=denoise).image
                 if denoise:
-                    self.denoised, rendered, last_cost = self.denoised + 1, 0.0, self._clock() - d
+                    last_cost = self._clock() - d
+                    self.denoised, rendered = self.denoised + 1, 0.0
                 if self.full_pass_seconds is None:
-                    self.full_pass_seconds = self._clock() - t
+                    # The pass and its film, not the denoiser: the preview is never denoised.
+                    self.full_pass_seconds = self._clock() - t - (last_cost if denoise else 0.0)
                     self.first_shape = self.first_shape or image.shape[:2]
                 with self._lock:
                     self.film, self.samples = image, samples
@@ -512,9 +514,10 @@ class Session:
         """Starts the worker on the synced scene (stopping the last one). The first image
         comes at a reduced resolution when the last full-resolution pass, or the last preview
         scaled up (:func:`pass_estimate`), did not fit ``FIRST_IMAGE_SECONDS`` (``pixel_size``
-        forces one; the very first start, with nothing measured, previews at 4). With the denoise options (``viewport_denoise``) the film is
-        denoised from ``denoise_start`` samples on; without Open Image Denoise the viewport
-        renders undenoised and ``notice`` says why."""
+        forces one; the very first start, with nothing measured, previews at 4). With the
+        denoise options (``viewport_denoise``) the film is denoised from ``denoise_start``
+        samples on; without Open Image Denoise the viewport renders undenoised and ``notice``
+        says why."""
         self.stop()
         last = self.worker
         if pixel_size is None:

@@ -44,34 +44,36 @@ pub(crate) const _CMP_GE_OQ: i32 = 0x1d;
 pub(crate) const _CMP_GT_OQ: i32 = 0x1e;
 
 /// `f` applied to both halves of `a` and `b`.
-macro_rules! halves {
-    ($f:ident, $a:expr, $b:expr) => {{
-        let (a, b) = ($a, $b);
-        // SAFETY: NEON is baseline on aarch64; register-only operations.
-        unsafe {
-            __m256 {
-                lo: $f(a.lo, b.lo),
-                hi: $f(a.hi, b.hi),
-            }
-        }
-    }};
+#[inline(always)]
+fn pair(a: __m256, b: __m256, f: impl Fn(float32x4_t, float32x4_t) -> float32x4_t) -> __m256 {
+    __m256 {
+        lo: f(a.lo, b.lo),
+        hi: f(a.hi, b.hi),
+    }
 }
 
-/// The bitwise operation `f` (on `u32` lanes) applied to both halves of `a` and `b`.
-macro_rules! bits {
-    ($f:ident, $a:expr, $b:expr) => {{
-        let (a, b) = ($a, $b);
+/// The bitwise operation `$f` on `u32` lanes of `a` and `b`, as one on floats' bits.
+macro_rules! on_bits {
+    ($f:ident, $a:expr, $b:expr) => {
         // SAFETY: NEON is baseline on aarch64; register-only operations.
-        unsafe {
-            let f = |x: float32x4_t, y: float32x4_t| {
-                vreinterpretq_f32_u32($f(vreinterpretq_u32_f32(x), vreinterpretq_u32_f32(y)))
-            };
-            __m256 {
-                lo: f(a.lo, b.lo),
-                hi: f(a.hi, b.hi),
-            }
-        }
-    }};
+        pair($a, $b, |x, y| unsafe {
+            vreinterpretq_f32_u32($f(vreinterpretq_u32_f32(x), vreinterpretq_u32_f32(y)))
+        })
+    };
+}
+
+/// SSE's `maxps` on four lanes: `a` where `a > b`, else `b` (so `b` when either is NaN).
+#[inline(always)]
+pub(crate) fn max_sse(a: float32x4_t, b: float32x4_t) -> float32x4_t {
+    // SAFETY: NEON is baseline on aarch64; register-only operations.
+    unsafe { vbslq_f32(vcgtq_f32(a, b), a, b) }
+}
+
+/// SSE's `minps` on four lanes: `a` where `a < b`, else `b` (so `b` when either is NaN).
+#[inline(always)]
+pub(crate) fn min_sse(a: float32x4_t, b: float32x4_t) -> float32x4_t {
+    // SAFETY: NEON is baseline on aarch64; register-only operations.
+    unsafe { vbslq_f32(vcltq_f32(a, b), a, b) }
 }
 
 #[inline(always)]
@@ -130,66 +132,60 @@ pub(crate) unsafe fn _mm256_storeu_ps(p: *mut f32, a: __m256) {
 
 #[inline(always)]
 pub(crate) unsafe fn _mm256_add_ps(a: __m256, b: __m256) -> __m256 {
-    halves!(vaddq_f32, a, b)
+    // SAFETY: NEON is baseline on aarch64; register-only operations.
+    pair(a, b, |x, y| unsafe { vaddq_f32(x, y) })
 }
 
 #[inline(always)]
 pub(crate) unsafe fn _mm256_sub_ps(a: __m256, b: __m256) -> __m256 {
-    halves!(vsubq_f32, a, b)
+    // SAFETY: NEON is baseline on aarch64; register-only operations.
+    pair(a, b, |x, y| unsafe { vsubq_f32(x, y) })
 }
 
 #[inline(always)]
 pub(crate) unsafe fn _mm256_mul_ps(a: __m256, b: __m256) -> __m256 {
-    halves!(vmulq_f32, a, b)
+    // SAFETY: NEON is baseline on aarch64; register-only operations.
+    pair(a, b, |x, y| unsafe { vmulq_f32(x, y) })
 }
 
 #[inline(always)]
 pub(crate) unsafe fn _mm256_div_ps(a: __m256, b: __m256) -> __m256 {
-    halves!(vdivq_f32, a, b)
+    // SAFETY: NEON is baseline on aarch64; register-only operations.
+    pair(a, b, |x, y| unsafe { vdivq_f32(x, y) })
 }
 
 /// `maxps`: `a` where `a > b`, else `b` (so `b` when either is NaN).
 #[inline(always)]
 pub(crate) unsafe fn _mm256_max_ps(a: __m256, b: __m256) -> __m256 {
-    // SAFETY: NEON is baseline on aarch64; register-only operations.
-    let f = |x, y| unsafe { vbslq_f32(vcgtq_f32(x, y), x, y) };
-    __m256 {
-        lo: f(a.lo, b.lo),
-        hi: f(a.hi, b.hi),
-    }
+    pair(a, b, max_sse)
 }
 
 /// `minps`: `a` where `a < b`, else `b` (so `b` when either is NaN).
 #[inline(always)]
 pub(crate) unsafe fn _mm256_min_ps(a: __m256, b: __m256) -> __m256 {
-    // SAFETY: NEON is baseline on aarch64; register-only operations.
-    let f = |x, y| unsafe { vbslq_f32(vcltq_f32(x, y), x, y) };
-    __m256 {
-        lo: f(a.lo, b.lo),
-        hi: f(a.hi, b.hi),
-    }
+    pair(a, b, min_sse)
 }
 
 #[inline(always)]
 pub(crate) unsafe fn _mm256_and_ps(a: __m256, b: __m256) -> __m256 {
-    bits!(vandq_u32, a, b)
+    on_bits!(vandq_u32, a, b)
 }
 
 #[inline(always)]
 pub(crate) unsafe fn _mm256_or_ps(a: __m256, b: __m256) -> __m256 {
-    bits!(vorrq_u32, a, b)
+    on_bits!(vorrq_u32, a, b)
 }
 
 #[inline(always)]
 pub(crate) unsafe fn _mm256_xor_ps(a: __m256, b: __m256) -> __m256 {
-    bits!(veorq_u32, a, b)
+    on_bits!(veorq_u32, a, b)
 }
 
 /// `!a & b`.
 #[inline(always)]
 pub(crate) unsafe fn _mm256_andnot_ps(a: __m256, b: __m256) -> __m256 {
     // `vbic(x, y)` is `x & !y`.
-    bits!(vbicq_u32, b, a)
+    on_bits!(vbicq_u32, b, a)
 }
 
 /// All ones in the lanes where predicate `IMM` holds, else zeros.
@@ -213,10 +209,7 @@ pub(crate) unsafe fn _mm256_cmp_ps<const IMM: i32>(a: __m256, b: __m256) -> __m2
         };
         vreinterpretq_f32_u32(m)
     };
-    __m256 {
-        lo: f(a.lo, b.lo),
-        hi: f(a.hi, b.hi),
-    }
+    pair(a, b, f)
 }
 
 /// Bit `i` for each lane `i` of `a` whose sign bit is set: each lane's upper half narrowed to
@@ -301,13 +294,15 @@ pub(crate) unsafe fn _mm256_set_m128(hi: __m128, lo: __m128) -> __m256 {
 /// Per half: `a0 b0 a1 b1`.
 #[inline(always)]
 pub(crate) unsafe fn _mm256_unpacklo_ps(a: __m256, b: __m256) -> __m256 {
-    halves!(vzip1q_f32, a, b)
+    // SAFETY: NEON is baseline on aarch64; register-only operations.
+    pair(a, b, |x, y| unsafe { vzip1q_f32(x, y) })
 }
 
 /// Per half: `a2 b2 a3 b3`.
 #[inline(always)]
 pub(crate) unsafe fn _mm256_unpackhi_ps(a: __m256, b: __m256) -> __m256 {
-    halves!(vzip2q_f32, a, b)
+    // SAFETY: NEON is baseline on aarch64; register-only operations.
+    pair(a, b, |x, y| unsafe { vzip2q_f32(x, y) })
 }
 
 /// Per half, lanes `IMM` picks: `0x44` is `a0 a1 b0 b1`, `0xee` is `a2 a3 b2 b3` (the two the
@@ -324,10 +319,7 @@ pub(crate) unsafe fn _mm256_shuffle_ps<const IMM: i32>(a: __m256, b: __m256) -> 
             vzip2q_f64(x, y)
         })
     };
-    __m256 {
-        lo: f(a.lo, b.lo),
-        hi: f(a.hi, b.hi),
-    }
+    pair(a, b, f)
 }
 
 /// # Safety

@@ -11,21 +11,8 @@
 //! `unsafe` blocks below are for that, and for the loads and stores their comments name).
 
 use super::{BoxRay, ChildHits, Node};
+use crate::avx::{max_sse, min_sse};
 use std::arch::aarch64::*;
-
-/// SSE's `maxps`: `a` where `a > b`, else `b` (so `b` when either is NaN).
-#[inline(always)]
-fn max_sse(a: float32x4_t, b: float32x4_t) -> float32x4_t {
-    // SAFETY: NEON is baseline on aarch64; register-only operations.
-    unsafe { vbslq_f32(vcgtq_f32(a, b), a, b) }
-}
-
-/// SSE's `minps`: `a` where `a < b`, else `b` (so `b` when either is NaN).
-#[inline(always)]
-fn min_sse(a: float32x4_t, b: float32x4_t) -> float32x4_t {
-    // SAFETY: NEON is baseline on aarch64; register-only operations.
-    unsafe { vbslq_f32(vcltq_f32(a, b), a, b) }
-}
 
 /// The box test of children `4 half .. 4 half + 4`: the hit lanes (all ones for a hit child)
 /// and each child's entry distance; [`super::slabs_avx2`] on four lanes.
