@@ -22,6 +22,14 @@ class LoadError(Exception):
 class RenderError(Exception):
     """A render, denoise or write failed."""
 
+class Primitive(TypedDict, total=False):
+    """One primitive's geometry (``positions`` and ``triangles`` required)."""
+
+    positions: npt.ArrayLike  # (N, 3) floats
+    triangles: npt.ArrayLike  # (M, 3) integer vertex indices
+    normals: npt.ArrayLike  # (N, 3) floats; flat normals without
+    uvs: npt.ArrayLike  # (N, 2) floats, texture coordinates set 0
+
 class Hits(TypedDict):
     t: npt.NDArray[np.float32]
     primitive: npt.NDArray[np.int32]
@@ -198,6 +206,9 @@ class Scene:
         outer_cone_angle: float = ...,
     ) -> None:
         """Sets a KHR_lights_punctual light's values."""
+    def set_geometry(self, mesh: int, primitives: Sequence[Primitive]) -> None:
+        """Gives a glTF mesh new geometry, one dict per primitive in order (as if the file
+        stored those arrays; each primitive keeps its material). Loads the file again."""
     def set_visible(self, node: int | str, visible: bool) -> None:
         """Shows or hides a node and what it carries."""
     def intersect(
@@ -247,8 +258,10 @@ def load(
     max_memory: int | str | None = None,
     transmission: _Convention = "auto",
     single_sided: _Convention = "auto",
+    geometry: dict[int, Sequence[Primitive]] | None = None,
 ) -> Scene:
-    """Loads a .gltf or .glb file with aperture render's load options."""
+    """Loads a .gltf or .glb file with aperture render's load options; ``geometry`` draws
+    those meshes (by index) from the given arrays instead of the file's."""
 
 def write(
     path: _Path,

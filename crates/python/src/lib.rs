@@ -24,6 +24,7 @@
 
 mod edits;
 mod errors;
+mod geometry;
 mod images;
 mod interrupt;
 mod load_opts;

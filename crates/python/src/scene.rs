@@ -37,13 +37,17 @@ pub(crate) fn load(
 ) -> PyResult<Scene> {
     let mut kw = Kwargs::new(options, "load")?;
     let (load, defaults) = load_options(&mut kw)?;
+    let given = match kw.take("geometry")? {
+        Some(v) if !v.is_none() => crate::geometry::load_edits(&v)?,
+        _ => Vec::new(),
+    };
     kw.finish()?;
     // Posed at once, so a file that loads but cannot be posed (a focus object behind the
     // camera) fails here, as the command line fails before rendering.
     let time = defaults.time;
     let session = py
         .detach(|| {
-            let mut session = aperture_render::Session::load(&path, &load)?;
+            let mut session = aperture_render::Session::load_edited(&path, &load, given)?;
             session.pose(time)?;
             Ok(session)
         })
@@ -221,6 +225,20 @@ impl Scene {
         let light = in_range("light", light, 0, i64::from(u32::MAX))?;
         let edits = edits::light(light as usize, values)?;
         self.edit(py, |_| Ok(edits))
+    }
+
+    /// Gives glTF mesh `mesh` (its index) new geometry, one dict per primitive in order (as
+    /// many as the mesh has): `positions` (N×3), `triangles` (M×3 vertex indices), optional
+    /// `normals` (N×3; flat without) and `uvs` (N×2, texture coordinates set 0). As if the file
+    /// stored them; each primitive keeps its material. The file is loaded again.
+    fn set_geometry(
+        &self,
+        py: Python<'_>,
+        mesh: &Bound<'_, PyAny>,
+        primitives: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let edit = crate::geometry::mesh_edit(crate::geometry::mesh_index(mesh)?, primitives)?;
+        self.edit(py, |_| Ok(vec![edit]))
     }
 
     /// Shows or hides node `node` (and what it carries), as `KHR_node_visibility` stores it.

@@ -250,3 +250,20 @@ def test_bad_lens_edits_raise_and_change_nothing(lens_scene):
         with pytest.raises(ValueError, match="lens_prescription"):
             scene.set_camera(lens_prescription=value)
     same_render(scene.render(**OPTS), before)
+
+
+def test_a_material_only_hidden_nodes_use_can_be_edited(demo, tmp_path):
+    # FillPanel (node 21) alone uses material 11: hidden, its mesh is not even decoded, but the
+    # file has the material and the edit holds once the node is shown again.
+    doc, binary = read_glb(demo)
+    scene = aperture.load(demo)
+    scene.set_visible(21, False)
+    scene.set_material(11, base_color=[0.9, 0.1, 0.6, 1.0], emissive=[0.0, 1.0, 0.0])
+    scene.set_visible(21, True)
+    edited = copy.deepcopy(doc)
+    edited["materials"][11].setdefault("pbrMetallicRoughness", {})["baseColorFactor"] = [0.9, 0.1, 0.6, 1.0]
+    edited["materials"][11]["emissiveFactor"] = [0.0, 1.0, 0.0]
+    write_glb(tmp_path / "m.glb", edited, binary)
+    warm = scene.render(**OPTS)
+    assert np.array_equal(bits(warm[0]), bits(aperture.load(tmp_path / "m.glb").render(**OPTS)[0]))
+    assert not np.array_equal(bits(warm[0]), bits(aperture.load(demo).render(**OPTS)[0]))

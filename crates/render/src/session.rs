@@ -101,6 +101,23 @@ impl Session {
         Ok(session)
     }
 
+    /// Loads `path` as if it stored the values `edits` set ([`Animated::load_edited`]): one
+    /// load where [`Session::load`] and the edits one by one could load several times (each
+    /// [`Edit::MeshGeometry`] loads the file again).
+    pub fn load_edited(
+        path: &Path,
+        options: &LoadOptions,
+        edits: Vec<Edit>,
+    ) -> Result<Self, SessionError> {
+        let animated = Animated::load_edited(path, options, &edits)?;
+        let mut session = Self::new(animated);
+        session.source = Some((path.to_path_buf(), options.clone()));
+        for e in edits {
+            session.remember(e);
+        }
+        Ok(session)
+    }
+
     /// A session of a document already loaded (edits that need a reload are refused).
     pub fn new(animated: Animated) -> Self {
         Self {
@@ -228,8 +245,18 @@ impl Session {
             Touched::Placements => drop(self.retire()),
             Touched::Cameras | Touched::Lights | Touched::Materials => self.refresh(touched)?,
         }
-        self.edits.push(edit);
+        self.remember(edit);
         Ok(touched)
+    }
+
+    /// Adds `edit` to the list a reload replays; a mesh's new geometry replaces the one it
+    /// was given before (only the last counts, and each holds the mesh's arrays).
+    fn remember(&mut self, edit: Edit) {
+        if let Edit::MeshGeometry { mesh, .. } = &edit {
+            let earlier = |e: &Edit| matches!(e, Edit::MeshGeometry { mesh: m, .. } if m == mesh);
+            self.edits.retain(|e| !earlier(e));
+        }
+        self.edits.push(edit);
     }
 
     /// The current frame's cameras, lights or materials posed again in place; a frame whose

@@ -99,6 +99,8 @@ pub struct Animated {
     lights: Vec<LightData>,
     materials: Vec<Material>,
     material_index: HashMap<usize, u32>,
+    /// The file's `materials` count (an edit may name one no shown mesh uses yet).
+    file_materials: usize,
     textures: Vec<Texture>,
     animations: Animations,
     static_meshes: Vec<Arc<Mesh>>,
@@ -224,7 +226,7 @@ impl Animated {
             &never_shown,
             &buffers,
             &mut stats,
-            variant,
+            crate::shared::Reading::new(variant, graph_edits),
             &mut materials,
         )?;
         let material_index = materials.gltf_indices();
@@ -258,6 +260,7 @@ impl Animated {
             lights: read_lights(&doc)?,
             materials: material_list,
             material_index,
+            file_materials: doc.materials().len(),
             textures,
             animations,
             static_meshes: Vec::new(),

@@ -3,9 +3,12 @@
 //! Here: what an edit is and what it touches, and the node edits a reload applies to the graph
 //! before anything is decoded; [`crate::Animated::edit`] applies the others in place.
 
+use std::sync::Arc;
+
 use serde_json::Value;
 
 use crate::error::Error;
+use crate::geometry::Geometry;
 use crate::nodes::{inherited, LocalTransform, NodeGraph};
 use crate::pointer::{self, NodeProperty, Pointer};
 /// A change to a loaded document: a value as the file could have stored it.
@@ -48,6 +51,17 @@ pub enum Edit {
         /// Its value.
         value: Value,
     },
+    /// `meshes[mesh]`'s primitives drawn from the given triangles, one [`Geometry`] a
+    /// primitive in order (as many as the mesh has), as if the file stored them as the
+    /// primitives' `POSITION`, `NORMAL`, `TEXCOORD_0` and triangle indices: each keeps its
+    /// material and loses its other attributes, morph targets and joints. Loads the file again
+    /// ([`Touched::Reload`]); the arrays are shared, not copied, by the edit list that replays it.
+    MeshGeometry {
+        /// The glTF mesh index.
+        mesh: usize,
+        /// Its primitives' new geometry.
+        primitives: Arc<[Geometry]>,
+    },
 }
 
 /// What an edit changed in the posed scene, so a renderer redoes only what depends on it.
@@ -63,8 +77,8 @@ pub enum Touched {
     Placements,
     /// What the loader decoded: the file must be loaded again with every edit so far
     /// ([`Animated::load_edited`]): visibility (hidden nodes' meshes are never decoded),
-    /// morph weights, transforms of skin joints (static skins are posed at load), and a
-    /// bokeh image naming a texture whose image was not loaded with the file.
+    /// morph weights, transforms of skin joints (static skins are posed at load), a bokeh
+    /// image naming a texture whose image was not loaded with the file, and a mesh's geometry.
     Reload,
 }
 
@@ -73,7 +87,7 @@ pub(crate) fn graph_edit(e: &Edit) -> bool {
     match e {
         Edit::NodeMatrix { .. } | Edit::NodeVisible { .. } => true,
         Edit::Pointer { path, .. } => path.starts_with("/nodes/"),
-        Edit::CameraKey { .. } => false,
+        Edit::CameraKey { .. } | Edit::MeshGeometry { .. } => false,
     }
 }
 
@@ -83,7 +97,19 @@ pub(crate) const LOADED_KEY: &str = "aperture_image";
 /// Edits a reload applies while loading: the node edits ([`graph_edit`]) and the camera keys
 /// read with the file ([`LOADED_KEY`], by [`apply_loaded_keys`]).
 pub(crate) fn load_edit(e: &Edit) -> bool {
-    graph_edit(e) || matches!(e, Edit::CameraKey { key, .. } if key == LOADED_KEY)
+    graph_edit(e)
+        || matches!(e, Edit::CameraKey { key, .. } if key == LOADED_KEY)
+        || matches!(e, Edit::MeshGeometry { .. })
+}
+
+/// By glTF mesh index, the geometry the last [`Edit::MeshGeometry`] of each mesh in `edits`
+/// gives it.
+pub(crate) fn given_geometry(edits: &[Edit]) -> std::collections::HashMap<usize, Arc<[Geometry]>> {
+    let given = edits.iter().filter_map(|e| match e {
+        Edit::MeshGeometry { mesh, primitives } => Some((*mesh, Arc::clone(primitives))),
+        _ => None,
+    });
+    given.collect()
 }
 
 /// Applies the [`LOADED_KEY`] edits of `edits` to freshly read cameras and their nodes, before
@@ -153,7 +179,7 @@ pub(crate) fn apply_graph_edits(mut graph: NodeGraph, edits: &[Edit]) -> Result<
             }
             Edit::NodeVisible { node, visible } => graph.own_hidden[node_of(*node)?] = !visible,
             Edit::Pointer { path, value } => apply_node_pointer(&mut graph, path, value)?,
-            Edit::CameraKey { .. } => {}
+            Edit::CameraKey { .. } | Edit::MeshGeometry { .. } => {}
         }
     }
     let own = graph.own_hidden.clone();

@@ -7,10 +7,11 @@ use gltf::mesh::Mode;
 
 use crate::accessor::Buffers;
 use crate::error::Error;
+use crate::geometry::Geometry;
 use crate::morph::MorphTarget;
 use crate::skin::{self, Influences};
 use crate::types::{Mesh, SceneStats};
-use part::{read_part, Part, SkinSet};
+use part::{given_part, read_part, Part, SkinSet};
 
 /// A merged glTF mesh with what deforms it: morph targets and joint influences, aligned with
 /// `mesh`'s vertices.
@@ -137,7 +138,8 @@ pub(crate) fn is_not_triangles(mode: Mode) -> bool {
 /// Reads a glTF mesh: triangle primitives merged, points and lines skipped with a warning.
 /// `material_of` maps a primitive's material index (None = the default material) to ours;
 /// `variant` selects `KHR_materials_variants` mappings (the default material where a primitive
-/// maps none for it).
+/// maps none for it). `given`: geometry to draw instead of the accessors, one per primitive
+/// ([`crate::Edit::MeshGeometry`]).
 pub(crate) fn load_mesh(
     doc: &gltf::Document,
     mesh: &gltf::Mesh<'_>,
@@ -145,10 +147,31 @@ pub(crate) fn load_mesh(
     stats: &mut SceneStats,
     variant: Option<usize>,
     material_of: &mut dyn FnMut(Option<usize>) -> u32,
+    given: Option<&[Geometry]>,
 ) -> Result<LoadedMesh, Error> {
+    let count = mesh.primitives().len();
+    if let Some(g) = given.filter(|g| g.len() != count) {
+        return Err(Error::Invalid {
+            at: format!("meshes[{}]", mesh.index()),
+            reason: format!(
+                "geometry given for {} primitives, the mesh has {count}",
+                g.len()
+            ),
+        });
+    }
     let mut parts = Vec::new();
     for prim in mesh.primitives() {
         let at = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
+        let given = given.map(|g| &g[prim.index()]);
+        if given.is_some() && is_not_triangles(prim.mode()) {
+            return Err(Error::Invalid {
+                at,
+                reason: format!(
+                    "draws {:?}: its geometry is not given as triangles",
+                    prim.mode()
+                ),
+            });
+        }
         if is_not_triangles(prim.mode()) {
             stats.skipped_primitives += 1;
             stats.warnings.push(format!(
@@ -162,7 +185,10 @@ pub(crate) fn load_mesh(
                 .and_then(|v| variant_material(&prim, v))
                 .or(prim.material().index()),
         );
-        parts.push(read_part(doc, &prim, buffers, &at, material)?);
+        parts.push(match given {
+            Some(g) => given_part(g, material),
+            None => read_part(doc, &prim, buffers, &at, material)?,
+        });
         stats.primitives += 1;
     }
     merge_parts(mesh, parts)

@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use crate::accessor::Buffers;
 use crate::error::Error;
+use crate::geometry::Geometry;
 use crate::material::Materials;
 use crate::mesh::{self, LoadedMesh};
 use crate::types::{Material, Scene, SceneStats};
@@ -53,6 +54,26 @@ fn geometry_key(mesh: &gltf::Mesh<'_>) -> Option<Vec<PrimitiveKey>> {
         .collect()
 }
 
+/// How meshes are read: the `KHR_materials_variants` variant chosen, and by glTF mesh index
+/// the geometry given in place of a mesh's accessors ([`crate::Edit::MeshGeometry`]).
+pub(crate) struct Reading {
+    variant: Option<usize>,
+    given: HashMap<usize, Arc<[Geometry]>>,
+}
+
+impl Reading {
+    /// The variant, and the geometry the last [`crate::Edit::MeshGeometry`] of each mesh in
+    /// `edits` gives it.
+    pub fn new(variant: Option<usize>, edits: &[crate::edit::Edit]) -> Self {
+        let given = crate::edit::given_geometry(edits);
+        Self { variant, given }
+    }
+
+    fn given(&self, mesh: usize) -> Option<&[Geometry]> {
+        self.given.get(&mesh).map(|g| &**g)
+    }
+}
+
 /// [`read_meshes`] for the nodes of `order` that may be shown (`hidden`: hidden at every time,
 /// stored hidden and not keyed visible, `KHR_node_visibility`; their meshes are not even read),
 /// with tangents generated where normal maps need them.
@@ -62,11 +83,20 @@ pub(crate) fn read_shown(
     hidden: &[bool],
     buffers: &Buffers,
     stats: &mut SceneStats,
-    variant: Option<usize>,
+    reading: Reading,
     materials: &mut Materials,
 ) -> Result<ReadMeshes, Error> {
+    if let Some(&m) = reading.given.keys().find(|&&m| m >= doc.meshes().len()) {
+        return Err(Error::Invalid {
+            at: format!("meshes[{m}]"),
+            reason: format!(
+                "geometry given for a mesh the file lacks (it has {})",
+                doc.meshes().len()
+            ),
+        });
+    }
     let shown: Vec<usize> = order.iter().copied().filter(|&i| !hidden[i]).collect();
-    let mut read = read_meshes(doc, &shown, buffers, stats, variant, materials)?;
+    let mut read = read_meshes(doc, &shown, buffers, stats, &reading, materials)?;
     generate_tangents(&mut read.meshes, &materials.materials);
     Ok(read)
 }
@@ -87,9 +117,10 @@ fn read_meshes(
     order: &[usize],
     buffers: &Buffers,
     stats: &mut SceneStats,
-    variant: Option<usize>,
+    reading: &Reading,
     materials: &mut Materials,
 ) -> Result<ReadMeshes, Error> {
+    let variant = reading.variant;
     let mut out = ReadMeshes {
         meshes: HashMap::new(),
         aliases: HashMap::new(),
@@ -106,7 +137,8 @@ fn read_meshes(
         if !seen.insert(m.index()) {
             continue;
         }
-        let key = geometry_key(&m);
+        // Given geometry is the mesh's own: it shares with nothing.
+        let key = geometry_key(&m).filter(|_| reading.given(m.index()).is_none());
         if let Some(&canon) = key.as_ref().and_then(|k| by_key.get(k)) {
             let own = primitive_materials(doc, &m, variant, materials);
             alias_candidates.push((m, canon, own));
@@ -127,14 +159,7 @@ fn read_meshes(
     }
     let read: Vec<(Result<LoadedMesh, Error>, SceneStats)> = to_read
         .par_iter()
-        .map(|r| {
-            let mut local = SceneStats::default();
-            let mut next = r.materials.iter().copied();
-            let mut material_of = |_: Option<usize>| next.next().unwrap_or(0);
-            let loaded =
-                mesh::load_mesh(doc, &r.mesh, buffers, &mut local, variant, &mut material_of);
-            (loaded, local)
-        })
+        .map(|r| read_one(doc, r, buffers, reading))
         .collect();
     for (r, (loaded, local)) in to_read.iter().zip(read) {
         stats.primitives += local.primitives;
@@ -148,12 +173,34 @@ fn read_meshes(
             out.aliases.insert(m.index(), (canon, set));
             continue;
         }
-        let loaded = mesh::load_mesh(doc, &m, buffers, stats, variant, &mut |i| {
-            materials.get(doc, i)
-        })?;
+        let of = &mut |i| materials.get(doc, i);
+        let loaded = mesh::load_mesh(doc, &m, buffers, stats, variant, of, None)?;
         out.meshes.insert(m.index(), loaded);
     }
     Ok(out)
+}
+
+/// One mesh of [`read_meshes`], its warnings and counts in stats of its own.
+fn read_one(
+    doc: &gltf::Document,
+    r: &ToRead<'_>,
+    buffers: &Buffers,
+    reading: &Reading,
+) -> (Result<LoadedMesh, Error>, SceneStats) {
+    let mut local = SceneStats::default();
+    let mut next = r.materials.iter().copied();
+    let of = &mut |_: Option<usize>| next.next().unwrap_or(0);
+    let given = reading.given(r.mesh.index());
+    let loaded = mesh::load_mesh(
+        doc,
+        &r.mesh,
+        buffers,
+        &mut local,
+        reading.variant,
+        of,
+        given,
+    );
+    (loaded, local)
 }
 
 /// Our material of `prim` (its variant's, else its own), numbered on first use.

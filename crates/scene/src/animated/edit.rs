@@ -46,6 +46,9 @@ impl Animated {
             }
             Edit::Pointer { path, value } => self.edit_pointer(path, value),
             Edit::CameraKey { camera, key, value } => self.edit_camera_key(*camera, key, value),
+            // Checked by the load it asks for: a mesh the file lacks, or a primitive count
+            // that differs, is that load's error.
+            Edit::MeshGeometry { .. } => Ok(Touched::Reload),
         }
     }
 
@@ -235,7 +238,7 @@ impl Animated {
     /// A document with as many of each thing as this one, for parsing pointers.
     fn counts(&self) -> Value {
         let n = |k: usize| Value::Array(vec![Value::Null; k]);
-        let materials = self.material_index.keys().max().map_or(0, |m| m + 1);
+        let materials = self.file_materials;
         serde_json::json!({
             "nodes": n(self.graph.nodes.len()),
             "cameras": n(self.cameras.len()),

@@ -7,6 +7,7 @@ use gltf::mesh::{Mode, Semantic};
 use crate::accessor::{read_f32, read_indices, read_vec, Buffers};
 use crate::draco::Decoded;
 use crate::error::Error;
+use crate::geometry::Geometry;
 use crate::morph::MorphTarget;
 
 /// One `JOINTS_n`/`WEIGHTS_n` pair: 4 joints and 4 weights per vertex.
@@ -270,12 +271,7 @@ pub(crate) fn read_part(
     // Without NORMAL, glTF asks for flat normals: each triangle gets its own three vertices.
     let flat = normals.is_none();
     let (remap, normals) = match normals {
-        Some(ns) => (
-            None,
-            ns.into_iter()
-                .map(|v| Vec3::from(v).try_normalize().unwrap_or(Vec3::Z))
-                .collect::<Vec<_>>(),
-        ),
+        Some(ns) => (None, ns.into_iter().map(unit).collect::<Vec<_>>()),
         None => {
             let (remap, ns) = flat_normals(&mut triangles, &positions);
             (Some(remap), ns)
@@ -311,6 +307,42 @@ pub(crate) fn read_part(
             .map(|(j, w)| (per_vertex(j), per_vertex(w)))
             .collect(),
     })
+}
+
+/// A primitive drawn from `given` instead of its accessors ([`crate::Edit::MeshGeometry`]):
+/// normals normalised as read ones are, flat ones made where none are given.
+pub(crate) fn given_part(given: &Geometry, material: u32) -> Part {
+    let positions: Vec<Vec3> = given.positions().iter().map(|&p| Vec3::from(p)).collect();
+    let mut triangles = given.triangles().to_vec();
+    let (remap, normals) = match given.normals() {
+        Some(ns) => (None, ns.iter().map(|&v| unit(v)).collect()),
+        None => {
+            let (remap, ns) = flat_normals(&mut triangles, &positions);
+            (Some(remap), ns)
+        }
+    };
+    let uvs = given
+        .uvs()
+        .map(|u| u.iter().map(|&v| Vec2::from(v)).collect());
+    Part {
+        flat: remap.is_some(),
+        positions: gather(positions, &remap),
+        normals,
+        tangents: None,
+        uv0: uvs.map(|u| gather(u, &remap)),
+        uv1: None,
+        uv_more: Vec::new(),
+        colors: None,
+        triangles,
+        material,
+        targets: Vec::new(),
+        skin_sets: Vec::new(),
+    }
+}
+
+/// A read normal as shading uses it: unit length, +Z where it has none.
+fn unit(v: [f32; 3]) -> Vec3 {
+    Vec3::from(v).try_normalize().unwrap_or(Vec3::Z)
 }
 
 /// `POSITION`, checked present and finite, with the path naming it.
