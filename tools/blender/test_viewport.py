@@ -8,7 +8,8 @@ A small scene (plane, cube with a material, camera with depth of field, point li
 into the add-on's viewport session. Then each of a camera move with an f-stop change, a
 transform, a light's power, a material's base colour, a geometry edit and a hide is applied in
 bpy; the depsgraph's real updates (`depsgraph_update_post`, the updates `view_update` gets) go
-to `Session.sync`, which must take the right path (only the geometry edit re-exports); and the
+to `Session.sync`, which must take the right path (none re-exports: the geometry edit sends
+the cube's new triangles as arrays, `mesh_arrays`); and the
 session's progressive film after N samples must be bit-identical to an F12-equivalent render of
 the same state: the edited scene exported fresh, `aperture.load`ed and rendered with the same
 options (same spp, same seed). The film must also differ from the previous state's.
@@ -45,6 +46,18 @@ def build_scene(bpy):
     cube = bpy.context.active_object
     cube.name = "Cube"
     cube.data.materials.append(mat)
+    # A second slot on the +X faces: the cube is two primitives (mesh_arrays splits by slot).
+    trim = bpy.data.materials.new("Trim")
+    trim.diffuse_color = (0.1, 0.7, 0.2, 1.0)
+    cube.data.materials.append(trim)
+    for poly in cube.data.polygons:
+        poly.material_index = int(poly.normal.x > 0.5)
+    # Smooth, without UVs: given by vertex (the others by corner).
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=2, radius=0.4, location=(-1.3, 0.6, 0.4))
+    ball = bpy.context.active_object
+    ball.name = "Ball"
+    bpy.ops.object.shade_smooth()
+    ball.data.uv_layers.remove(ball.data.uv_layers[0])
     cam = bpy.data.cameras.new("Cam")
     cam.dof.use_dof, cam.dof.focus_object, cam.dof.aperture_fstop = True, cube, 1.4
     obj = bpy.data.objects.new("Cam", cam)
@@ -95,7 +108,7 @@ def edits(bpy):
 
     return [("camera", "camera", camera), ("transform", "transform", transform),
             ("light", "light", light), ("material", "material", material),
-            ("geometry", "reexport", geometry), ("visibility", "visible", hide)]
+            ("geometry", "geometry", geometry), ("visibility", "visible", hide)]
 
 
 def reference(bpy, vs, aperture, options, k):
@@ -122,8 +135,11 @@ def run(bpy):
     bpy.app.handlers.depsgraph_update_post.append(handler)
     film = session.start().wait() and session.film()
     ref = reference(bpy, vs, aperture, session.scene_options, 0)
-    check("viewport.start", session.exports == 1 and bits_equal(film, ref),
-          f"one export at start; the {W}x{H} film after {SPP} spp equals a fresh render: "
+    arrays = {names[0]: len(slots) for slots, names in session.stood_in.values()}
+    check("viewport.start", session.exports == 1 and bits_equal(film, ref)
+          and arrays == {"Ground": 1, "Cube": 2, "Ball": 1},
+          f"one export at start; meshes given as arrays, with their primitives: {arrays} (want "
+          f"Ground 1, Cube 2, Ball 1); the {W}x{H} film after {SPP} spp equals a fresh render: "
           f"{bits_equal(film, ref)} (mean {film[..., :3].mean():.4f})")
     before = film
     for k, (name, want, edit) in enumerate(edits(bpy), start=1):
@@ -138,7 +154,7 @@ def run(bpy):
         re_exported = session.exports - exports
         same = bits_equal(film, ref)
         moved = float(np.abs(film - before).mean())
-        check(f"viewport.{name}", paths == [want] and re_exported == (want == "reexport")
+        check(f"viewport.{name}", paths == [want] and re_exported == 0
               and same and moved > 1e-4,
               f"updates {sorted(set(seen))} took {paths} (want [{want!r}]); re-exports: "
               f"{re_exported}; film after {session.worker.samples} spp bit-identical to a fresh "
@@ -290,10 +306,21 @@ def f12(bpy, name):
     return np.stack([ch[prefix + c] for c in "RGBA"], axis=-1)
 
 
+def new_slot(bpy, cube):
+    """A third material on one face: the cube's primitives change, which only a re-export
+    can say."""
+    glow = bpy.data.materials.new("Glow")
+    glow.diffuse_color = (0.9, 0.8, 0.1, 1.0)
+    cube.data.materials.append(glow)
+    cube.data.polygons[0].material_index = 2
+    cube.data.update()
+
+
 def test_f12(bpy, vs, aperture):
     """F12 through the session F12 and the viewport share: the first exports once, a second
     with nothing changed exports and sends nothing and gives the same bits, a transform is one
-    edit (no export), a geometry edit one re-export, denoising switched on neither (it is
+    edit (no export), a geometry edit one ``set_geometry`` (no export), a new material slot one
+    re-export, denoising switched on neither (it is
     denoised in the session, no longer by the command line); each image's RGB equals a fresh
     export's render (denoised the same way) bit for bit."""
     engine = sys.modules[ADDON + ".engine"]
@@ -303,7 +330,8 @@ def test_f12(bpy, vs, aperture):
              ("f12.transform", lambda: setattr(cube, "location", (-0.7, 0.4, 0.5)),
               ["transform"], 1),
              ("f12.geometry", lambda: [setattr(v.co, "x", v.co.x * 1.5) for v in cube.data.vertices]
-              and cube.data.update(), ["reexport"], 2),
+              and cube.data.update(), ["geometry"], 1),
+             ("f12.new-slot", lambda: new_slot(bpy, cube), ["reexport"], 2),
              ("f12.denoise", lambda: setattr(bpy.context.scene.aperture, "denoise", True), [], 2)]
     last = None
     for k, (name, edit, want, exports) in enumerate(steps):

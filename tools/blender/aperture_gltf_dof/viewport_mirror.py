@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from . import mesh_arrays
 from .dof_export import KEYS, _json_value, native_extras
 
 # io_scene_gltf2/blender/exp/tree.py: cameras and lights get a -90° turn about X with +Y up.
@@ -176,11 +177,7 @@ def geometry_signature(obj):
     """A hash of the evaluated mesh (vertex positions, faces, materials): what a geometry edit
     changes and a material or transform edit does not."""
     mesh = obj.data
-    co = np.empty(len(mesh.vertices) * 3, np.float32)
-    mesh.vertices.foreach_get("co", co)
-    loops = np.empty(len(mesh.loops), np.int32)
-    mesh.loops.foreach_get("vertex_index", loops)
-    h = hashlib.sha1(co.tobytes())
-    h.update(loops.tobytes())
+    h = hashlib.sha1(mesh_arrays.positions(mesh).tobytes())
+    h.update(mesh_arrays.corner_vertices(mesh).tobytes())
     h.update(repr([m.name if m else None for m in mesh.materials]).encode())
     return h.hexdigest()

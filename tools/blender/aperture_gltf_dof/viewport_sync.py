@@ -10,13 +10,17 @@ What takes which path (``Session.sync`` returns ``[(path, name)]``):
 - ``light``: a light's colour, power, exposure or temperature: ``set_light``;
 - ``material``: a Principled BSDF's Base Color, Alpha, Metallic, Roughness: ``set_material``;
 - ``visible``: an exported object's Disable in Renders: ``set_visible``;
+- ``geometry``: a mesh's new triangles (edit mode, modifiers): ``set_geometry`` of that mesh
+  alone, read from the evaluated object (``mesh_arrays``), no export;
 - ``options``: world and render settings: the next render's options (no edit);
-- ``reexport``: a mesh's geometry, a new object, or a change the edits cannot express (a
-  light's type, a material's links, ...): the whole scene is exported again and reloaded
-  (this session re-exports everything, not the changed object alone).
+- ``reexport``: a new object, a mesh whose material slots changed or that the arrays cannot
+  carry (shape keys, skins, ...), or a change the edits cannot express (a light's type, a
+  material's links, ...): the whole scene is exported again and reloaded.
 
-A geometry flag is confirmed against a hash of the evaluated mesh, so a material or modifier
-update that leaves the mesh as it was does not re-export.
+The export writes stand-ins for the meshes and the load takes their triangles as arrays
+(``mesh_arrays``: the exporter's vertex deduplication was most of a big scene's start). A
+geometry flag is confirmed against a hash of the evaluated mesh, so a material or modifier
+update that leaves the mesh as it was sends nothing.
 
 F12 and the viewport share one session per Blender scene (``shared``): F12's depsgraph is a
 fresh evaluation, so F12 brings the session to it with ``Session.refresh``, which compares every
@@ -35,7 +39,7 @@ import time
 import bpy
 import numpy as np
 
-from . import viewport_mirror as mirror, world
+from . import mesh_arrays, viewport_mirror as mirror, world
 from .scene_export import export_scene, resolution
 
 
@@ -309,15 +313,10 @@ class Session:
     def _reload(self, depsgraph):
         self.exports += 1
         path = os.path.join(self.folder, f"scene{self.exports}.glb")
-        self._busy = True
-        try:
-            self._export(path)
-        finally:
-            self._busy = False
-        self.scene = self._aperture.load(path)
+        doc, geometry = self._export_arrays(path, depsgraph)
+        self.scene = self._aperture.load(path, geometry=geometry)
         self.triangles = self.scene.info()["triangles"]["drawn"]
         self.path = path
-        doc = glb_json(path)
         self.nodes = {n.get("name"): i for i, n in enumerate(doc.get("nodes", []))}
         self.parents = {c: p for p, n in enumerate(doc.get("nodes", [])) for c in n.get("children", [])}
         lights = doc.get("extensions", {}).get("KHR_lights_punctual", {}).get("lights", [])
@@ -325,6 +324,41 @@ class Session:
         self.materials = {m.get("name"): i for i, m in enumerate(doc.get("materials", []))}
         self.scene_options = render_options(depsgraph.scene, self._size)
         self._snapshot(depsgraph)
+
+    def _export_arrays(self, path, depsgraph, stand_ins=True):
+        """Exports to ``path`` with stand-in meshes; returns the JSON and the stood-in meshes'
+        arrays. A stood-in mesh that cannot be read back exports again without stand-ins."""
+        self._busy = True
+        try:
+            with mesh_arrays.stubbed(stand_ins) as stubs:
+                self._export(path)
+        finally:
+            self._busy = False
+        doc = glb_json(path)
+        self.stood_in, self.drawn_by = {}, {}
+        if not stubs:
+            return doc, {}
+        try:
+            geometry, self.drawn_by = mesh_arrays.given(doc, lambda n: bpy.data.objects[n].evaluated_get(
+                depsgraph) if n in bpy.data.objects else None)
+        except LookupError:
+            return self._export_arrays(path, depsgraph, stand_ins=False)
+        self.stood_in = mesh_arrays.stood_in(doc)
+        return doc, geometry
+
+    def _geometry(self, obj, depsgraph):
+        """A stood-in mesh's new triangles as ``set_geometry`` (the objects drawing it take the
+        new hash), or ``reexport`` when its slots changed or it is not stood in."""
+        m = self.drawn_by.get(obj.name)
+        prims = None if m is None else mesh_arrays.primitives(
+            obj.evaluated_get(depsgraph).data, self.stood_in[m][0])
+        if prims is None:
+            return "reexport"
+        self.scene.set_geometry(m, prims)
+        for name in (n for n, k in self.drawn_by.items() if k == m and n in bpy.data.objects):
+            o = bpy.data.objects[name].evaluated_get(depsgraph)
+            self.geometry[name] = mirror.geometry_signature(o)
+        return "geometry"
 
     def _snapshot(self, depsgraph):
         """What the export holds now: visibility, geometry hashes and the signatures of what
@@ -418,7 +452,7 @@ class Session:
         if update.is_updated_geometry and obj.type == "MESH":
             sig = mirror.geometry_signature(obj.evaluated_get(depsgraph))
             if sig != self.geometry.get(obj.name):
-                return ["reexport"]
+                paths.append(self._geometry(obj, depsgraph))
         if obj.type == "CAMERA":
             return [self._camera(obj)] if update.is_updated_transform else []
         if update.is_updated_transform:
@@ -493,8 +527,7 @@ class Session:
         for obj in self._objects():
             if obj.type == "MESH" and self.geometry.get(obj.name) != mirror.geometry_signature(
                     obj.evaluated_get(depsgraph)):
-                done.append(("reexport", obj.name))
-                continue
+                done.append((self._geometry(obj, depsgraph), obj.name))
             paths = [self._camera(obj)] if obj.type == "CAMERA" else [self._transform(obj)]
             if obj.type == "LIGHT":
                 paths.append(self._light(obj))

@@ -1,0 +1,224 @@
+# SPDX-License-Identifier: MIT OR Apache-2.0
+"""Meshes handed to the session as numpy arrays instead of through the glTF exporter (issue 63):
+the exporter spends about 1.5 s of Python a million triangles deduplicating vertices and
+packing buffers. While the session exports, ``stubbed`` has the exporter write, for each mesh
+it can stand in for, one marked triangle per material slot instead of the mesh's triangles
+(its nodes, materials, cameras and lights are exported as before); ``given`` then reads those
+meshes' triangles from the evaluated objects with ``foreach_get`` and the session loads the
+file with them (``aperture.load(path, geometry=...)``). A geometry edit of such a mesh is one
+``Scene.set_geometry``, no export.
+
+A mesh is stood in for when the arrays carry everything the exporter would write of it: no
+shape keys, no skin, at most one UV map, no colour attributes. Vertices are the mesh's corners
+(each with its position, corner normal and UV), or its vertices when it has no UV map and
+smooth vertex normals: the same surface the exporter's deduplicated vertices describe, +Y up
+as the exporter turns it.
+"""
+
+import contextlib
+
+import numpy as np
+
+# The stand-in triangle's z: no mesh the exporter writes has a triangle there by chance.
+MARK = -12345.0
+
+
+def _exporter():
+    """The exporter's primitive extraction module and its constants (Blender 4.3–5.0 names,
+    then 4.2's), or ``(None, None)``."""
+    try:
+        from io_scene_gltf2.blender.exp import primitive_extract as extract
+        from io_scene_gltf2.io.com import constants
+    except ImportError:
+        try:
+            from io_scene_gltf2.blender.exp import gltf2_blender_gather_primitives_extract as extract
+            from io_scene_gltf2.io.com import gltf2_io_constants as constants
+        except ImportError:
+            return None, None
+    return extract, constants
+
+
+def eligible(mesh):
+    """True when the arrays carry all the exporter would write of ``mesh``."""
+    return (mesh.shape_keys is None and len(mesh.uv_layers) <= 1
+            and len(mesh.color_attributes) == 0 and len(mesh.polygons) > 0)
+
+
+def _read(collection, name, n, width, dtype):
+    """``foreach_get`` into a new array (a dtype matching the property's is a plain copy;
+    another converts item by item, 70× slower on a million triangles)."""
+    a = np.empty(n * width, dtype)
+    collection.foreach_get(name, a)
+    return a.reshape(n, width) if width > 1 else a
+
+
+def _triangle_slots(mesh):
+    """Each loop triangle's material slot (``None``: all 0, the mesh has no such attribute)."""
+    attr = mesh.attributes.get("material_index")
+    if attr is None or attr.domain != "FACE":
+        return None
+    face = _read(attr.data, "value", len(mesh.polygons), 1, np.int32)
+    tri_face = _read(mesh.loop_triangle_polygons, "value", len(mesh.loop_triangles), 1, np.int32)
+    return face[tri_face]
+
+
+def slots(mesh):
+    """The material slots the mesh's triangles use, sorted: one primitive each, in this
+    order (the exporter's ``primitive_split`` buckets them the same way)."""
+    tri = _triangle_slots(mesh)
+    return np.zeros(1, np.int32) if tri is None else np.unique(tri)
+
+
+def corner_vertices(mesh):
+    """Each corner's vertex (Blender 4.x's attribute, a plain copy; else the loops')."""
+    corners = mesh.attributes.get(".corner_vert")
+    return _read(corners.data if corners else mesh.loops, "value" if corners else "vertex_index",
+                 len(mesh.loops), 1, np.int32)
+
+
+def positions(mesh):
+    """The vertices' positions (the ``position`` attribute: a plain copy)."""
+    return _read(mesh.attributes["position"].data, "vector", len(mesh.vertices), 3, np.float32)
+
+
+def _stand_ins(mesh, constants):
+    """What ``extract_primitives`` returns for ``mesh`` stood in for: a triangle per slot at
+    ``MARK``, its slot in x (``given`` checks both)."""
+    prims = []
+    for slot in slots(mesh):
+        p = np.array([[slot, 0, MARK], [slot, 1, MARK], [slot, 0, MARK + 1]], np.float32)
+        prims.append({
+            "attributes": {"POSITION": {
+                "data": p,
+                "component_type": constants.ComponentType.Float,
+                "data_type": constants.DataType.Vec3,
+            }},
+            "indices": np.array([0, 1, 2], np.uint32),
+            "material": int(slot),
+            "uvmap_attributes_index": {},
+        })
+    return prims, [None] * len(prims), None
+
+
+@contextlib.contextmanager
+def stubbed(on=True):
+    """Within it, the exporter writes stand-ins for the meshes ``eligible`` accepts. Yields
+    False (and changes nothing) when not ``on`` or this Blender's exporter is not the one
+    known here."""
+    extract, constants = _exporter() if on else (None, None)
+    original = getattr(extract, "extract_primitives", None)
+    if original is None:
+        yield False
+        return
+
+    def extract_primitives(materials, mesh, skinned, *rest):
+        export_settings = rest[-1]
+        if skinned is not None or export_settings.get("gltf_shared_accessors") or not eligible(mesh):
+            return original(materials, mesh, skinned, *rest)
+        return _stand_ins(mesh, constants)
+
+    extract.extract_primitives = extract_primitives
+    try:
+        yield True
+    finally:
+        extract.extract_primitives = original
+
+
+def stood_in(doc):
+    """``{mesh index: (slots, [node names])}`` of the export's stood-in meshes."""
+    accessors = doc.get("accessors", [])
+    out = {}
+    for m, mesh in enumerate(doc.get("meshes", [])):
+        lows = [accessors[p["attributes"]["POSITION"]].get("min", [0, 0, 0])
+                for p in mesh.get("primitives", [])]
+        if lows and all(low[2] == MARK for low in lows):
+            out[m] = ([int(low[0]) for low in lows], [])
+    for n in doc.get("nodes", []):
+        if n.get("mesh") in out:
+            out[n["mesh"]][1].append(n.get("name"))
+    return out
+
+
+def _yup(v):
+    """Blender's +Z up as the exporter writes +Y up: (x, z, -y)."""
+    out = np.empty_like(v)
+    out[:, 0], out[:, 1], out[:, 2] = v[:, 0], v[:, 2], -v[:, 1]
+    return out
+
+
+def _normals(n):
+    """Normals as the exporter writes them (``__get_normals``: rounded to 4 digits,
+    normalised, a zero one made +Z, then +Y up), so that a render matches a full export's
+    bit for bit."""
+    n = np.round(n, 4)
+    norms = np.linalg.norm(n, axis=1, keepdims=True)
+    np.divide(n, norms, out=n, where=norms != 0)
+    n[~n.any(axis=1), 2] = 1
+    return _yup(n)
+
+
+def _arrays(mesh, corner_vertex, loops):
+    """The vertex arrays and each triangle's three vertices: by vertex when every corner of
+    a vertex has the same normal and UV (smooth normals, no UV seam), else by corner."""
+    nv, nc = len(mesh.vertices), len(mesh.loops)
+    co = positions(mesh)
+    uv = None
+    if len(mesh.uv_layers):
+        uv = _read(mesh.attributes[mesh.uv_layers[0].name].data, "vector", nc, 2, np.float32)
+        uv[:, 1] = 1.0 - uv[:, 1]  # glTF's v runs down the image (the exporter's flip)
+    if mesh.normals_domain == "POINT":
+        by_vertex = {"positions": _yup(co), "normals": _normals(
+            _read(mesh.vertex_normals, "vector", nv, 3, np.float32))}
+        if uv is not None:
+            uv_vertex = np.zeros((nv, 2), np.float32)
+            uv_vertex[corner_vertex] = uv
+            by_vertex["uvs"] = uv_vertex
+        if uv is None or np.array_equal(uv_vertex[corner_vertex], uv):
+            return by_vertex, corner_vertex[loops]
+    if mesh.normals_domain == "FACE":  # each corner its face's: normalised once a face
+        starts = _read(mesh.polygons, "loop_start", len(mesh.polygons), 1, np.int32)
+        sizes = np.diff(np.append(starts, nc))
+        faces = _normals(_read(mesh.polygon_normals, "vector", len(mesh.polygons), 3, np.float32))
+        normals = np.repeat(faces, sizes, axis=0)
+    else:
+        normals = _normals(_read(mesh.corner_normals, "vector", nc, 3, np.float32))
+    arrays = {"positions": _yup(co)[corner_vertex], "normals": normals}
+    if uv is not None:
+        arrays["uvs"] = uv
+    return arrays, loops
+
+
+def primitives(mesh, want):
+    """The primitive dicts of ``mesh`` (an evaluated mesh), one per slot of ``want`` in that
+    order; ``None`` when its slots are no longer those (a re-export is needed)."""
+    if not eligible(mesh) or list(slots(mesh)) != list(want):
+        return None
+    loops = _read(mesh.loop_triangles, "loops", len(mesh.loop_triangles), 3, np.uint32)
+    corner_vertex = corner_vertices(mesh)
+    arrays, tri_vertices = _arrays(mesh, corner_vertex, loops.astype(np.int32))
+    if len(want) == 1:
+        return [dict(arrays, triangles=tri_vertices)]
+    tri_slot = _triangle_slots(mesh)
+    out = []
+    for slot in want:
+        used, local = np.unique(tri_vertices[tri_slot == slot], return_inverse=True)
+        prim = {k: v[used] for k, v in arrays.items()}
+        prim["triangles"] = local.reshape(-1, 3)
+        out.append(prim)
+    return out
+
+
+def given(doc, objects):
+    """``({mesh index: primitive dicts}, {object name: mesh index})`` of the export's stood-in
+    meshes, read from ``objects(name)`` (the evaluated object of a node's name, or None).
+    Raises ``LookupError`` when a stood-in mesh cannot be read back (the caller exports
+    without stand-ins)."""
+    geometry, drawn_by = {}, {}
+    for m, (want, names) in stood_in(doc).items():
+        obj = next((o for o in map(objects, names) if o is not None), None)
+        prims = primitives(obj.data, want) if obj is not None and obj.type == "MESH" else None
+        if prims is None:
+            raise LookupError(f"mesh {m} (nodes {names}) cannot be read back")
+        geometry[m] = prims
+        drawn_by.update((n, m) for n in names)
+    return geometry, drawn_by
