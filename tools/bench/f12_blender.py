@@ -66,8 +66,10 @@ def main():
         bpy.ops.preferences.addon_enable(module=ADDON)
         vs = sys.modules[ADDON + ".viewport_sync"]
         sc = bpy.context.scene
-        for engine, session in (("APERTURE", True), ("APERTURE", False), ("CYCLES", None)):
+        runs = (("APERTURE", True), ("APERTURE", False), ("CYCLES", None), ("CYCLES", "sync"))
+        for engine, session in runs:
             sc.render.engine = engine
+            sc.render.resolution_percentage = 100
             if engine == "APERTURE":
                 s = sc.aperture
                 s.samples, s.denoise, s.binary, s.f12_session = 4, False, a.aperture, session
@@ -76,6 +78,9 @@ def main():
                 sc.cycles.samples, sc.cycles.use_denoising = 4, False
                 sc.render.threads_mode, sc.render.threads = "FIXED", 2
                 label = "Cycles"
+                if session == "sync":  # 1 sample at 32 x 18: about Cycles' sync + BVH alone
+                    sc.cycles.samples, sc.render.resolution_percentage = 1, 10
+                    label = "Cycles, 1 spp at 32 x 18 (sync + BVH)"
             first, again = timed(bpy), timed(bpy)
             rows.setdefault(label, []).append((first, again))
             vs.free_shared()

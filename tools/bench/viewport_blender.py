@@ -40,12 +40,40 @@ def first_image(worker):
     return time.perf_counter() - t
 
 
+class timed_parts:
+    """The session's export and its meshes read as arrays, timed (``--no-arrays``: the
+    exporter writes every mesh)."""
+
+    def __init__(self, vs, arrays, off):
+        self.seconds = {"export": 0.0, "arrays": 0.0}
+        given, stubbed = arrays.given, arrays.stubbed
+        if off:
+            arrays.stubbed = lambda on=True: stubbed(False)
+
+        def timed_given(*args):
+            t = time.perf_counter()
+            try:
+                return given(*args)
+            finally:
+                self.seconds["arrays"] += time.perf_counter() - t
+
+        arrays.given = timed_given
+        self._export = vs.export_scene
+
+    def export(self, path):
+        t = time.perf_counter()
+        self._export(path)
+        self.seconds["export"] += time.perf_counter() - t
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--scene", default="demo", choices=["demo", "big"])
     ap.add_argument("--triangles", type=int, default=1_000_000)
     ap.add_argument("--moves", type=int, default=7)
     ap.add_argument("--denoise", default="off", choices=["off", "schedule", "every"])
+    ap.add_argument("--no-arrays", action="store_true",
+                    help="export every mesh through the glTF exporter (no mesh_arrays stand-ins)")
     a = ap.parse_args()
     work = tempfile.mkdtemp(prefix="aperture-viewport-bench-")
     os.environ["BLENDER_USER_SCRIPTS"] = os.path.join(work, "s")
@@ -73,9 +101,13 @@ def main():
         vs.denoise_now = lambda samples, start, *rest: start is not None and samples >= start
     tris = sum(len(o.data.polygons) for o in sc.objects if o.type == "MESH")
     dg = bpy.context.evaluated_depsgraph_get()
+    parts = timed_parts(vs, sys.modules[ADDON + ".mesh_arrays"], a.no_arrays)
     t = time.perf_counter()
-    s = vs.Session(dg)
+    s = vs.Session(dg, export=parts.export)
     loaded = time.perf_counter() - t
+    print(f"start parts: export {parts.seconds['export']:.3f} s, meshes read as arrays "
+          f"{parts.seconds['arrays']:.3f} s ({len(s.stood_in)} meshes), load (aperture.load + "
+          f"info) {loaded - sum(parts.seconds.values()):.3f} s", flush=True)
     w = s.start(width=W, height=H, denoise_start=denoise_start, **denoise)
     start = loaded + first_image(w)
     w.wait()
