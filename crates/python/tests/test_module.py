@@ -23,7 +23,8 @@ def test_every_stubbed_name_exists_and_is_documented():
         if isinstance(node, ast.FunctionDef):
             assert getattr(aperture, node.name).__doc__, node.name
             checked += 1
-        if isinstance(node, ast.ClassDef) and node.name not in ("Hits", "CameraRays", "Triangles"):
+        typed_dicts = ("Hits", "CameraRays", "Triangles", "Primitive")  # the stub's own
+        if isinstance(node, ast.ClassDef) and node.name not in typed_dicts:
             cls = getattr(aperture, node.name)
             assert cls.__doc__, node.name
             for item in node.body:
