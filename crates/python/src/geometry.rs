@@ -39,20 +39,27 @@ fn rows<'py, T: numpy::Element + Copy, const N: usize>(
         .collect())
 }
 
-/// Triangle indices: an integer array (a float one is refused), each below 2³².
+/// Triangle indices: an integer array (a float one is refused), each below 2³². uint32 and
+/// int32 (what Blender's arrays hold) are read as they are; other widths through int64.
 fn triangles(v: &Bound<'_, PyAny>, at: &str) -> PyResult<Vec<[u32; 3]>> {
-    let np = v.py().import("numpy")?;
-    let kind: String = np
-        .call_method1("asarray", (v,))?
-        .getattr("dtype")?
-        .getattr("kind")?
-        .extract()?;
+    let a = v.py().import("numpy")?.call_method1("asarray", (v,))?;
+    let dtype = a.getattr("dtype")?;
+    let (kind, size): (String, usize) = (
+        dtype.getattr("kind")?.extract()?,
+        dtype.getattr("itemsize")?.extract()?,
+    );
     if kind != "i" && kind != "u" {
         return Err(value_error(format!(
             "{at}: must be integers, got dtype kind {kind:?}"
         )));
     }
-    let wide: Vec<[i64; 3]> = rows(v, "int64", at)?;
+    let wide: Vec<[i64; 3]> = match (kind.as_str(), size) {
+        ("u", 4) => return rows::<u32, 3>(&a, "uint32", at),
+        ("i", 4) => (rows::<i32, 3>(&a, "int32", at)?.into_iter())
+            .map(|t| t.map(i64::from))
+            .collect(),
+        _ => rows(&a, "int64", at)?,
+    };
     let bad = wide.iter().flatten().find(|&&i| u32::try_from(i).is_err());
     if let Some(i) = bad {
         return Err(value_error(format!(

@@ -126,6 +126,7 @@ def _bad(**change):
     (4, _bad(uvs=np.zeros((32, 3))), ValueError, "2 columns"),
     (4, _bad(triangles=np.array([[0.0, 1.0, 2.0]])), ValueError, "integers"),
     (4, _bad(triangles=np.array([[0, -1, 2]])), ValueError, "index -1"),
+    (4, _bad(triangles=np.array([[0, -1, 2]], np.int32)), ValueError, "index -1"),
     (4, _bad(positions=None), ValueError, "positions is missing"),
     (4, [dict(bumpy(4, 0.3, 0), colour=np.zeros((32, 4)))], ValueError, "unknown key"),
     (0, _bad(), ValueError, "the mesh has 2"),

@@ -9,10 +9,10 @@ file with them (``aperture.load(path, geometry=...)``). A geometry edit of such 
 ``Scene.set_geometry``, no export.
 
 A mesh is stood in for when the arrays carry everything the exporter would write of it: no
-shape keys, no skin, at most one UV map, no colour attributes. Vertices are the mesh's corners
-(each with its position, corner normal and UV), or its vertices when it has no UV map and
-smooth vertex normals: the same surface the exporter's deduplicated vertices describe, +Y up
-as the exporter turns it.
+shape keys, no skin, at most one UV map, no colour attributes. Vertices are the mesh's
+vertices when its normals are smooth and its UVs have no seam, else its corners (each with its
+position, corner normal and UV): the same surface the exporter's deduplicated vertices
+describe, +Y up as the exporter turns it.
 """
 
 import contextlib
