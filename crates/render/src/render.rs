@@ -9,6 +9,8 @@
 //! pixel at `spp` samples, onto what a film holds) or `rounds` (adaptive sampling), both
 //! tracing their samples through a `job::Job`.
 
+#[cfg(test)]
+mod centre_tests;
 mod job;
 mod rounds;
 #[cfg(test)]
@@ -23,7 +25,7 @@ use crate::frame_lights::FrameLights;
 use crate::options::{check, RenderError, RenderOptions};
 use crate::passes::{Pass, PassSet};
 use crate::spares::Spares;
-use aperture_accel::Accel;
+use aperture_accel::{Accel, Hit, Ray};
 use aperture_scene::Scene;
 use glam::{Vec2, Vec3};
 pub(crate) use job::geometry;
@@ -194,14 +196,9 @@ fn centre_rays(job: &Job<'_>, film: &mut Film) {
     let forward = cam.world_from_camera.transform_vector3(Vec3::NEG_Z);
     // The frame's instant: where moving instances are at the frame itself.
     let time = job.opts.motion.as_deref().map_or(0.0, |m| m.frame_time());
-    let hits: Vec<Option<(Vec3, aperture_accel::Hit)>> = (0..w.pixels())
+    let hits: Vec<Option<(Vec3, Hit)>> = (w.y0..w.y0 + w.height)
         .into_par_iter()
-        .map(|i| {
-            let (x, y) = (w.x0 + (i as u32 % w.width), w.y0 + (i as u32 / w.width));
-            let p_film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-            let ray = cam.centre_ray(p_film)?;
-            job.integrator.first_surface(ray.origin, ray.dir, time)
-        })
+        .flat_map_iter(|y| centre_row(job, w, y, time))
         .collect();
     let origin = Vec3::from(cam.world_from_camera.translation);
     let ortho = matches!(cam.model, crate::camera::CameraModel::Orthographic { .. });
@@ -222,7 +219,7 @@ fn centre_rays(job: &Job<'_>, film: &mut Film) {
     }
     if job.opts.passes.contains(Pass::Vector) {
         let instances = &job.integrator.geom.scene.instances;
-        let on = |&(p, hit): &(Vec3, aperture_accel::Hit)| {
+        let on = |&(p, hit): &(Vec3, Hit)| {
             let inst = instances.get(hit.instance as usize)?;
             Some((p, hit, inst.mesh, inst.world_from_object))
         };
@@ -234,6 +231,31 @@ fn centre_rays(job: &Job<'_>, film: &mut Film) {
                 .collect(),
         };
     }
+}
+
+/// The first surfaces row `y` of `w` sees through its pixels' centres at `time`, found
+/// together: a row's centre rays are coherent, so they walk the BVH as packets (one at a
+/// time, they took 7 % of a 1-spp 1080p EXR of 980 k triangles).
+fn centre_row(job: &Job<'_>, w: Window, y: u32, time: f32) -> Vec<Option<(Vec3, Hit)>> {
+    let mut rays = Vec::with_capacity(w.width as usize);
+    let mut at = Vec::with_capacity(w.width as usize);
+    for (k, x) in (w.x0..w.x0 + w.width).enumerate() {
+        let p_film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+        if let Some(r) = job.camera.centre_ray(p_film) {
+            rays.push(Ray {
+                time,
+                ..Ray::new(r.origin, r.dir)
+            });
+            at.push(k);
+        }
+    }
+    let (mut hits, mut seen) = (Vec::new(), Vec::new());
+    job.integrator.first_surfaces(&rays, &mut hits, &mut seen);
+    let mut row = vec![None; w.width as usize];
+    for (k, s) in at.into_iter().zip(seen) {
+        row[k] = s;
+    }
+    row
 }
 
 /// Depth where the centre ray meets nothing: Cycles' value.

@@ -146,20 +146,53 @@ impl Integrator<'_> {
 
     /// The first surface along a ray (unit direction) that is opaque at coverage ½: what the
     /// Depth, Position and Vector passes show (with the instance it lies on). Deterministic,
-    /// unlike a sample: alpha-blended surfaces
-    /// count as solid where their alpha is at least ½.
+    /// unlike a sample: alpha-blended surfaces count as solid where their alpha is at least ½.
+    /// One ray alone: the reference [`Integrator::first_surfaces`] is tested against.
+    #[cfg(test)]
     pub fn first_surface(
         &self,
         origin: Vec3,
         dir: Vec3,
         time: f32,
     ) -> Option<(Vec3, aperture_accel::Hit)> {
-        let mut r = Ray {
+        let r = Ray {
             time,
             ..Ray::new(origin, dir)
         };
-        for _ in 0..MAX_ALPHA_PASSES {
-            let hit = self.accel.intersect(&r)?;
+        let hit = self.accel.intersect(&r)?;
+        self.surface_from(r, hit)
+    }
+
+    /// The first surface along each of `rays` (unit directions) that is opaque at coverage ½,
+    /// into `out`: what the Depth, Position and Vector passes show (with the instance it lies
+    /// on). Deterministic, unlike a sample: alpha-blended surfaces count as solid where their
+    /// alpha is at least ½. The first hits are found together, as packets where the rays are
+    /// coherent (a row of pixels' centre rays); a ray that meets a culled back or a
+    /// see-through surface goes on alone. `hits` is scratch.
+    pub fn first_surfaces(
+        &self,
+        rays: &[Ray],
+        hits: &mut Vec<Option<Hit>>,
+        out: &mut Vec<Option<(Vec3, Hit)>>,
+    ) {
+        hits.clear();
+        hits.resize(rays.len(), None);
+        self.accel.intersect_packets(rays, hits);
+        out.clear();
+        out.extend(
+            rays.iter()
+                .zip(hits.iter())
+                .map(|(r, h)| h.and_then(|hit| self.surface_from(*r, hit))),
+        );
+    }
+
+    /// The first opaque surface along `r`, whose closest hit `hit` is.
+    fn surface_from(&self, mut r: Ray, mut hit: Hit) -> Option<(Vec3, Hit)> {
+        let time = r.time;
+        for pass in 0..MAX_ALPHA_PASSES {
+            if pass > 0 {
+                hit = self.accel.intersect(&r)?;
+            }
             let s = self.hit_surface(&r, &hit, true);
             let seen = !self.geom.is_culled(&s, r.dir);
             if seen && (!self.geom.has_alpha || self.geom.is_opaque(&s, 0.5)) {
