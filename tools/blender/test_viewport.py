@@ -41,7 +41,12 @@ def build_scene(bpy):
     bsdf.inputs["Base Color"].default_value = (0.8, 0.2, 0.1, 1.0)
     bsdf.inputs["Roughness"].default_value = 0.6
     bpy.ops.mesh.primitive_plane_add(size=10.0)
-    bpy.context.active_object.name = "Ground"
+    ground = bpy.context.active_object
+    ground.name = "Ground"
+    # A loose edge from a vertex to itself, which Mesh.validate() deletes: the session's
+    # export must leave the mesh as it is (mesh_arrays does not validate stood-in meshes).
+    ground.data.edges.add(1)
+    ground.data.edges[-1].vertices = (0, 0)
     bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0.0, 0.0, 0.5))
     cube = bpy.context.active_object
     cube.name = "Cube"
@@ -129,7 +134,10 @@ def run(bpy):
     build_scene(bpy)
     dg = bpy.context.evaluated_depsgraph_get()
     dg.update()
+    ground = bpy.data.objects["Ground"].data
+    edges = len(ground.edges)
     session = vs.Session(dg)
+    test_unvalidated(bpy, ground, edges)
     seen = []
     handler = lambda scene, depsgraph: seen.extend(session.sync(depsgraph))  # noqa: E731
     bpy.app.handlers.depsgraph_update_post.append(handler)
@@ -167,6 +175,24 @@ def run(bpy):
     test_denoise_schedule(vs)
     session.free()
     test_f12(bpy, vs, aperture)
+
+
+def test_unvalidated(bpy, ground, edges):
+    """The session's export did not validate the stood-in ground (its loose edge is still
+    there, and validating a copy would delete it); a mesh the validation would mend (a
+    position that is not finite) is not read as arrays."""
+    arrays = sys.modules[ADDON + ".mesh_arrays"]
+    copy = ground.copy()
+    mended = copy.validate()
+    bad = ground.copy()
+    bad.vertices[1].co.x = float("nan")
+    refused = arrays.primitives(bad, [0]) is None and arrays.primitives(copy, [0]) is not None
+    check("viewport.unvalidated", len(ground.edges) == edges and mended and refused,
+          f"the ground's edges after the session's export: {len(ground.edges)} (were {edges}); "
+          f"validating a copy mends it: {mended}; a NaN position refused as arrays, a valid "
+          f"mesh read: {refused}")
+    bpy.data.meshes.remove(copy)
+    bpy.data.meshes.remove(bad)
 
 
 def test_preview(vs, session):
