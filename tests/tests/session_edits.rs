@@ -387,6 +387,40 @@ fn a_camera_edit_builds_nothing() {
     std::fs::remove_file(&path).ok();
 }
 
+#[test]
+fn another_image_size_shares_the_frame_unless_motion_or_vector_follow_the_view() {
+    let (doc, bin) = demo_document();
+    let path = write_glb(&doc, &bin, "view.glb");
+    let mut session = load(&path);
+    let at = |view: (usize, u32, u32), time: Option<f64>, vector: bool| FrameSpec {
+        view,
+        time,
+        vector,
+        ..FrameSpec::default()
+    };
+    let mut times = |spec: FrameSpec| session.frame(&spec).expect("frame").times();
+    // A viewport's small first image and its full passes: one frame, built once.
+    let full = times(at((0, 1920, 1080), None, false));
+    assert_eq!(
+        times(at((0, 120, 68), None, false)),
+        full,
+        "built again for 120 x 68"
+    );
+    // The Vector pass follows the view's size: another size is another frame.
+    let vector = times(at((0, 1920, 1080), Some(0.0), true));
+    assert_ne!(
+        vector, full,
+        "the Vector pass at a time needs its own frame"
+    );
+    assert_eq!(times(at((0, 1920, 1080), Some(0.0), true)), vector);
+    assert_ne!(
+        times(at((0, 120, 68), Some(0.0), true)),
+        vector,
+        "kept for another view"
+    );
+    std::fs::remove_file(&path).ok();
+}
+
 /// Edits that name what the file does not have are refused with the place they name.
 #[test]
 fn bad_edits_are_refused() {

@@ -52,6 +52,20 @@ pub struct FrameSpec {
     pub view: (usize, u32, u32),
 }
 
+impl FrameSpec {
+    /// True when `other` is built into the same frame: the view and the frame rate shape only
+    /// a frame's camera motion and neighbouring poses, so without motion blur and the Vector
+    /// pass any image size shares it (a viewport's small first image and its full passes).
+    fn same_frame(&self, other: &FrameSpec) -> bool {
+        let follows_view = self.motion.is_some() || self.vector;
+        self.time == other.time
+            && self.quality == other.quality
+            && self.motion == other.motion
+            && self.vector == other.vector
+            && (!follows_view || (self.view == other.view && self.fps == other.fps))
+    }
+}
+
 impl Default for FrameSpec {
     fn default() -> Self {
         Self {
@@ -157,11 +171,12 @@ impl Session {
         Ok(scene)
     }
 
-    /// The frame of `spec`: posed and built on the first call, kept while the spec and the
-    /// document stay the same. A new time poses the scene again and rebuilds only what moved
+    /// The frame of `spec`: posed and built on the first call, kept while the document and
+    /// what the spec shapes stay the same (another image size shares a frame without motion
+    /// blur or the Vector pass). A new time poses the scene again and rebuilds only what moved
     /// (the bottom-level BVHs of unchanged meshes are taken from the frame before).
     pub fn frame(&mut self, spec: &FrameSpec) -> Result<&Frame, SessionError> {
-        let kept = matches!(&self.current, Some((s, _)) if s == spec);
+        let kept = matches!(&self.current, Some((s, _)) if s.same_frame(spec));
         if !kept {
             self.build_frame(spec)?;
         }
