@@ -144,11 +144,16 @@ def run(bpy):
     film = session.start().wait() and session.film()
     ref = reference(bpy, vs, aperture, session.scene_options, 0)
     arrays = {names[0]: len(slots) for slots, names in session.stood_in.values()}
+    drawn = session.scene.info()["triangles"]["drawn"]
+    # Counted from the stand-ins' arrays, and from a full export's accessors.
+    counted = (session.triangles, sys.modules[ADDON + ".mesh_arrays"].drawn_triangles(
+        vs.glb_json(os.path.join(WORK, "fresh0.glb")), {}))
     check("viewport.start", session.exports == 1 and bits_equal(film, ref)
-          and arrays == {"Ground": 1, "Cube": 2, "Ball": 1},
+          and arrays == {"Ground": 1, "Cube": 2, "Ball": 1} and counted == (drawn, drawn),
           f"one export at start; meshes given as arrays, with their primitives: {arrays} (want "
-          f"Ground 1, Cube 2, Ball 1); the {W}x{H} film after {SPP} spp equals a fresh render: "
-          f"{bits_equal(film, ref)} (mean {film[..., :3].mean():.4f})")
+          f"Ground 1, Cube 2, Ball 1); triangles drawn counted from the export (stand-ins, full) "
+          f"{counted} (info: {drawn}); the {W}x{H} film after {SPP} spp equals a fresh "
+          f"render: {bits_equal(film, ref)} (mean {film[..., :3].mean():.4f})")
     before = film
     for k, (name, want, edit) in enumerate(edits(bpy), start=1):
         seen.clear()

@@ -53,20 +53,29 @@ fn triangles(v: &Bound<'_, PyAny>, at: &str) -> PyResult<Vec<[u32; 3]>> {
             "{at}: must be integers, got dtype kind {kind:?}"
         )));
     }
-    let wide: Vec<[i64; 3]> = match (kind.as_str(), size) {
-        ("u", 4) => return rows::<u32, 3>(&a, "uint32", at),
-        ("i", 4) => (rows::<i32, 3>(&a, "int32", at)?.into_iter())
-            .map(|t| t.map(i64::from))
-            .collect(),
-        _ => rows(&a, "int64", at)?,
-    };
-    let bad = wide.iter().flatten().find(|&&i| u32::try_from(i).is_err());
-    if let Some(i) = bad {
+    match (kind.as_str(), size) {
+        ("u", 4) => rows::<u32, 3>(&a, "uint32", at),
+        ("i", 4) => narrowed(rows::<i32, 3>(&a, "int32", at)?, at),
+        _ => narrowed(rows::<i64, 3>(&a, "int64", at)?, at),
+    }
+}
+
+/// `wide` as u32 indices, or the error naming the first that is not one (int32's are
+/// narrowed in place: the collect reuses the allocation of a same-sized item).
+fn narrowed<T>(wide: Vec<[T; 3]>, at: &str) -> PyResult<Vec<[u32; 3]>>
+where
+    T: Copy + std::fmt::Display,
+    u32: TryFrom<T>,
+{
+    if let Some(i) = wide.iter().flatten().find(|&&i| u32::try_from(i).is_err()) {
         return Err(value_error(format!(
             "{at}: index {i} is not a vertex index"
         )));
     }
-    Ok(wide.into_iter().map(|t| t.map(|i| i as u32)).collect())
+    Ok(wide
+        .into_iter()
+        .map(|t| t.map(|i| u32::try_from(i).unwrap_or(0)))
+        .collect())
 }
 
 /// One primitive's dict.

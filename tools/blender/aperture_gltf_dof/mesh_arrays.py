@@ -235,7 +235,7 @@ def _read_mesh(mesh, want):
 def _arrays(r):
     """The vertex arrays of what ``_read_mesh`` read, and each triangle's three vertices: by
     vertex when it chose so, else by corner (numpy only: any thread)."""
-    loops = r["loops"].astype(np.int32)
+    loops = r["loops"]  # uint32, as Blender holds them: the library reads them as they are
     if "vertex_normals" in r and not ("face_normals" in r or "corner_normals" in r):
         arrays = {"positions": _yup(r["co"]), "normals": _normals(r["vertex_normals"])}
         if r["uv"] is not None:
@@ -303,3 +303,23 @@ def given(doc, objects):
             futures[m] = pool.submit(_primitives_of, r, want)
             drawn_by.update((n, m) for n in names)
         return {m: f.result() for m, f in futures.items()}, drawn_by
+
+
+def drawn_triangles(doc, geometry):
+    """The triangles the export draws, each mesh once per node drawing it (``info()``'s
+    ``drawn``), from its JSON and the stood-in meshes' ``geometry``: ``info()`` also
+    classifies every triangle and bounds every node (0.13 s on 4.9 M triangles)."""
+    accessors = doc.get("accessors", [])
+
+    def triangles(m, k, prim):
+        if m in geometry:
+            return len(geometry[m][k]["triangles"])
+        at = prim.get("indices", prim.get("attributes", {}).get("POSITION"))
+        n = accessors[at].get("count", 0) if at is not None and at < len(accessors) else 0
+        mode = prim.get("mode", 4)
+        return n // 3 if mode == 4 else max(n - 2, 0) if mode in (5, 6) else 0
+
+    meshes = [sum(triangles(m, k, p) for k, p in enumerate(mesh.get("primitives", [])))
+              for m, mesh in enumerate(doc.get("meshes", []))]
+    return sum(meshes[n["mesh"]] for n in doc.get("nodes", [])
+               if isinstance(n.get("mesh"), int) and n["mesh"] < len(meshes))

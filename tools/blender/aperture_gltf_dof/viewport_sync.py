@@ -315,7 +315,7 @@ class Session:
         path = os.path.join(self.folder, f"scene{self.exports}.glb")
         doc, geometry = self._export_arrays(path, depsgraph)
         self.scene = self._aperture.load(path, geometry=geometry)
-        self.triangles = self.scene.info()["triangles"]["drawn"]
+        self.triangles = mesh_arrays.drawn_triangles(doc, geometry)
         self.path = path
         self.nodes = {n.get("name"): i for i, n in enumerate(doc.get("nodes", []))}
         self.parents = {c: p for p, n in enumerate(doc.get("nodes", [])) for c in n.get("children", [])}
