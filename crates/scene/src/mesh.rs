@@ -33,6 +33,8 @@ pub(crate) struct LoadedMesh {
 fn fill<T: Clone>(dst: &mut Vec<T>, wanted: bool, src: Option<Vec<T>>, n: usize, zero: T) {
     if wanted {
         match src {
+            // The first primitive's own vector, not a copy of it (a mesh of one primitive).
+            Some(v) if dst.is_empty() => *dst = v,
             Some(v) => dst.extend(v),
             None => dst.extend(std::iter::repeat_n(zero, n)),
         }
