@@ -16,7 +16,6 @@ use glam::{Affine3A, Quat, Vec3};
 /// (alpha 0.8) and a single-sided quad turned away from the camera.
 fn layered() -> Scene {
     let mut s = test_scenes::lit_plane(3.0);
-    s.meshes.push(test_scenes::icosphere(2, 0).into());
     let mut add = |mesh: aperture_scene::Mesh, world_from_object| {
         s.instances.push(Instance {
             mesh: s.meshes.len() as u32,
