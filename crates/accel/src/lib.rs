@@ -58,6 +58,7 @@ mod deform;
 mod motion;
 mod node;
 mod packet;
+mod prefetch;
 mod query;
 pub mod rayfile;
 mod spawn;

@@ -7,6 +7,7 @@
 //! the same as obvhs' (a test compares every node), so images do not change.
 
 use crate::node::Node;
+use crate::prefetch::prefetch;
 use glam::Vec3A;
 use obvhs::bvh2::Bvh2;
 
@@ -14,31 +15,91 @@ use obvhs::bvh2::Bvh2;
 const PRIM_COST: f32 = 0.3;
 
 /// What a binary node becomes for one count of eight-wide slots it may fill.
-#[derive(Clone, Copy, Default, PartialEq)]
+#[derive(Clone, Copy, PartialEq)]
 enum Kind {
     /// One leaf child holding all its primitives.
     Leaf,
     /// One internal child.
     Internal,
     /// Its two children's subtrees spread over the slots.
-    #[default]
     Distribute,
 }
 
-/// The cheapest way to place a binary node's subtree in `1 + i` slots (entry `i` of the
-/// node's seven), the slot counts given to its children when spread, and the subtree's
-/// primitive count (up to 255: only "at most 3" is asked).
-#[derive(Clone, Copy, Default)]
-pub(super) struct Decision {
-    cost: f32,
-    kind: Kind,
-    left: u8,
-    right: u8,
-    prims: u8,
+/// The cheapest way to place a binary node's subtree in `1 + i` slots, packed in a byte (entry
+/// `i` of the node's [`Plan`]): its [`Kind`] and the slot counts given to its children when
+/// spread (3 bits each; 7 stands for "none found", read as 6 as obvhs reads `u8::MAX`).
+#[derive(Clone, Copy, PartialEq)]
+struct Choice(u8);
+
+impl Choice {
+    const LEAF: Self = Self(0);
+
+    fn new(kind: Kind, left: u8, right: u8) -> Self {
+        Self(kind as u8 | left.min(7) << 2 | right.min(7) << 5)
+    }
+
+    fn kind(self) -> Kind {
+        match self.0 & 3 {
+            0 => Kind::Leaf,
+            1 => Kind::Internal,
+            _ => Kind::Distribute,
+        }
+    }
+
+    /// Slots (minus one) for the first and the second child.
+    fn split(self) -> (usize, usize) {
+        (usize::from(self.0 >> 2 & 7), usize::from(self.0 >> 5))
+    }
 }
 
-/// The cost table's storage, kept between trees (the pieces of a joined tree).
-pub(super) type Decisions = Vec<Decision>;
+/// What the emit reads of a binary node, 16 bytes (two siblings share a cache line): its
+/// children (or primitives), its primitive count (0: internal) and its seven choices. The walk
+/// down from a node to the slots of its eight-wide node is a chain of dependent reads; with the
+/// links apart from obvhs' nodes and the costs, each step is one miss, not two.
+#[derive(Clone, Copy)]
+struct Link {
+    first: u32,
+    prim_count: u32,
+    plan: [Choice; 8],
+}
+
+/// The cost table's storage, kept between trees (the pieces of a joined tree): per binary node,
+/// the cost of each slot count, the subtree's primitive count (up to 255: only "at most 3" is
+/// asked; 0 until the node's decisions are filled) and its [`Link`].
+#[derive(Default)]
+pub(super) struct Decisions {
+    costs: Vec<[f32; 7]>,
+    prims: Vec<u8>,
+    links: Vec<Link>,
+}
+
+impl Decisions {
+    pub(super) fn new() -> Self {
+        Self::default()
+    }
+
+    fn reset(&mut self, n: usize) {
+        self.costs.clear();
+        self.costs.resize(n, [0.0; 7]);
+        self.prims.clear();
+        self.prims.resize(n, 0);
+        self.links.clear();
+        self.links.resize(
+            n,
+            Link {
+                first: 0,
+                prim_count: 0,
+                plan: [Choice::LEAF; 8],
+            },
+        );
+    }
+
+    /// Node `n`'s choice for `1 + i` slots.
+    #[inline]
+    fn choice(&self, n: usize, i: usize) -> Choice {
+        self.links[n].plan[i]
+    }
+}
 
 /// The ray octant directions the slots are ordered by (obvhs' `direction_lut`).
 const DIRECTIONS: [Vec3A; 8] = {
@@ -69,8 +130,7 @@ pub(super) fn collapse(
     if bvh2.nodes.is_empty() {
         return (Vec::new(), Vec::new());
     }
-    decisions.clear();
-    decisions.resize(bvh2.nodes.len() * 7, Decision::default());
+    decisions.reset(bvh2.nodes.len());
     let mut c = Collapser {
         bvh2,
         decisions,
@@ -91,26 +151,34 @@ struct Collapser<'a> {
 }
 
 impl Collapser<'_> {
-    /// Fills the cost table. PLOC stores every child after its parent, so a walk from the last
-    /// node back meets children first and reads the table in memory order (a tree that breaks
-    /// this takes the recursive walk); either way each node's decisions are the same.
+    /// Fills the cost table from the last node back. PLOC stores every child after its
+    /// parent, so the walk meets children first and reads the table in memory order; a child
+    /// that reinsertion moved before its parent is filled first, when the parent asks for it
+    /// (a node's primitive count is 0 until its decisions are filled). Each node's decisions
+    /// are those of a children-first walk from the root.
     fn costs(&mut self, max_prims: u32) {
+        // The children's rows are far from their parent's: ask for them some nodes ahead.
+        const AHEAD: usize = 16;
         let nodes = &self.bvh2.nodes;
-        let ordered = nodes
-            .iter()
-            .enumerate()
-            .all(|(n, node)| node.prim_count != 0 || node.first_index as usize > n);
-        if ordered {
-            for n in (0..nodes.len()).rev() {
-                self.node_cost(n, max_prims);
+        for n in (0..nodes.len()).rev() {
+            if let Some(ahead) = n.checked_sub(AHEAD).map(|k| &nodes[k]) {
+                let first = ahead.first_index as usize;
+                if ahead.prim_count == 0 {
+                    prefetch(self.decisions.costs.as_ptr().wrapping_add(first));
+                    prefetch(self.decisions.costs.as_ptr().wrapping_add(first + 1));
+                    prefetch(self.decisions.prims.as_ptr().wrapping_add(first));
+                }
             }
-        } else {
-            self.cost(0, max_prims);
+            self.cost(n, max_prims);
         }
     }
 
-    /// Fills the decisions of binary node `n` and of those below it, children first.
+    /// Fills the decisions of binary node `n` and of those below it not filled yet, children
+    /// first.
     fn cost(&mut self, n: usize, max_prims: u32) {
+        if self.decisions.prims[n] != 0 {
+            return;
+        }
         let node = &self.bvh2.nodes[n];
         if node.prim_count == 0 {
             let first = node.first_index as usize;
@@ -125,23 +193,21 @@ impl Collapser<'_> {
     fn node_cost(&mut self, n: usize, max_prims: u32) {
         let node = &self.bvh2.nodes[n];
         let half_area = node.aabb().half_area();
-        let d = n * 7;
+        let t = &mut *self.decisions;
         if node.prim_count != 0 {
-            let leaf = Decision {
-                cost: half_area * node.prim_count as f32 * PRIM_COST,
-                kind: Kind::Leaf,
-                prims: node.prim_count.min(255) as u8,
-                ..Decision::default()
+            t.costs[n] = [half_area * node.prim_count as f32 * PRIM_COST; 7];
+            t.prims[n] = node.prim_count.min(255) as u8;
+            t.links[n] = Link {
+                first: node.first_index,
+                prim_count: node.prim_count,
+                plan: [Choice::LEAF; 8],
             };
-            self.decisions[d..d + 7].fill(leaf);
             return;
         }
         let (a, b) = (node.first_index as usize, node.first_index as usize + 1);
-        let row = |t: &[Decision], n: usize| -> [f32; 7] {
-            std::array::from_fn(|k| t.get(n * 7 + k).map_or(f32::INFINITY, |d| d.cost))
-        };
-        let (ca, cb) = (row(self.decisions, a), row(self.decisions, b));
-        let count = |n: usize| self.decisions.get(n * 7).map_or(255, |d| d.prims);
+        let row = |n: usize| t.costs.get(n).copied().unwrap_or([f32::INFINITY; 7]);
+        let (ca, cb) = (row(a), row(b));
+        let count = |n: usize| t.prims.get(n).copied().unwrap_or(255);
         let prims = count(a).saturating_add(count(b));
         // One slot: a leaf of everything, or an internal node spreading both children.
         let cost_leaf = if u32::from(prims) <= max_prims {
@@ -162,16 +228,11 @@ impl Collapser<'_> {
         } else {
             (Kind::Internal, internal)
         };
-        let mut out = [Decision {
-            cost,
-            kind,
-            left,
-            right,
-            prims,
-        }; 7];
+        let mut costs = [cost; 7];
+        let mut plan = [Choice::new(kind, left, right); 8];
         // 1 + i slots: as with i slots, or the children's subtrees spread over them.
         for i in 1..7 {
-            let mut best = out[i - 1].cost;
+            let mut best = costs[i - 1];
             let mut split = None;
             for k in 0..i {
                 let c = ca[k] + cb[i - k - 1];
@@ -180,38 +241,55 @@ impl Collapser<'_> {
                     split = Some(k as u8);
                 }
             }
-            out[i] = match split {
-                Some(k) => Decision {
-                    cost: best,
-                    kind: Kind::Distribute,
-                    left: k,
-                    right: i as u8 - k - 1,
-                    prims,
-                },
-                None => out[i - 1],
+            (costs[i], plan[i]) = match split {
+                Some(k) => (best, Choice::new(Kind::Distribute, k, i as u8 - k - 1)),
+                None => (costs[i - 1], plan[i - 1]),
             };
         }
-        self.decisions[d..d + 7].copy_from_slice(&out);
+        t.costs[n] = costs;
+        t.prims[n] = prims;
+        t.links[n] = Link {
+            first: node.first_index,
+            prim_count: 0,
+            plan,
+        };
     }
 
     /// The binary nodes that become the slots of the eight-wide node for binary node `n` with
     /// `1 + i` slots, appended to `children` (obvhs' `get_children`).
     fn children(&self, n: usize, i: usize, children: &mut [u32; 8], count: &mut usize) {
-        let node = &self.bvh2.nodes[n];
-        if node.prim_count != 0 {
+        let link = &self.decisions.links[n];
+        if link.prim_count != 0 {
             children[*count] = n as u32;
             *count += 1;
             return;
         }
-        let dec = self.decisions[n * 7 + i];
-        for (child, slots) in [
-            (node.first_index, dec.left),
-            (node.first_index + 1, dec.right),
-        ] {
-            let slots = usize::from(slots.min(6));
-            if self.decisions[child as usize * 7 + slots].kind == Kind::Distribute {
+        let (left, right) = link.plan[i].split();
+        let links = &self.decisions.links;
+        let spread = [(link.first, left), (link.first + 1, right)].map(|(child, slots)| {
+            let slots = slots.min(6);
+            let c = &links[child as usize];
+            let spread = c.plan[slots].kind() == Kind::Distribute;
+            // Whatever the child becomes, its children (or primitives) are read next: ask for
+            // them now, so that the second's arrive while the first's are walked.
+            if c.prim_count == 0 {
+                prefetch(links.as_ptr().wrapping_add(c.first as usize));
+            } else {
+                prefetch(
+                    self.bvh2
+                        .primitive_indices
+                        .as_ptr()
+                        .wrapping_add(c.first as usize),
+                );
+            }
+            (child, slots, spread)
+        });
+        for (child, slots, spread) in spread {
+            if spread {
                 self.children(child as usize, slots, children, count);
             } else {
+                // Its box is read when the slots are ordered: ask for it now.
+                prefetch(self.bvh2.nodes.as_ptr().wrapping_add(child as usize));
                 children[*count] = child;
                 *count += 1;
             }
@@ -296,7 +374,7 @@ impl Collapser<'_> {
                 node.bounds[2 * a][slot] = b.min[a];
                 node.bounds[2 * a + 1][slot] = b.max[a];
             }
-            if self.decisions[child as usize * 7].kind == Kind::Leaf {
+            if self.decisions.choice(child as usize, 0).kind() == Kind::Leaf {
                 let count = self.push_primitives(child as usize);
                 node.child_meta[slot] = prims as u8 | ((1u8 << count.min(3)) - 1) << 5;
                 prims += count;
@@ -319,15 +397,14 @@ impl Collapser<'_> {
 
     /// Appends the primitives below binary node `n` to the order, left to right; their count.
     fn push_primitives(&mut self, n: usize) -> u32 {
-        let node = self.bvh2.nodes[n];
-        if node.prim_count != 0 {
-            let first = node.first_index as usize;
-            let range = first..first + node.prim_count as usize;
+        let link = self.decisions.links[n];
+        if link.prim_count != 0 {
+            let first = link.first as usize;
+            let range = first..first + link.prim_count as usize;
             self.order
                 .extend_from_slice(&self.bvh2.primitive_indices[range]);
-            return node.prim_count;
+            return link.prim_count;
         }
-        self.push_primitives(node.first_index as usize)
-            + self.push_primitives(node.first_index as usize + 1)
+        self.push_primitives(link.first as usize) + self.push_primitives(link.first as usize + 1)
     }
 }
