@@ -237,6 +237,29 @@ mod tests {
         (nodes, cw.primitive_indices)
     }
 
+    /// Unit boxes on a grid: equal costs everywhere, so the collapse must break ties as obvhs
+    /// does (the first of equal splits) to build its tree.
+    #[test]
+    fn collapse_of_a_grid_breaks_ties_as_obvhs() {
+        let b: Vec<Aabb> = (0..16 * 16 * 8)
+            .map(|i| {
+                let c = Vec3::new((i % 16) as f32, (i / 16 % 16) as f32, (i / 256) as f32);
+                Aabb::new((c - 0.5).into(), (c + 0.5).into())
+            })
+            .collect();
+        for quality in [BvhQuality::Fast, BvhQuality::Medium, BvhQuality::High] {
+            for leaf in 1..=3 {
+                let (fresh, fresh_order) = one_shot(&b, quality, leaf);
+                let (ours, order) = build_cwbvh_in(&b, quality, leaf, &Scratch::default());
+                let at = format!("grid, {quality:?}, leaves of {leaf}");
+                assert_eq!(fresh_order, order, "{at}");
+                let key = |n: &Node| (n.child_meta, n.child_base_idx, n.imask, n.bounds);
+                let keys = |v: &[Node]| v.iter().map(key).collect::<Vec<_>>();
+                assert_eq!(keys(&fresh), keys(&ours), "{at}");
+            }
+        }
+    }
+
     /// Every quality and leaf size, with allocations reused from bigger and smaller builds
     /// before: the tree is obvhs' one-shot build and conversion, node for node.
     #[test]
