@@ -237,6 +237,30 @@ mod tests {
         (nodes, cw.primitive_indices)
     }
 
+    /// Every quality and leaf size: (quality, primitives a leaf).
+    fn settings() -> impl Iterator<Item = (BvhQuality, u32)> {
+        [BvhQuality::Fast, BvhQuality::Medium, BvhQuality::High]
+            .into_iter()
+            .flat_map(|q| (1..=3).map(move |l| (q, l)))
+    }
+
+    /// Asserts that `build_cwbvh_in` with `scratch` builds obvhs' one-shot tree over `b`, node
+    /// for node, and the same primitive order.
+    fn assert_obvhs_tree(b: &[Aabb], quality: BvhQuality, leaf: u32, scratch: &Scratch, at: &str) {
+        let (fresh, fresh_order) = one_shot(b, quality, leaf);
+        let (ours, order) = build_cwbvh_in(b, quality, leaf, scratch);
+        let at = format!("{at}, {quality:?}, leaves of {leaf}");
+        assert_eq!(fresh_order, order, "{at}");
+        assert_eq!(fresh.len(), ours.len(), "{at}");
+        let key = |n: &Node| {
+            let links = (n.child_base_idx, n.primitive_base_idx, n.imask);
+            (n.child_meta, links, n.bounds)
+        };
+        for (a, r) in fresh.iter().zip(&ours) {
+            assert_eq!(key(a), key(r), "{at}");
+        }
+    }
+
     /// Unit boxes on a grid: equal costs everywhere, so the collapse must break ties as obvhs
     /// does (the first of equal splits) to build its tree.
     #[test]
@@ -247,16 +271,8 @@ mod tests {
                 Aabb::new((c - 0.5).into(), (c + 0.5).into())
             })
             .collect();
-        for quality in [BvhQuality::Fast, BvhQuality::Medium, BvhQuality::High] {
-            for leaf in 1..=3 {
-                let (fresh, fresh_order) = one_shot(&b, quality, leaf);
-                let (ours, order) = build_cwbvh_in(&b, quality, leaf, &Scratch::default());
-                let at = format!("grid, {quality:?}, leaves of {leaf}");
-                assert_eq!(fresh_order, order, "{at}");
-                let key = |n: &Node| (n.child_meta, n.child_base_idx, n.imask, n.bounds);
-                let keys = |v: &[Node]| v.iter().map(key).collect::<Vec<_>>();
-                assert_eq!(keys(&fresh), keys(&ours), "{at}");
-            }
+        for (quality, leaf) in settings() {
+            assert_obvhs_tree(&b, quality, leaf, &Scratch::default(), "grid");
         }
     }
 
@@ -265,7 +281,6 @@ mod tests {
     #[test]
     fn collapse_with_reuse_builds_obvhs_trees() {
         let scratch = Scratch::default();
-        let qualities = [BvhQuality::Fast, BvhQuality::Medium, BvhQuality::High];
         let sizes = [
             (3000, 1),
             (40, 2),
@@ -275,24 +290,10 @@ mod tests {
             (3, 7),
             (2500, 5),
         ];
-        for (quality, leaf) in qualities
-            .into_iter()
-            .flat_map(|q| (1..=3).map(move |l| (q, l)))
-        {
+        for (quality, leaf) in settings() {
             for (n, seed) in sizes {
-                let b = boxes(n, seed);
-                let (fresh, fresh_order) = one_shot(&b, quality, leaf);
-                let (reused, reused_order) = build_cwbvh_in(&b, quality, leaf, &scratch);
-                let at = format!("{n} boxes, {quality:?}, leaves of {leaf}");
-                assert_eq!(fresh_order, reused_order, "{at}");
-                assert_eq!(fresh.len(), reused.len(), "{at}");
-                let key = |n: &Node| {
-                    let links = (n.child_base_idx, n.primitive_base_idx, n.imask);
-                    (n.child_meta, links, n.bounds)
-                };
-                for (a, r) in fresh.iter().zip(&reused) {
-                    assert_eq!(key(a), key(r), "{at}");
-                }
+                let at = format!("{n} boxes");
+                assert_obvhs_tree(&boxes(n, seed), quality, leaf, &scratch, &at);
             }
         }
         assert_eq!(scratch.0.lock().map(|v| v.len()).unwrap_or(0), 1);
